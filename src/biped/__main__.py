@@ -1,0 +1,5 @@
+import sys
+
+from biped.cli import main
+
+sys.exit(main())
