@@ -1,0 +1,222 @@
+"""Wendlandt's recursive workspace balancing controller (W, 1997) as a Python object.
+
+>>> import biped.models
+>>> from biped.control import WorkspaceController
+>>> ctrl = WorkspaceController.from_mjcf(biped.models.path("wendlandt"))
+>>> out = ctrl.compute(qpos, qvel)       # MuJoCo's qpos (19,) / qvel (18,) of the biped's model
+>>> out.torques                           # (12,) [N m], ordered as ctrl.joint_names
+
+Frames and units: every 6-vector of the output is a twist ``[v; w]`` or a wrench ``[f; tau]``
+expressed in the central body's COM principal-axis frame (MuJoCo's inertial frame of the root
+body), SI units (N, N m, m/s^2, rad/s^2).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from os import PathLike
+
+import numpy as np
+
+from biped.control.recursions import (
+    NONFINITE_RESULT, NONFINITE_STATE, SINGULAR_DISTRIBUTION, compute_kernel, layout,
+)
+from biped.errors import ScenarioError, SingularityError, StateError
+from biped.model import DEFAULT_FEET, TreeModel
+from biped.spatial import axis_angle_quat
+
+__all__ = ["WorkspaceController", "Target", "Gains", "ControllerOutput", "TreeModel"]
+
+_AXES = {"-y": (0.0, -1.0, 0.0), "-x": (-1.0, 0.0, 0.0)}
+
+
+def _vec(name: str, value, n: int) -> np.ndarray:
+    arr = np.asarray(value, dtype=float).reshape(-1)
+    if arr.shape != (n,):
+        raise ScenarioError(f"{name} must have {n} entries, got {arr.size}")
+    if not np.all(np.isfinite(arr)):
+        raise ScenarioError(f"{name} must be finite, got {arr.tolist()}")
+    return arr
+
+
+@dataclass(frozen=True)
+class Target:
+    """Desired motion of the central body's COM frame (W Alg. 4 inputs), world frame, SI units.
+
+    com, com_vel, com_acc: (3,) position [m], velocity [m/s], acceleration [m/s^2] of the COM.
+    quat: (4,) desired orientation ``q_{0,d}`` (w, x, y, z) of the COM principal frame.
+    ang_vel, ang_acc: (3,) desired angular velocity / acceleration in the space frame.
+    """
+
+    com: tuple = (-0.01, 0.0, 1.14)
+    com_vel: tuple = (0.0, 0.0, 0.0)
+    com_acc: tuple = (0.0, 0.0, 0.0)
+    quat: tuple = tuple(axis_angle_quat(_AXES["-y"], np.radians(15.0)))
+    ang_vel: tuple = (0.0, 0.0, 0.0)
+    ang_acc: tuple = (0.0, 0.0, 0.0)
+    array: np.ndarray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        q = _vec("target quat", self.quat, 4)
+        if abs(np.linalg.norm(q) - 1.0) > 1e-6:
+            raise ScenarioError(f"target quat must be a unit quaternion (w, x, y, z), norm is {np.linalg.norm(q)}")
+        arr = np.concatenate([_vec("target com", self.com, 3), _vec("target com_vel", self.com_vel, 3),
+                              _vec("target com_acc", self.com_acc, 3), q,
+                              _vec("target ang_vel", self.ang_vel, 3),
+                              _vec("target ang_acc", self.ang_acc, 3)])
+        object.__setattr__(self, "array", arr)
+
+    @classmethod
+    def wendlandt(cls, com=(-0.01, 0.0, 1.14), tilt_deg: float = 15.0, axis: str = "-y") -> "Target":
+        """W's set point: COM (-1, 0, 114) cm, 15 deg about -y (text) or -x (the printed quaternion
+        (0.99144486, -0.13052619, 0, 0)); see docs/controller.md."""
+        if axis not in _AXES:
+            raise ScenarioError(f"unknown target axis {axis!r}; valid: {sorted(_AXES)}")
+        return cls(com=tuple(com), quat=tuple(axis_angle_quat(_AXES[axis], np.radians(tilt_deg))))
+
+
+@dataclass(frozen=True)
+class Gains:
+    """Diagonals of W's gain matrices K_c^p, K_c^v (COM) and K_R^p, K_R^v (orientation) [1/s^2, 1/s]."""
+
+    kp_com: tuple = (50.0, 50.0, 200.0)
+    kv_com: tuple = (7.07, 7.07, 14.142)
+    kp_rot: tuple = (50.0, 50.0, 50.0)
+    kv_rot: tuple = (7.07, 7.07, 7.07)
+    array: np.ndarray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        arr = np.concatenate([_vec(f"gains {n}", getattr(self, n), 3)
+                              for n in ("kp_com", "kv_com", "kp_rot", "kv_rot")])
+        object.__setattr__(self, "array", arr)
+
+    @classmethod
+    def wendlandt(cls) -> "Gains":
+        """W section 4's gains."""
+        return cls()
+
+
+@dataclass(frozen=True)
+class ControllerOutput:
+    """One controller call's results (central-body COM frame unless stated, SI units).
+
+    torques: (n_joints,) joint torques [N m], ordered as ``WorkspaceController.joint_names``.
+    P1: (6, 6) approximate workspace inertia ``P_1`` [kg, kg m, kg m^2] (W Alg. 3).
+    z1: (6,) workspace bias wrench ``z_1`` (gravity + Coriolis) [N, N m] (W Alg. 3).
+    accel_desired: (6,) ``X^b``, the commanded body acceleration [m/s^2, rad/s^2] (W Alg. 4).
+    wrench_desired: (6,) ``F_1^bd = P_1 X^b + z_1`` [N, N m] (W Alg. 4).
+    wrench_left, wrench_right: (6,) ``F~_2^bd``, ``F~_8^bd``: the shares of the two legs (sum =
+        wrench_desired) (W Alg. 5).
+    foot_wrench_left, foot_wrench_right: (6,) ``F_l``, ``F_r`` in each foot's own COM frame.
+    quat_error: (4,) ``q_e`` (w, x, y, z), scalar part >= 0 (W Alg. 4).
+    """
+
+    torques: np.ndarray
+    P1: np.ndarray
+    z1: np.ndarray
+    accel_desired: np.ndarray
+    wrench_desired: np.ndarray
+    wrench_left: np.ndarray
+    wrench_right: np.ndarray
+    foot_wrench_left: np.ndarray
+    foot_wrench_right: np.ndarray
+    quat_error: np.ndarray
+
+
+class WorkspaceController:
+    """W's recursive workspace balancing controller on a :class:`~biped.model.TreeModel`.
+
+    The model is immutable; the controller owns preallocated buffers (not thread-safe: use one
+    controller per thread or process). One :meth:`compute` is one compiled call (numba) running
+    W Alg. 1-6; set ``NUMBA_DISABLE_JIT=1`` to step through it in Python.
+    """
+
+    def __init__(self, tree: TreeModel, *, big_base: float = 1e6, target: Target | None = None,
+                 gains: Gains | None = None):
+        if not (np.isfinite(big_base) and big_base > 0):
+            raise ScenarioError(f"big_base must be a positive finite factor, got {big_base}")
+        self.tree = tree
+        self.big_base = float(big_base)
+        self.target = target or Target()
+        self.gains = gains or Gains()
+        n = tree.n_links
+        lay = layout(n)
+        self._layout = lay
+        mi = np.zeros(4 + 5 * n, dtype=np.int64)
+        mi[0] = n
+        mi[1:3] = tree.feet
+        for j, arr in enumerate((tree.parent, tree.qpos_adr, tree.dof_adr, tree.leg,
+                                 tree.beyond_foot.astype(np.int64))):
+            mi[4 + j * n:4 + (j + 1) * n] = arr
+        mf = np.zeros(lay["model"]["_size"][0])
+        g_bi = tree.G0[0]
+        from biped.spatial import rot_to_quat
+
+        values = {"H": tree.H, "G0": tree.G0, "mass": tree.mass, "inertia": tree.inertia,
+                  "qref": tree.qpos_ref, "gravity": tree.gravity,
+                  "root_qbi": rot_to_quat(np.ascontiguousarray(g_bi[:3, :3])), "big_base": [self.big_base]}
+        for name, (off, shape) in lay["model"].items():
+            if name != "_size":
+                mf[off:off + int(np.prod(shape))] = np.asarray(values[name], dtype=float).reshape(-1)
+        self._mi, self._mf = mi, mf
+        self._work = np.zeros(lay["work"]["_size"][0])
+        self._out = np.zeros(lay["out"]["_size"][0])
+
+    @classmethod
+    def from_mjcf(cls, source: str | PathLike, feet: tuple[str, str] = DEFAULT_FEET, **kwargs
+                  ) -> "WorkspaceController":
+        """Controller for the biped in an MJCF file (path, XML text or ``mujoco.MjModel``)."""
+        return cls(TreeModel.from_mjcf(source, feet=feet), **kwargs)
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """Hinge names in the order of ``torques`` (MuJoCo body order)."""
+        return self.tree.joint_names
+
+    def _view(self, name):
+        off, shape = self._layout["out"][name]
+        return self._out[off:off + int(np.prod(shape))].reshape(shape)
+
+    def _run(self, qpos, qvel, target, gains):
+        if qpos.shape != (self.tree.nq,) or qvel.shape != (self.tree.nv,):
+            raise StateError(
+                f"qpos must have shape ({self.tree.nq},) and qvel ({self.tree.nv},) (MuJoCo layout of "
+                f"{self.tree.source}), got {qpos.shape} and {qvel.shape}")
+        t = (target or self.target).array
+        k = (gains or self.gains).array
+        status = compute_kernel(qpos, qvel, t, k, self._mi, self._mf, self._work, self._out)
+        if status:
+            if status == NONFINITE_STATE:
+                bad = [f"qpos[{i}]" for i in np.flatnonzero(~np.isfinite(qpos))]
+                bad += [f"qvel[{i}]" for i in np.flatnonzero(~np.isfinite(qvel))]
+                raise StateError(f"non-finite state entries: {', '.join(bad)}; qpos and qvel must be finite")
+            if status == SINGULAR_DISTRIBUTION:
+                raise SingularityError("wrench distribution: G G^T is not positive definite (W Alg. 5)")
+            if status == NONFINITE_RESULT:
+                raise SingularityError(
+                    "the controller produced non-finite values: the workspace dynamics are singular at this "
+                    "state (a joint axis with zero articulated inertia, W Alg. 3)")
+
+    def compute(self, qpos, qvel, target: Target | None = None, gains: Gains | None = None
+                ) -> ControllerOutput:
+        """Run W Alg. 1-6 at state (qpos, qvel) (MuJoCo layout of the biped's own model).
+
+        Returns a :class:`ControllerOutput` of fresh arrays. ``target`` and ``gains`` default to
+        the controller's (W's set point and gains unless given at construction).
+        """
+        qpos = np.ascontiguousarray(qpos, dtype=float)
+        qvel = np.ascontiguousarray(qvel, dtype=float)
+        self._run(qpos, qvel, target, gains)
+        v = self._view
+        return ControllerOutput(
+            torques=v("tau").copy(), P1=v("P1").copy(), z1=v("z1").copy(), accel_desired=v("X").copy(),
+            wrench_desired=v("Fd").copy(), wrench_left=v("Fl_tilde").copy(),
+            wrench_right=v("Fr_tilde").copy(), foot_wrench_left=v("Fl").copy(),
+            foot_wrench_right=v("Fr").copy(), quat_error=v("qe").copy())
+
+    def torques(self, qpos: np.ndarray, qvel: np.ndarray, target: Target | None = None,
+                gains: Gains | None = None) -> np.ndarray:
+        """Hot path: joint torques only, as a view into the controller's buffer (overwritten by the
+        next call; copy it to keep it). qpos/qvel must be contiguous float64 arrays."""
+        self._run(qpos, qvel, target, gains)
+        return self._out[: self.tree.n_links - 1]
