@@ -47,6 +47,12 @@ ASSUMPTIONS = {
     "intermediate_body_mass_kg": 0.01,  # W's massless hip and ankle intermediate bodies
     "intermediate_body_inertia_kgm2": 1e-5,
     "sole_clearance_m": 0.005,  # soles above the floor in W's initial state
+    # Passive viscous damping of every hinge [N m s/rad]: a property of the simulated plant that
+    # W's controller (like W's model) does not know. Without it the closed loop on MuJoCo's
+    # compliant contacts is unstable (measured: W's run diverges at 0.62 s with 0.5 ms steps and no
+    # damping; 0.3 diverges, 0.5 and above converge to the set point). Order of magnitude of the
+    # passive damping measured at human joints (~1 N m s/rad).
+    "joint_damping_Nms_per_rad": 1.0,
 }
 
 #: W's initial state (section 4).
@@ -239,7 +245,8 @@ def build_xml() -> str:
   Central body (link 1) = head + arms + trunk of de Leva. Intermediate hip/ankle bodies: {mi} kg.
   Other assumptions: ankle height {A['ankle_height_fraction_of_stature']} H and foot breadth 0.055 H
   (Winter 2009); the ankle {A['heel_to_ankle_fraction_of_foot']} of the foot length from the heel;
-  hip joint centres {2 * hip_y:.4f} m apart. The biped faces -x; its left leg is on -y.
+  hip joint centres {2 * hip_y:.4f} m apart; passive hinge damping {A['joint_damping_Nms_per_rad']} N m s/rad
+  (a plant property the controller does not model). The biped faces -x; its left leg is on -y.
   W's joint numbers: left 2..7 and right 8..13 = hip_abduction, hip_flexion, hip_rotation, knee,
   ankle_inversion, ankle_dorsiflexion. Body frames of the central body sit at its COM.
 -->
@@ -248,7 +255,7 @@ def build_xml() -> str:
   <option timestep="0.0005" gravity="0 0 -9.81"/>
   <default>
     <geom contype="2" conaffinity="1" friction="0.3 0.005 0.0001" condim="3"/>
-    <joint type="hinge" limited="false" damping="0"/>
+    <joint type="hinge" limited="false" damping="{A['joint_damping_Nms_per_rad']}"/>
     <default class="sole">
       <geom type="box" rgba="0.25 0.25 0.25 1"/>
     </default>
