@@ -1,0 +1,16 @@
+"""Visualisation of a motion: a self-contained 3D browser replay and an offscreen video.
+
+- :func:`replay_from_mujoco` and :func:`write_replay` (module :mod:`biped.viz.replay`): one HTML
+  file that plays the motion in 3D with three.js (inlined; nothing loaded from the network).
+- :func:`render_video` (module :mod:`biped.viz.video`): an MP4 from MuJoCo's offscreen renderer
+  with a camera that follows a body; returns ``path=None`` and a reason where no OpenGL works.
+
+Both take ``(model, times, qpos)``: the visualisation is a function of the model and the
+trajectory, computed after the simulation. See ``docs/viz.md``.
+"""
+
+from biped.viz.replay import Replay, ReplayGeom, replay_from_mujoco, write_replay
+from biped.viz.video import VideoResult, gl_available, render_video
+
+__all__ = ["Replay", "ReplayGeom", "replay_from_mujoco", "write_replay",
+           "VideoResult", "gl_available", "render_video"]

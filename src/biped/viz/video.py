@@ -1,0 +1,271 @@
+"""An MP4 video of a motion from MuJoCo's offscreen renderer, with a camera that follows the biped.
+
+MuJoCo picks its OpenGL backend from the environment variable ``MUJOCO_GL`` once, when ``mujoco``
+is first imported (and PyOpenGL picks its platform from ``PYOPENGL_PLATFORM`` when it is first
+imported). By the time a simulation asks for a video, ``mujoco`` has long been imported, so this
+module does not touch the running process's GL state: it renders in a child Python process
+(``python -m biped.viz.video``) started with ``MUJOCO_GL`` and ``PYOPENGL_PLATFORM`` set to a
+backend that works. The model travels as a MuJoCo binary (``mj_saveModel``), the trajectory as a
+``.npz`` file. A side benefit: a broken GL driver that crashes cannot take the caller down; it
+becomes a ``VideoResult`` with ``path=None`` and the reason.
+
+Backends tried, in order: the ``MUJOCO_GL`` of the environment if set, then ``egl``, then
+``osmesa`` (then ``glfw`` if a ``DISPLAY`` is set). On Debian, ``egl`` needs ``libegl1`` (with
+Mesa's ``libegl-mesa0`` and ``libgl1-mesa-dri`` it renders on the CPU), ``osmesa`` needs
+``libosmesa6``. :func:`gl_available` probes them once per process (about 1 s).
+"""
+
+from __future__ import annotations
+
+import functools
+import json
+import math
+import os
+import pathlib
+import subprocess
+import sys
+import tempfile
+from dataclasses import dataclass
+
+import numpy as np
+
+from biped.errors import ModelError, ScenarioError, StateError, unknown_name
+
+__all__ = ["VideoResult", "render_video", "gl_available"]
+
+_PROBE_TIMEOUT_S = 60.0
+_BACKENDS = ("egl", "osmesa")
+
+
+@dataclass(frozen=True)
+class VideoResult:
+    """What :func:`render_video` produced.
+
+    Attributes:
+        path: the MP4 file, or ``None`` when no video could be made.
+        reason: ``None`` on success, else one line saying why there is no video.
+        backend: the ``MUJOCO_GL`` backend that rendered it (``"egl"``, ``"osmesa"``...).
+        frames: number of frames written.
+    """
+
+    path: pathlib.Path | None
+    reason: str | None
+    backend: str | None = None
+    frames: int = 0
+
+
+_PROBE = r"""
+import mujoco
+m = mujoco.MjModel.from_xml_string(
+    '<mujoco><worldbody><light pos="0 0 3"/>'
+    '<geom type="sphere" size=".1" rgba="1 0 0 1"/></worldbody></mujoco>')
+d = mujoco.MjData(m)
+mujoco.mj_forward(m, d)
+r = mujoco.Renderer(m, 32, 32)
+r.update_scene(d)
+img = r.render()
+r.close()
+assert img.shape == (32, 32, 3) and img.std() > 0, "blank image"
+print("ok")
+"""
+
+
+def _child_env(backend: str) -> dict:
+    """Environment of a child process that renders with ``backend``, and imports this package."""
+    env = dict(os.environ)
+    env["MUJOCO_GL"] = backend
+    if backend in ("egl", "osmesa"):
+        env["PYOPENGL_PLATFORM"] = backend
+    else:
+        env.pop("PYOPENGL_PLATFORM", None)
+    src = str(pathlib.Path(__file__).resolve().parents[2])   # the folder that holds biped/
+    env["PYTHONPATH"] = src + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    return env
+
+
+def _last_line(text: str) -> str:
+    lines = [ln.strip() for ln in text.strip().splitlines() if ln.strip()]
+    return lines[-1][:200] if lines else "no output"
+
+
+def _candidates() -> list[str]:
+    out = []
+    env = os.environ.get("MUJOCO_GL", "").strip().lower()
+    if env and env not in ("disable", "disabled", "off", "false", "0"):
+        out.append(env)
+    out += [b for b in _BACKENDS if b not in out]
+    if os.environ.get("DISPLAY") and "glfw" not in out:
+        out.append("glfw")
+    return out
+
+
+@functools.lru_cache(maxsize=1)
+def gl_available() -> tuple[bool, str]:
+    """Whether MuJoCo can render offscreen here: ``(True, backend)`` or ``(False, reason)``.
+
+    Probes each candidate backend (``MUJOCO_GL`` if set, ``egl``, ``osmesa``) in a child process
+    that renders a 32x32 image; the result is cached for the life of the process.
+    """
+    if os.environ.get("MUJOCO_GL", "").strip().lower() in ("disable", "disabled", "off", "false", "0"):
+        return False, "no video: MUJOCO_GL disables rendering"
+    errors = []
+    for backend in _candidates():
+        try:
+            proc = subprocess.run([sys.executable, "-c", _PROBE], env=_child_env(backend),
+                                  capture_output=True, text=True, timeout=_PROBE_TIMEOUT_S)
+        except subprocess.TimeoutExpired:
+            errors.append(f"{backend}: timed out")
+            continue
+        if proc.returncode == 0 and proc.stdout.strip().endswith("ok"):
+            return True, backend
+        errors.append(f"{backend}: {_last_line(proc.stderr)}")
+    return False, ("no video: no offscreen OpenGL works here (install Debian's libegl1 or "
+                   "libosmesa6); " + "; ".join(errors))
+
+
+def _check_inputs(model, times, qpos, fps, width, height, track_body):
+    import mujoco
+
+    if not isinstance(model, mujoco.MjModel):
+        raise ModelError(f"model must be a mujoco.MjModel, got {type(model).__name__}")
+    times = np.asarray(times, dtype=float)
+    qpos = np.asarray(qpos, dtype=float)
+    if times.ndim != 1 or times.size < 1:
+        raise StateError(f"times must have shape (T,) with T >= 1, got {times.shape}")
+    if qpos.shape != (times.size, model.nq):
+        raise StateError(
+            f"qpos must have shape (T, nq) = ({times.size}, {model.nq}), got {qpos.shape}")
+    if not (np.all(np.isfinite(times)) and np.all(np.isfinite(qpos))):
+        raise StateError("times or qpos contains NaN or infinite entries")
+    if np.any(np.diff(times) < 0):
+        raise StateError("times must be non-decreasing")
+    if not (isinstance(fps, (int, float)) and math.isfinite(fps) and 1 <= fps <= 240):
+        raise ScenarioError(f"fps must be a number in [1, 240], got {fps!r}")
+    for name, v in (("width", width), ("height", height)):
+        if not (isinstance(v, (int, np.integer)) and 16 <= v <= 4096 and v % 2 == 0):
+            raise ScenarioError(
+                f"{name} must be an even number of pixels in [16, 4096] (H.264 needs even sizes), "
+                f"got {v!r}")
+    body_id = -1
+    if track_body is not None:
+        body_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, str(track_body))
+        if body_id < 0:
+            names = [model.body(i).name for i in range(model.nbody) if model.body(i).name]
+            raise ModelError(unknown_name("track_body", str(track_body), names))
+    return times, qpos, body_id
+
+
+def frame_indices(times: np.ndarray, fps: float) -> np.ndarray:
+    """Indices into ``times`` (T,) s of the samples shown at ``fps`` frames per second.
+
+    Frame k shows the last sample at or before ``times[0] + k / fps`` (zero-order hold, so a free
+    joint's quaternion is never interpolated); frames run to ``times[-1]``.
+    """
+    times = np.asarray(times, dtype=float)
+    n = int(math.floor((times[-1] - times[0]) * fps + 1e-9)) + 1
+    ft = times[0] + np.arange(n) / fps
+    return np.clip(np.searchsorted(times, ft + 1e-12, side="right") - 1, 0, times.size - 1)
+
+
+def render_video(model, times, qpos, path, *, fps=30, width=640, height=480,
+                 track_body="central_body", distance=None, azimuth=60.0,
+                 elevation=-12.0) -> VideoResult:
+    """Render the trajectory ``(times, qpos)`` of ``model`` to an H.264 MP4 file.
+
+    Each frame runs ``mujoco.mj_forward`` on the sample shown (see :func:`frame_indices`) and
+    draws it with ``mujoco.Renderer`` from a tracking camera (``mjCAMERA_TRACKING``) that follows
+    the subtree centre of mass of ``track_body`` at a fixed distance and direction. Rendering
+    runs in a child process with its own ``MUJOCO_GL`` (see the module docstring).
+
+    Args:
+        model: ``mujoco.MjModel``; not modified (the child enlarges its own copy's offscreen
+            buffer when ``width`` x ``height`` needs it).
+        times: (T,) s, non-decreasing.
+        qpos: (T, nq) generalized positions.
+        path: the ``.mp4`` file to write; missing parent folders are created.
+        fps: frames per second of the video (real time).
+        width, height: pixels, even.
+        track_body: body the camera follows; ``None`` for a fixed camera on the model's centre.
+        distance: camera distance, m; default 1.5 times the model's extent (``model.stat``).
+        azimuth, elevation: camera direction, deg, MuJoCo's convention (azimuth 60: from the
+            biped's front left when it faces -x; elevation < 0 looks down).
+
+    Returns:
+        :class:`VideoResult`; ``path=None`` and a one-line ``reason`` if no OpenGL backend works
+        or the renderer fails. Bad arguments raise (``StateError``, ``ModelError``,
+        ``ScenarioError``) before anything is rendered.
+    """
+    times, qpos, body_id = _check_inputs(model, times, qpos, fps, width, height, track_body)
+    path = pathlib.Path(path)
+    ok, backend = gl_available()
+    if not ok:
+        return VideoResult(None, backend)
+    import mujoco
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    idx = frame_indices(times, fps)
+    with tempfile.TemporaryDirectory(prefix="biped-video-") as tmp:
+        tmp = pathlib.Path(tmp)
+        mujoco.mj_saveModel(model, str(tmp / "model.mjb"), None)
+        np.save(tmp / "qpos.npy", qpos[idx])
+        extent = float(model.stat.extent) if model.stat.extent > 0 else 1.0
+        cfg = {"out": str(path.resolve()), "fps": float(fps), "width": int(width),
+               "height": int(height), "body_id": int(body_id),
+               "distance": float(distance) if distance is not None else 1.5 * extent,
+               "azimuth": float(azimuth), "elevation": float(elevation)}
+        (tmp / "job.json").write_text(json.dumps(cfg))
+        try:
+            proc = subprocess.run([sys.executable, "-m", "biped.viz.video", str(tmp)],
+                                  env=_child_env(backend), capture_output=True, text=True,
+                                  timeout=120 + 2.0 * len(idx))
+        except subprocess.TimeoutExpired:
+            return VideoResult(None, f"no video: rendering with MUJOCO_GL={backend} timed out",
+                               backend)
+    if proc.returncode != 0 or not path.is_file():
+        return VideoResult(None, f"no video: rendering with MUJOCO_GL={backend} failed: "
+                                 f"{_last_line(proc.stderr)}", backend)
+    return VideoResult(path.resolve(), None, backend, len(idx))
+
+
+def _render_job(workdir: pathlib.Path) -> int:
+    """Child process: render ``workdir/job.json`` (called by ``python -m biped.viz.video``)."""
+    import imageio_ffmpeg
+    import mujoco
+
+    cfg = json.loads((workdir / "job.json").read_text())
+    model = mujoco.MjModel.from_binary_path(str(workdir / "model.mjb"))
+    qpos = np.load(workdir / "qpos.npy")
+    w, h = cfg["width"], cfg["height"]
+    model.vis.global_.offwidth = max(int(model.vis.global_.offwidth), w)
+    model.vis.global_.offheight = max(int(model.vis.global_.offheight), h)
+    data = mujoco.MjData(model)
+
+    cam = mujoco.MjvCamera()
+    if cfg["body_id"] >= 0:
+        cam.type = mujoco.mjtCamera.mjCAMERA_TRACKING
+        cam.trackbodyid = cfg["body_id"]
+    else:
+        cam.type = mujoco.mjtCamera.mjCAMERA_FREE
+        cam.lookat[:] = model.stat.center
+    cam.distance, cam.azimuth, cam.elevation = cfg["distance"], cfg["azimuth"], cfg["elevation"]
+
+    renderer = mujoco.Renderer(model, h, w)
+    writer = imageio_ffmpeg.write_frames(cfg["out"], (w, h), fps=cfg["fps"], codec="libx264",
+                                         pix_fmt_out="yuv420p", quality=7, macro_block_size=2,
+                                         ffmpeg_log_level="error")
+    writer.send(None)
+    try:
+        for q in qpos:
+            data.qpos[:] = q
+            data.qvel[:] = 0.0
+            mujoco.mj_forward(model, data)
+            renderer.update_scene(data, camera=cam)
+            writer.send(np.ascontiguousarray(renderer.render()))
+    finally:
+        writer.close()
+        renderer.close()
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover - exercised through render_video
+    sys.exit(_render_job(pathlib.Path(sys.argv[1])))
