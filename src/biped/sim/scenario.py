@@ -1,0 +1,294 @@
+"""The push-recovery scenario of Wendlandt (1997), section 4, as one frozen dataclass.
+
+Every field defaults to W's value (see ``docs/push.md``). A scenario comes from keyword arguments,
+a TOML file (:meth:`Scenario.from_toml`, top-level ``key = value`` lines) or command-line overrides
+(:meth:`Scenario.with_overrides`); every route goes through :func:`validate`, which rejects unknown
+keys, vectors of the wrong length, non-finite numbers and out-of-range values with a
+:class:`~biped.errors.ScenarioError` naming the key and what is valid, before any simulation starts.
+
+Units are in the key names: ``_m`` metres, ``_m_s`` m/s, ``_kg``, ``_s``, ``_hz``, ``_deg`` degrees.
+Frames: world, z up, the biped faces -x, its left leg on -y.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from biped.errors import ScenarioError
+
+#: W's joint order theta_2..theta_13: left leg then right leg, each hip abduction, hip flexion,
+#: hip rotation, knee, ankle inversion, ankle dorsiflexion (MJCF hinge names of the shipped model).
+LEG_JOINTS = ("hip_abduction", "hip_flexion", "hip_rotation", "knee", "ankle_inversion",
+              "ankle_dorsiflexion")
+JOINT_NAMES = tuple(f"{side}_{j}" for side in ("left", "right") for j in LEG_JOINTS)
+
+#: W section 4: theta_2..theta_13 [deg].
+W_JOINT_ANGLES_DEG = (0.0, 40.0, 0.0, -77.4595, 0.0, 42.4595) * 2
+
+CONTROLLERS = ("workspace", "joint-pd")
+TARGET_AXES = ("-y", "-x")
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """W's push-recovery experiment (section 4); every default is W's unless stated.
+
+    Vectors are tuples of floats in world coordinates. ``target_axis="-y"`` is W's text (15 deg
+    about -Y); ``"-x"`` is the quaternion W prints, (0.99144486, -0.13052619, 0, 0).
+    ``torque_limits`` is ``"none"``, one positive number [N m] for every joint, or 12 of them in
+    :data:`JOINT_NAMES` order. ``joint_noise_deg`` adds N(0, sigma^2) to the initial joint angles,
+    drawn from ``numpy.random.default_rng(seed)`` (0 = W's exact state).
+    """
+
+    duration_s: float = 3.0
+    physics_timestep_s: float = 0.0005
+    control_rate_hz: float = 500.0
+    block_mass_kg: float = 1.8
+    block_position_m: tuple = (0.5, 0.1, 1.2)
+    block_velocity_m_s: tuple = (-4.5, 0.0, 0.2)
+    block_size_m: tuple = (0.1, 0.1, 0.1)  # not in W: a 10 cm cube (1.8 kg: a brick's density)
+    initial_com_m: tuple = (0.0, 0.0, 1.035)
+    initial_tilt_deg: float = 5.0  # about -y
+    initial_joint_angles_deg: tuple = W_JOINT_ANGLES_DEG
+    joint_noise_deg: float = 0.0
+    target_com_m: tuple = (-0.01, 0.0, 1.14)
+    target_tilt_deg: float = 15.0
+    target_axis: str = "-y"
+    kp_com: tuple = (50.0, 50.0, 200.0)
+    kv_com: tuple = (7.07, 7.07, 14.142)
+    kp_rot: tuple = (50.0, 50.0, 50.0)
+    kv_rot: tuple = (7.07, 7.07, 7.07)
+    controller: str = "workspace"
+    torque_limits: Any = "none"
+    friction: float = 0.3
+    restitution: float = 0.2
+    contact_timeconst_s: float = 0.005  # not in W (Impulse is rigid); MuJoCo's contact stiffness
+    fall_height_m: float = 0.6  # central-body COM below this height = fall
+    recovery_com_tol_m: float = 0.02
+    recovery_orientation_tol_deg: float = 2.0
+    seed: int = 0
+
+    def __post_init__(self):
+        validate(self)
+
+    # ------------------------------------------------------------------ construction
+    @classmethod
+    def from_dict(cls, values: dict) -> "Scenario":
+        """A scenario from ``{key: value}``; unknown keys are an error (listing the valid ones)."""
+        _check_keys(values)
+        return cls(**{k: _coerce(k, v) for k, v in values.items()})
+
+    @classmethod
+    def from_toml(cls, path: str | Path) -> "Scenario":
+        """A scenario from a TOML file of top-level ``key = value`` lines (others keep W's)."""
+        path = Path(path)
+        try:
+            text = path.read_text()
+        except OSError as exc:
+            raise ScenarioError(f"cannot read scenario file {str(path)!r}: {exc.strerror}") from None
+        try:
+            values = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise ScenarioError(f"scenario file {str(path)!r} is not valid TOML: {exc}") from None
+        for k, v in values.items():
+            if isinstance(v, dict):
+                raise ScenarioError(
+                    f"scenario file {str(path)!r}: tables such as [{k}] are not used; write "
+                    f"top-level 'key = value' lines with keys from: {', '.join(keys())}")
+        return cls.from_dict(values)
+
+    def with_overrides(self, **values) -> "Scenario":
+        """A copy with some keys changed (validated like every other route)."""
+        _check_keys(values)
+        return dataclasses.replace(self, **{k: _coerce(k, v) for k, v in values.items()})
+
+    # ------------------------------------------------------------------ export
+    def to_dict(self) -> dict:
+        """Plain ``{key: value}`` (tuples as lists), JSON- and TOML-ready."""
+        out = {}
+        for f in dataclasses.fields(self):
+            v = getattr(self, f.name)
+            out[f.name] = list(v) if isinstance(v, tuple) else v
+        return out
+
+    def to_toml(self) -> str:
+        """TOML text that :meth:`from_toml` reads back to an equal scenario."""
+        lines = []
+        for k, v in self.to_dict().items():
+            lines.append(f"{k} = {_toml_value(v)}")
+        return "\n".join(lines) + "\n"
+
+    # ------------------------------------------------------------------ derived
+    @property
+    def control_substeps(self) -> int:
+        """Physics steps per control period (the zero-order hold)."""
+        return int(round(1.0 / (self.control_rate_hz * self.physics_timestep_s)))
+
+    @property
+    def control_steps(self) -> int:
+        """Number of control periods in ``duration_s``."""
+        return int(round(self.duration_s * self.control_rate_hz))
+
+
+# ---------------------------------------------------------------------------------------------
+# validation
+
+_VECTORS = {
+    "block_position_m": (3, "(x, y, z) in m"),
+    "block_velocity_m_s": (3, "(vx, vy, vz) in m/s"),
+    "block_size_m": (3, "edge lengths (x, y, z) in m"),
+    "initial_com_m": (3, "(x, y, z) in m"),
+    "initial_joint_angles_deg": (12, "W's theta_2..theta_13 in deg: " + ", ".join(JOINT_NAMES)),
+    "target_com_m": (3, "(x, y, z) in m"),
+    "kp_com": (3, "diagonal gains (x, y, z) [1/s^2]"),
+    "kv_com": (3, "diagonal gains (x, y, z) [1/s]"),
+    "kp_rot": (3, "diagonal gains (x, y, z) [1/s^2]"),
+    "kv_rot": (3, "diagonal gains (x, y, z) [1/s]"),
+}
+_STRINGS = {"target_axis": TARGET_AXES, "controller": CONTROLLERS}
+_INTS = {"seed"}
+
+
+def keys() -> tuple[str, ...]:
+    """Every valid scenario key, in declaration order."""
+    return tuple(f.name for f in dataclasses.fields(Scenario))
+
+
+def _check_keys(values: dict) -> None:
+    valid = keys()
+    for k in values:
+        if k not in valid:
+            raise ScenarioError(f"unknown scenario key {k!r}; valid keys: {', '.join(valid)}")
+
+
+def _is_number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _coerce(key: str, v):
+    """Lists to tuples and ints to floats where a float is meant; type errors name the key."""
+    if key in _VECTORS:
+        n, what = _VECTORS[key]
+        if isinstance(v, (str, bytes)) or not hasattr(v, "__len__"):
+            raise ScenarioError(f"{key} must be {n} numbers, {what}; got {v!r}")
+        return tuple(float(x) if _is_number(x) else x for x in v)
+    if key == "torque_limits":
+        if isinstance(v, (list, tuple)):
+            return tuple(float(x) if _is_number(x) else x for x in v)
+        return float(v) if _is_number(v) else v
+    if key in _STRINGS or key in _INTS:
+        return v
+    return float(v) if _is_number(v) else v
+
+
+def _finite(key: str, v, what: str) -> float:
+    if not _is_number(v):
+        raise ScenarioError(f"{key} must be a number ({what}); got {v!r}")
+    if not math.isfinite(v):
+        raise ScenarioError(f"{key} must be finite ({what}); got {v!r}")
+    return float(v)
+
+
+def _positive(s: Scenario, key: str, what: str, *, zero_ok: bool = False) -> float:
+    v = _finite(key, getattr(s, key), what)
+    if v < 0 or (v == 0 and not zero_ok):
+        bound = ">= 0" if zero_ok else "> 0"
+        raise ScenarioError(f"{key} must be {bound} ({what}); got {v!r}")
+    return v
+
+
+def validate(s: Scenario) -> None:
+    """Raise :class:`ScenarioError` naming the first invalid key of ``s`` and what is valid."""
+    for key, (n, what) in _VECTORS.items():
+        v = getattr(s, key)
+        if not isinstance(v, tuple) or len(v) != n:
+            got = len(v) if isinstance(v, tuple) else repr(v)
+            raise ScenarioError(f"{key} must be {n} numbers, {what}; got {got}"
+                                + (" numbers" if isinstance(v, tuple) else ""))
+        for i, x in enumerate(v):
+            _finite(f"{key}[{i}]", x, what)
+    for key in ("block_size_m",):
+        if min(getattr(s, key)) <= 0:
+            raise ScenarioError(f"{key} must be 3 positive edge lengths in m; got {getattr(s, key)}")
+    for key in ("kp_com", "kv_com", "kp_rot", "kv_rot"):
+        if min(getattr(s, key)) < 0:
+            raise ScenarioError(f"{key} must be >= 0 (PD gains); got {getattr(s, key)}")
+    _positive(s, "duration_s", "simulated time in s")
+    dt = _positive(s, "physics_timestep_s", "physics step in s, at most 0.001")
+    if dt > 0.001:
+        raise ScenarioError(f"physics_timestep_s must be <= 0.001 s (the issue's bound); got {dt}")
+    rate = _positive(s, "control_rate_hz", "controller calls per second")
+    ratio = 1.0 / (rate * dt)
+    if ratio < 1 - 1e-9 or abs(ratio - round(ratio)) > 1e-6:
+        raise ScenarioError(
+            f"control_rate_hz must make the control period a whole number of physics steps "
+            f"(physics_timestep_s = {dt} s); got {rate} Hz, i.e. {ratio:.6g} steps")
+    _positive(s, "block_mass_kg", "block mass in kg")
+    _positive(s, "joint_noise_deg", "standard deviation in deg", zero_ok=True)
+    _finite("initial_tilt_deg", s.initial_tilt_deg, "deg about -y")
+    _finite("target_tilt_deg", s.target_tilt_deg, "deg about target_axis")
+    for key, valid in _STRINGS.items():
+        v = getattr(s, key)
+        if v not in valid:
+            raise ScenarioError(f"{key} must be one of {', '.join(map(repr, valid))}; got {v!r}")
+    tl = s.torque_limits
+    if isinstance(tl, tuple):
+        if len(tl) != 12:
+            raise ScenarioError(f"torque_limits must be 'none', one number or 12 numbers "
+                                f"({', '.join(JOINT_NAMES)}) in N m; got {len(tl)} numbers")
+        for i, x in enumerate(tl):
+            if _finite(f"torque_limits[{i}]", x, "N m") <= 0:
+                raise ScenarioError(f"torque_limits[{i}] must be > 0 N m; got {x!r}")
+    elif tl != "none":
+        if not _is_number(tl) or not math.isfinite(tl) or tl <= 0:
+            raise ScenarioError(f"torque_limits must be 'none', one positive number or 12 of "
+                                f"them in N m; got {tl!r}")
+    _positive(s, "friction", "Coulomb coefficient", zero_ok=True)
+    e = _finite("restitution", s.restitution, "coefficient of restitution")
+    if not 0.0 <= e <= 0.8:
+        raise ScenarioError(f"restitution must be in [0, 0.8] (the calibrated range); got {e!r}")
+    tc = _positive(s, "contact_timeconst_s", "MuJoCo solref time constant in s")
+    if tc < 2 * dt:
+        raise ScenarioError(f"contact_timeconst_s must be >= 2 physics_timestep_s = {2 * dt} s "
+                            f"(MuJoCo's stability rule); got {tc}")
+    _positive(s, "fall_height_m", "central-body COM height in m")
+    _positive(s, "recovery_com_tol_m", "m")
+    _positive(s, "recovery_orientation_tol_deg", "deg")
+    if not isinstance(s.seed, int) or isinstance(s.seed, bool) or s.seed < 0:
+        raise ScenarioError(f"seed must be an integer >= 0; got {s.seed!r}")
+
+
+def _toml_value(v) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, list):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    if isinstance(v, float):
+        return repr(v)
+    return str(v)
+
+
+def parse_assignment(text: str) -> tuple[str, Any]:
+    """``"key=value"`` (value in TOML syntax, e.g. ``block_mass_kg=2.5`` or
+    ``kp_com=[60, 60, 200]``) -> ``(key, value)``; for the command line's ``--set``."""
+    if "=" not in text:
+        raise ScenarioError(f"--set expects KEY=VALUE with a key from: {', '.join(keys())}; "
+                            f"got {text!r}")
+    key, raw = (p.strip() for p in text.split("=", 1))
+    _check_keys({key: None})
+    try:
+        value = tomllib.loads(f"v = {raw}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw  # a bare word such as joint-pd or none
+    return key, value
+
+
+__all__ = ["Scenario", "JOINT_NAMES", "LEG_JOINTS", "W_JOINT_ANGLES_DEG", "CONTROLLERS",
+           "TARGET_AXES", "keys", "validate", "parse_assignment"]
