@@ -19,7 +19,8 @@ from os import PathLike
 import numpy as np
 
 from biped.control.recursions import (
-    NONFINITE_RESULT, NONFINITE_STATE, SINGULAR_DISTRIBUTION, compute_kernel, layout,
+    NONFINITE_RESULT, NONFINITE_STATE, SINGULAR_DISTRIBUTION, alg1_initialize,
+    alg2_velocity_propagation, alg6_torques, compute_kernel, layout,
 )
 from biped.errors import ScenarioError, SingularityError, StateError
 from biped.model import DEFAULT_FEET, TreeModel
@@ -161,6 +162,11 @@ class WorkspaceController:
         self._mi, self._mf = mi, mf
         self._work = np.zeros(lay["work"]["_size"][0])
         self._out = np.zeros(lay["out"]["_size"][0])
+        # named views of the flat buffers, for the debugging methods below (not the hot path)
+        self._m = {k: mf[o:o + int(np.prod(sh))].reshape(sh)
+                   for k, (o, sh) in lay["model"].items() if k != "_size"}
+        self._w = {k: self._work[o:o + int(np.prod(sh))].reshape(sh)
+                   for k, (o, sh) in lay["work"].items() if k != "_size"}
 
     @classmethod
     def from_mjcf(cls, source: str | PathLike, feet: tuple[str, str] = DEFAULT_FEET, **kwargs
@@ -213,6 +219,61 @@ class WorkspaceController:
             wrench_desired=v("Fd").copy(), wrench_left=v("Fl_tilde").copy(),
             wrench_right=v("Fr_tilde").copy(), foot_wrench_left=v("Fl").copy(),
             foot_wrench_right=v("Fr").copy(), quat_error=v("qe").copy())
+
+    # ------------------------------------------------------------------ debugging / checking
+
+    def _state(self, qpos, qvel):
+        qpos = np.ascontiguousarray(qpos, dtype=float)
+        qvel = np.zeros(self.tree.nv) if qvel is None else np.ascontiguousarray(qvel, dtype=float)
+        if qpos.shape != (self.tree.nq,) or qvel.shape != (self.tree.nv,):
+            raise StateError(
+                f"qpos must have shape ({self.tree.nq},) and qvel ({self.tree.nv},) (MuJoCo layout of "
+                f"{self.tree.source}), got {qpos.shape} and {qvel.shape}")
+        bad = [f"qpos[{i}]" for i in np.flatnonzero(~np.isfinite(qpos))]
+        bad += [f"qvel[{i}]" for i in np.flatnonzero(~np.isfinite(qvel))]
+        if bad:
+            raise StateError(f"non-finite state entries: {', '.join(bad)}; qpos and qvel must be finite")
+        return qpos, qvel
+
+    def _kinematics(self, qpos, qvel):
+        """W Alg. 1 and Alg. 2 alone (the kernel's own functions) into the work buffer."""
+        t, m, w = self.tree, self._m, self._w
+        tmp44 = w["tmp66"].reshape(-1)[:48].reshape(3, 4, 4)
+        alg1_initialize(qpos, qvel, t.qpos_adr[0], t.dof_adr[0], m["G0"][0], m["root_qbi"], m["mass"],
+                        m["inertia"], m["gravity"], w["g"], w["V"], w["a"], w["b"], w["quat"])
+        alg2_velocity_propagation(qpos, qvel, t.parent, t.qpos_adr, t.dof_adr, m["H"], m["G0"],
+                                  m["qref"], m["mass"], m["inertia"], m["gravity"], w["g"], w["Ad"],
+                                  w["V"], w["a"], w["b"], tmp44)
+
+    def link_poses(self, qpos) -> np.ndarray:
+        """(n_links, 4, 4) world poses ``g_{0,k}`` of every link's COM principal frame (MuJoCo's
+        ``xipos``/``ximat``), W Alg. 1-2. For checking and debugging; allocates."""
+        qpos, qvel = self._state(qpos, None)
+        self._kinematics(qpos, qvel)
+        return self._w["g"].copy()
+
+    def link_velocities(self, qpos, qvel) -> np.ndarray:
+        """(n_links, 6) body velocities ``V_k^b = [v; w]`` of every link (W Alg. 1-2): velocity of
+        link k's COM and its angular velocity relative to the world, both in link k's COM
+        principal frame [m/s, rad/s]. For checking and debugging; allocates."""
+        qpos, qvel = self._state(qpos, qvel)
+        self._kinematics(qpos, qvel)
+        return self._w["V"].copy()
+
+    def leg_torques(self, qpos, wrench_left, wrench_right) -> np.ndarray:
+        """W Alg. 6 alone: joint torques (n_joints,) [N m] with which the legs exert the wrenches
+        ``F~_2`` (left) and ``F~_8`` (right) [N, N m] on the central body (central-body COM frame),
+        feet fixed: ``tau_leg = J_leg^T F~``. Joints off the legs get zero. For checking the
+        recursion against a Jacobian and for Jacobian-transpose control; allocates."""
+        qpos, _ = self._state(qpos, None)
+        t = self.tree
+        fl, fr = (np.array(_vec(n, v, 6)) for n, v in (("wrench_left", wrench_left),
+                                                       ("wrench_right", wrench_right)))
+        F = np.zeros((t.n_links, 6))
+        tau = np.zeros(t.n_links - 1)
+        alg6_torques(t.parent, self._m["H"], t.leg, t.beyond_foot.astype(np.int64), self._m["G0"],
+                     qpos, t.qpos_adr, self._m["qref"], fl, fr, F, np.zeros((3, 4, 4)), tau)
+        return tau
 
     def torques(self, qpos: np.ndarray, qvel: np.ndarray, target: Target | None = None,
                 gains: Gains | None = None) -> np.ndarray:
