@@ -382,7 +382,7 @@ def write_outputs(result: PushResult, out_dir: str | Path, *, figures: bool = Tr
         else:
             try:
                 res = render_video(scene.model, result.times, result.qpos, out / "video.mp4",
-                                   fps=30, track_body="central_body")
+                                   fps=30, track_body="central_body", distance=3.0)
                 if getattr(res, "path", None):
                     written["video"] = Path(res.path)
                 else:
@@ -401,7 +401,7 @@ def write_outputs(result: PushResult, out_dir: str | Path, *, figures: bool = Tr
                         "final orientation error [deg]": round(result.final_orientation_error_deg, 3)}
                 rp = replay_from_mujoco(scene.model, result.times, result.qpos,
                                         title="W section 4: push recovery", info=info,
-                                        markers=_markers(result))
+                                        markers=_markers(result), follow="trunk")
                 written["replay"] = write_replay(rp, out / "replay.html") or out / "replay.html"
             except Exception as exc:  # noqa: BLE001
                 log(f"replay: not written ({type(exc).__name__}: {exc})")

@@ -1,0 +1,178 @@
+"""``biped push``: W's push-recovery experiment (section 4) on MuJoCo.
+
+With no arguments it runs W's scenario and writes summary.json, trajectory.csv, figures/,
+video.mp4 and replay.html into a new folder under ``runs/``. Thin: parsing here, work in
+:mod:`biped.sim`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime as _dt
+import os
+import sys
+from pathlib import Path
+
+from biped.errors import ScenarioError
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "push", help="W's push-recovery experiment: a thrown block vs the workspace controller",
+        description="Simulate W section 4 on MuJoCo: the biped rises to its set point while a "
+                    "1.8 kg block hits it. Every parameter defaults to W's; see docs/push.md.")
+    p.add_argument("--scenario", metavar="FILE.toml", help="scenario file (top-level key = value)")
+    p.add_argument("--duration", type=float, metavar="S", help="simulated time [s] (W: 3)")
+    p.add_argument("--block-position", type=float, nargs=3, metavar=("X", "Y", "Z"),
+                   help="block start [m] (W: 0.5 0.1 1.2)")
+    p.add_argument("--block-velocity", type=float, nargs=3, metavar=("VX", "VY", "VZ"),
+                   help="block velocity [m/s] (W: -4.5 0 0.2)")
+    p.add_argument("--block-mass", type=float, metavar="KG", help="block mass [kg] (W: 1.8)")
+    p.add_argument("--controller", choices=("workspace", "joint-pd"),
+                   help="W's workspace controller (default) or the joint-PD baseline")
+    p.add_argument("--timestep", type=float, metavar="S", help="physics step [s], <= 0.001")
+    p.add_argument("--seed", type=int, help="seed of the initial-state noise (joint_noise_deg)")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="any scenario key, TOML value syntax (repeatable), e.g. "
+                        "--set 'kp_com=[60, 60, 200]' --set target_axis='\"-x\"'")
+    p.add_argument("--out", metavar="DIR", help="output folder (default: a new one under runs/)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="allow writing into a folder that already holds a run")
+    p.add_argument("--no-video", action="store_true", help="skip video.mp4")
+    p.add_argument("--no-replay", action="store_true", help="skip replay.html")
+    p.add_argument("--no-figures", action="store_true", help="skip figures/")
+    p.add_argument("--viewer", action="store_true", help="show the run live in MuJoCo's viewer")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def build_scenario(args):
+    """The scenario from ``--scenario``, then ``--set``, then the named options (last wins)."""
+    from biped.sim.scenario import Scenario, parse_assignment
+
+    scenario = Scenario.from_toml(args.scenario) if args.scenario else Scenario()
+    overrides = dict(parse_assignment(a) for a in args.set)
+    named = {"duration_s": args.duration, "block_position_m": args.block_position,
+             "block_velocity_m_s": args.block_velocity, "block_mass_kg": args.block_mass,
+             "controller": args.controller, "physics_timestep_s": args.timestep,
+             "seed": args.seed}
+    overrides.update({k: v for k, v in named.items() if v is not None})
+    return scenario.with_overrides(**overrides) if overrides else scenario
+
+
+def _out_dir(args) -> Path:
+    if args.out:
+        out = Path(args.out)
+        if (out / "summary.json").exists() and not args.overwrite:
+            raise ScenarioError(f"--out {str(out)!r} already holds a run (summary.json); choose "
+                                f"another folder or pass --overwrite")
+        return out
+    stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S")
+    out = Path("runs") / f"push-{stamp}"
+    k = 1
+    while out.exists():
+        k += 1
+        out = Path("runs") / f"push-{stamp}-{k}"
+    return out
+
+
+def _viewer(enabled: bool):
+    """A live viewer's (on_step, close) or (None, None) with a one-line reason."""
+    if not enabled:
+        return None, None
+    if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")) and sys.platform != "darwin":
+        print("--viewer: no display (DISPLAY / WAYLAND_DISPLAY unset); running without it")
+        return None, None
+    try:
+        import mujoco.viewer
+    except Exception as exc:  # noqa: BLE001
+        print(f"--viewer: MuJoCo's viewer is unavailable ({exc}); running without it")
+        return None, None
+    state = {}
+
+    def on_step(model, data):
+        if "v" not in state:
+            try:
+                state["v"] = mujoco.viewer.launch_passive(model, data)
+            except Exception as exc:  # noqa: BLE001
+                print(f"--viewer: could not open ({exc}); running without it")
+                state["v"] = None
+        v = state["v"]
+        if v is not None and v.is_running():
+            v.sync()
+
+    def close():
+        if state.get("v") is not None:
+            state["v"].close()
+
+    return on_step, close
+
+
+def _table(result, out: Path, paths: dict) -> str:
+    def f(x, fmt):
+        return "n/a" if x is None else format(x, fmt)
+
+    s = result.scenario
+    status = ("recovered" if result.recovered else "fell" if result.fell
+              else "diverged" if result.diverged else "interrupted" if result.interrupted
+              else "controller error" if result.controller_error else "not recovered")
+    rows = [
+        ("result", status),
+        ("final COM error", f"{f(result.final_com_error_m * 100, '.2f')} cm "
+                            f"(tolerance {s.recovery_com_tol_m * 100:g} cm)"),
+        ("final orientation error", f"{f(result.final_orientation_error_deg, '.3f')} deg "
+                                    f"(tolerance {s.recovery_orientation_tol_deg:g} deg)"),
+        ("block hits the body", f"{f(result.block_contact_time_s, '.3f')} s"),
+        ("simulated", f"{result.times[-1] if len(result.times) else 0:.3f} of {s.duration_s:g} s"),
+        ("wall time", f"{result.wall_time_s:.2f} s ({result.realtime_factor:.1f}x real time, "
+                      f"physics {s.physics_timestep_s * 1e3:g} ms, control {s.control_rate_hz:g} Hz)"),
+    ]
+    if result.fell:
+        rows.append(("fall", f"{result.fall_time_s:.3f} s: {result.fall_reason}"))
+    if result.diverged:
+        rows.append(("diverged", result.diverged))
+    if result.controller_error:
+        rows.append(("controller error", result.controller_error))
+    first = {}
+    for e in result.events:
+        if e.time_s > 0.05:  # after the initial landing
+            first.setdefault((e.foot, e.kind), e)
+    for (foot, kind), e in sorted(first.items(), key=lambda kv: kv[1].time_s):
+        rows.append((f"first {foot} {kind.replace('_', ' ')} after landing", f"{e.time_s:.3f} s ({e.part})"))
+    rows.append(("outputs", str(out)))
+    w = max(len(k) for k, _ in rows)
+    return "\n".join(f"  {k:<{w}}  {v}" for k, v in rows)
+
+
+def run(args) -> int:
+    from biped.sim.push import simulate, write_outputs
+    from biped.sim.scene import build_scene
+
+    scenario = build_scenario(args)  # validated before anything is simulated
+    out = _out_dir(args)
+    scene = build_scene(scenario)
+    on_step, close = _viewer(args.viewer)
+    bar = None
+    progress = None
+    if not args.quiet:
+        from tqdm import tqdm
+
+        bar = tqdm(total=round(scenario.duration_s, 6), unit="s sim", desc="biped push",
+                   bar_format="{l_bar}{bar}| {n:.2f}/{total:.2f} s sim [{elapsed}<{remaining}]")
+
+        def progress(t):
+            bar.update(max(0.0, t - bar.n))
+
+    try:
+        result = simulate(scenario, progress=progress, scene=scene, on_step=on_step)
+    finally:
+        if bar is not None:
+            bar.close()
+        if close is not None:
+            close()
+    paths = write_outputs(result, out, figures=not args.no_figures, video=not args.no_video,
+                          replay=not args.no_replay, scene=scene)
+    print(_table(result, out, paths))
+    if result.interrupted:
+        return 130
+    return 0
