@@ -3,6 +3,10 @@
 
 const $ = (id) => document.getElementById(id);
 
+// Content-Security-Policy (default-src 'none') blocks any network access; record attempts.
+const violations = [];
+document.addEventListener("securitypolicyviolation", (e) => violations.push(e.blockedURI + " " + e.violatedDirective));
+
 function showMessage(text) {
   const m = $("message");
   m.textContent = text;
@@ -86,6 +90,7 @@ async function main() {
 
   const scene = new THREE.Scene();
   scene.background = new THREE.Color(0xe9edf1);
+  scene.fog = new THREE.Fog(0xe9edf1, 12, 60);
   const camera = new THREE.PerspectiveCamera(40, window.innerWidth / window.innerHeight, 0.02, 500);
   camera.up.set(0, 0, 1);
 
@@ -328,7 +333,27 @@ async function main() {
   dirty = false;
   if (hp.play === "1") setPlaying(true);
   requestAnimationFrame(frame);
+  if (hp.probe === "1") probe(THREE, meshes);
   document.body.dataset.ready = "1";
+}
+
+// #probe=1: write what was drawn as JSON into a hidden pre element (id "probe"), for tests (chromium --dump-dom):
+// each mesh's world axis-aligned bounding box at the shown time, resources loaded and blocked.
+function probe(THREE, meshes) {
+  const boxes = meshes.map((m) => {
+    m.updateWorldMatrix(true, false);
+    const b = new THREE.Box3().setFromObject(m, true);
+    return { name: m.name, min: b.min.toArray(), max: b.max.toArray() };
+  });
+  const out = document.createElement("pre");
+  out.id = "probe";
+  out.style.display = "none";
+  out.textContent = JSON.stringify({
+    boxes, violations,
+    resources: performance.getEntriesByType("resource").map((e) => e.name),
+    title: document.title, h1: $("title").textContent, hash: location.hash,
+  });
+  document.body.appendChild(out);
 }
 
 main().catch((err) => {
