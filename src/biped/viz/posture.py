@@ -82,11 +82,12 @@ def stability_map_figure(smap, marks: dict | None = None) -> Figure:
     ``marks``: label -> (K_theta1, K_theta2) drawn as points (B's gain sets)."""
     fig = _figure(6.5, 5.0)
     ax = fig.add_subplot()
-    m = np.clip(smap.margin, -5, 5)
-    im = ax.pcolormesh(smap.k_theta1, smap.k_theta2, m, cmap="RdYlGn", vmin=-5, vmax=5,
+    v = float(min(5.0, np.nanmax(np.abs(smap.margin))))
+    m = np.clip(smap.margin, -v, v)
+    im = ax.pcolormesh(smap.k_theta1, smap.k_theta2, m, cmap="RdYlGn", vmin=-v, vmax=v,
                        shading="nearest")  # fmt: skip
     ax.contour(smap.k_theta1, smap.k_theta2, smap.margin, levels=[0.0], colors="k", linewidths=1.2)
-    fig.colorbar(im, ax=ax, label="margin -max Re(lambda) [1/s] (clipped to +-5)")
+    fig.colorbar(im, ax=ax, label="stability margin -max Re(lambda) [1/s]")
     for label, (k1, k2) in (marks or {}).items():
         ax.plot([k1], [k2], "o", ms=7, mfc="white", mec="k")
         ax.annotate(label, (k1, k2), textcoords="offset points", xytext=(6, 6), fontsize=8)
