@@ -1,0 +1,98 @@
+"""Scenario input: W's defaults, TOML round trip, and clear errors before any simulation."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from biped.cli import main
+from biped.errors import ScenarioError
+from biped.sim.scenario import Scenario, keys, parse_assignment
+
+
+def test_defaults_are_w_section_4():
+    """Numbers typed from W section 4 (not from the code)."""
+    s = Scenario()
+    assert s.duration_s == 3.0 and s.control_rate_hz == 500.0 and s.physics_timestep_s <= 0.001
+    assert s.block_mass_kg == 1.8
+    assert s.block_position_m == (0.50, 0.10, 1.20)
+    assert s.block_velocity_m_s == (-4.50, 0.0, 0.20)
+    assert s.initial_com_m == (0.0, 0.0, 1.035) and s.initial_tilt_deg == 5.0
+    assert s.initial_joint_angles_deg == (0.0, 40.0, 0.0, -77.4595, 0.0, 42.4595) * 2
+    assert s.target_com_m == (-0.01, 0.0, 1.14) and s.target_tilt_deg == 15.0
+    assert (s.kp_com, s.kv_com) == ((50, 50, 200), (7.07, 7.07, 14.142))
+    assert (s.kp_rot, s.kv_rot) == ((50, 50, 50), (7.07, 7.07, 7.07))
+    assert s.friction == 0.3 and s.restitution == 0.2
+
+
+def test_toml_round_trip(tmp_path):
+    s = Scenario(block_mass_kg=2.5, kp_com=(60.0, 60.0, 210.0), controller="joint-pd",
+                 torque_limits=150.0)
+    p = tmp_path / "s.toml"
+    p.write_text(s.to_toml())
+    assert Scenario.from_toml(p) == s
+
+
+@pytest.mark.parametrize("text, words", [
+    ("block_mas_kg = 2.0", ["unknown scenario key 'block_mas_kg'", "block_mass_kg"]),
+    ("block_position_m = [0.5, 0.1]", ["block_position_m", "3 numbers", "got 2"]),
+    ("initial_joint_angles_deg = [0, 40, 0]", ["initial_joint_angles_deg", "12 numbers"]),
+    ("block_mass_kg = -1.0", ["block_mass_kg", "> 0"]),
+    ("friction = nan", ["friction", "finite"]),
+    ("block_velocity_m_s = [-4.5, nan, 0.2]", ["block_velocity_m_s[1]", "finite"]),
+    ("controller = \"pid\"", ["controller", "'workspace'", "'joint-pd'"]),
+    ("physics_timestep_s = 0.002", ["physics_timestep_s", "0.001"]),
+    ("control_rate_hz = 700.0", ["control_rate_hz", "whole number"]),
+    ("restitution = 1.5", ["restitution", "[0, 0.8]"]),
+    ("torque_limits = [1, 2]", ["torque_limits", "12 numbers"]),
+    ("seed = -3", ["seed", ">= 0"]),
+    ("[block]\nmass = 2", ["tables", "top-level"]),
+    ("block_mass_kg = ", ["not valid TOML"]),
+])
+def test_bad_scenario_file_names_the_key(tmp_path, text, words):
+    p = tmp_path / "bad.toml"
+    p.write_text(text + "\n")
+    with pytest.raises(ScenarioError) as err:
+        Scenario.from_toml(p)
+    for w in words:
+        assert w in str(err.value), (w, str(err.value))
+
+
+def test_unknown_key_lists_every_valid_key():
+    with pytest.raises(ScenarioError) as err:
+        Scenario().with_overrides(mass=1)
+    for k in keys():
+        assert k in str(err.value)
+
+
+def test_set_assignment_parses_toml_values():
+    assert parse_assignment("kp_com=[60, 60, 200]") == ("kp_com", [60, 60, 200])
+    assert parse_assignment("controller=joint-pd") == ("controller", "joint-pd")
+    with pytest.raises(ScenarioError, match="KEY=VALUE"):
+        parse_assignment("kp_com")
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--block-mass", "-1"], ["block_mass_kg", "> 0"]),
+    (["--set", "frobnicate=1"], ["unknown scenario key 'frobnicate'"]),
+    (["--set", "block_size_m=[0.1, 0.1]"], ["block_size_m", "3 numbers"]),
+    (["--duration", "nan"], ["duration_s", "finite"]),
+])
+def test_cli_rejects_bad_input_before_simulating(tmp_path, capsys, argv, words):
+    out = tmp_path / "run"
+    code = main(["push", "--quiet", "--no-video", "--no-replay", "--out", str(out), *argv])
+    assert code == 2
+    err = capsys.readouterr().err
+    for w in words:
+        assert w in err
+    assert not out.exists()  # nothing simulated, nothing written
+
+
+def test_cli_refuses_to_overwrite_a_run(tmp_path, capsys):
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "summary.json").write_text(json.dumps({"recovered": True}))
+    assert main(["push", "--quiet", "--out", str(out), "--duration", "0.01"]) == 2
+    assert "--overwrite" in capsys.readouterr().err
+    assert json.loads((out / "summary.json").read_text()) == {"recovered": True}
