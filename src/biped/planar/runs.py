@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from biped.errors import ScenarioError, StateError
+from biped.errors import BipedError, ScenarioError, StateError
 from biped.planar import body_leg as bl
 from biped.planar import integrators
 from biped.planar import pendulum as pd
@@ -139,13 +139,22 @@ def _run(model, method, acc_fn, nq, torque_fn, x0, dt, duration, integrator, hol
             f = lambda t, y, u=u: rhs(t, y, u)  # noqa: E731
         else:
             f = lambda t, y: rhs(t, y, torque_fn(y))  # noqa: E731
-        x_next = step(f, i * dt, x, dt)
-        if not np.all(np.isfinite(x_next)):
+        try:
+            with np.errstate(over="ignore", invalid="ignore"):
+                x_next = step(f, i * dt, x, dt)
+            cause = None
+        except (OverflowError, StateError) as exc:  # a stage left the finite numbers
+            x_next, cause = None, exc
+        except ValueError as exc:  # math domain error on inf; other BipedErrors propagate
+            if isinstance(exc, BipedError):
+                raise
+            x_next, cause = None, exc
+        if x_next is None or not np.all(np.isfinite(x_next)):
             raise StateError(
                 f"the {model} state became non-finite at t = {(i + 1) * dt:.4g} s "
                 f"({method}, {integrator}, dt = {dt}): the closed loop diverged; "
                 "try a smaller dt, another integrator or other gains"
-            )
+            ) from cause
         xs[i + 1] = x_next
     wall = _time.perf_counter() - t0
     us[n] = torque_fn(xs[n])
