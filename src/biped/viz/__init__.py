@@ -12,5 +12,5 @@ trajectory, computed after the simulation. See ``docs/viz.md``.
 from biped.viz.replay import Replay, ReplayGeom, replay_from_mujoco, write_replay
 from biped.viz.video import VideoResult, gl_available, render_video
 
-__all__ = ["Replay", "ReplayGeom", "replay_from_mujoco", "write_replay",
-           "VideoResult", "gl_available", "render_video"]
+__all__ = ["Replay", "ReplayGeom", "VideoResult", "gl_available", "render_video",
+           "replay_from_mujoco", "write_replay"]

@@ -27,8 +27,9 @@ import json
 import math
 import pathlib
 import re
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Iterable, Mapping
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -37,7 +38,7 @@ from biped.errors import BipedError, ModelError, StateError, unknown_name
 if TYPE_CHECKING:  # pragma: no cover
     import mujoco
 
-__all__ = ["ReplayGeom", "Replay", "replay_from_mujoco", "write_replay", "GEOM_KINDS"]
+__all__ = ["GEOM_KINDS", "Replay", "ReplayGeom", "replay_from_mujoco", "write_replay"]
 
 #: Valid :attr:`ReplayGeom.kind` values and the number of entries of their ``size``.
 GEOM_KINDS = {"box": 3, "sphere": 1, "capsule": 2, "cylinder": 2, "ellipsoid": 3, "plane": 2}
@@ -211,7 +212,7 @@ _MJ_KIND = {0: "plane", 2: "sphere", 3: "capsule", 4: "ellipsoid", 5: "cylinder"
 _MJ_DEFAULT_RGBA = (0.5, 0.5, 0.5, 1.0)
 
 
-def replay_from_mujoco(model: "mujoco.MjModel", times, qpos, *, geom_groups=None,
+def replay_from_mujoco(model: mujoco.MjModel, times, qpos, *, geom_groups=None,
                        title: str = "biped replay", info: Mapping[str, Any] | None = None,
                        markers: Iterable[Mapping] = (), follow: str | None = None) -> Replay:
     """Record the world pose of each visible geom of ``model`` along a trajectory.
