@@ -119,6 +119,18 @@ def test_replay_records_every_visible_geom_with_mjcf_names_and_colours(wendlandt
         replay_from_mujoco(m, [0.0], m.key_qpos[:1], geom_groups=[5])
 
 
+def test_a_500_hz_trajectory_becomes_a_100_frames_per_second_replay(wendlandt_mj):
+    m = wendlandt_mj
+    times = np.arange(1501) / 500.0 + 0.25           # 3 s at the control rate
+    q = np.tile(m.key_qpos[0], (times.size, 1))
+    q[:, 0] = times                                   # the root moves 1 m/s in x
+    r = replay_from_mujoco(m, times, q)
+    np.testing.assert_allclose(r.times, 0.25 + np.arange(301) / 100.0, atol=1e-12)
+    trunk = [g.name for g in r.geoms].index("trunk")
+    np.testing.assert_allclose(r.pos[:, trunk, 0] - r.times, r.pos[0, trunk, 0] - 0.25, atol=1e-12)
+    assert replay_from_mujoco(m, times, q, max_rate_hz=None).times.size == 1501
+
+
 def test_bad_input_is_rejected_with_a_clear_message(wendlandt_mj):
     m = wendlandt_mj
     q = np.tile(m.key_qpos[0], (3, 1))
