@@ -16,7 +16,7 @@ import pytest
 
 from biped.sim.scenario import JOINT_NAMES, Scenario
 from biped.sim.scene import scene_spec
-from biped.spatial import axis_angle_quat, quat_mul, quat_to_rot
+from biped.spatial import axis_angle_quat, quat_mul
 
 E_TOL = 0.05
 

@@ -14,7 +14,7 @@ from biped.sim import Scenario, build_scene, simulate, write_outputs
 from biped.sim.push import make_controller, orientation_error_deg, write_trajectory_csv
 from biped.sim.scene import initial_state, scene_spec, tilt_quat
 
-MISS = dict(block_position_m=(3.0, 3.0, 0.06), block_velocity_m_s=(0.0, 0.0, 0.0))
+MISS = {"block_position_m": (3.0, 3.0, 0.06), "block_velocity_m_s": (0.0, 0.0, 0.0)}
 
 
 def test_block_hits_and_pushes_the_body_forward():

@@ -7,7 +7,6 @@ video.mp4 and replay.html into a new folder under ``runs/``. Thin: parsing here,
 
 from __future__ import annotations
 
-import argparse
 import datetime as _dt
 import os
 import sys
@@ -118,14 +117,14 @@ def _table(result, out: Path, paths: dict) -> str:
               else "controller error" if result.controller_error else "not recovered")
     rows = [
         ("result", status),
-        ("final COM error", f"{f(result.final_com_error_m * 100, '.2f')} cm "
-                            f"(tolerance {s.recovery_com_tol_m * 100:g} cm)"),
-        ("final orientation error", f"{f(result.final_orientation_error_deg, '.3f')} deg "
-                                    f"(tolerance {s.recovery_orientation_tol_deg:g} deg)"),
+        ("final COM error", (f"{f(result.final_com_error_m * 100, '.2f')} cm "
+                            f"(tolerance {s.recovery_com_tol_m * 100:g} cm)")),
+        ("final orientation error", (f"{f(result.final_orientation_error_deg, '.3f')} deg "
+                                    f"(tolerance {s.recovery_orientation_tol_deg:g} deg)")),
         ("block hits the body", f"{f(result.block_contact_time_s, '.3f')} s"),
         ("simulated", f"{result.times[-1] if len(result.times) else 0:.3f} of {s.duration_s:g} s"),
-        ("wall time", f"{result.wall_time_s:.2f} s ({result.realtime_factor:.1f}x real time, "
-                      f"physics {s.physics_timestep_s * 1e3:g} ms, control {s.control_rate_hz:g} Hz)"),
+        ("wall time", (f"{result.wall_time_s:.2f} s ({result.realtime_factor:.1f}x real time, "
+                      f"physics {s.physics_timestep_s * 1e3:g} ms, control {s.control_rate_hz:g} Hz)")),
     ]
     if result.fell:
         rows.append(("fall", f"{result.fall_time_s:.3f} s: {result.fall_reason}"))

@@ -9,5 +9,12 @@ from biped.sim.push import PushResult, replay_torques, simulate, write_outputs
 from biped.sim.scenario import Scenario
 from biped.sim.scene import Scene, build_scene
 
-__all__ = ["Scenario", "Scene", "PushResult", "build_scene", "simulate", "replay_torques",
-           "write_outputs"]
+__all__ = [
+           "PushResult",
+           "Scenario",
+           "Scene",
+           "build_scene",
+           "replay_torques",
+           "simulate",
+           "write_outputs",
+]

@@ -55,7 +55,7 @@ def _drop_rig(timestep: float, timeconst: float):
     spec.option.timestep = timestep
     spec.option.gravity = [0.0, 0.0, 0.0]
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
-    kw = dict(solref=[timeconst, 1.0], solimp=list(CONTACT_SOLIMP))
+    kw = {"solref": [timeconst, 1.0], "solimp": list(CONTACT_SOLIMP)}
     spec.worldbody.add_geom(name="plane", type=mujoco.mjtGeom.mjGEOM_PLANE, size=[1, 1, 0.1], **kw)
     body = spec.worldbody.add_body(name="ball", pos=[0, 0, 0.05])
     body.add_freejoint()

@@ -65,7 +65,7 @@ class JointPDController:
             self._set_target(target)
 
     @classmethod
-    def from_mjcf(cls, source: str | PathLike, **kwargs) -> "JointPDController":
+    def from_mjcf(cls, source: str | PathLike, **kwargs) -> JointPDController:
         return cls(mujoco.MjModel.from_xml_path(str(source)), **kwargs)
 
     # -- the set point in joint space -----------------------------------------------------------

@@ -17,22 +17,29 @@ from __future__ import annotations
 import json
 import math
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Callable
 
 import mujoco
 import numpy as np
 
 from biped.errors import BipedError
-from biped.sim.contact import SOLE_GEOMS, ContactEvent, ContactMonitor
+from biped.sim.contact import SOLE_GEOMS, ContactMonitor
 from biped.sim.scenario import Scenario
 from biped.sim.scene import Scene, build_scene, initial_state, tilt_quat
 
 _BADQACC = int(mujoco.mjtWarning.mjWARN_BADQACC)
 
-__all__ = ["PushResult", "simulate", "replay_torques", "make_controller", "write_outputs",
-           "write_trajectory_csv", "summary_dict"]
+__all__ = [
+    "PushResult",
+    "make_controller",
+    "replay_torques",
+    "simulate",
+    "summary_dict",
+    "write_outputs",
+    "write_trajectory_csv",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -94,9 +101,8 @@ def orientation_error_deg(quat, target_quat) -> float:
 def make_controller(scenario: Scenario, scene: Scene) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
     """``policy(qpos_biped (19,), qvel_biped (18,)) -> torques (12,)`` in ``scene.joint_names``
     order, for ``scenario.controller`` with the scenario's set point and gains."""
-    from biped.control import Gains, Target
-
     import biped.models
+    from biped.control import Gains, Target
 
     target = Target.wendlandt(com=scenario.target_com_m, tilt_deg=scenario.target_tilt_deg,
                               axis=scenario.target_axis)
@@ -159,7 +165,7 @@ def _run(scenario: Scenario, scene: Scene, policy, *, progress=None, on_step=Non
     jq = scene.joint_qpos_index
     mass_block = m.body_mass[scene.block_body]
     p_before = mass_block * d.qvel[scene.block_qvel_index[:3]].copy()
-    progress_every = max(1, int(round(0.05 * scenario.control_rate_hz)))
+    progress_every = max(1, round(0.05 * scenario.control_rate_hz))
     interrupted = False
     controller_error = None
     diverged = None

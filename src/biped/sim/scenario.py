@@ -78,13 +78,13 @@ class Scenario:
 
     # ------------------------------------------------------------------ construction
     @classmethod
-    def from_dict(cls, values: dict) -> "Scenario":
+    def from_dict(cls, values: dict) -> Scenario:
         """A scenario from ``{key: value}``; unknown keys are an error (listing the valid ones)."""
         _check_keys(values)
         return cls(**{k: _coerce(k, v) for k, v in values.items()})
 
     @classmethod
-    def from_toml(cls, path: str | Path) -> "Scenario":
+    def from_toml(cls, path: str | Path) -> Scenario:
         """A scenario from a TOML file of top-level ``key = value`` lines (others keep W's)."""
         path = Path(path)
         try:
@@ -102,7 +102,7 @@ class Scenario:
                     f"top-level 'key = value' lines with keys from: {', '.join(keys())}")
         return cls.from_dict(values)
 
-    def with_overrides(self, **values) -> "Scenario":
+    def with_overrides(self, **values) -> Scenario:
         """A copy with some keys changed (validated like every other route)."""
         _check_keys(values)
         return dataclasses.replace(self, **{k: _coerce(k, v) for k, v in values.items()})
@@ -127,12 +127,12 @@ class Scenario:
     @property
     def control_substeps(self) -> int:
         """Physics steps per control period (the zero-order hold)."""
-        return int(round(1.0 / (self.control_rate_hz * self.physics_timestep_s)))
+        return round(1.0 / (self.control_rate_hz * self.physics_timestep_s))
 
     @property
     def control_steps(self) -> int:
         """Number of control periods in ``duration_s``."""
-        return int(round(self.duration_s * self.control_rate_hz))
+        return round(self.duration_s * self.control_rate_hz)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -244,10 +244,9 @@ def validate(s: Scenario) -> None:
         for i, x in enumerate(tl):
             if _finite(f"torque_limits[{i}]", x, "N m") <= 0:
                 raise ScenarioError(f"torque_limits[{i}] must be > 0 N m; got {x!r}")
-    elif tl != "none":
-        if not _is_number(tl) or not math.isfinite(tl) or tl <= 0:
-            raise ScenarioError(f"torque_limits must be 'none', one positive number or 12 of "
-                                f"them in N m; got {tl!r}")
+    elif tl != "none" and (not _is_number(tl) or not math.isfinite(tl) or tl <= 0):
+        raise ScenarioError(f"torque_limits must be 'none', one positive number or 12 of "
+                            f"them in N m; got {tl!r}")
     _positive(s, "friction", "Coulomb coefficient", zero_ok=True)
     e = _finite("restitution", s.restitution, "coefficient of restitution")
     if not 0.0 <= e <= 0.8:
@@ -290,5 +289,14 @@ def parse_assignment(text: str) -> tuple[str, Any]:
     return key, value
 
 
-__all__ = ["Scenario", "JOINT_NAMES", "LEG_JOINTS", "W_JOINT_ANGLES_DEG", "CONTROLLERS",
-           "TARGET_AXES", "keys", "validate", "parse_assignment"]
+__all__ = [
+    "CONTROLLERS",
+    "JOINT_NAMES",
+    "LEG_JOINTS",
+    "TARGET_AXES",
+    "W_JOINT_ANGLES_DEG",
+    "Scenario",
+    "keys",
+    "parse_assignment",
+    "validate",
+]
