@@ -19,7 +19,7 @@ from os import PathLike
 import numpy as np
 
 from biped.control.recursions import (
-    NONFINITE_RESULT, NONFINITE_STATE, SINGULAR_DISTRIBUTION, alg1_initialize,
+    NONFINITE_RESULT, NONFINITE_STATE, SINGULAR_DISTRIBUTION, ZERO_QUATERNION, alg1_initialize,
     alg2_velocity_propagation, alg6_torques, compute_kernel, layout,
 )
 from biped.errors import ScenarioError, SingularityError, StateError
@@ -196,12 +196,19 @@ class WorkspaceController:
                 bad = [f"qpos[{i}]" for i in np.flatnonzero(~np.isfinite(qpos))]
                 bad += [f"qvel[{i}]" for i in np.flatnonzero(~np.isfinite(qvel))]
                 raise StateError(f"non-finite state entries: {', '.join(bad)}; qpos and qvel must be finite")
+            if status == ZERO_QUATERNION:
+                a = self.tree.qpos_adr[0] + 3
+                raise StateError(f"the root quaternion qpos[{a}:{a + 4}] is zero; it must be a "
+                                 f"(w, x, y, z) quaternion of nonzero norm (it is normalized)")
             if status == SINGULAR_DISTRIBUTION:
-                raise SingularityError("wrench distribution: G G^T is not positive definite (W Alg. 5)")
+                raise SingularityError(
+                    "wrench distribution: G G^T is singular to working precision (W Alg. 5); it is the "
+                    "sum of two positive-definite matrices, so this means feet absurdly far from the "
+                    "central body for double precision")
             if status == NONFINITE_RESULT:
                 raise SingularityError(
-                    "the controller produced non-finite values: the workspace dynamics are singular at this "
-                    "state (a joint axis with zero articulated inertia, W Alg. 3)")
+                    "the controller produced non-finite values at this state: velocities too large for "
+                    "double precision, or a joint axis with zero articulated inertia (W Alg. 3)")
 
     def compute(self, qpos, qvel, target: Target | None = None, gains: Gains | None = None
                 ) -> ControllerOutput:
@@ -233,6 +240,10 @@ class WorkspaceController:
         bad += [f"qvel[{i}]" for i in np.flatnonzero(~np.isfinite(qvel))]
         if bad:
             raise StateError(f"non-finite state entries: {', '.join(bad)}; qpos and qvel must be finite")
+        a = self.tree.qpos_adr[0] + 3
+        if np.dot(qpos[a:a + 4], qpos[a:a + 4]) < 1e-20:
+            raise StateError(f"the root quaternion qpos[{a}:{a + 4}] is zero; it must be a "
+                             f"(w, x, y, z) quaternion of nonzero norm (it is normalized)")
         return qpos, qvel
 
     def _kinematics(self, qpos, qvel):

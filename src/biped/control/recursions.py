@@ -30,6 +30,7 @@ OK = 0
 NONFINITE_STATE = 1
 NONFINITE_RESULT = 2
 SINGULAR_DISTRIBUTION = 3
+ZERO_QUATERNION = 4
 
 
 def layout(n: int) -> dict[str, tuple[int, tuple[int, ...]]]:
@@ -169,11 +170,17 @@ def alg1_initialize(qpos, qvel, root_qadr, root_dadr, G0root, root_qbi, mass, in
     ``a_1 = 0`` and ``b_1 = -F_1^be + Omega_1 M_1 V_1`` of the central body.
 
     MuJoCo's free joint gives the body-frame origin's position and world linear velocity and the
-    body-frame angular velocity; they are moved to the central body's COM principal frame.
+    body-frame angular velocity; they are moved to the central body's COM principal frame. The
+    root quaternion is normalized (as MuJoCo does); the caller rejects a zero one.
     """
     q = quat[0]
+    nrm = 0.0
     for i in range(4):
         q[i] = qpos[root_qadr + 3 + i]
+        nrm += q[i] * q[i]
+    nrm = np.sqrt(nrm)  # MuJoCo normalizes qpos quaternions; so does the controller
+    for i in range(4):
+        q[i] /= nrm
     quat_mul_into(q, root_qbi, quat[1])  # orientation of the inertial frame
     Rb = g[0, :3, :3]
     quat_to_rot_into(q, Rb)  # body-frame rotation, temporarily
@@ -492,13 +499,17 @@ def alg6_torques(parent, H, leg, beyond, G0, qpos, qadr, qref, Fl_tilde, Fr_tild
 @njit(cache=True)
 def compute_kernel(qpos, qvel, target, gains, mi, mf, work, out):
     """One controller call: W Alg. 1-6 on flat buffers (see :func:`layout`). Returns a status code
-    (0 ok, 1 non-finite state, 2 non-finite result, 3 singular wrench distribution)."""
+    (0 ok, 1 non-finite state, 2 non-finite result, 3 singular wrench distribution, 4 zero root
+    quaternion)."""
     for i in range(qpos.shape[0]):
         if not np.isfinite(qpos[i]):
             return NONFINITE_STATE
     for i in range(qvel.shape[0]):
         if not np.isfinite(qvel[i]):
             return NONFINITE_STATE
+    r = mi[4 + mi[0]]  # qpos address of the root's free joint
+    if qpos[r + 3] ** 2 + qpos[r + 4] ** 2 + qpos[r + 5] ** 2 + qpos[r + 6] ** 2 < 1e-20:
+        return ZERO_QUATERNION
     n = mi[0]
     parent = mi[4:4 + n]
     qadr = mi[4 + n:4 + 2 * n]
