@@ -12,7 +12,7 @@ import mujoco
 import numpy as np
 import pytest
 
-from biped.control import WorkspaceController
+from biped.control import Target, WorkspaceController
 
 pin = pytest.importorskip("pinocchio")
 
@@ -154,7 +154,8 @@ def exact_workspace_dynamics(pb: PinBiped, body: str, feet, qpos, qvel):
     K = Mi - Mi @ Jc.T @ Lc @ Jc @ Mi
     Lam = np.linalg.inv(J1 @ K @ J1.T)
     z = Lam @ (J1 @ K @ c + J1 @ Mi @ Jc.T @ Lc @ Jcd - J1d)
-    return Lam, z
+    parts = dict(M=M, c=c, J1=J1, J1d=J1d, Jc=Jc, Jcd=Jcd, v=v)
+    return Lam, z, parts
 
 
 def _rel(a, b):
@@ -180,9 +181,41 @@ def test_alg3_big_base_converges_to_exact_fixed_feet_dynamics(tree_case):
     rng = np.random.default_rng(4)
     for _ in range(6):
         qpos, qvel = nominal_state(pb.mj, rng)
-        Lam, z = exact_workspace_dynamics(pb, body, feet, qpos, qvel)
+        Lam, z, _ = exact_workspace_dynamics(pb, body, feet, qpos, qvel)
         for name, exact in (("P1", Lam), ("z1", z)):
             err = np.array([_rel(getattr(c.compute(qpos, qvel), name), exact) for c in ctrls])
             assert 9.0 < err[1] / err[2] < 11.0, (name, err)  # 1e3 -> 1e4
             assert 90.0 < err[2] / err[3] < 110.0, (name, err)  # 1e4 -> 1e6
             assert err[0] < 1e-2 and err[3] < 1e-6, (name, err)
+
+
+def test_torques_give_the_commanded_acceleration_with_feet_fixed(tree_case):
+    """The whole controller (Alg. 1-6): with both feet rigidly fixed, the computed joint torques
+    accelerate the central body by the commanded X^b (W Alg. 4), to the big-base error.
+
+    Pinocchio's dynamics with the feet's COM frames held at zero acceleration:
+    M qdd + c = S^T tau + Jc^T lam, Jc qdd + Jcdot qd = 0; V1dot = J1 qdd + J1dot qd.
+    """
+    path, feet = tree_case
+    pb = PinBiped(path)
+    ctrl = WorkspaceController.from_mjcf(path, feet=feet)
+    body = ctrl.tree.body_names[0]
+    rng = np.random.default_rng(10)
+    for _ in range(6):
+        qpos, qvel = nominal_state(pb.mj, rng)
+        quat = rng.normal(size=4)
+        target = Target(com=tuple(rng.normal(0, 0.05, 3) + [0, 0, 1]), quat=tuple(quat / np.linalg.norm(quat)),
+                        com_vel=tuple(rng.normal(size=3)), ang_acc=tuple(rng.normal(size=3)))
+        out = ctrl.compute(qpos, qvel, target=target)
+        _, _, p = exact_workspace_dynamics(pb, body, feet, qpos, qvel)
+        tau = np.zeros(pb.model.nv)
+        for name, t in zip(ctrl.joint_names, out.torques):
+            tau[pb.model.joints[pb.model.getJointId(name)].idx_v] = t
+        Mi = np.linalg.inv(p["M"])
+        Jc = p["Jc"]
+        lam = np.linalg.solve(Jc @ Mi @ Jc.T, -p["Jcd"] - Jc @ Mi @ (tau - p["c"]))
+        qdd = Mi @ (tau - p["c"] + Jc.T @ lam)
+        V1dot = p["J1"] @ qdd + p["J1d"]
+        assert np.abs(out.accel_desired).max() > 1.0  # a real command, not a trivial zero
+        np.testing.assert_allclose(V1dot, out.accel_desired, rtol=0,
+                                   atol=1e-5 * np.abs(out.accel_desired).max())
