@@ -2,13 +2,16 @@
 the pendulum's 5x5 vs 3x3 Newton-Euler systems (B II-C-1: "3x3 about two times faster").
 
 Each case runs B's closed loop (Heun, dt 0.01 s, torques held over the step, 500 steps) through
-``biped.planar.runs`` and reports the median wall time per step over repeats, and the ratio to the
-reference measured in the same run. Usage: python benchmarks/posture.py [--repeats N]
+``biped.planar.runs`` and reports the median wall time per step of the integration loop
+(``Trajectory.wall_time``) over repeats, and the ratio to the reference measured in the same run.
+The cases are interleaved (round robin) so that load changes on the machine hit all alike.
+Usage: python benchmarks/posture.py [--repeats N]
 """
 
 from __future__ import annotations
 
 import argparse
+import os
 import platform
 import statistics
 import time
@@ -20,59 +23,68 @@ from biped.planar import pendulum as pd
 from biped.planar import runs
 
 
-def _per_step(fn, steps, repeats):
-    fn()  # warm-up
-    samples = []
+def _interleaved(cases: dict, repeats: int) -> dict:
+    """cases: name -> callable returning seconds per unit; medians over round-robin repeats."""
+    for fn in cases.values():
+        fn()  # warm-up
+    samples = {name: [] for name in cases}
     for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        samples.append((time.perf_counter() - t0) / steps)
-    return statistics.median(samples), samples
+        for name, fn in cases.items():
+            samples[name].append(fn())
+    return {name: statistics.median(v) for name, v in samples.items()}
 
 
-def _loop_per_step(method, steps, repeats):
-    """Median of the integration loop's own wall time (``Trajectory.wall_time``, which excludes
-    the reaction-force bookkeeping done after the loop) per step."""
-    runs.simulate_body_leg(method=method, duration=steps * 0.01)  # warm-up
-    return statistics.median(
-        runs.simulate_body_leg(method=method, duration=steps * 0.01).wall_time / steps
-        for _ in range(repeats)
-    )
+def _report(title, medians, unit, ref_name):
+    print(title)
+    ref = medians[ref_name]
+    for name, med in medians.items():
+        print(f"  {name:20s} {med * 1e6:8.2f} us/{unit}   ratio to {ref_name} {med / ref:5.2f}")
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--repeats", type=int, default=15)
+    ap.add_argument("--repeats", type=int, default=21)
     args = ap.parse_args()
-    print(f"python {platform.python_version()}, numpy {np.__version__}, {platform.machine()}")
+    print(f"python {platform.python_version()}, numpy {np.__version__}, {platform.machine()}, "
+          f"{os.cpu_count()} cores")  # fmt: skip
 
     steps = 500
-    print(f"\nbody-leg, B's run (Heun, dt 0.01, {steps} steps), median time per step:")
-    ref = None
-    for method in ("lagrange", "lagrange-linear", "newton-euler"):
-        med = _loop_per_step(method, steps, args.repeats)
-        ref = ref or med
-        print(f"  {method:16s} {med * 1e6:8.1f} us/step   ratio to lagrange {med / ref:5.2f}")
 
-    print("\nsingle accelerations call (no integrator), median of 20000 calls:")
+    def loop(method):
+        return lambda: runs.simulate_body_leg(method=method, duration=steps * 0.01).wall_time / steps
+
+    med = _interleaved({m: loop(m) for m in ("lagrange", "lagrange-linear", "newton-euler")},
+                       args.repeats)  # fmt: skip
+    _report(f"\nbody-leg, B's run (Heun, dt 0.01, {steps} steps), median time per step:",
+            med, "step", "lagrange")  # fmt: skip
+
+    n = 5000
     p = bl.BodyLegParams()
     x, u = np.array([0.5, 0.1, 1.0, -0.2]), np.array([-12500.0, -40000.0])
-    ref = None
-    for method in ("lagrange", "lagrange-linear", "newton-euler"):
-        fn = bl.BODY_LEG_METHODS[method]
-        med, _ = _per_step(lambda fn=fn: [fn(p, x, u) for _ in range(20000)], 20000, args.repeats)
-        ref = ref or med
-        print(f"  {method:16s} {med * 1e6:8.2f} us/call   ratio to lagrange {med / ref:5.2f}")
 
-    print("\npendulum Newton-Euler, single call, median of 20000 calls:")
+    def calls(fn, *a):
+        def run():
+            t0 = time.perf_counter()
+            for _ in range(n):
+                fn(*a)
+            return (time.perf_counter() - t0) / n
+
+        return run
+
+    med = _interleaved({m: calls(bl.BODY_LEG_METHODS[m], p, x, u)
+                        for m in ("lagrange", "lagrange-linear", "newton-euler")}, args.repeats)  # fmt: skip
+    _report(f"\nbody-leg accelerations alone, median of {n} calls:", med, "call", "lagrange")
+
     pp = pd.PendulumParams()
-    ref = None
-    for name, fn in (("3x3 (eq. 2.10)", pd.newton_euler_3x3), ("5x5 (eq. 2.9)", pd.newton_euler_5x5),
-                     ("closed form (2.27)", pd.lagrange)):  # fmt: skip
-        med, _ = _per_step(lambda fn=fn: [fn(pp, 0.3, 0.1, 100.0) for _ in range(20000)], 20000,
-                           args.repeats)  # fmt: skip
-        ref = ref or med
-        print(f"  {name:18s} {med * 1e6:8.2f} us/call   ratio to 3x3 {med / ref:5.2f}")
+    med = _interleaved(
+        {
+            "3x3 (eq. 2.10)": calls(pd.newton_euler_3x3, pp, 0.3, 0.1, 100.0),
+            "5x5 (eq. 2.9)": calls(pd.newton_euler_5x5, pp, 0.3, 0.1, 100.0),
+            "closed form (2.27)": calls(pd.lagrange, pp, 0.3, 0.1, 100.0),
+        },
+        args.repeats,
+    )
+    _report(f"\npendulum forms, median of {n} calls:", med, "call", "3x3 (eq. 2.10)")
 
 
 if __name__ == "__main__":
