@@ -119,6 +119,27 @@ def test_replay_records_every_visible_geom_with_mjcf_names_and_colours(wendlandt
         replay_from_mujoco(m, [0.0], m.key_qpos[:1], geom_groups=[5])
 
 
+def test_a_checkered_floor_gets_its_average_colour_and_invisible_geoms_are_left_out():
+    """MuJoCo's builtin checker texture is half rgb1, half rgb2: the page's plane (no textures)
+    gets the material's rgba times their mean; alpha-0 and group-3 geoms are not drawn."""
+    m = mujoco.MjModel.from_xml_string("""
+    <mujoco><asset>
+      <texture name="grid" type="2d" builtin="checker" rgb1=".2 .4 .6" rgb2=".6 .8 1"
+               width="64" height="64"/>
+      <material name="floor" texture="grid" rgba="1 1 .5 1"/></asset>
+      <worldbody><geom name="floor" type="plane" size="3 2 .1" material="floor"/>
+        <geom name="ghost" type="sphere" size=".1" rgba="1 0 0 0"/>
+        <geom name="hidden" type="sphere" size=".1" group="3"/>
+        <body><freejoint/><geom name="ball" type="ellipsoid" size=".1 .2 .3"/></body>
+      </worldbody></mujoco>""")
+    r = replay_from_mujoco(m, [0.0], m.qpos0[None])
+    assert [g.name for g in r.geoms] == ["floor", "ball"]
+    floor = r.geoms[0]
+    assert floor.kind == "plane" and floor.size == (3.0, 2.0)
+    np.testing.assert_allclose(floor.rgba, [0.4, 0.6, 0.4, 1.0], atol=2 / 255)
+    assert r.geoms[1].kind == "ellipsoid" and r.geoms[1].size == pytest.approx((0.1, 0.2, 0.3))
+
+
 def test_a_500_hz_trajectory_becomes_a_100_frames_per_second_replay(wendlandt_mj):
     m = wendlandt_mj
     times = np.arange(1501) / 500.0 + 0.25           # 3 s at the control rate

@@ -212,6 +212,22 @@ _MJ_KIND = {0: "plane", 2: "sphere", 3: "capsule", 4: "ellipsoid", 5: "cylinder"
 _MJ_DEFAULT_RGBA = (0.5, 0.5, 0.5, 1.0)
 
 
+def _material_rgba(model, matid: int) -> tuple:
+    """Colour of a material: its rgba times the mean colour of its first texture, if any (the
+    page draws no textures; a checkered floor shows as its average grey)."""
+    rgba = np.array(model.mat_rgba[matid], dtype=float)
+    texids = np.atleast_1d(model.mat_texid[matid])
+    texids = texids[texids >= 0]
+    if texids.size:
+        t = int(texids[0])
+        n, adr = int(model.tex_nchannel[t]), int(model.tex_adr[t])
+        size = int(model.tex_width[t]) * int(model.tex_height[t]) * n
+        if n >= 3 and size > 0:
+            pix = np.asarray(model.tex_data[adr:adr + size], dtype=float).reshape(-1, n)
+            rgba[:3] *= pix[:, :3].mean(axis=0) / 255.0
+    return tuple(float(c) for c in rgba)
+
+
 def replay_from_mujoco(model: mujoco.MjModel, times, qpos, *, geom_groups=None,
                        title: str = "biped replay", info: Mapping[str, Any] | None = None,
                        markers: Iterable[Mapping] = (), follow: str | None = None,
@@ -276,7 +292,7 @@ def replay_from_mujoco(model: mujoco.MjModel, times, qpos, *, geom_groups=None,
         rgba = tuple(float(c) for c in model.geom_rgba[i])
         matid = int(model.geom_matid[i])
         if matid >= 0 and np.allclose(rgba, _MJ_DEFAULT_RGBA):
-            rgba = tuple(float(c) for c in model.mat_rgba[matid])
+            rgba = _material_rgba(model, matid)
         if rgba[3] <= 0.0:
             continue
         name = model.geom(i).name or f"geom{i}"
