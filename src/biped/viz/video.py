@@ -4,7 +4,7 @@ MuJoCo picks its OpenGL backend from the environment variable ``MUJOCO_GL`` once
 is first imported (and PyOpenGL picks its platform from ``PYOPENGL_PLATFORM`` when it is first
 imported). By the time a simulation asks for a video, ``mujoco`` has long been imported, so this
 module does not touch the running process's GL state: it renders in a child Python process
-(``python -m biped.viz.video``) started with ``MUJOCO_GL`` and ``PYOPENGL_PLATFORM`` set to a
+(``_render_job`` in a fresh ``python``) started with ``MUJOCO_GL`` and ``PYOPENGL_PLATFORM`` set to a
 backend that works. The model travels as a MuJoCo binary (``mj_saveModel``), the trajectory as a
 ``.npz`` file. A side benefit: a broken GL driver that crashes cannot take the caller down; it
 becomes a ``VideoResult`` with ``path=None`` and the reason.
@@ -53,6 +53,9 @@ class VideoResult:
     backend: str | None = None
     frames: int = 0
 
+
+_CHILD = ("import pathlib, sys; from biped.viz.video import _render_job; "
+          "sys.exit(_render_job(pathlib.Path(sys.argv[1])))")
 
 _PROBE = r"""
 import mujoco
@@ -216,7 +219,7 @@ def render_video(model, times, qpos, path, *, fps=30, width=640, height=480,
                "azimuth": float(azimuth), "elevation": float(elevation)}
         (tmp / "job.json").write_text(json.dumps(cfg))
         try:
-            proc = subprocess.run([sys.executable, "-m", "biped.viz.video", str(tmp)],
+            proc = subprocess.run([sys.executable, "-c", _CHILD, str(tmp)],
                                   env=_child_env(backend), capture_output=True, text=True,
                                   timeout=120 + 2.0 * len(idx), check=False)
         except subprocess.TimeoutExpired:
@@ -260,7 +263,7 @@ def _floor_grid(model, data, qpos, spacing=0.5, margin=4.0, width=0.012):
 
 
 def _render_job(workdir: pathlib.Path) -> int:
-    """Child process: render ``workdir/job.json`` (called by ``python -m biped.viz.video``)."""
+    """Child process: render ``workdir/job.json`` (started by :func:`render_video`)."""
     import imageio_ffmpeg
     import mujoco
 
@@ -305,7 +308,3 @@ def _render_job(workdir: pathlib.Path) -> int:
         writer.close()
         renderer.close()
     return 0
-
-
-if __name__ == "__main__":  # pragma: no cover - exercised through render_video
-    sys.exit(_render_job(pathlib.Path(sys.argv[1])))
