@@ -17,7 +17,9 @@ B_GAINS = [runs.BODY_LEG_GAINS_EQ_3_83, runs.BODY_LEG_GAINS]
 
 
 def _numeric(expr_matrix, params, p):
-    return np.array(expr_matrix.subs(dict(zip(params, (p.m, p.I, p.r, p.l, p.g)))).evalf(), dtype=float)
+    return np.array(
+        expr_matrix.subs(dict(zip(params, (p.m, p.I, p.r, p.l, p.g)))).evalf(), dtype=float
+    )
 
 
 def test_ab_closed_form_symbolic_and_finite_differences_agree():
@@ -94,7 +96,9 @@ def test_pole_placement_places_poles():
     A, B = an.ab_matrices(P)
     poles = np.array([-2.0, -3.0, -4.0, -5.0])
     K = an.place_poles_gains(A, B, poles)
-    np.testing.assert_allclose(np.sort(np.linalg.eigvals(A + B @ K).real), np.sort(poles), rtol=1e-8)
+    np.testing.assert_allclose(
+        np.sort(np.linalg.eigvals(A + B @ K).real), np.sort(poles), rtol=1e-8
+    )
 
 
 def test_lqr_solves_riccati_and_matches_cost():

@@ -32,8 +32,10 @@ MJCF = f"""
 def _integrate(p, x0, t_end, wrench_world=None):
     def f(t, x):
         R = rb.rotation_matrix(*x[3:6])
-        w = np.zeros(6) if wrench_world is None else np.concatenate(
-            [R.T @ wrench_world[:3], R.T @ wrench_world[3:]]
+        w = (
+            np.zeros(6)
+            if wrench_world is None
+            else np.concatenate([R.T @ wrench_world[:3], R.T @ wrench_world[3:]])
         )
         return rb.state_derivative(p, x, w)
 

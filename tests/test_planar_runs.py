@@ -70,7 +70,10 @@ def test_set_points_reach_static_balance():
     def balance(t):
         M1 = -g[0] * (t[0] - alpha[0])
         M2 = -g[2] * (t[1] - alpha[1])
-        return [-p.m * p.g * p.r * math.sin(t[0]) - (M1 - M2), -p.m * p.g * p.l * math.sin(t[1]) - M2]
+        return [
+            -p.m * p.g * p.r * math.sin(t[0]) - (M1 - M2),
+            -p.m * p.g * p.l * math.sin(t[1]) - M2,
+        ]
 
     eq = scipy.optimize.fsolve(balance, alpha, xtol=1e-13)
     np.testing.assert_allclose(tr.states[-1, 0::2], eq, atol=1e-6)

@@ -28,9 +28,8 @@ UNITS = (
 
 def register(subparsers) -> None:
     from biped.planar import body_leg as bl
-    from biped.planar import integrators
+    from biped.planar import integrators, runs
     from biped.planar import pendulum as pd
-    from biped.planar import runs
 
     parser = subparsers.add_parser(
         "posture",
@@ -61,7 +60,9 @@ def register(subparsers) -> None:
                        help="re-evaluate the torques in every integrator stage "
                             "(default: held over each step, as B's code)")  # fmt: skip
         p.add_argument("--no-animation", action="store_true", help="skip the GIF")
-        p.add_argument("--out", type=Path, default=Path(out), help=f"output directory (default {out})")
+        p.add_argument(
+            "--out", type=Path, default=Path(out), help=f"output directory (default {out})"
+        )
 
     pp = sub.add_parser("pendulum", help="single-link inverted pendulum (B Fig. 25)")
     common(pp, pd.PENDULUM_METHODS, "newton-euler", "euler", 0.02, 20.0, 2, runs.PENDULUM_GAINS,
@@ -77,7 +78,9 @@ def register(subparsers) -> None:
     pb.set_defaults(func=run)
 
     pg = sub.add_parser("gains", help="linear analysis, pole placement, LQR, best local gains, map")
-    pg.add_argument("--grid", type=int, default=81, help="stability map points per axis (default 81)")
+    pg.add_argument(
+        "--grid", type=int, default=81, help="stability map points per axis (default 81)"
+    )
     pg.add_argument("--k1-max", type=float, default=60000.0, help="map K_theta1 range end")
     pg.add_argument("--k2-max", type=float, default=60000.0, help="map K_theta2 range end")
     pg.add_argument("--rate-gains", type=float, nargs=2, default=[2500.0, 400.0],
@@ -170,8 +173,8 @@ def _run_model(args) -> int:
 
     out: Path = args.out
     out.mkdir(parents=True, exist_ok=True)
-    common = dict(dt=args.dt, duration=args.duration, integrator=args.integrator,
-                  hold=not args.continuous, progress=True)  # fmt: skip
+    common = {"dt": args.dt, "duration": args.duration, "integrator": args.integrator,
+                  "hold": not args.continuous, "progress": True}  # fmt: skip
     if args.model == "pendulum":
         params = _params(pd.PendulumParams, args.param)
         traj = runs.simulate_pendulum(params, args.method, args.gains, args.x0,
@@ -256,7 +259,11 @@ def _run_gains(args) -> int:
         "gains": best.gains, "bounds": best.bounds, "stability_margin": best.margin,
         "eigenvalues": best_lin.eigenvalue_pairs(),
     }  # fmt: skip
-    poles = np.array(args.poles) if args.poles else np.array([-best.margin * f for f in (1.0, 1.1, 1.2, 1.3)])
+    poles = (
+        np.array(args.poles)
+        if args.poles
+        else np.array([-best.margin * f for f in (1.0, 1.1, 1.2, 1.3)])
+    )
     K_pp = analysis.place_poles_gains(A, B, poles)
     result["pole_placement"] = {
         "poles": poles, "K": K_pp,

@@ -43,7 +43,9 @@ def ab_matrices(p: bl.BodyLegParams) -> tuple[np.ndarray, np.ndarray]:
             [-l * m * g * r / (I * r), 0.0, m * g * l * r / (I * r), 0.0],
         ]
     )
-    B = np.array([[0.0, 0.0], [J / D, -(l * m * r + J) / D], [0.0, 0.0], [-l / (I * r), (r + l) / (I * r)]])
+    B = np.array(
+        [[0.0, 0.0], [J / D, -(l * m * r + J) / D], [0.0, 0.0], [-l / (I * r), (r + l) / (I * r)]]
+    )
     return A, B
 
 

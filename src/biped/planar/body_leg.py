@@ -192,5 +192,9 @@ def energy(p: BodyLegParams, x) -> float:
     """Kinetic plus potential energy (eq. 3.10, 3.11) [lb ft^2/s^2]."""
     t1, t1d, t2, t2d = (float(v) for v in x)
     m, I, r, l, g = p.m, p.I, p.r, p.l, p.g
-    T = 0.5 * m * (r * r * t1d * t1d + l * l * t2d * t2d + 2 * r * l * t1d * t2d * math.cos(t1 - t2))
+    T = (
+        0.5
+        * m
+        * (r * r * t1d * t1d + l * l * t2d * t2d + 2 * r * l * t1d * t2d * math.cos(t1 - t2))
+    )
     return T + 0.5 * I * t2d * t2d + m * g * (r * math.cos(t1) + l * math.cos(t2))

@@ -9,7 +9,7 @@ accelerations of the start of the step; see docs/posture.md): first order in the
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -82,7 +82,7 @@ def integrate(f: Rhs, x0, t_end: float, dt: float, method: str = "rk4") -> np.nd
     """Integrate from t = 0 to ``t_end`` with ``n = round(t_end / dt)`` fixed steps; returns the
     (n + 1, len(x0)) states."""
     step = get(method)
-    n = int(round(t_end / dt))
+    n = round(t_end / dt)
     xs = np.empty((n + 1, len(x0)))
     xs[0] = x0
     for i in range(n):

@@ -120,7 +120,7 @@ def _run(model, method, acc_fn, nq, torque_fn, x0, dt, duration, integrator, hol
         raise ScenarioError("integrator 'heun-frozen' (B's Lisp step) needs hold=True")
     dt = check_positive("dt", dt)
     duration = check_positive("duration", duration, allow_zero=True)
-    n = int(round(duration / dt))
+    n = round(duration / dt)
     rhs = _interleave(nq)(acc_fn)
     xs = np.empty((n + 1, 2 * nq))
     xs[0] = x0
@@ -136,9 +136,9 @@ def _run(model, method, acc_fn, nq, torque_fn, x0, dt, duration, integrator, hol
         u = torque_fn(x)
         us[i] = u
         if hold:
-            f = lambda t, y, u=u: rhs(t, y, u)  # noqa: E731
+            f = lambda t, y, u=u: rhs(t, y, u)
         else:
-            f = lambda t, y: rhs(t, y, torque_fn(y))  # noqa: E731
+            f = lambda t, y: rhs(t, y, torque_fn(y))
         try:
             with np.errstate(over="ignore", invalid="ignore"):
                 x_next = step(f, i * dt, x, dt)

@@ -11,7 +11,7 @@ Each derivation is cached (``functools.lru_cache``), so a session pays for it on
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 import sympy as sp
@@ -50,7 +50,7 @@ class Derivation:
         return evaluate
 
 
-@lru_cache(maxsize=None)
+@cache
 def pendulum() -> Derivation:
     """Single-link pendulum on a pivot (B Fig. 1 / Fig. 21) by Lagrange's method.
 
@@ -91,7 +91,7 @@ def pendulum() -> Derivation:
     )
 
 
-@lru_cache(maxsize=None)
+@cache
 def body_leg() -> Derivation:
     """Body on a massless leg of constant length (B Fig. 9) by Lagrange's method.
 
@@ -144,7 +144,7 @@ def body_leg() -> Derivation:
     )
 
 
-@lru_cache(maxsize=None)
+@cache
 def body_leg_linearization():
     """Symbolic A (4, 4) and B (4, 2) of the derivation linearized at the upright equilibrium
     (x = 0, u = 0), the counterpart of eq. 3.58, 3.59. Returns (A, B, params)."""
@@ -160,7 +160,7 @@ def body_leg_linearization():
     return A, B, d.params
 
 
-@lru_cache(maxsize=None)
+@cache
 def body_leg_characteristic_polynomial():
     """det(s I - (A - B K)) * I m r^2 for the local gains K of eq. 3.60, as a sympy Poly in s,
     with gain symbols (K_theta1, K_theta1dot, K_theta2, K_theta2dot). Counterpart of eq. 3.80."""

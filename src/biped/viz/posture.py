@@ -118,7 +118,7 @@ def _write_animation(images: list, path: Path, fps: float) -> None:
             for im in images
         ]
         frames[0].save(path, save_all=True, append_images=frames[1:],
-                       duration=int(round(1000 / fps)), loop=0)  # fmt: skip
+                       duration=round(1000 / fps), loop=0)  # fmt: skip
     elif suffix == ".mp4":
         import imageio.v2 as imageio
 
