@@ -170,6 +170,11 @@ def _run(scenario: Scenario, scene: Scene, policy, *, progress=None, on_step=Non
     controller_error = None
     diverged = None
     rows = 0
+    if not isinstance(policy, np.ndarray):  # compile/warm the controller outside the timer
+        try:
+            policy(d.qpos[iq], d.qvel[iv])
+        except BipedError:
+            pass
     t0 = time.perf_counter()
     try:
         for k in range(n):
