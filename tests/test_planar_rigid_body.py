@@ -11,6 +11,7 @@ from scipy.integrate import solve_ivp
 
 from biped.errors import SingularityError, StateError
 from biped.planar import rigid_body as rb
+from biped.planar import symbolic
 from biped.spatial import quat_to_rot, rot_to_quat
 
 MASS, INERTIA, G = 10.0, (2.0, 3.0, 4.0), 32.2185
@@ -66,6 +67,23 @@ def test_follows_mujoco_free_body_under_same_force_and_torque():
     np.testing.assert_allclose(x[9:12], data.qvel[3:6], atol=1e-8)
     R = rb.rotation_matrix(*x[3:6])
     np.testing.assert_allclose(R @ x[6:9], data.qvel[:3], atol=1e-8)
+
+
+def test_growth_rates_and_euler_rates_match_kanes_method():
+    """Eq. 4.24, 4.25 and the Euler-rate matrix against a sympy KanesMethod derivation."""
+    f = symbolic.rigid_body().numeric()
+    rng = np.random.default_rng(7)
+    for _ in range(10):
+        p = rb.RigidBodyParams(
+            rng.uniform(1, 100), tuple(rng.uniform(1, 10, 3)), rng.uniform(0, 40)
+        )
+        s = rng.uniform(-2, 2, 12)
+        s[4] = rng.uniform(-1.4, 1.4)
+        wrench = rng.uniform(-50, 50, 6)
+        expected = f((p.mass, *p.inertia, p.g), s, wrench)
+        np.testing.assert_allclose(
+            rb.state_derivative(p, s, wrench), expected, rtol=1e-12, atol=1e-12
+        )
 
 
 def test_torque_free_keeps_energy_and_angular_momentum():

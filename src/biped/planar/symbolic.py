@@ -5,7 +5,7 @@ Lagrange's method applied to the kinematics (frames, points, a rigid body, loads
 forces from Newton's law on the body, F = m a_com - m g, with a_com differentiated by sympy. Tests
 compare the hand-written forms against these; where B's print disagrees, the derivation wins.
 
-Each derivation is cached (``functools.lru_cache``), so a session pays for it once.
+Each derivation is cached (``functools.cache``), so a session pays for it once.
 """
 
 from __future__ import annotations
@@ -171,3 +171,69 @@ def body_leg_characteristic_polynomial():
     det = (s * sp.eye(4) - (A + B * K)).det(method="berkowitz")
     poly = sp.Poly(sp.expand(sp.simplify(det * I * m * r**2)), s)
     return poly, (k1, k1d, k2, k2d), params
+
+
+@dataclass(frozen=True)
+class RigidBodyDerivation:
+    """Kane's equations of a free rigid body: ``qdot`` (6,) and ``udot`` (6,) sympy expressions of
+    params (m, I_xx, I_yy, I_zz, g), q (x, y, z, phi, theta, psi), u (u, v, w, p, q, r) and the
+    body-frame wrench (f_x, f_y, f_z, L, M, N)."""
+
+    params: tuple
+    q: tuple
+    u: tuple
+    wrench: tuple
+    qdot: tuple
+    udot: tuple
+
+    def numeric(self):
+        """Function (params, state (12,), wrench (6,)) -> d state / dt (12,)."""
+        args = (*self.params, *self.q, *self.u, *self.wrench)
+        f = sp.lambdify(args, [*self.qdot, *self.udot], "math")
+        return lambda params, state, wrench: np.array(f(*params, *state, *wrench), dtype=float)
+
+
+@cache
+def rigid_body() -> RigidBodyDerivation:
+    """The 6-DOF body of B's Appendix A by Kane's method (independent of eq. 4.24, 4.25).
+
+    Earth frame N with N.z down and gravity m g N.z; body frame B = N rotated by the body-fixed
+    z-y-x sequence (psi, theta, phi); generalized speeds are the body-axis components of the centre
+    of mass velocity and of the angular velocity; the wrench acts at the centre of mass in B.
+    """
+    m, Ixx, Iyy, Izz, g = sp.symbols("m I_xx I_yy I_zz g", real=True)
+    fx, fy, fz, L, M, Nn = sp.symbols("f_x f_y f_z L M N", real=True)
+    qs = me.dynamicsymbols("x y z phi theta psi")
+    us = me.dynamicsymbols("u v w p q r")
+    x, y, z, phi, theta, psi = qs
+    u, v, w, p, q, r = us
+    N = me.ReferenceFrame("N")
+    B = me.ReferenceFrame("B")
+    B.orient_body_fixed(N, (psi, theta, phi), "zyx")
+    w_euler = B.ang_vel_in(N)  # in terms of the Euler-angle rates
+    t = me.dynamicsymbols._t
+    kd = [w_euler.dot(B.x) - p, w_euler.dot(B.y) - q, w_euler.dot(B.z) - r]
+    vel = u * B.x + v * B.y + w * B.z
+    kd += [x.diff(t) - vel.dot(N.x), y.diff(t) - vel.dot(N.y), z.diff(t) - vel.dot(N.z)]
+    B.set_ang_vel(N, p * B.x + q * B.y + r * B.z)
+    O = me.Point("O")
+    O.set_vel(N, 0)
+    P = O.locatenew("P", x * N.x + y * N.y + z * N.z)
+    P.set_vel(N, vel)
+    body = me.RigidBody("body", P, B, m, (me.inertia(B, Ixx, Iyy, Izz), P))
+    loads = [(P, fx * B.x + fy * B.y + fz * B.z + m * g * N.z), (B, L * B.x + M * B.y + Nn * B.z)]
+    km = me.KanesMethod(N, q_ind=list(qs), u_ind=list(us), kd_eqs=kd)
+    km.kanes_equations([body], loads)
+    udot = km.mass_matrix.LUsolve(km.forcing)
+    kdd = km.kindiffdict()
+    qsym = sp.symbols("q0:6", real=True)
+    usym = sp.symbols("u0:6", real=True)
+    rep = dict(zip(us, usym)) | dict(zip(qs, qsym))
+    return RigidBodyDerivation(
+        params=(m, Ixx, Iyy, Izz, g),
+        q=qsym,
+        u=usym,
+        wrench=(fx, fy, fz, L, M, Nn),
+        qdot=tuple(kdd[qq.diff(t)].subs(rep) for qq in qs),
+        udot=tuple(e.subs(rep) for e in udot),
+    )
