@@ -113,10 +113,12 @@ def make_controller(scenario: Scenario, scene: Scene) -> Callable[[np.ndarray, n
 
         ctrl = WorkspaceController.from_mjcf(biped.models.path("wendlandt"), target=target,
                                              gains=gains)
-    else:
-        from biped.sim.joint_pd import JointPDController
+    else:  # the project's joint-space PD baseline (the same as ``biped sweep``'s)
+        from biped.control.joint_pd import JointPDController
 
-        ctrl = JointPDController.from_mjcf(biped.models.path("wendlandt"), target=target)
+        ctrl = JointPDController.from_mjcf(biped.models.path("wendlandt"),
+                                           q_ref_deg=scenario.initial_joint_angles_deg,
+                                           control_period_s=1.0 / scenario.control_rate_hz)
     names = tuple(ctrl.joint_names)
     if sorted(names) != sorted(scene.joint_names):
         raise BipedError(f"controller joints {names} differ from the scene's {scene.joint_names}")
