@@ -166,3 +166,19 @@ def test_a_fall_is_a_result_not_a_crash():
     assert r.fell or r.diverged
     assert not r.recovered
     assert r.times[-1] < 2.0
+
+
+def test_ctrl_c_keeps_what_was_simulated(tmp_path):
+    """A KeyboardInterrupt during the run returns the rows simulated so far, which are written."""
+    def progress(t):
+        if t >= 0.1:
+            raise KeyboardInterrupt
+
+    r = simulate(Scenario(duration_s=1.0), progress=progress)
+    assert r.interrupted and not r.recovered
+    assert 0.09 <= r.times[-1] < 0.2
+    write_outputs(r, tmp_path, figures=False, video=False, replay=False)
+    summary = json.loads((tmp_path / "summary.json").read_text())
+    assert summary["interrupted"] is True
+    n = len((tmp_path / "trajectory.csv").read_text().splitlines())
+    assert n == len(r.times) + 1
