@@ -13,7 +13,7 @@ body), SI units (N, N m, m/s^2, rad/s^2).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from os import PathLike
 
 import numpy as np
@@ -124,6 +124,9 @@ class ControllerOutput:
     quat_error: np.ndarray
 
 
+_OUTPUT_FIELDS = tuple(f.name for f in fields(ControllerOutput))
+
+
 class WorkspaceController:
     """W's recursive workspace balancing controller on a :class:`~biped.model.TreeModel`.
 
@@ -167,6 +170,9 @@ class WorkspaceController:
                    for k, (o, sh) in lay["model"].items() if k != "_size"}
         self._w = {k: self._work[o:o + int(np.prod(sh))].reshape(sh)
                    for k, (o, sh) in lay["work"].items() if k != "_size"}
+        # (slice, shape or None for 1-d) of each output field, in ControllerOutput's order
+        self._fields = tuple((slice(o, o + int(np.prod(sh))), sh if len(sh) > 1 else None) for o, sh in (
+            lay["out"][k] for k in ("tau", "P1", "z1", "X", "Fd", "Fl_tilde", "Fr_tilde", "Fl", "Fr", "qe")))
 
     @classmethod
     def from_mjcf(cls, source: str | PathLike, feet: tuple[str, str] = DEFAULT_FEET, **kwargs
@@ -178,10 +184,6 @@ class WorkspaceController:
     def joint_names(self) -> tuple[str, ...]:
         """Hinge names in the order of ``torques`` (MuJoCo body order)."""
         return self.tree.joint_names
-
-    def _view(self, name):
-        off, shape = self._layout["out"][name]
-        return self._out[off:off + int(np.prod(shape))].reshape(shape)
 
     def _run(self, qpos, qvel, target, gains):
         if qpos.shape != (self.tree.nq,) or qvel.shape != (self.tree.nv,):
@@ -220,12 +222,11 @@ class WorkspaceController:
         qpos = np.ascontiguousarray(qpos, dtype=float)
         qvel = np.ascontiguousarray(qvel, dtype=float)
         self._run(qpos, qvel, target, gains)
-        v = self._view
-        return ControllerOutput(
-            torques=v("tau").copy(), P1=v("P1").copy(), z1=v("z1").copy(), accel_desired=v("X").copy(),
-            wrench_desired=v("Fd").copy(), wrench_left=v("Fl_tilde").copy(),
-            wrench_right=v("Fr_tilde").copy(), foot_wrench_left=v("Fl").copy(),
-            foot_wrench_right=v("Fr").copy(), quat_error=v("qe").copy())
+        buf = self._out.copy()  # one fresh buffer; the fields are views of it
+        out = object.__new__(ControllerOutput)  # skips the frozen __init__'s 10 setattr calls (3 us)
+        out.__dict__.update(zip(_OUTPUT_FIELDS, [buf[sl] if sh is None else buf[sl].reshape(sh)
+                                                 for sl, sh in self._fields]))
+        return out
 
     # ------------------------------------------------------------------ debugging / checking
 
@@ -253,7 +254,7 @@ class WorkspaceController:
         alg1_initialize(qpos, qvel, t.qpos_adr[0], t.dof_adr[0], m["G0"][0], m["root_qbi"], m["mass"],
                         m["inertia"], m["gravity"], w["g"], w["V"], w["a"], w["b"], w["quat"])
         alg2_velocity_propagation(qpos, qvel, t.parent, t.qpos_adr, t.dof_adr, m["H"], m["G0"],
-                                  m["qref"], m["mass"], m["inertia"], m["gravity"], w["g"], w["Ad"],
+                                  m["qref"], m["mass"], m["inertia"], m["gravity"], w["g"], w["gl"],
                                   w["V"], w["a"], w["b"], tmp44)
 
     def link_poses(self, qpos) -> np.ndarray:
@@ -276,14 +277,15 @@ class WorkspaceController:
         ``F~_2`` (left) and ``F~_8`` (right) [N, N m] on the central body (central-body COM frame),
         feet fixed: ``tau_leg = J_leg^T F~``. Joints off the legs get zero. For checking the
         recursion against a Jacobian and for Jacobian-transpose control; allocates."""
-        qpos, _ = self._state(qpos, None)
+        qpos, qvel = self._state(qpos, None)
         t = self.tree
         fl, fr = (np.array(_vec(n, v, 6)) for n, v in (("wrench_left", wrench_left),
                                                        ("wrench_right", wrench_right)))
+        self._kinematics(qpos, qvel)  # the joint transforms g_{k.i,k.o}
         F = np.zeros((t.n_links, 6))
         tau = np.zeros(t.n_links - 1)
-        alg6_torques(t.parent, self._m["H"], t.leg, t.beyond_foot.astype(np.int64), self._m["G0"],
-                     qpos, t.qpos_adr, self._m["qref"], fl, fr, F, np.zeros((3, 4, 4)), tau)
+        alg6_torques(t.parent, self._m["H"], t.leg, t.beyond_foot.astype(np.int64), self._w["gl"],
+                     fl, fr, F, tau)
         return tau
 
     def torques(self, qpos: np.ndarray, qvel: np.ndarray, target: Target | None = None,

@@ -46,7 +46,7 @@ def layout(n: int) -> dict[str, tuple[int, tuple[int, ...]]]:
     return {
         "model": pack([("H", (n, 6)), ("G0", (n, 4, 4)), ("mass", (n,)), ("inertia", (n, 3)),
                        ("qref", (n,)), ("gravity", (3,)), ("root_qbi", (4,)), ("big_base", (1,))]),
-        "work": pack([("g", (n, 4, 4)), ("Ad", (n, 6, 6)), ("V", (n, 6)), ("a", (n, 6)),
+        "work": pack([("g", (n, 4, 4)), ("gl", (n, 4, 4)), ("V", (n, 6)), ("a", (n, 6)),
                       ("b", (n, 6)), ("P", (n, 6, 6)), ("z", (n, 6)), ("F", (n, 6)),
                       ("tmp6", (4, 6)), ("tmp66", (3, 6, 6)), ("quat", (3, 4)), ("R3", (2, 3, 3))]),
         "out": pack([("tau", (n - 1,)), ("P1", (6, 6)), ("z1", (6,)), ("Fd", (6,)), ("Fl_tilde", (6,)),
@@ -149,11 +149,17 @@ def _revolute_exp(H, theta, g):
 
 @njit(cache=True)
 def _mat4_mul(A, B, C):
-    """C = A B for 4x4 rigid transforms (C must not alias A or B)."""
+    """C = A B for 4x4 rigid transforms (C must not alias A or B). Operands are read into locals
+    first: the compiler cannot prove that C does not alias them."""
+    b00, b01, b02, b03 = B[0, 0], B[0, 1], B[0, 2], B[0, 3]
+    b10, b11, b12, b13 = B[1, 0], B[1, 1], B[1, 2], B[1, 3]
+    b20, b21, b22, b23 = B[2, 0], B[2, 1], B[2, 2], B[2, 3]
     for i in range(3):
-        for j in range(4):
-            C[i, j] = A[i, 0] * B[0, j] + A[i, 1] * B[1, j] + A[i, 2] * B[2, j]
-        C[i, 3] += A[i, 3]
+        a0, a1, a2, a3 = A[i, 0], A[i, 1], A[i, 2], A[i, 3]
+        C[i, 0] = a0 * b00 + a1 * b10 + a2 * b20
+        C[i, 1] = a0 * b01 + a1 * b11 + a2 * b21
+        C[i, 2] = a0 * b02 + a1 * b12 + a2 * b22
+        C[i, 3] = a0 * b03 + a1 * b13 + a2 * b23 + a3
     C[3, 0] = 0.0
     C[3, 1] = 0.0
     C[3, 2] = 0.0
@@ -217,12 +223,14 @@ def alg1_initialize(qpos, qvel, root_qadr, root_dadr, G0root, root_qbi, mass, in
 
 @njit(cache=True)
 def alg2_velocity_propagation(qpos, qvel, parent, qadr, dadr, H, G0, qref, mass, inertia,
-                              gravity, g, Ad, V, a, b, tmp44):
+                              gravity, g, gl, V, a, b, tmp44):
     """W Alg. 2 (forward kinematics, outboard): for each joint k = link k's joint,
     ``g_{k.o,0}``, ``A = Ad_{g_{k.o,k.i}}``, ``V_{k.o} = A V_{k.i} + H_k thetadot_k``,
     ``a_k = ad_{V_{k.o}} H_k thetadot_k``, ``b_{k.o} = -F^be + Omega M V``.
 
-    ``g[k]`` holds ``g_{0,k}`` (world pose of link k's frame); ``Ad[k]`` holds ``Ad_{g_{k,k.i}}``.
+    ``g[k]`` holds ``g_{0,k}`` (world pose of link k's frame) and ``gl[k]`` the joint transform
+    ``g_{k.i,k.o}(theta_k)``, from which Alg. 3 and Alg. 6 apply ``A = Ad_{gl[k]}^-1`` without
+    forming the 6x6 matrix.
     """
     n = parent.shape[0]
     for k in range(1, n):
@@ -230,7 +238,7 @@ def alg2_velocity_propagation(qpos, qvel, parent, qadr, dadr, H, G0, qref, mass,
         theta = qpos[qadr[k]] - qref[k]
         thd = qvel[dadr[k]]
         E = tmp44[0]
-        gpk = tmp44[1]
+        gpk = gl[k]
         _revolute_exp(H[k], theta, E)
         _mat4_mul(G0[k], E, gpk)  # g_{p,k}(theta)
         _mat4_mul(g[p], gpk, g[k])  # g_{0,k}
@@ -242,7 +250,6 @@ def alg2_velocity_propagation(qpos, qvel, parent, qadr, dadr, H, G0, qref, mass,
                 Rkp[i, j] = gpk[j, i]
         for i in range(3):
             pkp[i] = -(gpk[0, i] * gpk[0, 3] + gpk[1, i] * gpk[1, 3] + gpk[2, i] * gpk[2, 3])
-        _adjoint(Rkp, pkp, Ad[k])
         _ad_mul(Rkp, pkp, V[p], V[k])
         for i in range(6):
             V[k, i] += H[k, i] * thd
@@ -259,7 +266,7 @@ def alg2_velocity_propagation(qpos, qvel, parent, qadr, dadr, H, G0, qref, mass,
 
 
 @njit(cache=True)
-def alg3_workspace_dynamics(parent, H, mass, inertia, feet, beyond, big_base, Ad, a, b, P, z, tmp6,
+def alg3_workspace_dynamics(parent, H, mass, inertia, feet, beyond, big_base, gl, a, b, P, z, tmp6,
                             tmp66):
     """W Alg. 3 (workspace dynamics, inboard): articulated-body inertias ``P_k`` and biases
     ``z_k`` from the feet to the central body with the big-base approximation
@@ -267,7 +274,10 @@ def alg3_workspace_dynamics(parent, H, mass, inertia, feet, beyond, big_base, Ad
     ``F_1 = P_1 Vdot_1^b + z_1`` for a wrench ``F_1`` on the central body (feet fixed).
 
     Per joint: ``D = H^T P H``, ``K = H D^-1 H^T``, ``L = (I - K P) A``,
-    ``P_{k.i} += L^T P L = A^T (P - P H H^T P / D) A``, ``z_{k.i} += L^T (P a + z)``.
+    ``P_{k.i} += L^T P L = A^T (P - P H H^T P / D) A``, ``z_{k.i} += L^T (P a + z)``
+    (accumulated: link 1 receives both legs). With ``A = Ad_{g_{k.o,k.i}}`` and
+    ``gl[k] = g_{k.i,k.o} = (R, p)``, ``A^T = [[I, 0], [p^, I]] blockdiag(R, R)``: the 6x6 products
+    are a block rotation followed by a shift, W eq. 3.7 written out.
     """
     n = parent.shape[0]
     for k in range(n):
@@ -288,7 +298,8 @@ def alg3_workspace_dynamics(parent, H, mass, inertia, feet, beyond, big_base, Ad
     PH = tmp6[0]
     c = tmp6[1]
     Pa = tmp66[0]
-    T = tmp66[1]
+    Q = tmp66[1]
+    W = tmp66[2]  # 3x3 scratch in the corner
     for k in range(n - 1, 0, -1):
         if beyond[k]:
             continue
@@ -303,7 +314,8 @@ def alg3_workspace_dynamics(parent, H, mass, inertia, feet, beyond, big_base, Ad
         D = 0.0
         for i in range(6):
             D += Hk[i] * PH[i]
-        # c = P a + z ; za = c - PH (H.c) / D
+        Dinv = 1.0 / D
+        # c = P a + z ; c <- c - PH (H.c) / D ; Pa = P - PH PH^T / D
         hc = 0.0
         for i in range(6):
             s = z[k, i]
@@ -313,29 +325,63 @@ def alg3_workspace_dynamics(parent, H, mass, inertia, feet, beyond, big_base, Ad
         for i in range(6):
             hc += Hk[i] * c[i]
         for i in range(6):
-            c[i] -= PH[i] * hc / D
+            u = PH[i] * Dinv
+            c[i] -= u * hc
             for j in range(6):
-                Pa[i, j] = Pk[i, j] - PH[i] * PH[j] / D
-        A = Ad[k]
-        # T = Pa A ; P_p += A^T T ; z_p += A^T c
-        for i in range(6):
-            for j in range(6):
-                s = 0.0
-                for m in range(6):
-                    s += Pa[i, m] * A[m, j]
-                T[i, j] = s
-        for i in range(6):
-            s = 0.0
-            for m in range(6):
-                s += A[m, i] * c[m]
-            z[p, i] += s
-            for j in range(i, 6):
-                s = 0.0
-                for m in range(6):
-                    s += A[m, i] * T[m, j]
-                P[p, i, j] += s
-                if j != i:
-                    P[p, j, i] += s
+                Pa[i, j] = Pk[i, j] - u * PH[j]
+        gm = gl[k]
+        px, py, pz = gm[0, 3], gm[1, 3], gm[2, 3]
+        r00, r01, r02 = gm[0, 0], gm[0, 1], gm[0, 2]
+        r10, r11, r12 = gm[1, 0], gm[1, 1], gm[1, 2]
+        r20, r21, r22 = gm[2, 0], gm[2, 1], gm[2, 2]
+        # z_p += A^T c: f' = R f, tau' = R tau + p x f'
+        f0 = r00 * c[0] + r01 * c[1] + r02 * c[2]
+        f1 = r10 * c[0] + r11 * c[1] + r12 * c[2]
+        f2 = r20 * c[0] + r21 * c[1] + r22 * c[2]
+        z[p, 0] += f0
+        z[p, 1] += f1
+        z[p, 2] += f2
+        z[p, 3] += r00 * c[3] + r01 * c[4] + r02 * c[5] + py * f2 - pz * f1
+        z[p, 4] += r10 * c[3] + r11 * c[4] + r12 * c[5] + pz * f0 - px * f2
+        z[p, 5] += r20 * c[3] + r21 * c[4] + r22 * c[5] + px * f1 - py * f0
+        # Q = blockdiag(R, R) Pa blockdiag(R, R)^T, blocks 11, 12, 22: W = Pa_blk R^T, Q = R W
+        for blk in range(3):
+            bi = 0 if blk < 2 else 3
+            bj = 0 if blk == 0 else 3
+            for i in range(3):
+                m0, m1, m2 = Pa[bi + i, bj], Pa[bi + i, bj + 1], Pa[bi + i, bj + 2]
+                W[i, 0] = m0 * r00 + m1 * r01 + m2 * r02
+                W[i, 1] = m0 * r10 + m1 * r11 + m2 * r12
+                W[i, 2] = m0 * r20 + m1 * r21 + m2 * r22
+            for j in range(3):
+                w0, w1, w2 = W[0, j], W[1, j], W[2, j]
+                Q[bi, bj + j] = r00 * w0 + r01 * w1 + r02 * w2
+                Q[bi + 1, bj + j] = r10 * w0 + r11 * w1 + r12 * w2
+                Q[bi + 2, bj + j] = r20 * w0 + r21 * w1 + r22 * w2
+        # S = B12 = Q12 - Q11 p^ (into W)
+        for i in range(3):
+            W[i, 0] = Q[i, 3] - (Q[i, 1] * pz - Q[i, 2] * py)
+            W[i, 1] = Q[i, 4] - (Q[i, 2] * px - Q[i, 0] * pz)
+            W[i, 2] = Q[i, 5] - (Q[i, 0] * py - Q[i, 1] * px)
+        # B22 = Q22 + p^ Q12 - S^T p^
+        for j in range(3):
+            h0 = py * Q[2, 3 + j] - pz * Q[1, 3 + j]
+            h1 = pz * Q[0, 3 + j] - px * Q[2, 3 + j]
+            h2 = px * Q[1, 3 + j] - py * Q[0, 3 + j]
+            if j == 0:
+                s0, s1, s2 = W[1, 0] * pz - W[2, 0] * py, W[1, 1] * pz - W[2, 1] * py, W[1, 2] * pz - W[2, 2] * py
+            elif j == 1:
+                s0, s1, s2 = W[2, 0] * px - W[0, 0] * pz, W[2, 1] * px - W[0, 1] * pz, W[2, 2] * px - W[0, 2] * pz
+            else:
+                s0, s1, s2 = W[0, 0] * py - W[1, 0] * px, W[0, 1] * py - W[1, 1] * px, W[0, 2] * py - W[1, 2] * px
+            P[p, 3, 3 + j] += Q[3, 3 + j] + h0 - s0
+            P[p, 4, 3 + j] += Q[4, 3 + j] + h1 - s1
+            P[p, 5, 3 + j] += Q[5, 3 + j] + h2 - s2
+        for i in range(3):
+            for j in range(3):
+                P[p, i, j] += Q[i, j]
+                P[p, i, 3 + j] += W[i, j]
+                P[p, 3 + j, i] += W[i, j]
 
 
 @njit(cache=True)
@@ -471,12 +517,13 @@ def alg5_wrench_distribution(g, feet, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_tilde, Fr_
 
 
 @njit(cache=True)
-def alg6_torques(parent, H, leg, beyond, G0, qpos, qadr, qref, Fl_tilde, Fr_tilde, F, tmp44, tau):
+def alg6_torques(parent, H, leg, beyond, gl, Fl_tilde, Fr_tilde, F, tau):
     """W Alg. 6 (torque calculation, outboard): ``F_k = -Ad^{-T}_{g_{k.o,k.i}} F~_k`` (equal and
     opposite wrenches across joint k), ``tau_k = H_k^T F_k``, ``F~_{k+1} = -F_k`` (link k.o in
     equilibrium). Equivalent to ``tau = J^T F~`` with J the leg's body Jacobian, foot fixed.
 
-    ``F[k]`` holds ``F_k`` in link k's frame. Joints off the two leg paths get zero torque.
+    ``gl[k] = g_{k.i,k.o}(theta_k)`` from Alg. 2. ``F[k]`` holds ``F_k`` in link k's frame. Joints
+    off the two leg paths get zero torque.
     """
     n = parent.shape[0]
     for k in range(1, n):
@@ -489,11 +536,8 @@ def alg6_torques(parent, H, leg, beyond, G0, qpos, qadr, qref, Fl_tilde, Fr_tild
         else:
             Ft = F[p]
         sign = 1.0 if p == 0 else -1.0  # F~_k = -F_{k.i} inside a leg
-        # g_{p,k}(theta) = G0 exp(H theta); F_k = -Ad^T_{g_{p,k}} F~_k
-        E = tmp44[0]
-        gpk = tmp44[1]
-        _revolute_exp(H[k], qpos[qadr[k]] - qref[k], E)
-        _mat4_mul(G0[k], E, gpk)
+        # F_k = -Ad^T_{g_{p,k}} F~_k  (Ad^{-T}_{g_{k,p}} = Ad^T_{g_{p,k}})
+        gpk = gl[k]
         _adT_mul(gpk[:3, :3], gpk[:3, 3], Ft, F[k])
         s = 0.0
         for i in range(6):
@@ -534,7 +578,7 @@ def compute_kernel(qpos, qvel, target, gains, mi, mf, work, out):
     big_base = mf[o]
     o = 0
     g = work[o:o + 16 * n].reshape((n, 4, 4)); o += 16 * n
-    Ad = work[o:o + 36 * n].reshape((n, 6, 6)); o += 36 * n
+    gl = work[o:o + 16 * n].reshape((n, 4, 4)); o += 16 * n
     V = work[o:o + 6 * n].reshape((n, 6)); o += 6 * n
     a = work[o:o + 6 * n].reshape((n, 6)); o += 6 * n
     b = work[o:o + 6 * n].reshape((n, 6)); o += 6 * n
@@ -561,8 +605,8 @@ def compute_kernel(qpos, qvel, target, gains, mi, mf, work, out):
     alg1_initialize(qpos, qvel, qadr[0], dadr[0], G0[0], root_qbi, mass, inertia, gravity, g, V, a,
                     b, quat)
     alg2_velocity_propagation(qpos, qvel, parent, qadr, dadr, H, G0, qref, mass, inertia, gravity,
-                              g, Ad, V, a, b, tmp44)
-    alg3_workspace_dynamics(parent, H, mass, inertia, feet, beyond, big_base, Ad, a, b, P, z, tmp6,
+                              g, gl, V, a, b, tmp44)
+    alg3_workspace_dynamics(parent, H, mass, inertia, feet, beyond, big_base, gl, a, b, P, z, tmp6,
                             tmp66)
     for i in range(6):
         z1[i] = z[0, i]
@@ -571,7 +615,7 @@ def compute_kernel(qpos, qvel, target, gains, mi, mf, work, out):
     alg4_desired_wrench(g, V, P, z, target, gains, quat, R3, X, qe, Fd)
     if not alg5_wrench_distribution(g, feet, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_tilde, Fr_tilde):
         return SINGULAR_DISTRIBUTION
-    alg6_torques(parent, H, leg, beyond, G0, qpos, qadr, qref, Fl_tilde, Fr_tilde, F, tmp44, tau)
+    alg6_torques(parent, H, leg, beyond, gl, Fl_tilde, Fr_tilde, F, tau)
     for i in range(out.shape[0]):
         if not np.isfinite(out[i]):
             return NONFINITE_RESULT
