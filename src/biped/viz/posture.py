@@ -35,7 +35,7 @@ def pendulum_attitude_figure(traj) -> Figure:
     ax.axhline(0.0, color="0.6", lw=0.8)
     ax.set_xlabel("time [s]")
     ax.set_ylabel("theta [rad]")
-    ax.set_title(f"Body attitude of the inverted pendulum ({_label(traj)})")
+    ax.set_title(f"Pendulum body attitude ({_label(traj)})", fontsize=10)
     ax.grid(alpha=0.3)
     fig.tight_layout()
     return fig
