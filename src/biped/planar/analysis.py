@@ -58,11 +58,13 @@ def ab_matrices_as_printed(p: bl.BodyLegParams) -> tuple[np.ndarray, np.ndarray]
     return A, B
 
 
-def linearize(accel, nq: int, nu: int, eps: float = 1e-6):
+def linearize(accel, nq: int, nu: int, eps: float = 1e-6, du: float = 1.0):
     """Central finite-difference Jacobians of x_dot = f(x, u) at x = 0, u = 0.
 
     accel(x, u) -> the nq accelerations (first nq entries of a form's result); states interleave
-    (q_0, qd_0, q_1, qd_1, ...). Returns A (2 nq, 2 nq), B (2 nq, nu).
+    (q_0, qd_0, q_1, qd_1, ...). ``eps`` is the state step [rad, rad/s], ``du`` the torque step
+    (torques are O(1e4) in B's units, and the forms are linear in them). Returns A (2 nq, 2 nq),
+    B (2 nq, nu).
     """
 
     def f(x, u):
@@ -79,11 +81,10 @@ def linearize(accel, nq: int, nu: int, eps: float = 1e-6):
         e = np.zeros(n)
         e[j] = eps
         A[:, j] = (f(x0 + e, u0) - f(x0 - e, u0)) / (2 * eps)
-    scale = 1.0 / eps
     for j in range(nu):
         e = np.zeros(nu)
-        e[j] = eps * scale  # torques are O(1e4): step of 1
-        B[:, j] = (f(x0, u0 + e) - f(x0, u0 - e)) / (2 * eps * scale)
+        e[j] = du
+        B[:, j] = (f(x0, u0 + e) - f(x0, u0 - e)) / (2 * du)
     return A, B
 
 
