@@ -132,12 +132,16 @@ def _table(result, out: Path, paths: dict) -> str:
         rows.append(("diverged", result.diverged))
     if result.controller_error:
         rows.append(("controller error", result.controller_error))
-    first = {}
-    for e in result.events:
-        if e.time_s > 0.05:  # after the initial landing
-            first.setdefault((e.foot, e.kind), e)
-    for (foot, kind), e in sorted(first.items(), key=lambda kv: kv[1].time_s):
-        rows.append((f"first {foot} {kind.replace('_', ' ')} after landing", f"{e.time_s:.3f} s ({e.part})"))
+    hit = result.block_contact_time_s
+    if hit is not None:  # W's timeline: heels rise after the hit, feet back down
+        for foot in ("left", "right"):
+            after = [e for e in result.events if e.foot == foot and e.time_s >= hit]
+            rise = next((e for e in after if e.kind == "lift_off"), None)
+            downs = [e for e in after if e.kind == "touch_down"]
+            if rise is not None:
+                rows.append((f"{foot} foot rises", f"{rise.time_s:.3f} s ({rise.part})"))
+            if rise is not None and downs and downs[-1].time_s > rise.time_s:
+                rows.append((f"{foot} foot back down", f"{downs[-1].time_s:.3f} s ({downs[-1].part})"))
     rows.append(("outputs", str(out)))
     w = max(len(k) for k, _ in rows)
     return "\n".join(f"  {k:<{w}}  {v}" for k, v in rows)
