@@ -218,6 +218,7 @@ class _HalfStep:
     lean0: float
     lean1: float
     label: str
+    roll_ramp: str = ""  # "in" from standing, "out" to standing: the roll rate is 0 there
 
     def evaluate(self, dims, params, s):
         n = s.size
@@ -243,6 +244,8 @@ class _HalfStep:
         foot = hip + k[:, None] * (g - hip)
         sign = -1.0 if self.stance_side == "left" else 1.0  # roll toward the stance side
         roll = sign * params.torso_roll * DEG * np.sin(np.pi * s)
+        if self.roll_ramp:
+            roll = roll * _smooth(s if self.roll_ramp == "in" else 1.0 - s)
         lean = _lerp(self.lean0, self.lean1, _smooth(s))
         z = np.zeros(n)
         swinging = (s > 0.0) & (s < 1.0)
@@ -516,7 +519,8 @@ def _walk(dims, params, footholds, a_trail, a_lead, T, lean, label, bump=True):
         regular = 1 < i < N + 1
         segs.append(_HalfStep(T, stance, feet[stance].copy(), feet[swing].copy(), land, D[i - 1], V[i - 1],
                               D[i], V[i], A if regular else 0.0,
-                              lean if i > 1 else 0.0, lean if i < N + 1 else 0.0, label))
+                              lean if i > 1 else 0.0, lean if i < N + 1 else 0.0, label,
+                              "in" if i == 1 else "out" if i == N + 1 else ""))
         feet[swing] = land
     return segs
 

@@ -1,0 +1,193 @@
+"""``biped walk``: Bediz's kinematic figure stepping forward, up stairs and jumping (B IV-B, V-D).
+
+Writes trajectory.csv, summary.json, figures/, replay.html and video.mp4 into ``--out``. Thin:
+parsing here, work in :mod:`biped.kinematic`; see docs/walk.md.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import json
+import math
+from pathlib import Path
+
+from biped.errors import ScenarioError
+
+_DEFAULT_STEPS = {"forward": 6, "upstairs": 5}
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "walk", help="B's kinematic figure: step forward, climb stairs, jump (inverse kinematics)",
+        description="Bediz's 15-part kinematic figure moved by leg inverse kinematics (B eq. "
+                    "4.12-4.19) with its stance feet held on the ground, and the joint torques and "
+                    "ground forces the motion would need on W's biped (MuJoCo mj_inverse). "
+                    "Every parameter defaults to B's; see docs/walk.md.")
+    p.add_argument("--gait", choices=("forward", "upstairs", "jump", "demo"), default="demo",
+                   help="forward, upstairs, jump, or B's demo: 6 forward, 5 up, a jump, 4 forward "
+                        "(default demo)")
+    p.add_argument("--steps", type=int, metavar="N",
+                   help="footfalls for forward (default 6) and upstairs (default 5); "
+                        "not used by jump and demo")
+    p.add_argument("--speed", type=float, default=1.0, metavar="M/S",
+                   help="forward walking speed; sets the pace of every gait (default 1.0)")
+    p.add_argument("--stair-rise", type=float, metavar="M",
+                   help="stair rise (default eq. 4.23 at 30 deg: (l1 + l2)(1 - cos 30 deg) = 0.111 m)")
+    p.add_argument("--stair-run", type=float, metavar="M",
+                   help="stair run (default 0.540 m: B's -10..+30 deg leg angles)")
+    p.add_argument("--no-somersault", action="store_true",
+                   help="jump without B's 360 deg turn along the semicircle")
+    p.add_argument("--rate", type=float, default=200.0, metavar="HZ",
+                   help="samples per second of trajectory.csv and the dynamics (default 200)")
+    p.add_argument("--out", metavar="DIR", help="output folder (default: a new one under runs/)")
+    p.add_argument("--overwrite", action="store_true",
+                   help="allow writing into a folder that already holds a run")
+    p.add_argument("--no-dynamics", action="store_true", help="skip the inverse dynamics")
+    p.add_argument("--no-video", action="store_true", help="skip video.mp4")
+    p.add_argument("--no-replay", action="store_true", help="skip replay.html")
+    p.add_argument("--no-figures", action="store_true", help="skip figures/")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def build_plan(args):
+    """The :class:`~biped.kinematic.gaits.Plan` the arguments ask for (validated)."""
+    from dataclasses import replace
+
+    from biped.kinematic import FigureDims, GaitParams, demo, jump, step_forward, step_upward
+
+    if args.steps is not None and args.gait in ("jump", "demo"):
+        raise ScenarioError(f"--steps applies to --gait forward and upstairs, not {args.gait} "
+                            f"(B's demo is 6 forward, 5 up, a jump, 4 forward)")
+    if (args.stair_rise is not None or args.stair_run is not None) and args.gait not in ("upstairs", "demo"):
+        raise ScenarioError(f"--stair-rise / --stair-run apply to --gait upstairs and demo, not {args.gait}")
+    if not (math.isfinite(args.rate) and 20.0 <= args.rate <= 2000.0):
+        raise ScenarioError(f"--rate must be in [20, 2000] Hz, got {args.rate!r}")
+    dims = FigureDims.from_anthropometry()
+    params = GaitParams()
+    if args.no_somersault:
+        params = replace(params, somersault=False)
+    steps = args.steps if args.steps is not None else _DEFAULT_STEPS.get(args.gait)
+    if steps is not None and steps < 1:
+        raise ScenarioError(f"--steps must be >= 1, got {steps}")
+    if args.gait == "forward":
+        return step_forward(dims, steps, args.speed, params)
+    if args.gait == "upstairs":
+        return step_upward(dims, steps, args.speed, params, args.stair_rise, args.stair_run)
+    if args.gait == "jump":
+        return jump(dims, args.speed, params)
+    return demo(dims, args.speed, params, rise=args.stair_rise, run=args.stair_run)
+
+
+def _out_dir(args) -> Path:
+    if args.out:
+        out = Path(args.out)
+        if (out / "summary.json").exists() and not args.overwrite:
+            raise ScenarioError(f"--out {str(out)!r} already holds a run (summary.json); choose "
+                                f"another folder or pass --overwrite")
+        return out
+    stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S")
+    out = Path("runs") / f"walk-{args.gait}-{stamp}"
+    k = 1
+    while out.exists():
+        k += 1
+        out = Path("runs") / f"walk-{args.gait}-{stamp}-{k}"
+    return out
+
+
+def run(args) -> int:
+    from tqdm import tqdm
+
+    from biped.kinematic import stair_geometry, walk_metrics
+    from biped.kinematic.outputs import (
+        build_replay,
+        figure_model,
+        figure_qpos,
+        write_trajectory_csv,
+    )
+
+    plan = build_plan(args)
+    out = _out_dir(args)
+    out.mkdir(parents=True, exist_ok=True)
+    stages = ["motion", "trajectory.csv"] + (["dynamics"] if not args.no_dynamics else []) \
+        + (["figures"] if not args.no_figures else []) + (["replay.html"] if not args.no_replay else []) \
+        + (["video.mp4"] if not args.no_video else [])
+    bar = tqdm(stages, desc=f"biped walk {args.gait}", disable=args.quiet, unit="stage")
+    paths, notes = {}, {}
+    idyn = None
+    for stage in bar:
+        bar.set_postfix_str(stage)
+        if stage == "motion":
+            motion = plan.sample(args.rate)
+            lm = motion.landmarks()
+            metrics = walk_metrics(motion, lm)
+        elif stage == "trajectory.csv":
+            paths["trajectory"] = str(write_trajectory_csv(motion, lm, out / "trajectory.csv"))
+        elif stage == "dynamics":
+            from biped.kinematic.dynamics import inverse_dynamics
+
+            idyn = inverse_dynamics(motion)
+        elif stage == "figures":
+            from biped.viz.walk_figures import plot_feet, plot_inverse_dynamics, plot_joint_angles
+
+            figs = [plot_joint_angles(motion, out / "figures" / "joint_angles.png"),
+                    plot_feet(motion, lm, out / "figures" / "feet.png")]
+            if idyn is not None:
+                figs.append(plot_inverse_dynamics(idyn, plan.markers, out / "figures" / "inverse_dynamics.png"))
+            paths["figures"] = [str(f) for f in figs]
+        elif stage == "replay.html":
+            from biped.viz.replay import write_replay
+
+            info = {"gait": args.gait, "distance_m": metrics.distance_m,
+                    "height_climbed_m": metrics.height_climbed_m,
+                    "max_stance_slip_m": metrics.max_stance_slip_m,
+                    "min_swing_clearance_m": metrics.min_swing_clearance_m}
+            rep = build_replay(motion, f"biped walk --gait {args.gait} (Bediz's kinematic figure)", info)
+            paths["replay"] = str(write_replay(rep, out / "replay.html"))
+        elif stage == "video.mp4":
+            from biped.viz.video import render_video
+
+            model = figure_model(motion)
+            res = render_video(model, motion.times, figure_qpos(model, motion), out / "video.mp4",
+                               track_body="pelvis", distance=4.0, azimuth=-125.0, elevation=-15.0,
+                               fps=25, width=480, height=360)
+            if res.path is None:
+                notes["video"] = res.reason
+            else:
+                paths["video"] = str(res.path)
+    bar.close()
+    summary = {
+        "gait": args.gait,
+        "speed_m_s": args.speed,
+        "rate_hz": args.rate,
+        "somersault": plan.params.somersault,
+        **metrics.as_dict(),
+        "step_length_m": plan.dims.leg * math.sin(2 * math.radians(plan.params.alpha)),
+        "markers": list(plan.markers),
+    }
+    if args.gait in ("upstairs", "demo"):
+        rise, run_, a_up = stair_geometry(plan.dims, plan.params, args.stair_rise, args.stair_run)
+        summary["stairs"] = {"rise_m": rise, "run_m": run_, "alpha_up_deg": math.degrees(a_up),
+                             "alpha_down_deg": plan.params.alpha_down}
+    if idyn is not None:
+        summary["inverse_dynamics"] = idyn.summary()
+    summary["outputs"] = paths
+    summary["notes"] = notes
+    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    rows = [("gait", args.gait), ("duration", f"{metrics.duration_s:.2f} s"),
+            ("distance travelled", f"{metrics.distance_m:.3f} m"),
+            ("height climbed", f"{metrics.height_climbed_m:.3f} m"),
+            ("max penetration", f"{metrics.max_penetration_m * 1e3:.3g} mm"),
+            ("max stance slip", f"{metrics.max_stance_slip_m * 1e3:.3g} mm"),
+            ("min swing clearance", f"{metrics.min_swing_clearance_m * 100:.2f} cm")]
+    if idyn is not None:
+        s = summary["inverse_dynamics"]
+        rows += [("peak vertical GRF", f"{s['peak_grf_z_body_weights']:.2f} body weights"),
+                 ("stance CoP outside the sole", f"{100 * s['fraction_cop_outside_sole']:.0f} % of stance frames"),
+                 ("peak friction needed", f"{s['peak_friction_ratio']:.2f} (W: 0.3)")]
+    for k, v in notes.items():
+        rows.append((k, v))
+    rows.append(("outputs", str(out)))
+    w = max(len(k) for k, _ in rows)
+    print("\n".join(f"  {k:<{w}}  {v}" for k, v in rows))
+    return 0
