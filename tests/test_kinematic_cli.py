@@ -1,0 +1,147 @@
+"""``biped walk``: its files, its errors, its replay in headless Chromium and its video.
+
+Oracles: the floor and the stair treads (closed-form heights), the figure's own geometry for the
+boxes three.js builds, and the CSV read back with the csv module.
+"""
+
+from __future__ import annotations
+
+import csv
+import html
+import json
+import math
+import re
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+from biped.cli import main
+from biped.kinematic import step_upward
+from biped.kinematic.outputs import CSV_COLUMNS, build_replay, figure_model, figure_qpos
+
+
+def _read_csv(path):
+    with open(path, newline="") as fh:
+        rows = list(csv.reader(fh))
+    return rows[0], np.array(rows[1:], dtype=float)
+
+
+def test_forward_writes_csv_summary_figures_and_replay(tmp_path, capsys):
+    out = tmp_path / "fw"
+    assert main(["walk", "--gait", "forward", "--steps", "2", "--out", str(out), "--no-video", "--quiet"]) == 0
+    header, data = _read_csv(out / "trajectory.csv")
+    assert tuple(header) == CSV_COLUMNS
+    for col in ("time", "left_knee", "pelvis_z", "left_heel_x", "right_toe_z"):
+        assert col in header
+    c = {n: i for i, n in enumerate(header)}
+    # a foot that bears weight is on the floor: heel and toe at z = 0
+    for side in ("left", "right"):
+        st = data[:, c[f"{side}_stance"]] == 1
+        assert np.max(np.abs(data[st, c[f"{side}_heel_z"]])) < 1e-6
+        assert np.max(np.abs(data[st, c[f"{side}_toe_z"]])) < 1e-6
+    s = json.loads((out / "summary.json").read_text())
+    for k in ("max_penetration_m", "max_stance_slip_m", "min_swing_clearance_m", "distance_m",
+              "height_climbed_m", "inverse_dynamics"):
+        assert k in s
+    L = s["step_length_m"]
+    assert s["distance_m"] == pytest.approx(2 * L, abs=1e-9)
+    assert s["max_penetration_m"] < 1e-3 and s["max_stance_slip_m"] < 1e-3
+    assert s["min_swing_clearance_m"] > 0.01
+    for f in ("joint_angles.png", "feet.png", "inverse_dynamics.png"):
+        assert (out / "figures" / f).stat().st_size > 10_000
+    assert (out / "replay.html").stat().st_size > 100_000
+    assert "max stance slip" in capsys.readouterr().out
+
+
+def test_upstairs_options_reach_the_stairs(tmp_path):
+    out = tmp_path / "up"
+    assert main(["walk", "--gait", "upstairs", "--steps", "3", "--stair-rise", "0.15", "--stair-run", "0.32",
+                 "--out", str(out), "--no-video", "--no-replay", "--no-figures", "--no-dynamics", "--quiet"]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    assert s["stairs"]["rise_m"] == 0.15 and s["stairs"]["run_m"] == 0.32
+    assert s["height_climbed_m"] == pytest.approx(0.45)
+    header, data = _read_csv(out / "trajectory.csv")
+    c = {n: i for i, n in enumerate(header)}
+    assert data[-1, c["left_heel_z"]] == pytest.approx(0.45, abs=1e-6)   # both feet on tread 3
+    assert data[-1, c["right_toe_z"]] == pytest.approx(0.45, abs=1e-6)
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--gait", "jump", "--steps", "3"], "--steps applies to --gait forward and upstairs"),
+    (["--gait", "forward", "--stair-rise", "0.1"], "apply to --gait upstairs and demo"),
+    (["--gait", "upstairs", "--stair-run", "0.1"], "stair run must be at least"),
+    (["--gait", "forward", "--speed", "-1"], "speed must be a positive number"),
+    (["--gait", "forward", "--rate", "5"], r"--rate must be in \[20, 2000\] Hz"),
+])
+def test_bad_arguments_exit_2_with_a_clear_message(tmp_path, capsys, argv, message):
+    assert main(["walk", *argv, "--out", str(tmp_path / "x"), "--no-video", "--quiet"]) == 2
+    assert re.search(message, capsys.readouterr().err)
+
+
+def test_existing_run_is_not_overwritten(tmp_path, capsys):
+    out = tmp_path / "r"
+    args = ["walk", "--gait", "forward", "--steps", "1", "--out", str(out), "--no-video", "--no-replay",
+            "--no-figures", "--no-dynamics", "--quiet"]
+    assert main(args) == 0
+    assert main(args) == 2
+    assert "--overwrite" in capsys.readouterr().err
+    assert main([*args, "--overwrite"]) == 0
+
+
+def _chromium():
+    for name in ("chromium", "chromium-browser", "google-chrome"):
+        exe = shutil.which(name)
+        if exe:
+            return exe
+    pytest.skip("Debian's chromium is not installed (apt-get install chromium); CI installs it")
+
+
+@pytest.mark.browser
+def test_chromium_draws_the_stance_foot_on_its_tread(tmp_path):
+    """In the browser, at a double support on the stairs, each foot's box rests on the top of the
+    stair box under it (the tread heights i * rise) and the figure's 15 parts are drawn."""
+    plan = step_upward(steps=3)
+    motion = plan.sample(100.0)
+    rep = build_replay(motion, "stairs")
+    f = tmp_path / "stairs.html"
+    from biped.viz.replay import write_replay
+
+    write_replay(rep, f)
+    t = float(plan.starts[2])  # both feet down: treads 1 and 2
+    i = int(np.argmin(np.abs(rep.times - t)))
+    t = float(rep.times[i])
+    cmd = [_chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--use-angle=swiftshader",
+           "--enable-unsafe-swiftshader", "--disable-background-networking", "--disable-component-update",
+           "--disable-sync", "--no-first-run", "--disable-extensions", f"--user-data-dir={tmp_path / 'profile'}",
+           "--window-size=800,600", "--virtual-time-budget=8000", "--dump-dom", f"{f.as_uri()}#t={t!r}&probe=1"]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=90, check=False)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    probe = re.search(r'<pre id="probe" style="[^"]*">(.*?)</pre>', proc.stdout, re.DOTALL)
+    assert probe, proc.stdout[-2000:]
+    boxes = {b["name"]: b for b in json.loads(html.unescape(probe[1]))["boxes"]}
+    assert len([n for n in boxes if not n.startswith(("stair", "floor"))]) == 15
+    rise = plan.terrain.blocks[0][2]
+    feet = sorted(boxes[f"{s}_foot"]["min"][2] for s in ("left", "right"))
+    assert feet == pytest.approx([rise, 2 * rise], abs=2e-4)
+    assert boxes["stair1"]["max"][2] == pytest.approx(rise, abs=2e-4)
+    assert boxes["stair2"]["max"][2] == pytest.approx(2 * rise, abs=2e-4)
+
+
+def test_video_of_the_figure(tmp_path):
+    """A few frames of the figure's MJCF render to an MP4 (skipped where no OpenGL works)."""
+    from biped.viz.video import gl_available, render_video
+
+    ok, why = gl_available()
+    if not ok:
+        pytest.skip(why)
+    motion = step_upward(steps=1).sample(50.0)
+    model = figure_model(motion)
+    q = figure_qpos(model, motion)
+    k = slice(0, 20)
+    res = render_video(model, motion.times[k], q[k], tmp_path / "v.mp4", fps=10, width=160, height=120,
+                       track_body="pelvis", distance=3.0)
+    assert res.path is not None, res.reason
+    assert res.frames == math.floor((motion.times[19] - motion.times[0]) * 10 + 1e-9) + 1
+    assert res.path.stat().st_size > 1000
