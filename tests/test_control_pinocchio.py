@@ -154,7 +154,7 @@ def exact_workspace_dynamics(pb: PinBiped, body: str, feet, qpos, qvel):
     K = Mi - Mi @ Jc.T @ Lc @ Jc @ Mi
     Lam = np.linalg.inv(J1 @ K @ J1.T)
     z = Lam @ (J1 @ K @ c + J1 @ Mi @ Jc.T @ Lc @ Jcd - J1d)
-    parts = dict(M=M, c=c, J1=J1, J1d=J1d, Jc=Jc, Jcd=Jcd, v=v)
+    parts = {"M": M, "c": c, "J1": J1, "J1d": J1d, "Jc": Jc, "Jcd": Jcd, "v": v}
     return Lam, z, parts
 
 

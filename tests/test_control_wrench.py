@@ -60,6 +60,17 @@ def rotvec_quat(v):
 # --------------------------------------------------------------------------- W Alg. 4
 
 
+def _body_velocity(t, R, pdot, acc, w, alpha):
+    """V^b(t) = [R(t)^T pdot(t); R(t)^T w(t)] of a motion with world COM velocity pdot + acc t,
+    angular velocity w + alpha t (space frame) and R(t) = exp(w^ t) R (exact to first order)."""
+    q = np.zeros(4)
+    mujoco.mju_mulQuat(q, rotvec_quat(w * t), quat_of(R))
+    Rm = np.zeros(9)
+    mujoco.mju_quat2Mat(Rm, q)
+    Rm = Rm.reshape(3, 3)
+    return np.concatenate([Rm.T @ (pdot + acc * t), Rm.T @ (w + alpha * t)])
+
+
 def test_alg4_quaternion_sign_does_not_matter(ctrl, wendlandt_mj):
     rng = np.random.default_rng(6)
     for _ in range(5):
@@ -98,16 +109,8 @@ def test_alg4_zero_error_commands_the_desired_acceleration(ctrl, wendlandt_mj):
                         ang_vel=tuple(w), ang_acc=tuple(alpha))
         out = ctrl.compute(d.qpos, d.qvel, target=target)
         h = 1e-5
-
-        def body_velocity(t):
-            Rt = np.zeros(4)
-            mujoco.mju_mulQuat(Rt, rotvec_quat(w * t) if t else np.array([1.0, 0, 0, 0]), quat_of(R))
-            Rm = np.zeros(9)
-            mujoco.mju_quat2Mat(Rm, Rt)
-            Rm = Rm.reshape(3, 3)
-            return np.concatenate([Rm.T @ (pdot + acc * t), Rm.T @ (w + alpha * t)])
-
-        expected = (body_velocity(h) - body_velocity(-h)) / (2 * h)
+        args = (R, pdot, acc, w, alpha)
+        expected = (_body_velocity(h, *args) - _body_velocity(-h, *args)) / (2 * h)
         np.testing.assert_allclose(out.accel_desired, expected, rtol=0, atol=1e-7)
         np.testing.assert_allclose(out.wrench_desired, out.P1 @ expected + out.z1, rtol=1e-9, atol=1e-6)
         np.testing.assert_allclose(out.quat_error, [1, 0, 0, 0], atol=1e-12)

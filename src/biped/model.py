@@ -95,7 +95,7 @@ class TreeModel:
             raise ModelError(unknown_name("body", name, self.body_names)) from None
 
     @classmethod
-    def from_mjcf(cls, source, feet: tuple[str, str] = DEFAULT_FEET) -> "TreeModel":
+    def from_mjcf(cls, source, feet: tuple[str, str] = DEFAULT_FEET) -> TreeModel:
         """Build from an MJCF path, an XML string or a compiled ``mujoco.MjModel``."""
         model, label = _load(source)
         return _build(model, tuple(feet), label)

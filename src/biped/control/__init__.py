@@ -19,14 +19,21 @@ from os import PathLike
 import numpy as np
 
 from biped.control.recursions import (
-    NONFINITE_RESULT, NONFINITE_STATE, SINGULAR_DISTRIBUTION, ZERO_QUATERNION, alg1_initialize,
-    alg2_velocity_propagation, alg6_torques, compute_kernel, layout,
+    NONFINITE_RESULT,
+    NONFINITE_STATE,
+    SINGULAR_DISTRIBUTION,
+    ZERO_QUATERNION,
+    alg1_initialize,
+    alg2_velocity_propagation,
+    alg6_torques,
+    compute_kernel,
+    layout,
 )
 from biped.errors import ScenarioError, SingularityError, StateError
 from biped.model import DEFAULT_FEET, TreeModel
 from biped.spatial import axis_angle_quat
 
-__all__ = ["WorkspaceController", "Target", "Gains", "ControllerOutput", "TreeModel"]
+__all__ = ["ControllerOutput", "Gains", "Target", "TreeModel", "WorkspaceController"]
 
 _AXES = {"-y": (0.0, -1.0, 0.0), "-x": (-1.0, 0.0, 0.0)}
 
@@ -68,7 +75,7 @@ class Target:
         object.__setattr__(self, "array", arr)
 
     @classmethod
-    def wendlandt(cls, com=(-0.01, 0.0, 1.14), tilt_deg: float = 15.0, axis: str = "-y") -> "Target":
+    def wendlandt(cls, com=(-0.01, 0.0, 1.14), tilt_deg: float = 15.0, axis: str = "-y") -> Target:
         """W's set point: COM (-1, 0, 114) cm, 15 deg about -y (text) or -x (the printed quaternion
         (0.99144486, -0.13052619, 0, 0)); see docs/controller.md."""
         if axis not in _AXES:
@@ -92,7 +99,7 @@ class Gains:
         object.__setattr__(self, "array", arr)
 
     @classmethod
-    def wendlandt(cls) -> "Gains":
+    def wendlandt(cls) -> Gains:
         """W section 4's gains."""
         return cls()
 
@@ -176,7 +183,7 @@ class WorkspaceController:
 
     @classmethod
     def from_mjcf(cls, source: str | PathLike, feet: tuple[str, str] = DEFAULT_FEET, **kwargs
-                  ) -> "WorkspaceController":
+                  ) -> WorkspaceController:
         """Controller for the biped in an MJCF file (path, XML text or ``mujoco.MjModel``)."""
         return cls(TreeModel.from_mjcf(source, feet=feet), **kwargs)
 
