@@ -115,7 +115,8 @@ class ControllerOutput:
     wrench_desired: (6,) ``F_1^bd = P_1 X^b + z_1`` [N, N m] (W Alg. 4).
     wrench_left, wrench_right: (6,) ``F~_2^bd``, ``F~_8^bd``: the shares of the two legs (sum =
         wrench_desired) (W Alg. 5).
-    foot_wrench_left, foot_wrench_right: (6,) ``F_l``, ``F_r`` in each foot's own COM frame.
+    foot_wrench_left, foot_wrench_right: (6,) ``F_l``, ``F_r``: the ground's wrench on each foot that
+        the split implies, in that foot's own COM principal frame, at its COM (W Alg. 5).
     quat_error: (4,) ``q_e`` (w, x, y, z), scalar part >= 0 (W Alg. 4).
     """
 

@@ -14,6 +14,9 @@ Where the transcribed paper is ambiguous the code follows the derivation, as SEE
 - Alg. 4: ``X_c^b = R^T (X_c^s - w^s x pdot^s)`` (the print has ``p`` for ``pdot``: the body-frame
   derivative of ``v^b = R^T pdot`` is ``R^T (pddot - w^s x pdot)``).
 - eq. 3.9: ``Omega = blockdiag(w^, w^)``, the hat of the body angular velocity.
+- Alg. 5: ``G = [Ad^T_{g_{7,1}}  Ad^T_{g_{13,1}}]`` moves each foot's wrench to the central body
+  (the print's ``Ad^T_{g_{1,7}}`` follows W eq. 3.8, whose subscripts are swapped with respect to
+  W eq. 3.6 and Alg. 6; see :func:`alg5_wrench_distribution`).
 
 Buffers are flat float64 arrays whose layout :func:`layout` defines; ``biped.control`` wraps them.
 """
