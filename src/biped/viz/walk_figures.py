@@ -84,7 +84,7 @@ def plot_joint_angles(motion, path) -> Path:
     ax.plot(t, a[:, J["torso_roll"]], color="tab:green", lw=1.0, label="torso roll")
     ax.plot(t, a[:, J["torso_pitch"]], color="tab:purple", lw=1.0, label="torso pitch (lean)")
     if np.any(motion.pelvis_pitch != 0):
-        ax.plot(t, np.degrees(motion.pelvis_pitch) / 10.0, color="k", lw=0.8, label="pelvis pitch / 10")
+        ax.plot(t, np.degrees(motion.pelvis_pitch) / 10.0, color="k", lw=0.8, label="pelvis pitch / 10 (somersault; 360 deg = 0)")
     ax.set_ylabel("torso [deg]", fontsize=8)
     ax.legend(loc="upper right", fontsize=7)
     _markers(ax, motion.plan.markers)
