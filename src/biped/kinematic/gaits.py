@@ -26,8 +26,9 @@ stance foot slides and sinks, and every gait starts with a jump of the joint ang
   mid-swing as B; ``k = 1`` at lift-off and touch-down so that the foot leaves and lands where a
   stance foot stands), ``g`` moving from the lift-off to the landing foothold with zero speed at
   both ends (on stairs it rises before it moves forward, to clear the nosing).
-- **Arms** swing with the opposite leg (B): shoulder ``0.7 theta1 + 10 deg``, elbow
-  ``1.5 theta1 - 10 deg`` of the opposite hip angle. **Torso** rolls toward the stance leg,
+- **Arms** swing with the opposite leg (B): shoulder ``0.7 theta1 - 10 deg``, elbow
+  ``1.5 theta1 + 10 deg`` of the opposite hip angle (B's ``+10`` / ``-10`` in his leg frame, whose
+  y axis must point backward for his ``theta2 = +acos`` to be a human knee; docs/walk.md). **Torso** rolls toward the stance leg,
   ``11/3 deg sin(pi s)`` (B: z/3 for z up to 11), and leans 7 deg on stairs (B).
 - **Jump** (B's ``jump``): crouch, straight up, along a semicircle (with B's 360 deg somersault
   unless disabled), straight down, absorb, back up to standing.
@@ -85,7 +86,8 @@ class GaitParams:
         swing_factor: eq. 4.21's 0.95 (reached at mid-swing).
         height_amplitude: eq. 4.22's amplitude in units of the thigh length (B: 0.08, l1 = 1).
         shoulder_gain, shoulder_offset, elbow_gain, elbow_offset: arm swing from the opposite hip
-            angle (B: 0.7, +10, 1.5, -10).
+            angle (B: 0.7, 10, 1.5, 10; the offsets' signs are B's read in our leg frame, see
+            the module docstring).
         torso_roll: torso roll amplitude toward the stance side (B: 11/3).
         alpha_down: stairs, trailing-leg angle at double support (B: 10).
         stair_lean: forward torso lean on stairs (B: 7).
@@ -386,8 +388,9 @@ class Plan:
                 swing_s[m, j] = f.swing_s[sd]
                 mode, val = f.feet[sd]
                 if mode == "world":
-                    # ankle relative to the hip, in the pelvis frame (pelvis pitched about +y)
-                    hip = f.pelvis + np.stack([sp * 0.0, np.full(s.size, _hip_y(d, sd)), sp * 0.0], 1)
+                    # ankle relative to the hip, in the pelvis frame (pelvis pitched about +y;
+                    # the lateral hip offset is along the pitch axis, so it does not turn)
+                    hip = f.pelvis + np.array([0.0, _hip_y(d, sd), 0.0])
                     r = val - hip
                     rx = cp * r[:, 0] - sp * r[:, 2]
                     rz = sp * r[:, 0] + cp * r[:, 2]
