@@ -289,3 +289,49 @@ def test_bad_states_raise_state_errors(ctrl, wendlandt_mj):
 def re_escape(s):
     import re
     return re.escape(s)
+
+
+def _adjoint_T(g):
+    """Ad_g^T (6, 6) of a 4x4 transform, written out here from W eq. 3.7."""
+    R, p = g[:3, :3], g[:3, 3]
+    phat = np.array([[0, -p[2], p[1]], [p[2], 0, -p[0]], [-p[1], p[0], 0]])
+    A = np.zeros((6, 6))
+    A[:3, :3], A[:3, 3:], A[3:, 3:] = R, phat @ R, R
+    return A.T
+
+
+def test_alg5_printed_reading_is_selectable_and_differs(wendlandt_path, wendlandt_mj):
+    """distribution="printed" follows W's print G = [Ad^T_{g_{1,7}} Ad^T_{g_{1,13}}] literally:
+    its shares still sum to F_1^bd and are the minimum-norm solution of *that* G (numpy lstsq on
+    MuJoCo's poses), and they differ from the statics split of the default."""
+    m = wendlandt_mj
+    d = mujoco.MjData(m)
+    printed = WorkspaceController.from_mjcf(wendlandt_path, distribution="printed")
+    statics = WorkspaceController.from_mjcf(wendlandt_path)
+    ids = [m.body(b).id for b in ("central_body", "left_foot", "right_foot")]
+    rng = np.random.default_rng(21)
+    for _ in range(10):
+        d.qpos[:], d.qvel[:] = near_initial(m, rng)
+        mujoco.mj_kinematics(m, d)
+        pose = []
+        for b in ids:
+            g = np.eye(4)
+            g[:3, :3], g[:3, 3] = d.ximat[b].reshape(3, 3), d.xipos[b]
+            pose.append(g)
+        A1l, A1r = (_adjoint_T(np.linalg.solve(pose[0], pose[i])) for i in (1, 2))
+        out = printed.compute(d.qpos, d.qvel)
+        Fd = out.wrench_desired
+        scale = np.abs(Fd).max()
+        np.testing.assert_allclose(out.wrench_left + out.wrench_right, Fd, rtol=0, atol=1e-12 * scale)
+        x = np.linalg.lstsq(np.hstack([A1l, A1r]), Fd, rcond=None)[0]
+        np.testing.assert_allclose(np.concatenate([out.foot_wrench_left, out.foot_wrench_right]), x,
+                                   rtol=0, atol=1e-10 * np.abs(x).max())
+        np.testing.assert_allclose(out.wrench_left, A1l @ x[:6], rtol=0, atol=1e-9 * scale)
+        ref = statics.compute(d.qpos, d.qvel)
+        np.testing.assert_allclose(ref.wrench_desired, Fd, rtol=1e-12, atol=1e-9)
+        assert np.abs(ref.wrench_left - out.wrench_left).max() > 1e-3 * scale
+
+
+def test_unknown_distribution_is_rejected(wendlandt_path):
+    with pytest.raises(ScenarioError, match="valid: \\('statics', 'printed'\\)"):
+        WorkspaceController.from_mjcf(wendlandt_path, distribution="paper")

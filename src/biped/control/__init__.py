@@ -37,6 +37,11 @@ __all__ = ["ControllerOutput", "Gains", "Target", "TreeModel", "WorkspaceControl
 
 _AXES = {"-y": (0.0, -1.0, 0.0), "-x": (-1.0, 0.0, 0.0)}
 
+#: W Alg. 5 readings: "statics" (default) moves each foot's wrench to the central body with
+#: Ad^T_{g_{foot,1}}, as power balance and W's eq. 3.6 require; "printed" uses W's print
+#: Ad^T_{g_{1,foot}} literally (same sum F_1^bd, a different and unphysical split).
+DISTRIBUTIONS = ("statics", "printed")
+
 
 def _vec(name: str, value, n: int) -> np.ndarray:
     arr = np.asarray(value, dtype=float).reshape(-1)
@@ -141,12 +146,20 @@ class WorkspaceController:
     The model is immutable; the controller owns preallocated buffers (not thread-safe: use one
     controller per thread or process). One :meth:`compute` is one compiled call (numba) running
     W Alg. 1-6; set ``NUMBA_DISABLE_JIT=1`` to step through it in Python.
+
+    Options: ``big_base`` is W Alg. 3's factor (feet get ``big_base * M_1``; W: 1e6);
+    ``distribution`` selects the reading of W Alg. 5 (:data:`DISTRIBUTIONS`: "statics", the
+    default, or W's "printed" subscripts); ``target`` and ``gains`` are the defaults of
+    :meth:`compute`.
     """
 
     def __init__(self, tree: TreeModel, *, big_base: float = 1e6, target: Target | None = None,
-                 gains: Gains | None = None):
+                 gains: Gains | None = None, distribution: str = "statics"):
         if not (np.isfinite(big_base) and big_base > 0):
             raise ScenarioError(f"big_base must be a positive finite factor, got {big_base}")
+        if distribution not in DISTRIBUTIONS:
+            raise ScenarioError(f"unknown wrench distribution {distribution!r}; valid: {DISTRIBUTIONS}")
+        self.distribution = distribution
         self.tree = tree
         self.big_base = float(big_base)
         self.target = target or Target()
@@ -157,6 +170,7 @@ class WorkspaceController:
         mi = np.zeros(4 + 5 * n, dtype=np.int64)
         mi[0] = n
         mi[1:3] = tree.feet
+        mi[3] = 1 if distribution == "printed" else 0
         for j, arr in enumerate((tree.parent, tree.qpos_adr, tree.dof_adr, tree.leg,
                                  tree.beyond_foot.astype(np.int64))):
             mi[4 + j * n:4 + (j + 1) * n] = arr

@@ -448,7 +448,7 @@ def alg4_desired_wrench(g, V, P, z, target, gains, quat, R3, X, qe, Fd):
 
 
 @njit(cache=True)
-def alg5_wrench_distribution(g, feet, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_tilde, Fr_tilde):
+def alg5_wrench_distribution(g, feet, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_tilde, Fr_tilde, printed=False):
     """W Alg. 5 (desired wrench distribution, eq. 3.11-3.14): ``F_1^bd = G [F_l; F_r]`` with
     ``G = [Ad^T_{g_{7,1}}  Ad^T_{g_{13,1}}]`` (each foot's wrench moved to the central body),
     ``[F_l; F_r] = G^T (G G^T)^-1 F_1^bd`` (minimum norm), ``F~_2 = Ad^T_{g_{7,1}} F_l``,
@@ -457,6 +457,9 @@ def alg5_wrench_distribution(g, feet, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_tilde, Fr_
     swapped with respect to its own eq. 3.6 and Alg. 6 (power balance gives
     ``F_k = Ad^T_{g_{l,k}} F_l``); taken literally, the print moves the wrench the wrong way and the
     split carries internal moments through the legs.
+
+    ``printed=True`` uses W's print literally (``g_{1,7}``, ``g_{1,13}`` in place of ``g_{7,1}``,
+    ``g_{13,1}``): the shares still sum to ``F_1^bd`` but are not the feet's wrenches moved by statics.
 
     Returns False when ``G G^T`` (a sum of two positive-definite matrices) is not positive
     definite to working precision: non-finite poses or feet absurdly far from the body.
@@ -469,14 +472,20 @@ def alg5_wrench_distribution(g, feet, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_tilde, Fr_
     R0 = g[0, :3, :3]
     for f in range(2):
         k = feet[f]
-        # g_{foot,1} = g_{0,foot}^-1 g_{0,1}: R = R_f^T R_0, p = R_f^T (p_0 - p_f)
         R = R3[f]
         pp = tmp6[2 + f]
-        for i in range(3):
-            for j in range(3):
-                R[i, j] = g[k, 0, i] * R0[0, j] + g[k, 1, i] * R0[1, j] + g[k, 2, i] * R0[2, j]
-            pp[i] = (g[k, 0, i] * (g[0, 0, 3] - g[k, 0, 3]) + g[k, 1, i] * (g[0, 1, 3] - g[k, 1, 3])
-                     + g[k, 2, i] * (g[0, 2, 3] - g[k, 2, 3]))
+        if printed:  # W's print: g_{1,foot} = g_{0,1}^-1 g_{0,foot}
+            for i in range(3):
+                for j in range(3):
+                    R[i, j] = R0[0, i] * g[k, 0, j] + R0[1, i] * g[k, 1, j] + R0[2, i] * g[k, 2, j]
+                pp[i] = (R0[0, i] * (g[k, 0, 3] - g[0, 0, 3]) + R0[1, i] * (g[k, 1, 3] - g[0, 1, 3])
+                         + R0[2, i] * (g[k, 2, 3] - g[0, 2, 3]))
+        else:  # g_{foot,1} = g_{0,foot}^-1 g_{0,1}: R = R_f^T R_0, p = R_f^T (p_0 - p_f)
+            for i in range(3):
+                for j in range(3):
+                    R[i, j] = g[k, 0, i] * R0[0, j] + g[k, 1, i] * R0[1, j] + g[k, 2, i] * R0[2, j]
+                pp[i] = (g[k, 0, i] * (g[0, 0, 3] - g[k, 0, 3]) + g[k, 1, i] * (g[0, 1, 3] - g[k, 1, 3])
+                         + g[k, 2, i] * (g[0, 2, 3] - g[k, 2, 3]))
         _adjoint(R, pp[:3], Afoot)
         for i in range(6):
             for j in range(i, 6):
@@ -616,7 +625,8 @@ def compute_kernel(qpos, qvel, target, gains, mi, mf, work, out):
         for j in range(6):
             P1[i, j] = P[0, i, j]
     alg4_desired_wrench(g, V, P, z, target, gains, quat, R3, X, qe, Fd)
-    if not alg5_wrench_distribution(g, feet, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_tilde, Fr_tilde):
+    if not alg5_wrench_distribution(g, feet, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_tilde, Fr_tilde,
+                                    mi[3] == 1):
         return SINGULAR_DISTRIBUTION
     alg6_torques(parent, H, leg, beyond, gl, Fl_tilde, Fr_tilde, F, tau)
     for i in range(out.shape[0]):
