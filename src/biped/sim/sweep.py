@@ -310,6 +310,16 @@ class SweepSpec:
         return TrialSetup(self.scenario(trial), trial, self.torque_limits)
 
 
+def hold_scenario(base: Scenario | None = None) -> Scenario:
+    """``base`` (W's scenario by default) with the set point moved to the initial state: COM at
+    ``initial_com_m``, ``initial_tilt_deg`` about -y. The task of ``biped sweep``'s default
+    ``--task hold``: the same job for W's controller and for the joint-space PD baseline (which
+    holds the initial joint angles), so their envelopes compare like with like."""
+    base = base or Scenario()
+    return base.with_overrides(target_com_m=base.initial_com_m,
+                               target_tilt_deg=base.initial_tilt_deg, target_axis="-y")
+
+
 def aim_block(target_xy, speed_m_s: float, direction_deg: float, height_m: float,
               launch_distance_m: float = 0.5, gravity: float = GRAVITY):
     """Start position [m] and velocity [m/s] (world frame) of a block aimed at a vertical line.
@@ -1118,7 +1128,7 @@ def feet_in_place_bound(directions_deg, scenario: Scenario | None = None) -> Fee
 
 
 __all__ = ["AXES", "W_THROW", "MEASURED", "Trial", "TrialSetup", "SweepSpec", "SweepSummary",
-           "SweepData", "Envelope", "FeetInPlaceBound", "aim_block", "trial_scenario", "parse_axis",
+           "SweepData", "Envelope", "FeetInPlaceBound", "aim_block", "hold_scenario", "trial_scenario", "parse_axis",
            "execute_trial", "run_sweep", "run_trial", "make_policy", "measure",
            "ballistic_impulse", "envelope", "survived", "hof_bound", "ray_to_polygon_edge",
            "support_polygon", "feet_in_place_bound", "load", "default_workers", "parts_dir"]

@@ -1,0 +1,128 @@
+"""``biped sweep``: push-recovery envelopes, many push trials on every local core or a Dask cluster.
+
+Thin: parsing here, work in :mod:`biped.sim.sweep`, plots in :mod:`biped.viz.envelope`.
+See docs/sweep.md.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+from biped.errors import ScenarioError
+
+_AXIS_OPTIONS = (("speed", "speed_m_s", "block speed [m/s]"),
+                 ("direction", "direction_deg", "direction of travel [deg], 0 = +x, 90 = +y"),
+                 ("mass", "block_mass_kg", "block mass [kg]"),
+                 ("height", "height_m", "aim height [m]"),
+                 ("gain_scale", "gain_scale", "gain factor (kp * s, kv * sqrt(s))"))
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "sweep", help="push-recovery envelopes: a grid of pushes on all cores or a Dask cluster",
+        description="Run a grid (or random sample) of push trials and write one Parquet file, a row "
+                    "per trial. Axis values: a number, a list 1,2,4 or START:STOP:NUM (ends "
+                    "included). Interrupted? Run the same command again: finished trials are "
+                    "kept and skipped. See docs/sweep.md.")
+    p.add_argument("--grid", metavar="FILE.toml",
+                   help="sweep file ([grid] axes, [scenario] keys, samples, seed, torque_limits); "
+                        "command-line options override it")
+    for opt, _, what in _AXIS_OPTIONS:
+        p.add_argument(f"--{opt.replace('_', '-')}", metavar="VALUES", dest=opt, help=what)
+    p.add_argument("--samples", type=int, metavar="N",
+                   help="N random trials, uniform between each axis's smallest and largest value")
+    p.add_argument("--seed", type=int, metavar="S", help="seed of --samples (default 0)")
+    p.add_argument("--task", choices=("hold", "wendlandt"), default=None,
+                   help="hold: keep the initial posture (set point = initial state; default, the "
+                        "same task for both controllers); wendlandt: rise to W's set point")
+    p.add_argument("--controller", choices=("workspace", "joint-pd"), default=None,
+                   help="W's workspace controller (default) or the joint-space PD baseline")
+    p.add_argument("--torque-limits", choices=("none", "human"), default=None,
+                   help="joint torque limits: none (W) or human-like (docs/sweep.md)")
+    p.add_argument("--duration", type=float, metavar="S", help="simulated time per trial [s] (3)")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                   help="any scenario key (TOML value syntax), repeatable")
+    p.add_argument("--workers", type=int, metavar="N", help="local processes (default: all cores)")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="run on a Dask cluster instead, e.g. tcp://10.0.0.5:8786")
+    p.add_argument("--batch", type=int, default=1, metavar="N", help="trials per task (1)")
+    p.add_argument("--out", metavar="FILE.parquet",
+                   help="results (default runs/sweep-<controller>-<limits>.parquet)")
+    p.add_argument("--retry-failed", action="store_true", help="rerun trials that raised")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace an --out file that holds a different sweep")
+    p.add_argument("--plot", metavar="FILE.png", help="draw the polar envelope when done")
+    p.add_argument("--compare", metavar="OTHER.parquet", action="append", default=[],
+                   help="with --plot: draw these finished sweeps side by side (repeatable)")
+    p.add_argument("--by", choices=("speed_m_s", "impulse_n_s"), default="speed_m_s",
+                   help="radius of the polar plot")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(func=run)
+
+
+def build_spec(args):
+    """The sweep from ``--grid``, then the task, --set and the named options (last wins)."""
+    from biped.sim.scenario import Scenario, parse_assignment
+    from biped.sim.sweep import SweepSpec, hold_scenario, parse_axis
+
+    spec = SweepSpec.from_toml(args.grid) if args.grid else None
+    base = spec.base if spec else Scenario()
+    task = args.task or (None if spec else "hold")
+    if task == "hold":
+        base = hold_scenario(base)
+    overrides = dict(parse_assignment(a) for a in args.set)
+    if args.controller:
+        overrides["controller"] = args.controller
+    if args.duration is not None:
+        overrides["duration_s"] = args.duration
+    if overrides:
+        base = base.with_overrides(**overrides)
+    axes = dict(spec.axes) if spec else {}
+    for opt, name, _ in _AXIS_OPTIONS:
+        text = getattr(args, opt)
+        if text is not None:
+            axes[name] = parse_axis(name, text)
+    if not spec and not any(getattr(args, opt) for opt, _, _ in _AXIS_OPTIONS):
+        axes.update(speed_m_s=(2.0, 4.0, 6.0), direction_deg=tuple(range(0, 360, 45)))
+    samples = args.samples if args.samples is not None else (spec.samples if spec else None)
+    seed = args.seed if args.seed is not None else (spec.seed if spec else 0)
+    limits = args.torque_limits or (spec.torque_limits if spec else "none")
+    return SweepSpec(axes=axes, base=base, samples=samples, seed=seed, torque_limits=limits,
+                     launch_distance_m=spec.launch_distance_m if spec else 0.5)
+
+
+def run(args) -> int:
+    from biped.sim.sweep import load, run_sweep, survived
+
+    if args.compare and not args.plot:
+        raise ScenarioError("--compare needs --plot FILE.png")
+    spec = build_spec(args)
+    out = Path(args.out) if args.out else Path("runs") / (
+        f"sweep-{spec.base.controller}-{spec.torque_limits}.parquet")
+    n = len(spec.trials())
+    where = args.scheduler or f"{args.workers or 'all'} local worker(s)"
+    print(f"biped sweep: {n} trials of {spec.base.duration_s:g} s, controller "
+          f"{spec.base.controller}, torque limits {spec.torque_limits}, on {where} -> {out}",
+          file=sys.stderr)
+    summary = run_sweep(spec, out, workers=args.workers, scheduler=args.scheduler,
+                        progress=not args.quiet, retry_failed=args.retry_failed,
+                        overwrite=args.overwrite, batch=args.batch)
+    rate = summary.ran / summary.wall_time_s if summary.wall_time_s > 0 else float("nan")
+    print(f"ran {summary.ran} (skipped {summary.skipped} already done), failed {summary.failed}, "
+          f"wall {summary.wall_time_s:.1f} s, {rate:.2f} trials/s ({summary.backend})")
+    if not summary.complete:
+        print(f"biped sweep: {summary.lost} trials were lost to a dead worker; the "
+              f"{summary.skipped + summary.ran} finished ones are kept in "
+              f"{out.name}.parts/. Run the same command again to finish.", file=sys.stderr)
+        return 1
+    data = load(out)
+    ok = survived(data.table)
+    print(f"{out}: {data.table.num_rows} trials, survived {int(ok.sum())}, "
+          f"did not {int((~ok).sum())}")
+    if args.plot:
+        from biped.viz.envelope import plot_comparison
+
+        plot_comparison([out, *args.compare], by=args.by, out=args.plot)
+        print(f"envelope plot: {args.plot}")
+    return 0
