@@ -7,12 +7,11 @@ video.mp4 and replay.html into a new folder under ``runs/``. Thin: parsing here,
 
 from __future__ import annotations
 
-import datetime as _dt
 import os
 import sys
 from pathlib import Path
 
-from biped.errors import ScenarioError
+from biped.cli._common import run_dir
 
 
 def register(subparsers) -> None:
@@ -60,19 +59,7 @@ def build_scenario(args):
 
 
 def _out_dir(args) -> Path:
-    if args.out:
-        out = Path(args.out)
-        if (out / "summary.json").exists() and not args.overwrite:
-            raise ScenarioError(f"--out {str(out)!r} already holds a run (summary.json); choose "
-                                f"another folder or pass --overwrite")
-        return out
-    stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S")
-    out = Path("runs") / f"push-{stamp}"
-    k = 1
-    while out.exists():
-        k += 1
-        out = Path("runs") / f"push-{stamp}-{k}"
-    return out
+    return run_dir(args.out, "push", overwrite=args.overwrite)
 
 
 def _viewer(enabled: bool):

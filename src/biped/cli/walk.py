@@ -6,11 +6,11 @@ parsing here, work in :mod:`biped.kinematic`; see docs/walk.md.
 
 from __future__ import annotations
 
-import datetime as _dt
 import json
 import math
 from pathlib import Path
 
+from biped.cli._common import run_dir
 from biped.errors import ScenarioError
 
 _DEFAULT_STEPS = {"forward": 6, "upstairs": 5}
@@ -80,19 +80,7 @@ def build_plan(args):
 
 
 def _out_dir(args) -> Path:
-    if args.out:
-        out = Path(args.out)
-        if (out / "summary.json").exists() and not args.overwrite:
-            raise ScenarioError(f"--out {str(out)!r} already holds a run (summary.json); choose "
-                                f"another folder or pass --overwrite")
-        return out
-    stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S")
-    out = Path("runs") / f"walk-{args.gait}-{stamp}"
-    k = 1
-    while out.exists():
-        k += 1
-        out = Path("runs") / f"walk-{args.gait}-{stamp}-{k}"
-    return out
+    return run_dir(args.out, f"walk-{args.gait}", overwrite=args.overwrite)
 
 
 def run(args) -> int:

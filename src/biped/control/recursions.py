@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from biped.spatial import quat_mul_into, quat_to_rot_into
+from biped.spatial import adjoint_into, quat_mul_into, quat_to_rot_into
 
 # status codes returned by compute_kernel
 OK = 0
@@ -90,20 +90,6 @@ def _adT_mul(R, p, F, out):
     out[3] = R[0, 0] * t0 + R[1, 0] * t1 + R[2, 0] * t2
     out[4] = R[0, 1] * t0 + R[1, 1] * t1 + R[2, 1] * t2
     out[5] = R[0, 2] * t0 + R[1, 2] * t1 + R[2, 2] * t2
-
-
-@njit(cache=True)
-def _adjoint(R, p, A):
-    """A = Ad_(R,p) (W eq. 3.7)."""
-    for i in range(3):
-        for j in range(3):
-            A[i, j] = R[i, j]
-            A[i + 3, j + 3] = R[i, j]
-            A[i + 3, j] = 0.0
-    for j in range(3):
-        A[0, j + 3] = -p[2] * R[1, j] + p[1] * R[2, j]
-        A[1, j + 3] = p[2] * R[0, j] - p[0] * R[2, j]
-        A[2, j + 3] = -p[1] * R[0, j] + p[0] * R[1, j]
 
 
 @njit(cache=True)
@@ -486,7 +472,7 @@ def alg5_wrench_distribution(g, feet, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_tilde, Fr_
                     R[i, j] = g[k, 0, i] * R0[0, j] + g[k, 1, i] * R0[1, j] + g[k, 2, i] * R0[2, j]
                 pp[i] = (g[k, 0, i] * (g[0, 0, 3] - g[k, 0, 3]) + g[k, 1, i] * (g[0, 1, 3] - g[k, 1, 3])
                          + g[k, 2, i] * (g[0, 2, 3] - g[k, 2, 3]))
-        _adjoint(R, pp[:3], Afoot)
+        adjoint_into(R, pp[:3], Afoot)
         for i in range(6):
             for j in range(i, 6):
                 s = 0.0
