@@ -24,7 +24,14 @@ from biped import models
 from biped.errors import ScenarioError
 from biped.sim.scenario import Scenario
 from biped.sim.sweep import (
-    AXES, SweepSpec, TrialSetup, aim_block, load, parse_axis, parts_dir, run_sweep,
+    AXES,
+    SweepSpec,
+    TrialSetup,
+    aim_block,
+    load,
+    parse_axis,
+    parts_dir,
+    run_sweep,
 )
 
 GRID = {"speed_m_s": (1.0, 3.0, 5.0), "direction_deg": (0.0, 90.0, 180.0, 270.0)}
@@ -146,7 +153,7 @@ def test_aimed_block_passes_through_the_aim_point_in_mujoco():
         '</body></worldbody></mujoco>')
     data = mujoco.MjData(model)
     data.qpos[:3], data.qvel[:3] = p0, v0
-    steps = int(round(L / speed / model.opt.timestep))
+    steps = round(L / speed / model.opt.timestep)
     mujoco.mj_step(model, data, steps)
     np.testing.assert_allclose(data.qpos[:3], [*target, height], atol=2e-4)
     u = np.array(v0[:2]) / np.hypot(*v0[:2])

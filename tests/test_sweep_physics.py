@@ -10,12 +10,17 @@ import numpy as np
 import pytest
 
 from biped import models
-from biped.control.joint_pd import JointPDController, JointPDGains
+from biped.control.joint_pd import JointPDController
 from biped.control.limits import HUMAN_N_M_PER_KG, JOINT_NAMES, clip_torques, torque_limits
 from biped.errors import ScenarioError
 from biped.sim.scenario import Scenario
 from biped.sim.sweep import (
-    SweepSpec, ballistic_impulse, envelope, hof_bound, ray_to_polygon_edge, run_trial,
+    SweepSpec,
+    ballistic_impulse,
+    envelope,
+    hof_bound,
+    ray_to_polygon_edge,
+    run_trial,
     support_polygon,
 )
 

@@ -183,8 +183,8 @@ class SweepSpec:
         defaults = dict(W_THROW, block_mass_kg=self.base.block_mass_kg)
         axes = tuple((name, _axis_values(name, given[name]) if name in given else
                       (float(defaults[name]),)) for name in AXES)
-        for name in given:
-            _axis_values(name, given[name])  # unknown names raise here
+        for name, value in given.items():
+            _axis_values(name, value)  # unknown names raise here
         object.__setattr__(self, "axes", axes)
         if self.samples is not None and (not isinstance(self.samples, int)
                                          or isinstance(self.samples, bool) or self.samples < 1):
@@ -208,7 +208,7 @@ class SweepSpec:
 
     # ------------------------------------------------------------------ construction
     @classmethod
-    def from_dict(cls, values: Mapping) -> "SweepSpec":
+    def from_dict(cls, values: Mapping) -> SweepSpec:
         """From ``{"grid": {axis: values}, "scenario": {key: value}, "samples": N, "seed": S,
         "launch_distance_m": L}`` (the TOML layout, see :meth:`from_toml`)."""
         valid = {"grid", "scenario", "samples", "seed", "launch_distance_m", "model",
@@ -229,7 +229,7 @@ class SweepSpec:
                    torque_limits=values.get("torque_limits", "none"))
 
     @classmethod
-    def from_toml(cls, path: str | os.PathLike) -> "SweepSpec":
+    def from_toml(cls, path: str | os.PathLike) -> SweepSpec:
         """A sweep from a TOML file::
 
             samples = 200            # optional: a random sample instead of the full grid
@@ -251,7 +251,7 @@ class SweepSpec:
             raise ScenarioError(f"sweep file {str(path)!r} is not valid TOML: {exc}") from None
         return cls.from_dict(values)
 
-    def with_axes(self, **axes) -> "SweepSpec":
+    def with_axes(self, **axes) -> SweepSpec:
         """A copy with some axes replaced."""
         return dataclasses.replace(self, axes={**dict(self.axes), **axes})
 
@@ -496,11 +496,10 @@ def _check_same_sweep(spec: SweepSpec, out: Path, overwrite: bool) -> None:
                 f"--out {str(out)!r} holds a different sweep (another base scenario, launch "
                 f"distance or model file); choose another path or pass --overwrite")
     manifest = pdir / "sweep.json"
-    if manifest.exists():
-        if json.loads(manifest.read_text()).get("sweep_id") != ident:
-            raise ScenarioError(
-                f"{str(pdir)!r} holds the unfinished parts of a different sweep; choose another "
-                f"--out or pass --overwrite")
+    if manifest.exists() and json.loads(manifest.read_text()).get("sweep_id") != ident:
+        raise ScenarioError(
+            f"{str(pdir)!r} holds the unfinished parts of a different sweep; choose another "
+            f"--out or pass --overwrite")
 
 
 def _done_rows(out: Path):
@@ -793,7 +792,7 @@ def make_policy(setup: TrialSetup, scene, model: str = "wendlandt"):
         ctrl = JointPDController.from_mjcf(
             models.path(model), q_ref_deg=sc.initial_joint_angles_deg,
             gain_scale=setup.trial.gain_scale, control_period_s=1.0 / sc.control_rate_hz)
-        raw = lambda q, v: ctrl.compute(q, v).torques  # noqa: E731
+        raw = lambda q, v: ctrl.compute(q, v).torques
     else:  # pragma: no cover - Scenario validates the name
         raise ScenarioError(f"unknown controller {sc.controller!r}")
     names = tuple(ctrl.joint_names)
@@ -1127,8 +1126,34 @@ def feet_in_place_bound(directions_deg, scenario: Scenario | None = None) -> Fee
     return hof_bound(directions_deg, mass, h, com_xy, polygon)
 
 
-__all__ = ["AXES", "W_THROW", "MEASURED", "Trial", "TrialSetup", "SweepSpec", "SweepSummary",
-           "SweepData", "Envelope", "FeetInPlaceBound", "aim_block", "hold_scenario", "trial_scenario", "parse_axis",
-           "execute_trial", "run_sweep", "run_trial", "make_policy", "measure",
-           "ballistic_impulse", "envelope", "survived", "hof_bound", "ray_to_polygon_edge",
-           "support_polygon", "feet_in_place_bound", "load", "default_workers", "parts_dir"]
+__all__ = [
+    "AXES",
+    "MEASURED",
+    "W_THROW",
+    "Envelope",
+    "FeetInPlaceBound",
+    "SweepData",
+    "SweepSpec",
+    "SweepSummary",
+    "Trial",
+    "TrialSetup",
+    "aim_block",
+    "ballistic_impulse",
+    "default_workers",
+    "envelope",
+    "execute_trial",
+    "feet_in_place_bound",
+    "hof_bound",
+    "hold_scenario",
+    "load",
+    "make_policy",
+    "measure",
+    "parse_axis",
+    "parts_dir",
+    "ray_to_polygon_edge",
+    "run_sweep",
+    "run_trial",
+    "support_polygon",
+    "survived",
+    "trial_scenario",
+]

@@ -133,12 +133,12 @@ def plot_comparison(sources, *, labels=None, by: str = "speed_m_s", criterion: s
     h2, l2 = ax.get_legend_handles_labels()
     fig.legend(handles + h2, labs + l2, loc="lower center", ncol=min(6, len(labs + l2)),
                fontsize=8, frameon=False)
-    fig.tight_layout(rect=(0, 0.07, 1, 1))
+    fig.tight_layout(rect=(0, 0.07, 1, 0.94))
     if out is not None:
         out = Path(out)
         out.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(out, dpi=110)
+        fig.savefig(out, dpi=80)
     return fig
 
 
-__all__ = ["plot_envelope", "plot_comparison"]
+__all__ = ["plot_comparison", "plot_envelope"]
