@@ -72,7 +72,7 @@ class JointPDGains:
     kp: np.ndarray
     kd: np.ndarray
 
-    def scaled(self, s: float) -> "JointPDGains":
+    def scaled(self, s: float) -> JointPDGains:
         """Stiffness times s and damping times sqrt(s) (each damping ratio kept)."""
         if not (math.isfinite(s) and s > 0):
             raise ScenarioError(f"gain scale must be > 0; got {s!r}")
@@ -157,7 +157,7 @@ class JointPDController:
     def from_mjcf(cls, source: str | PathLike, *, q_ref_deg=W_INITIAL_ANGLES_DEG,
                   gains: JointPDGains | None = None, gain_scale: float = 1.0,
                   gravity_compensation: bool = False, control_period_s: float = 0.002,
-                  feet: tuple[str, str] = DEFAULT_FEET) -> "JointPDController":
+                  feet: tuple[str, str] = DEFAULT_FEET) -> JointPDController:
         """PD for the biped of an MJCF file holding ``q_ref_deg`` (12 angles in the model's joint
         order, default W's initial posture) with :func:`default_gains` (times ``gain_scale`` on
         kp, ``sqrt(gain_scale)`` on kd, capped for ``control_period_s``) unless ``gains`` is
@@ -228,5 +228,12 @@ def _lowest_sole(model: mujoco.MjModel, qpos: np.ndarray) -> float:
     return 0.0 if not np.isfinite(low) else low
 
 
-__all__ = ["JointPDController", "JointPDGains", "JointPDOutput", "default_gains",
-           "whole_body_com_height", "apparent_inertia", "W_INITIAL_ANGLES_DEG"]
+__all__ = [
+    "W_INITIAL_ANGLES_DEG",
+    "JointPDController",
+    "JointPDGains",
+    "JointPDOutput",
+    "apparent_inertia",
+    "default_gains",
+    "whole_body_com_height",
+]

@@ -84,7 +84,7 @@ class TorqueLimits:
     def unlimited(self) -> bool:
         return self.lower is None
 
-    def reorder(self, joint_names) -> "TorqueLimits":
+    def reorder(self, joint_names) -> TorqueLimits:
         """The same limits in another joint order (names must match)."""
         if self.unlimited:
             return TorqueLimits(self.name, tuple(joint_names), None, None)
@@ -124,5 +124,12 @@ def clip_torques(tau: np.ndarray, limits: TorqueLimits) -> np.ndarray:
     return np.minimum(np.maximum(tau, limits.lower), limits.upper)
 
 
-__all__ = ["TorqueLimits", "torque_limits", "clip_torques", "HUMAN_N_M_PER_KG", "JOINT_NAMES",
-           "KINDS", "MODEL_MASS_KG"]
+__all__ = [
+    "HUMAN_N_M_PER_KG",
+    "JOINT_NAMES",
+    "KINDS",
+    "MODEL_MASS_KG",
+    "TorqueLimits",
+    "clip_torques",
+    "torque_limits",
+]
