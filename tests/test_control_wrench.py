@@ -246,7 +246,7 @@ def test_alg5_reports_a_numerically_singular_distribution():
     g = np.tile(np.eye(4), (3, 1, 1))
     g[1, :3, 3] = [0.1, -0.1, -0.9]
     g[2, :3, 3] = [0.1, 0.1, -0.9]
-    args = lambda g: (g, np.array([1, 2]), np.ones(6), np.zeros((4, 6)), np.zeros((3, 6, 6)),
+    args = lambda g: (g, np.array([1, 2]), np.array([1, 1]), np.ones(6), np.zeros((4, 6)), np.zeros((3, 6, 6)),
                       np.zeros((2, 3, 3)), *(np.zeros(6) for _ in range(4)))
     assert alg5_wrench_distribution(*args(g))
     g[2, 0, 3] = np.nan

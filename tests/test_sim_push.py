@@ -74,7 +74,7 @@ def test_controller_wiring_recovers_with_welded_feet():
     policy = make_controller(s, scene)
     for _ in range(s.control_steps):
         data.ctrl[scene.actuator_index] = policy(data.qpos[scene.biped_qpos_index],
-                                                 data.qvel[scene.biped_qvel_index])
+                                                 data.qvel[scene.biped_qvel_index], (True, True))
         mujoco.mj_step(model, data, s.control_substeps)
     com = data.xipos[scene.central_body]
     quat = data.qpos[scene.biped_qpos_index[3:7]]

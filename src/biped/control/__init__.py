@@ -185,6 +185,8 @@ class WorkspaceController:
             if name != "_size":
                 mf[off:off + int(np.prod(shape))] = np.asarray(values[name], dtype=float).reshape(-1)
         self._mi, self._mf = mi, mf
+        self._both = np.ones(2, dtype=np.int64)
+        self._contact_buf = np.ones(2, dtype=np.int64)
         self._work = np.zeros(lay["work"]["_size"][0])
         self._out = np.zeros(lay["out"]["_size"][0])
         # named views of the flat buffers, for the debugging methods below (not the hot path)
@@ -207,14 +209,28 @@ class WorkspaceController:
         """Hinge names in the order of ``torques`` (MuJoCo body order)."""
         return self.tree.joint_names
 
-    def _run(self, qpos, qvel, target, gains):
+    def _contact(self, feet_in_contact):
+        if feet_in_contact is None:
+            return self._both
+        c = self._contact_buf
+        try:
+            left, right = feet_in_contact
+        except (TypeError, ValueError):
+            raise StateError(f"feet_in_contact must be a pair of booleans (left, right), got "
+                             f"{feet_in_contact!r}") from None
+        c[0] = 1 if left else 0
+        c[1] = 1 if right else 0
+        return c
+
+    def _run(self, qpos, qvel, target, gains, feet_in_contact=None):
         if qpos.shape != (self.tree.nq,) or qvel.shape != (self.tree.nv,):
             raise StateError(
                 f"qpos must have shape ({self.tree.nq},) and qvel ({self.tree.nv},) (MuJoCo layout of "
                 f"{self.tree.source}), got {qpos.shape} and {qvel.shape}")
         t = (target or self.target).array
         k = (gains or self.gains).array
-        status = compute_kernel(qpos, qvel, t, k, self._mi, self._mf, self._work, self._out)
+        status = compute_kernel(qpos, qvel, t, k, self._contact(feet_in_contact), self._mi, self._mf,
+                                self._work, self._out)
         if status:
             if status == NONFINITE_STATE:
                 bad = [f"qpos[{i}]" for i in np.flatnonzero(~np.isfinite(qpos))]
@@ -234,16 +250,24 @@ class WorkspaceController:
                     "the controller produced non-finite values at this state: velocities too large for "
                     "double precision, or a joint axis with zero articulated inertia (W Alg. 3)")
 
-    def compute(self, qpos, qvel, target: Target | None = None, gains: Gains | None = None
-                ) -> ControllerOutput:
+    def compute(self, qpos, qvel, target: Target | None = None, gains: Gains | None = None,
+                feet_in_contact: tuple[bool, bool] | None = None) -> ControllerOutput:
         """Run W Alg. 1-6 at state (qpos, qvel) (MuJoCo layout of the biped's own model).
 
         Returns a :class:`ControllerOutput` of fresh arrays. ``target`` and ``gains`` default to
         the controller's (W's set point and gains unless given at construction).
+
+        ``feet_in_contact`` = (left, right) says which feet are on the ground, as a contact or force
+        sensor would. ``None`` (the default) is W's controller: both feet are always taken as fixed
+        (the big base of Alg. 3, both shares of Alg. 5). Given flags, a foot off the ground keeps its
+        own inertia in Alg. 3 (its leg a passive articulated branch of the central body) and takes no
+        share in Alg. 5, so the stance leg realizes all of ``F_1^bd`` and the free leg gets zero
+        torque; with no foot down, no wrench is distributed. This goes beyond W: W's controller
+        assumes both feet fixed even while one is in the air.
         """
         qpos = np.ascontiguousarray(qpos, dtype=float)
         qvel = np.ascontiguousarray(qvel, dtype=float)
-        self._run(qpos, qvel, target, gains)
+        self._run(qpos, qvel, target, gains, feet_in_contact)
         buf = self._out.copy()  # one fresh buffer; the fields are views of it
         out = object.__new__(ControllerOutput)  # skips the frozen __init__'s 10 setattr calls (3 us)
         out.__dict__.update(zip(_OUTPUT_FIELDS, [buf[sl] if sh is None else buf[sl].reshape(sh)
@@ -311,8 +335,10 @@ class WorkspaceController:
         return tau
 
     def torques(self, qpos: np.ndarray, qvel: np.ndarray, target: Target | None = None,
-                gains: Gains | None = None) -> np.ndarray:
+                gains: Gains | None = None, feet_in_contact: tuple[bool, bool] | None = None
+                ) -> np.ndarray:
         """Hot path: joint torques only, as a view into the controller's buffer (overwritten by the
-        next call; copy it to keep it). qpos/qvel must be contiguous float64 arrays."""
-        self._run(qpos, qvel, target, gains)
+        next call; copy it to keep it). qpos/qvel must be contiguous float64 arrays.
+        ``feet_in_contact`` as in :meth:`compute`."""
+        self._run(qpos, qvel, target, gains, feet_in_contact)
         return self._out[: self.tree.n_links - 1]

@@ -255,8 +255,8 @@ def alg2_velocity_propagation(qpos, qvel, parent, qadr, dadr, H, G0, qref, mass,
 
 
 @njit(cache=True)
-def alg3_workspace_dynamics(parent, H, mass, inertia, feet, beyond, big_base, gl, a, b, P, z, tmp6,
-                            tmp66):
+def alg3_workspace_dynamics(parent, H, mass, inertia, feet, contact, beyond, big_base, gl, a, b, P, z,
+                            tmp6, tmp66):
     """W Alg. 3 (workspace dynamics, inboard): articulated-body inertias ``P_k`` and biases
     ``z_k`` from the feet to the central body with the big-base approximation
     ``P_foot = big_base * M_1``, ``z_foot = 0``. Result: ``P[0] = P_1``, ``z[0] = z_1`` with
@@ -264,7 +264,9 @@ def alg3_workspace_dynamics(parent, H, mass, inertia, feet, beyond, big_base, gl
 
     Per joint: ``D = H^T P H``, ``K = H D^-1 H^T``, ``L = (I - K P) A``,
     ``P_{k.i} += L^T P L = A^T (P - P H H^T P / D) A``, ``z_{k.i} += L^T (P a + z)``
-    (accumulated: link 1 receives both legs). With ``A = Ad_{g_{k.o,k.i}}`` and
+    (accumulated: link 1 receives both legs). Only the feet with ``contact[f] != 0`` are big bases
+    (W: both, always); a foot off the ground keeps its own inertia and bias, so its leg enters
+    ``P_1``, ``z_1`` as a passive articulated branch. With ``A = Ad_{g_{k.o,k.i}}`` and
     ``gl[k] = g_{k.i,k.o} = (R, p)``, ``A^T = [[I, 0], [p^, I]] blockdiag(R, R)``: the 6x6 products
     are a block rotation followed by a shift, W eq. 3.7 written out.
     """
@@ -278,6 +280,8 @@ def alg3_workspace_dynamics(parent, H, mass, inertia, feet, beyond, big_base, gl
             P[k, i, i] = mass[k]
             P[k, 3 + i, 3 + i] = inertia[k, i]
     for f in range(feet.shape[0]):
+        if contact[f] == 0:
+            continue
         k = feet[f]
         for i in range(6):
             z[k, i] = 0.0
@@ -434,7 +438,8 @@ def alg4_desired_wrench(g, V, P, z, target, gains, quat, R3, X, qe, Fd):
 
 
 @njit(cache=True)
-def alg5_wrench_distribution(g, feet, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_tilde, Fr_tilde, printed=False):
+def alg5_wrench_distribution(g, feet, contact, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_tilde, Fr_tilde,
+                             printed=False):
     """W Alg. 5 (desired wrench distribution, eq. 3.11-3.14): ``F_1^bd = G [F_l; F_r]`` with
     ``G = [Ad^T_{g_{7,1}}  Ad^T_{g_{13,1}}]`` (each foot's wrench moved to the central body),
     ``[F_l; F_r] = G^T (G G^T)^-1 F_1^bd`` (minimum norm), ``F~_2 = Ad^T_{g_{7,1}} F_l``,
@@ -443,6 +448,9 @@ def alg5_wrench_distribution(g, feet, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_tilde, Fr_
     swapped with respect to its own eq. 3.6 and Alg. 6 (power balance gives
     ``F_k = Ad^T_{g_{l,k}} F_l``); taken literally, the print moves the wrench the wrong way and the
     split carries internal moments through the legs.
+
+    Only feet with ``contact[f] != 0`` take a share (W: both): ``G`` keeps their blocks, so one
+    foot in contact takes all of ``F_1^bd`` and with none no wrench is distributed (all zero).
 
     ``printed=True`` uses W's print literally (``g_{1,7}``, ``g_{1,13}`` in place of ``g_{7,1}``,
     ``g_{13,1}``): the shares still sum to ``F_1^bd`` but are not the feet's wrenches moved by statics.
@@ -456,6 +464,13 @@ def alg5_wrench_distribution(g, feet, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_tilde, Fr_
         for j in range(6):
             GG[i, j] = 0.0
     R0 = g[0, :3, :3]
+    if contact[0] == 0 and contact[1] == 0:
+        for i in range(6):
+            Fl[i] = 0.0
+            Fr[i] = 0.0
+            Fl_tilde[i] = 0.0
+            Fr_tilde[i] = 0.0
+        return True
     for f in range(2):
         k = feet[f]
         R = R3[f]
@@ -472,6 +487,8 @@ def alg5_wrench_distribution(g, feet, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_tilde, Fr_
                     R[i, j] = g[k, 0, i] * R0[0, j] + g[k, 1, i] * R0[1, j] + g[k, 2, i] * R0[2, j]
                 pp[i] = (g[k, 0, i] * (g[0, 0, 3] - g[k, 0, 3]) + g[k, 1, i] * (g[0, 1, 3] - g[k, 1, 3])
                          + g[k, 2, i] * (g[0, 2, 3] - g[k, 2, 3]))
+        if contact[f] == 0:
+            continue
         adjoint_into(R, pp[:3], Afoot)
         for i in range(6):
             for j in range(i, 6):
@@ -511,6 +528,13 @@ def alg5_wrench_distribution(g, feet, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_tilde, Fr_
     _adT_mul(R3[0], tmp6[2, :3], Fl, Fl_tilde)
     _ad_mul(R3[1], tmp6[3, :3], y, Fr)
     _adT_mul(R3[1], tmp6[3, :3], Fr, Fr_tilde)
+    for i in range(6):
+        if contact[0] == 0:
+            Fl[i] = 0.0
+            Fl_tilde[i] = 0.0
+        if contact[1] == 0:
+            Fr[i] = 0.0
+            Fr_tilde[i] = 0.0
     return True
 
 
@@ -545,8 +569,9 @@ def alg6_torques(parent, H, leg, beyond, gl, Fl_tilde, Fr_tilde, F, tau):
 
 
 @njit(cache=True)
-def compute_kernel(qpos, qvel, target, gains, mi, mf, work, out):
-    """One controller call: W Alg. 1-6 on flat buffers (see :func:`layout`). Returns a status code
+def compute_kernel(qpos, qvel, target, gains, contact, mi, mf, work, out):
+    """One controller call: W Alg. 1-6 on flat buffers (see :func:`layout`); ``contact`` (2,) int
+    flags the (left, right) feet taken as fixed to the ground (W: both). Returns a status code
     (0 ok, 1 non-finite state, 2 non-finite result, 3 singular wrench distribution, 4 zero root
     quaternion)."""
     for i in range(qpos.shape[0]):
@@ -604,15 +629,15 @@ def compute_kernel(qpos, qvel, target, gains, mi, mf, work, out):
                     b, quat)
     alg2_velocity_propagation(qpos, qvel, parent, qadr, dadr, H, G0, qref, mass, inertia, gravity,
                               g, gl, V, a, b, tmp44)
-    alg3_workspace_dynamics(parent, H, mass, inertia, feet, beyond, big_base, gl, a, b, P, z, tmp6,
-                            tmp66)
+    alg3_workspace_dynamics(parent, H, mass, inertia, feet, contact, beyond, big_base, gl, a, b, P, z,
+                            tmp6, tmp66)
     for i in range(6):
         z1[i] = z[0, i]
         for j in range(6):
             P1[i, j] = P[0, i, j]
     alg4_desired_wrench(g, V, P, z, target, gains, quat, R3, X, qe, Fd)
-    if not alg5_wrench_distribution(g, feet, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_tilde, Fr_tilde,
-                                    mi[3] == 1):
+    if not alg5_wrench_distribution(g, feet, contact, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_tilde,
+                                    Fr_tilde, mi[3] == 1):
         return SINGULAR_DISTRIBUTION
     alg6_torques(parent, H, leg, beyond, gl, Fl_tilde, Fr_tilde, F, tau)
     for i in range(out.shape[0]):

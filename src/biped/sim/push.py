@@ -99,8 +99,10 @@ def orientation_error_deg(quat, target_quat) -> float:
 
 
 def make_controller(scenario: Scenario, scene: Scene) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-    """``policy(qpos_biped (19,), qvel_biped (18,)) -> torques (12,)`` in ``scene.joint_names``
-    order, for ``scenario.controller`` with the scenario's set point and gains."""
+    """``policy(qpos_biped (19,), qvel_biped (18,), feet (left, right) on the floor) -> torques
+    (12,)`` in ``scene.joint_names`` order, for ``scenario.controller`` with the scenario's set
+    point and gains; the workspace controller uses the feet flags when ``scenario.support`` is
+    "sensed" and takes both feet as fixed (W) when it is "fixed"."""
     import biped.models
     from biped.control import Gains, Target
 
@@ -124,8 +126,10 @@ def make_controller(scenario: Scenario, scene: Scene) -> Callable[[np.ndarray, n
         raise BipedError(f"controller joints {names} differ from the scene's {scene.joint_names}")
     order = np.array([names.index(n) for n in scene.joint_names])
     if hasattr(ctrl, "torques"):  # the workspace controller's allocation-free hot path
-        return lambda q, v: ctrl.torques(q, v)[order]
-    return lambda q, v: ctrl.compute(q, v).torques[order]
+        if scenario.support == "sensed":
+            return lambda q, v, feet: ctrl.torques(q, v, feet_in_contact=feet)[order]
+        return lambda q, v, feet: ctrl.torques(q, v)[order]
+    return lambda q, v, feet: ctrl.compute(q, v).torques[order]
 
 
 def _limits(scenario: Scenario) -> np.ndarray | None:
@@ -174,7 +178,7 @@ def _run(scenario: Scenario, scene: Scene, policy, *, progress=None, on_step=Non
     rows = 0
     if not isinstance(policy, np.ndarray):  # compile/warm the controller outside the timer
         try:
-            policy(d.qpos[iq], d.qvel[iv])
+            policy(d.qpos[iq], d.qvel[iv], (True, True))
         except BipedError:
             pass
     t0 = time.perf_counter()
@@ -183,8 +187,11 @@ def _run(scenario: Scenario, scene: Scene, policy, *, progress=None, on_step=Non
             t = k * period
             q = d.qpos[iq]
             v = d.qvel[iv]
+            fell = monitor.update(t, d)
+            flags = monitor.flags  # (left heel, left toe, right heel, right toe) on the floor
+            feet = (bool(flags[0] or flags[1]), bool(flags[2] or flags[3]))
             try:
-                tau = policy(q, v) if not isinstance(policy, np.ndarray) else policy[k]
+                tau = policy(q, v, feet) if not isinstance(policy, np.ndarray) else policy[k]
             except BipedError as exc:  # a singular state is a result, like a fall
                 controller_error = f"t = {t:.3f} s: {exc}"
                 tau = np.zeros(12)
@@ -197,8 +204,7 @@ def _run(scenario: Scenario, scene: Scene, policy, *, progress=None, on_step=Non
             angles[k] = d.qpos[jq]
             torques[k] = tau
             block[k] = d.qpos[bq[:3]]
-            fell = monitor.update(t, d)
-            contacts[k] = monitor.flags
+            contacts[k] = flags
             rows = k + 1
             if fell or controller_error or k == n_ctrl:
                 break

@@ -32,6 +32,9 @@ W_JOINT_ANGLES_DEG = (0.0, 40.0, 0.0, -77.4595, 0.0, 42.4595) * 2
 
 CONTROLLERS = ("workspace", "joint-pd")
 TARGET_AXES = ("-y", "-x")
+#: Which feet the workspace controller takes as fixed: "fixed" = both, always (W); "sensed" = the
+#: feet whose soles touch the floor at each control step (see WorkspaceController.compute).
+SUPPORTS = ("fixed", "sensed")
 
 
 @dataclass(frozen=True)
@@ -64,6 +67,7 @@ class Scenario:
     kp_rot: tuple = (50.0, 50.0, 50.0)
     kv_rot: tuple = (7.07, 7.07, 7.07)
     controller: str = "workspace"
+    support: str = "fixed"  # not in W: "sensed" drops a foot off the floor from Alg. 3 and 5
     torque_limits: Any = "none"
     friction: float = 0.3
     restitution: float = 0.2
@@ -150,7 +154,7 @@ _VECTORS = {
     "kp_rot": (3, "diagonal gains (x, y, z) [1/s^2]"),
     "kv_rot": (3, "diagonal gains (x, y, z) [1/s]"),
 }
-_STRINGS = {"target_axis": TARGET_AXES, "controller": CONTROLLERS}
+_STRINGS = {"target_axis": TARGET_AXES, "controller": CONTROLLERS, "support": SUPPORTS}
 _INTS = {"seed"}
 
 

@@ -770,7 +770,7 @@ def _tree(model: str):
 
 
 def make_policy(setup: TrialSetup, scene, model: str = "wendlandt"):
-    """``policy(qpos_biped, qvel_biped) -> torques (12,)`` in ``scene.joint_names`` order for the
+    """``policy(qpos_biped, qvel_biped, feet) -> torques (12,)`` in ``scene.joint_names`` order for the
     trial's controller (W's workspace controller with the scenario's set point and gains, or the
     joint-space PD of :mod:`biped.control.joint_pd` holding the initial joint angles, its gains
     times ``gain_scale``), clipped by the sweep's torque limits."""
@@ -784,7 +784,10 @@ def make_policy(setup: TrialSetup, scene, model: str = "wendlandt"):
                                   axis=sc.target_axis)
         gains = Gains(kp_com=sc.kp_com, kv_com=sc.kv_com, kp_rot=sc.kp_rot, kv_rot=sc.kv_rot)
         ctrl = WorkspaceController(_tree(model), target=target, gains=gains)
-        raw = ctrl.torques
+        if sc.support == "sensed":
+            raw = lambda q, v, feet: ctrl.torques(q, v, feet_in_contact=feet)
+        else:
+            raw = lambda q, v, feet: ctrl.torques(q, v)
     elif sc.controller == "joint-pd":
         from biped import models
         from biped.control.joint_pd import JointPDController
@@ -792,15 +795,15 @@ def make_policy(setup: TrialSetup, scene, model: str = "wendlandt"):
         ctrl = JointPDController.from_mjcf(
             models.path(model), q_ref_deg=sc.initial_joint_angles_deg,
             gain_scale=setup.trial.gain_scale, control_period_s=1.0 / sc.control_rate_hz)
-        raw = lambda q, v: ctrl.compute(q, v).torques
+        raw = lambda q, v, feet: ctrl.compute(q, v).torques
     else:  # pragma: no cover - Scenario validates the name
         raise ScenarioError(f"unknown controller {sc.controller!r}")
     names = tuple(ctrl.joint_names)
     order = np.array([names.index(n) for n in scene.joint_names])
     limits = torque_limits(setup.torque_limits).reorder(scene.joint_names)
     if limits.unlimited:
-        return lambda q, v: raw(q, v)[order]
-    return lambda q, v: clip_torques(raw(q, v)[order], limits)
+        return lambda q, v, feet: raw(q, v, feet)[order]
+    return lambda q, v, feet: clip_torques(raw(q, v, feet)[order], limits)
 
 
 def run_trial(setup: TrialSetup) -> dict:
