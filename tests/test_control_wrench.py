@@ -166,20 +166,25 @@ def transfer(g, F):
     return np.concatenate([f, R @ F[3:] + np.cross(p, f)])
 
 
+def body_to_feet(m, d):
+    """``g_{1,7}``, ``g_{1,13}``: the feet's COM frames in the central body's (MuJoCo kinematics)."""
+    mujoco.mj_kinematics(m, d)
+    pose = []
+    for name in ("central_body", "left_foot", "right_foot"):
+        b = m.body(name).id
+        g = np.eye(4)
+        g[:3, :3], g[:3, 3] = d.ximat[b].reshape(3, 3), d.xipos[b]
+        pose.append(g)
+    return tuple(np.linalg.solve(pose[0], pose[i]) for i in (1, 2))
+
+
 def test_alg5_split_sums_and_is_minimum_norm(ctrl, wendlandt_mj):
     m = wendlandt_mj
     d = mujoco.MjData(m)
-    ids = [m.body(b).id for b in ("central_body", "left_foot", "right_foot")]
     rng = np.random.default_rng(8)
     for _ in range(20):
         d.qpos[:], d.qvel[:] = near_initial(m, rng)
-        mujoco.mj_kinematics(m, d)
-        pose = []
-        for b in ids:
-            g = np.eye(4)
-            g[:3, :3], g[:3, 3] = d.ximat[b].reshape(3, 3), d.xipos[b]
-            pose.append(g)
-        g1l, g1r = (np.linalg.solve(pose[0], pose[i]) for i in (1, 2))
+        g1l, g1r = body_to_feet(m, d)
         G = np.hstack([np.column_stack([transfer(g, e) for e in np.eye(6)]) for g in (g1l, g1r)])
         out = ctrl.compute(d.qpos, d.qvel)
         Fd = out.wrench_desired
@@ -308,17 +313,10 @@ def test_alg5_printed_reading_is_selectable_and_differs(wendlandt_path, wendland
     d = mujoco.MjData(m)
     printed = WorkspaceController.from_mjcf(wendlandt_path, distribution="printed")
     statics = WorkspaceController.from_mjcf(wendlandt_path)
-    ids = [m.body(b).id for b in ("central_body", "left_foot", "right_foot")]
     rng = np.random.default_rng(21)
     for _ in range(10):
         d.qpos[:], d.qvel[:] = near_initial(m, rng)
-        mujoco.mj_kinematics(m, d)
-        pose = []
-        for b in ids:
-            g = np.eye(4)
-            g[:3, :3], g[:3, 3] = d.ximat[b].reshape(3, 3), d.xipos[b]
-            pose.append(g)
-        A1l, A1r = (_adjoint_T(np.linalg.solve(pose[0], pose[i])) for i in (1, 2))
+        A1l, A1r = (_adjoint_T(g) for g in body_to_feet(m, d))
         out = printed.compute(d.qpos, d.qvel)
         Fd = out.wrench_desired
         scale = np.abs(Fd).max()
