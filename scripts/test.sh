@@ -3,8 +3,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if command -v apt-get >/dev/null && [ "$(id -u)" = 0 ]; then
-  if ! command -v chromium >/dev/null || ! command -v ffmpeg >/dev/null || ! dpkg -s libosmesa6 >/dev/null 2>&1; then
-    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium libosmesa6 libgl1 ffmpeg >/dev/null
+  if ! command -v chromium >/dev/null || ! dpkg -s libosmesa6 >/dev/null 2>&1; then
+    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium libosmesa6 libgl1 >/dev/null
   fi
 fi
 python -m pip install -q -e ".[test]"
