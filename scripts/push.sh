@@ -3,7 +3,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 if command -v apt-get >/dev/null && [ "$(id -u)" = 0 ]; then
-  if ! command -v ffmpeg >/dev/null || ! dpkg -s libosmesa6 >/dev/null 2>&1; then
+  if ! dpkg -s libosmesa6 >/dev/null 2>&1; then
     apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libosmesa6 libgl1 >/dev/null
   fi
 fi
