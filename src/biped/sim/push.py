@@ -98,38 +98,45 @@ def orientation_error_deg(quat, target_quat) -> float:
     return math.degrees(2.0 * math.acos(min(1.0, c)))
 
 
-def make_controller(scenario: Scenario, scene: Scene) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-    """``policy(qpos_biped (19,), qvel_biped (18,), feet (left, right) on the floor) -> torques
-    (12,)`` in ``scene.joint_names`` order, for ``scenario.controller`` with the scenario's set
-    point and gains; the workspace controller uses the feet flags when ``scenario.support`` is
-    "sensed" and takes both feet as fixed (W) when it is "fixed"."""
+def workspace_policy(scenario: Scenario, tree=None):
+    """W's controller for ``scenario``'s set point, gains and support, and its policy
+    ``raw(qpos_biped, qvel_biped, feet) -> torques`` in ``ctrl.joint_names`` order (a view into the
+    controller's buffer). The feet flags are used when ``scenario.support`` is "sensed"; with
+    "fixed" both feet are taken as fixed (W). ``tree`` defaults to the shipped biped's."""
     import biped.models
-    from biped.control import Gains, Target
+    from biped.control import Gains, Target, WorkspaceController
+    from biped.model import TreeModel
 
     target = Target.wendlandt(com=scenario.target_com_m, tilt_deg=scenario.target_tilt_deg,
                               axis=scenario.target_axis)
     gains = Gains(kp_com=scenario.kp_com, kv_com=scenario.kv_com, kp_rot=scenario.kp_rot,
                   kv_rot=scenario.kv_rot)
-    if scenario.controller == "workspace":
-        from biped.control import WorkspaceController
+    tree = tree or TreeModel.from_mjcf(biped.models.path("wendlandt"))
+    ctrl = WorkspaceController(tree, target=target, gains=gains)
+    if scenario.support == "sensed":
+        return ctrl, lambda q, v, feet: ctrl.torques(q, v, feet_in_contact=feet)
+    return ctrl, lambda q, v, feet: ctrl.torques(q, v)
 
-        ctrl = WorkspaceController.from_mjcf(biped.models.path("wendlandt"), target=target,
-                                             gains=gains)
+
+def make_controller(scenario: Scenario, scene: Scene) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    """``policy(qpos_biped (19,), qvel_biped (18,), feet (left, right) on the floor) -> torques
+    (12,)`` in ``scene.joint_names`` order, for ``scenario.controller`` with the scenario's set
+    point and gains (see :func:`workspace_policy` for the feet flags)."""
+    if scenario.controller == "workspace":
+        ctrl, raw = workspace_policy(scenario)
     else:  # the project's joint-space PD baseline (the same as ``biped sweep``'s)
+        import biped.models
         from biped.control.joint_pd import JointPDController
 
         ctrl = JointPDController.from_mjcf(biped.models.path("wendlandt"),
                                            q_ref_deg=scenario.initial_joint_angles_deg,
                                            control_period_s=1.0 / scenario.control_rate_hz)
+        raw = lambda q, v, feet: ctrl.compute(q, v).torques
     names = tuple(ctrl.joint_names)
     if sorted(names) != sorted(scene.joint_names):
         raise BipedError(f"controller joints {names} differ from the scene's {scene.joint_names}")
     order = np.array([names.index(n) for n in scene.joint_names])
-    if hasattr(ctrl, "torques"):  # the workspace controller's allocation-free hot path
-        if scenario.support == "sensed":
-            return lambda q, v, feet: ctrl.torques(q, v, feet_in_contact=feet)[order]
-        return lambda q, v, feet: ctrl.torques(q, v)[order]
-    return lambda q, v, feet: ctrl.compute(q, v).torques[order]
+    return lambda q, v, feet: raw(q, v, feet)[order]
 
 
 def _limits(scenario: Scenario) -> np.ndarray | None:

@@ -778,16 +778,9 @@ def make_policy(setup: TrialSetup, scene, model: str = "wendlandt"):
 
     sc = setup.scenario
     if sc.controller == "workspace":
-        from biped.control import Gains, Target, WorkspaceController
+        from biped.sim.push import workspace_policy
 
-        target = Target.wendlandt(com=sc.target_com_m, tilt_deg=sc.target_tilt_deg,
-                                  axis=sc.target_axis)
-        gains = Gains(kp_com=sc.kp_com, kv_com=sc.kv_com, kp_rot=sc.kp_rot, kv_rot=sc.kv_rot)
-        ctrl = WorkspaceController(_tree(model), target=target, gains=gains)
-        if sc.support == "sensed":
-            raw = lambda q, v, feet: ctrl.torques(q, v, feet_in_contact=feet)
-        else:
-            raw = lambda q, v, feet: ctrl.torques(q, v)
+        ctrl, raw = workspace_policy(sc, _tree(model))
     elif sc.controller == "joint-pd":
         from biped import models
         from biped.control.joint_pd import JointPDController
