@@ -222,24 +222,32 @@ class WorkspaceController:
         c[1] = 1 if right else 0
         return c
 
-    def _run(self, qpos, qvel, target, gains, feet_in_contact=None):
+    def _check_state(self, qpos, qvel):
+        """Raise a StateError naming what is wrong with (qpos, qvel): their shapes, non-finite
+        entries, or a zero root quaternion."""
         if qpos.shape != (self.tree.nq,) or qvel.shape != (self.tree.nv,):
             raise StateError(
                 f"qpos must have shape ({self.tree.nq},) and qvel ({self.tree.nv},) (MuJoCo layout of "
                 f"{self.tree.source}), got {qpos.shape} and {qvel.shape}")
+        bad = [f"qpos[{i}]" for i in np.flatnonzero(~np.isfinite(qpos))]
+        bad += [f"qvel[{i}]" for i in np.flatnonzero(~np.isfinite(qvel))]
+        if bad:
+            raise StateError(f"non-finite state entries: {', '.join(bad)}; qpos and qvel must be finite")
+        a = self.tree.qpos_adr[0] + 3
+        if np.dot(qpos[a:a + 4], qpos[a:a + 4]) < 1e-20:
+            raise StateError(f"the root quaternion qpos[{a}:{a + 4}] is zero; it must be a "
+                             f"(w, x, y, z) quaternion of nonzero norm (it is normalized)")
+
+    def _run(self, qpos, qvel, target, gains, feet_in_contact=None):
+        if qpos.shape != (self.tree.nq,) or qvel.shape != (self.tree.nv,):
+            self._check_state(qpos, qvel)
         t = (target or self.target).array
         k = (gains or self.gains).array
         status = compute_kernel(qpos, qvel, t, k, self._contact(feet_in_contact), self._mi, self._mf,
                                 self._work, self._out)
         if status:
-            if status == NONFINITE_STATE:
-                bad = [f"qpos[{i}]" for i in np.flatnonzero(~np.isfinite(qpos))]
-                bad += [f"qvel[{i}]" for i in np.flatnonzero(~np.isfinite(qvel))]
-                raise StateError(f"non-finite state entries: {', '.join(bad)}; qpos and qvel must be finite")
-            if status == ZERO_QUATERNION:
-                a = self.tree.qpos_adr[0] + 3
-                raise StateError(f"the root quaternion qpos[{a}:{a + 4}] is zero; it must be a "
-                                 f"(w, x, y, z) quaternion of nonzero norm (it is normalized)")
+            if status in (NONFINITE_STATE, ZERO_QUATERNION):
+                self._check_state(qpos, qvel)
             if status == SINGULAR_DISTRIBUTION:
                 raise SingularityError(
                     "wrench distribution: G G^T is singular to working precision (W Alg. 5); it is the "
@@ -279,18 +287,7 @@ class WorkspaceController:
     def _state(self, qpos, qvel):
         qpos = np.ascontiguousarray(qpos, dtype=float)
         qvel = np.zeros(self.tree.nv) if qvel is None else np.ascontiguousarray(qvel, dtype=float)
-        if qpos.shape != (self.tree.nq,) or qvel.shape != (self.tree.nv,):
-            raise StateError(
-                f"qpos must have shape ({self.tree.nq},) and qvel ({self.tree.nv},) (MuJoCo layout of "
-                f"{self.tree.source}), got {qpos.shape} and {qvel.shape}")
-        bad = [f"qpos[{i}]" for i in np.flatnonzero(~np.isfinite(qpos))]
-        bad += [f"qvel[{i}]" for i in np.flatnonzero(~np.isfinite(qvel))]
-        if bad:
-            raise StateError(f"non-finite state entries: {', '.join(bad)}; qpos and qvel must be finite")
-        a = self.tree.qpos_adr[0] + 3
-        if np.dot(qpos[a:a + 4], qpos[a:a + 4]) < 1e-20:
-            raise StateError(f"the root quaternion qpos[{a}:{a + 4}] is zero; it must be a "
-                             f"(w, x, y, z) quaternion of nonzero norm (it is normalized)")
+        self._check_state(qpos, qvel)
         return qpos, qvel
 
     def _kinematics(self, qpos, qvel):
