@@ -31,7 +31,7 @@ from biped.control.recursions import (
 )
 from biped.errors import ScenarioError, SingularityError, StateError
 from biped.model import DEFAULT_FEET, TreeModel
-from biped.spatial import axis_angle_quat
+from biped.spatial import axis_angle_quat, rot_to_quat
 
 __all__ = ["ControllerOutput", "Gains", "Target", "TreeModel", "WorkspaceController"]
 
@@ -176,7 +176,6 @@ class WorkspaceController:
             mi[4 + j * n:4 + (j + 1) * n] = arr
         mf = np.zeros(lay["model"]["_size"][0])
         g_bi = tree.G0[0]
-        from biped.spatial import rot_to_quat
 
         values = {"H": tree.H, "G0": tree.G0, "mass": tree.mass, "inertia": tree.inertia,
                   "qref": tree.qpos_ref, "gravity": tree.gravity,
