@@ -1,0 +1,334 @@
+"""W's recursive workspace balancing controller (W, 1997): the object around the compiled kernel.
+
+Frames and units: every 6-vector of the output is a twist ``[v; w]`` or a wrench ``[f; tau]``
+expressed in the central body's COM principal-axis frame (MuJoCo's inertial frame of the root
+body), SI units (N, N m, m/s^2, rad/s^2).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, fields
+from os import PathLike
+
+import numpy as np
+
+from biped.control.recursions import (
+    NONFINITE_RESULT,
+    NONFINITE_STATE,
+    SINGULAR_DISTRIBUTION,
+    ZERO_QUATERNION,
+    alg1_initialize,
+    alg2_velocity_propagation,
+    alg6_torques,
+    compute_kernel,
+    layout,
+)
+from biped.errors import ScenarioError, SingularityError, StateError
+from biped.model import DEFAULT_FEET, TreeModel
+from biped.spatial import axis_angle_quat, rot_to_quat
+
+__all__ = ["DISTRIBUTIONS", "ControllerOutput", "Gains", "Target", "WorkspaceController"]
+
+_AXES = {"-y": (0.0, -1.0, 0.0), "-x": (-1.0, 0.0, 0.0)}
+
+#: W Alg. 5 readings: "statics" (default) moves each foot's wrench to the central body with
+#: Ad^T_{g_{foot,1}}, as power balance and W's eq. 3.6 require; "printed" uses W's print
+#: Ad^T_{g_{1,foot}} literally (same sum F_1^bd, a different and unphysical split).
+DISTRIBUTIONS = ("statics", "printed")
+
+
+def _vec(name: str, value, n: int) -> np.ndarray:
+    arr = np.asarray(value, dtype=float).reshape(-1)
+    if arr.shape != (n,):
+        raise ScenarioError(f"{name} must have {n} entries, got {arr.size}")
+    if not np.all(np.isfinite(arr)):
+        raise ScenarioError(f"{name} must be finite, got {arr.tolist()}")
+    return arr
+
+
+@dataclass(frozen=True)
+class Target:
+    """Desired motion of the central body's COM frame (W Alg. 4 inputs), world frame, SI units.
+
+    com, com_vel, com_acc: (3,) position [m], velocity [m/s], acceleration [m/s^2] of the COM.
+    quat: (4,) desired orientation ``q_{0,d}`` (w, x, y, z) of the COM principal frame.
+    ang_vel, ang_acc: (3,) desired angular velocity / acceleration in the space frame.
+    """
+
+    com: tuple = (-0.01, 0.0, 1.14)
+    com_vel: tuple = (0.0, 0.0, 0.0)
+    com_acc: tuple = (0.0, 0.0, 0.0)
+    quat: tuple = tuple(axis_angle_quat(_AXES["-y"], np.radians(15.0)))
+    ang_vel: tuple = (0.0, 0.0, 0.0)
+    ang_acc: tuple = (0.0, 0.0, 0.0)
+    array: np.ndarray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        q = _vec("target quat", self.quat, 4)
+        if abs(np.linalg.norm(q) - 1.0) > 1e-6:
+            raise ScenarioError(f"target quat must be a unit quaternion (w, x, y, z), norm is {np.linalg.norm(q)}")
+        arr = np.concatenate([_vec("target com", self.com, 3), _vec("target com_vel", self.com_vel, 3),
+                              _vec("target com_acc", self.com_acc, 3), q,
+                              _vec("target ang_vel", self.ang_vel, 3),
+                              _vec("target ang_acc", self.ang_acc, 3)])
+        object.__setattr__(self, "array", arr)
+
+    @classmethod
+    def wendlandt(cls, com=(-0.01, 0.0, 1.14), tilt_deg: float = 15.0, axis: str = "-y") -> Target:
+        """W's set point: COM (-1, 0, 114) cm, 15 deg about -y (text) or -x (the printed quaternion
+        (0.99144486, -0.13052619, 0, 0)); see docs/controller.md."""
+        if axis not in _AXES:
+            raise ScenarioError(f"unknown target axis {axis!r}; valid: {sorted(_AXES)}")
+        return cls(com=tuple(com), quat=tuple(axis_angle_quat(_AXES[axis], np.radians(tilt_deg))))
+
+
+@dataclass(frozen=True)
+class Gains:
+    """Diagonals of W's gain matrices K_c^p, K_c^v (COM) and K_R^p, K_R^v (orientation) [1/s^2, 1/s]."""
+
+    kp_com: tuple = (50.0, 50.0, 200.0)
+    kv_com: tuple = (7.07, 7.07, 14.142)
+    kp_rot: tuple = (50.0, 50.0, 50.0)
+    kv_rot: tuple = (7.07, 7.07, 7.07)
+    array: np.ndarray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        arr = np.concatenate([_vec(f"gains {n}", getattr(self, n), 3)
+                              for n in ("kp_com", "kv_com", "kp_rot", "kv_rot")])
+        object.__setattr__(self, "array", arr)
+
+    @classmethod
+    def wendlandt(cls) -> Gains:
+        """W section 4's gains."""
+        return cls()
+
+
+@dataclass(frozen=True)
+class ControllerOutput:
+    """One controller call's results (central-body COM frame unless stated, SI units).
+
+    torques: (n_joints,) joint torques [N m], ordered as ``WorkspaceController.joint_names``.
+    P1: (6, 6) approximate workspace inertia ``P_1`` [kg, kg m, kg m^2] (W Alg. 3).
+    z1: (6,) workspace bias wrench ``z_1`` (gravity + Coriolis) [N, N m] (W Alg. 3).
+    accel_desired: (6,) ``X^b``, the commanded body acceleration [m/s^2, rad/s^2] (W Alg. 4).
+    wrench_desired: (6,) ``F_1^bd = P_1 X^b + z_1`` [N, N m] (W Alg. 4).
+    wrench_left, wrench_right: (6,) ``F~_2^bd``, ``F~_8^bd``: the shares of the two legs (sum =
+        wrench_desired) (W Alg. 5).
+    foot_wrench_left, foot_wrench_right: (6,) ``F_l``, ``F_r``: the ground's wrench on each foot that
+        the split implies, in that foot's own COM principal frame, at its COM (W Alg. 5).
+    quat_error: (4,) ``q_e`` (w, x, y, z), scalar part >= 0 (W Alg. 4).
+    """
+
+    torques: np.ndarray
+    P1: np.ndarray
+    z1: np.ndarray
+    accel_desired: np.ndarray
+    wrench_desired: np.ndarray
+    wrench_left: np.ndarray
+    wrench_right: np.ndarray
+    foot_wrench_left: np.ndarray
+    foot_wrench_right: np.ndarray
+    quat_error: np.ndarray
+
+
+_OUTPUT_FIELDS = tuple(f.name for f in fields(ControllerOutput))
+
+
+class WorkspaceController:
+    """W's recursive workspace balancing controller on a :class:`~biped.model.TreeModel`.
+
+    The model is immutable; the controller owns preallocated buffers (not thread-safe: use one
+    controller per thread or process). One :meth:`compute` is one compiled call (numba) running
+    W Alg. 1-6; set ``NUMBA_DISABLE_JIT=1`` to step through it in Python.
+
+    Options: ``big_base`` is W Alg. 3's factor (feet get ``big_base * M_1``; W: 1e6);
+    ``distribution`` selects the reading of W Alg. 5 (:data:`DISTRIBUTIONS`: "statics", the
+    default, or W's "printed" subscripts); ``target`` and ``gains`` are the defaults of
+    :meth:`compute`.
+    """
+
+    def __init__(self, tree: TreeModel, *, big_base: float = 1e6, target: Target | None = None,
+                 gains: Gains | None = None, distribution: str = "statics"):
+        if not (np.isfinite(big_base) and big_base > 0):
+            raise ScenarioError(f"big_base must be a positive finite factor, got {big_base}")
+        if distribution not in DISTRIBUTIONS:
+            raise ScenarioError(f"unknown wrench distribution {distribution!r}; valid: {DISTRIBUTIONS}")
+        self.distribution = distribution
+        self.tree = tree
+        self.big_base = float(big_base)
+        self.target = target or Target()
+        self.gains = gains or Gains()
+        n = tree.n_links
+        lay = layout(n)
+        self._layout = lay
+        mi = np.zeros(4 + 5 * n, dtype=np.int64)
+        mi[0] = n
+        mi[1:3] = tree.feet
+        mi[3] = 1 if distribution == "printed" else 0
+        for j, arr in enumerate((tree.parent, tree.qpos_adr, tree.dof_adr, tree.leg,
+                                 tree.beyond_foot.astype(np.int64))):
+            mi[4 + j * n:4 + (j + 1) * n] = arr
+        mf = np.zeros(lay["model"]["_size"][0])
+        g_bi = tree.G0[0]
+
+        values = {"H": tree.H, "G0": tree.G0, "mass": tree.mass, "inertia": tree.inertia,
+                  "qref": tree.qpos_ref, "gravity": tree.gravity,
+                  "root_qbi": rot_to_quat(np.ascontiguousarray(g_bi[:3, :3])), "big_base": [self.big_base]}
+        for name, (off, shape) in lay["model"].items():
+            if name != "_size":
+                mf[off:off + int(np.prod(shape))] = np.asarray(values[name], dtype=float).reshape(-1)
+        self._mi, self._mf = mi, mf
+        self._both = np.ones(2, dtype=np.int64)
+        self._contact_buf = np.ones(2, dtype=np.int64)
+        self._work = np.zeros(lay["work"]["_size"][0])
+        self._out = np.zeros(lay["out"]["_size"][0])
+        # named views of the flat buffers, for the debugging methods below (not the hot path)
+        self._m = {k: mf[o:o + int(np.prod(sh))].reshape(sh)
+                   for k, (o, sh) in lay["model"].items() if k != "_size"}
+        self._w = {k: self._work[o:o + int(np.prod(sh))].reshape(sh)
+                   for k, (o, sh) in lay["work"].items() if k != "_size"}
+        # (slice, shape or None for 1-d) of each output field, in ControllerOutput's order
+        self._fields = tuple((slice(o, o + int(np.prod(sh))), sh if len(sh) > 1 else None) for o, sh in (
+            lay["out"][k] for k in ("tau", "P1", "z1", "X", "Fd", "Fl_tilde", "Fr_tilde", "Fl", "Fr", "qe")))
+
+    @classmethod
+    def from_mjcf(cls, source: str | PathLike, feet: tuple[str, str] = DEFAULT_FEET, **kwargs
+                  ) -> WorkspaceController:
+        """Controller for the biped in an MJCF file (path, XML text or ``mujoco.MjModel``)."""
+        return cls(TreeModel.from_mjcf(source, feet=feet), **kwargs)
+
+    @property
+    def joint_names(self) -> tuple[str, ...]:
+        """Hinge names in the order of ``torques`` (MuJoCo body order)."""
+        return self.tree.joint_names
+
+    def _contact(self, feet_in_contact):
+        if feet_in_contact is None:
+            return self._both
+        c = self._contact_buf
+        try:
+            left, right = feet_in_contact
+        except (TypeError, ValueError):
+            raise StateError(f"feet_in_contact must be a pair of booleans (left, right), got "
+                             f"{feet_in_contact!r}") from None
+        c[0] = 1 if left else 0
+        c[1] = 1 if right else 0
+        return c
+
+    def _check_state(self, qpos, qvel):
+        """Raise a StateError naming what is wrong with (qpos, qvel): their shapes, non-finite
+        entries, or a zero root quaternion."""
+        if qpos.shape != (self.tree.nq,) or qvel.shape != (self.tree.nv,):
+            raise StateError(
+                f"qpos must have shape ({self.tree.nq},) and qvel ({self.tree.nv},) (MuJoCo layout of "
+                f"{self.tree.source}), got {qpos.shape} and {qvel.shape}")
+        bad = [f"qpos[{i}]" for i in np.flatnonzero(~np.isfinite(qpos))]
+        bad += [f"qvel[{i}]" for i in np.flatnonzero(~np.isfinite(qvel))]
+        if bad:
+            raise StateError(f"non-finite state entries: {', '.join(bad)}; qpos and qvel must be finite")
+        a = self.tree.qpos_adr[0] + 3
+        if np.dot(qpos[a:a + 4], qpos[a:a + 4]) < 1e-20:
+            raise StateError(f"the root quaternion qpos[{a}:{a + 4}] is zero; it must be a "
+                             f"(w, x, y, z) quaternion of nonzero norm (it is normalized)")
+
+    def _run(self, qpos, qvel, target, gains, feet_in_contact=None):
+        if qpos.shape != (self.tree.nq,) or qvel.shape != (self.tree.nv,):
+            self._check_state(qpos, qvel)
+        t = (target or self.target).array
+        k = (gains or self.gains).array
+        status = compute_kernel(qpos, qvel, t, k, self._contact(feet_in_contact), self._mi, self._mf,
+                                self._work, self._out)
+        if status:
+            if status in (NONFINITE_STATE, ZERO_QUATERNION):
+                self._check_state(qpos, qvel)
+            if status == SINGULAR_DISTRIBUTION:
+                raise SingularityError(
+                    "wrench distribution: G G^T is singular to working precision (W Alg. 5); it is the "
+                    "sum of two positive-definite matrices, so this means feet absurdly far from the "
+                    "central body for double precision")
+            if status == NONFINITE_RESULT:
+                raise SingularityError(
+                    "the controller produced non-finite values at this state: velocities too large for "
+                    "double precision, or a joint axis with zero articulated inertia (W Alg. 3)")
+
+    def compute(self, qpos, qvel, target: Target | None = None, gains: Gains | None = None,
+                feet_in_contact: tuple[bool, bool] | None = None) -> ControllerOutput:
+        """Run W Alg. 1-6 at state (qpos, qvel) (MuJoCo layout of the biped's own model).
+
+        Returns a :class:`ControllerOutput` of fresh arrays. ``target`` and ``gains`` default to
+        the controller's (W's set point and gains unless given at construction).
+
+        ``feet_in_contact`` = (left, right) says which feet are on the ground, as a contact or force
+        sensor would. ``None`` (the default) is W's controller: both feet are always taken as fixed
+        (the big base of Alg. 3, both shares of Alg. 5). Given flags, a foot off the ground keeps its
+        own inertia in Alg. 3 (its leg a passive articulated branch of the central body) and takes no
+        share in Alg. 5, so the stance leg realizes all of ``F_1^bd`` and the free leg gets zero
+        torque; with no foot down, no wrench is distributed. This goes beyond W: W's controller
+        assumes both feet fixed even while one is in the air.
+        """
+        qpos = np.ascontiguousarray(qpos, dtype=float)
+        qvel = np.ascontiguousarray(qvel, dtype=float)
+        self._run(qpos, qvel, target, gains, feet_in_contact)
+        buf = self._out.copy()  # one fresh buffer; the fields are views of it
+        out = object.__new__(ControllerOutput)  # skips the frozen __init__'s 10 setattr calls (3 us)
+        out.__dict__.update(zip(_OUTPUT_FIELDS, [buf[sl] if sh is None else buf[sl].reshape(sh)
+                                                 for sl, sh in self._fields]))
+        return out
+
+    # ------------------------------------------------------------------ debugging / checking
+
+    def _state(self, qpos, qvel):
+        qpos = np.ascontiguousarray(qpos, dtype=float)
+        qvel = np.zeros(self.tree.nv) if qvel is None else np.ascontiguousarray(qvel, dtype=float)
+        self._check_state(qpos, qvel)
+        return qpos, qvel
+
+    def _kinematics(self, qpos, qvel):
+        """W Alg. 1 and Alg. 2 alone (the kernel's own functions) into the work buffer."""
+        t, m, w = self.tree, self._m, self._w
+        tmp44 = w["tmp66"].reshape(-1)[:48].reshape(3, 4, 4)
+        alg1_initialize(qpos, qvel, t.qpos_adr[0], t.dof_adr[0], m["G0"][0], m["root_qbi"], m["mass"],
+                        m["inertia"], m["gravity"], w["g"], w["V"], w["a"], w["b"], w["quat"])
+        alg2_velocity_propagation(qpos, qvel, t.parent, t.qpos_adr, t.dof_adr, m["H"], m["G0"],
+                                  m["qref"], m["mass"], m["inertia"], m["gravity"], w["g"], w["gl"],
+                                  w["V"], w["a"], w["b"], tmp44)
+
+    def link_poses(self, qpos) -> np.ndarray:
+        """(n_links, 4, 4) world poses ``g_{0,k}`` of every link's COM principal frame (MuJoCo's
+        ``xipos``/``ximat``), W Alg. 1-2. For checking and debugging; allocates."""
+        qpos, qvel = self._state(qpos, None)
+        self._kinematics(qpos, qvel)
+        return self._w["g"].copy()
+
+    def link_velocities(self, qpos, qvel) -> np.ndarray:
+        """(n_links, 6) body velocities ``V_k^b = [v; w]`` of every link (W Alg. 1-2): velocity of
+        link k's COM and its angular velocity relative to the world, both in link k's COM
+        principal frame [m/s, rad/s]. For checking and debugging; allocates."""
+        qpos, qvel = self._state(qpos, qvel)
+        self._kinematics(qpos, qvel)
+        return self._w["V"].copy()
+
+    def leg_torques(self, qpos, wrench_left, wrench_right) -> np.ndarray:
+        """W Alg. 6 alone: joint torques (n_joints,) [N m] with which the legs exert the wrenches
+        ``F~_2`` (left) and ``F~_8`` (right) [N, N m] on the central body (central-body COM frame),
+        feet fixed: ``tau_leg = J_leg^T F~``. Joints off the legs get zero. For checking the
+        recursion against a Jacobian and for Jacobian-transpose control; allocates."""
+        qpos, qvel = self._state(qpos, None)
+        t = self.tree
+        fl, fr = (np.array(_vec(n, v, 6)) for n, v in (("wrench_left", wrench_left),
+                                                       ("wrench_right", wrench_right)))
+        self._kinematics(qpos, qvel)  # the joint transforms g_{k.i,k.o}
+        F = np.zeros((t.n_links, 6))
+        tau = np.zeros(t.n_links - 1)
+        alg6_torques(t.parent, self._m["H"], t.leg, t.beyond_foot.astype(np.int64), self._w["gl"],
+                     fl, fr, F, tau)
+        return tau
+
+    def torques(self, qpos: np.ndarray, qvel: np.ndarray, target: Target | None = None,
+                gains: Gains | None = None, feet_in_contact: tuple[bool, bool] | None = None
+                ) -> np.ndarray:
+        """Hot path: joint torques only, as a view into the controller's buffer (overwritten by the
+        next call; copy it to keep it). qpos/qvel must be contiguous float64 arrays.
+        ``feet_in_contact`` as in :meth:`compute`."""
+        self._run(qpos, qvel, target, gains, feet_in_contact)
+        return self._out[: self.tree.n_links - 1]
