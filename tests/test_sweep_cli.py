@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from biped.cli import main
-from biped.sim.sweep import feet_in_place_bound, load
+from biped.analysis import feet_in_place_bound
+from biped.sim.sweep import load
 
 
 def test_cli_runs_a_tiny_sweep_and_plots_it(tmp_path, capsys):

@@ -14,15 +14,8 @@ from biped.control.joint_pd import JointPDController
 from biped.control.limits import HUMAN_N_M_PER_KG, JOINT_NAMES, clip_torques, torque_limits
 from biped.errors import ScenarioError
 from biped.sim.scenario import Scenario
-from biped.sim.sweep import (
-    SweepSpec,
-    ballistic_impulse,
-    envelope,
-    hof_bound,
-    ray_to_polygon_edge,
-    run_trial,
-    support_polygon,
-)
+from biped.analysis import envelope, hof_bound, ray_to_polygon_edge, support_polygon
+from biped.sim.sweep import SweepSpec, ballistic_impulse, run_trial
 
 G = np.array([0.0, 0.0, -9.81])
 

@@ -1,7 +1,8 @@
 """``biped sweep``: push-recovery envelopes, many push trials on every local core or a Dask cluster.
 
 Thin: parsing here, work in :mod:`biped.sim.sweep`, plots in :mod:`biped.viz.envelope`.
-See docs/sweep.md.
+See docs/sweep.md. Exit status: 0 done; 1 incomplete (a worker died: rerun to finish);
+2 bad input (one line on stderr, before any work); 130 Ctrl-C, 143 SIGTERM (finished trials kept).
 """
 
 from __future__ import annotations
@@ -58,6 +59,8 @@ def register(subparsers) -> None:
     p.add_argument("--by", choices=("speed_m_s", "impulse_n_s"), default="speed_m_s",
                    help="radius of the polar plot")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--dry-run", action="store_true",
+                   help="check everything and say what would run, run nothing")
     p.set_defaults(func=run)
 
 
@@ -92,22 +95,51 @@ def build_spec(args):
                      launch_distance_m=spec.launch_distance_m if spec else 0.5)
 
 
-def run(args) -> int:
-    from biped.sim.sweep import load, run_sweep, survived
-
-    if args.compare and not args.plot:
+def _check_plot(path: str | None, compare: list[str]) -> None:
+    """--plot and --compare, checked before the sweep runs."""
+    if compare and not path:
         raise ScenarioError("--compare needs --plot FILE.png")
+    if not path:
+        return
+    import matplotlib.figure
+
+    kinds = matplotlib.figure.Figure().canvas.get_supported_filetypes()
+    suffix = Path(path).suffix.lstrip(".").lower()
+    if suffix not in kinds:
+        raise ScenarioError(f"--plot {path!r}: unknown image type {suffix or '(none)'!r}; "
+                            f"valid: {', '.join('.' + k for k in sorted(kinds))}")
+    for other in compare:
+        if Path(other).suffix != ".parquet" or not Path(other).is_file():
+            raise ScenarioError(f"--compare {other!r}: no finished sweep file (.parquet) there")
+
+
+def run(args) -> int:
+    from biped.analysis import survived
+    from biped.sim.sweep import Terminated, check_run_args, load, parts_dir, run_sweep
+
+    _check_plot(args.plot, args.compare)
     spec = build_spec(args)
     out = Path(args.out) if args.out else Path("runs") / (
         f"sweep-{spec.base.controller}-{spec.torque_limits}.parquet")
-    n = len(spec.trials())
+    n = spec.n_trials
     where = args.scheduler or f"{args.workers or 'all'} local worker(s)"
+    if args.dry_run:
+        check_run_args(out, workers=args.workers, batch=args.batch, scheduler=args.scheduler)
+        print(f"biped sweep (dry run): {n} trials of {spec.base.duration_s:g} s, controller "
+              f"{spec.base.controller}, torque limits {spec.torque_limits}, on {where} -> {out}")
+        return 0
     print(f"biped sweep: {n} trials of {spec.base.duration_s:g} s, controller "
           f"{spec.base.controller}, torque limits {spec.torque_limits}, on {where} -> {out}",
           file=sys.stderr)
-    summary = run_sweep(spec, out, workers=args.workers, scheduler=args.scheduler,
-                        progress=not args.quiet, retry_failed=args.retry_failed,
-                        overwrite=args.overwrite, batch=args.batch)
+    try:
+        summary = run_sweep(spec, out, workers=args.workers, scheduler=args.scheduler,
+                            progress=not args.quiet, retry_failed=args.retry_failed,
+                            overwrite=args.overwrite, batch=args.batch)
+    except KeyboardInterrupt as exc:
+        what = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
+        print(f"biped sweep: {what}; every finished trial is kept in {parts_dir(out)}/. Run the "
+              f"same command again to finish.", file=sys.stderr)
+        return 143 if isinstance(exc, Terminated) else 130
     rate = summary.ran / summary.wall_time_s if summary.wall_time_s > 0 else float("nan")
     print(f"ran {summary.ran} (skipped {summary.skipped} already done), failed {summary.failed}, "
           f"wall {summary.wall_time_s:.1f} s, {rate:.2f} trials/s ({summary.backend})")
