@@ -123,8 +123,8 @@ def run(args) -> int:
         f"sweep-{spec.base.controller}-{spec.torque_limits}.parquet")
     n = spec.n_trials
     where = args.scheduler or f"{args.workers or 'all'} local worker(s)"
+    check_run_args(out, workers=args.workers, batch=args.batch, scheduler=args.scheduler)
     if args.dry_run:
-        check_run_args(out, workers=args.workers, batch=args.batch, scheduler=args.scheduler)
         print(f"biped sweep (dry run): {n} trials of {spec.base.duration_s:g} s, controller "
               f"{spec.base.controller}, torque limits {spec.torque_limits}, on {where} -> {out}")
         return 0
