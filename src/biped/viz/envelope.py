@@ -11,14 +11,15 @@ survived, red cross if not. The line is the envelope (per direction, the largest
 which every trial survived) and the dashed line Hof's feet-in-place bound J_max = m omega_0 d
 (:class:`biped.analysis.FeetInPlaceBound`), converted to block speed with the head-on impact
 law ``v = J / ((1 + e) m_block)`` when the radius is the speed. The radial scale reaches at least
-the bound's nearest point, so the bound is always drawn; where it runs beyond the scale a note
-gives its range. Angles: 0 deg = +x, counter-clockwise toward +y. The biped faces -x (180 deg),
+all of the bound when that does not squash the trials (a factor 2.5 at most), else its nearest
+point, so the bound is always drawn; its legend entry gives its range. Angles: 0 deg = +x, counter-clockwise toward +y. The biped faces -x (180 deg),
 its left side toward -y: a block travelling at 180 deg (W's throw) hits its back.
 """
 
 from __future__ import annotations
 
 import os
+import textwrap
 from pathlib import Path
 from typing import Any
 
@@ -58,13 +59,16 @@ def _values(cols: dict, by: str) -> np.ndarray:
 
 
 def _scale(data: Any, by: str, bound: bool) -> float:
-    """A radial limit that shows every trial and at least the nearest point of Hof's bound."""
+    """A radial limit that shows every trial and Hof's bound: all of it when that costs at most
+    a factor 2.5 on the trials' scale, else at least its nearest point."""
     cols = _columns(data)
     r = _values(cols, by)
     top = float(np.nanmax(r)) if np.isfinite(r).any() else 1.0
     if bound:
-        top = max(top, float(np.min(_bound_radius(data, cols, by, np.arange(0.0, 360.0, 2.0)))))
-    return 1.1 * max(top, 1e-9)
+        radius = _bound_radius(data, cols, by, np.arange(0.0, 360.0, 2.0))
+        far, near = float(radius.max()), float(radius.min())
+        top = max(top, far if far <= 2.5 * top else near)
+    return 1.08 * max(top, 1e-9)
 
 
 def _facing_arrow(ax: Any, rmax: float) -> None:
@@ -82,7 +86,7 @@ def plot_envelope(source: Any, ax: Any = None, *, by: str = "speed_m_s",
 
     ``by``: ``"speed_m_s"`` or ``"impulse_n_s"``; ``criterion``: ``"survived"`` or
     ``"recovered"`` (:func:`biped.analysis.survived`). ``rmax`` defaults to a scale that shows
-    every trial and the nearest point of Hof's bound.
+    every trial and Hof's bound (at least its nearest point).
     """
     import matplotlib.pyplot as plt
 
@@ -108,13 +112,9 @@ def plot_envelope(source: Any, ax: Any = None, *, by: str = "speed_m_s",
         dirs = np.arange(0.0, 360.0, 2.0)
         radius = _bound_radius(data, cols, by, dirs)
         t, v = _closed(np.radians(dirs), radius)
-        ax.plot(t, v, color="black", ls="--", lw=1.6, label="feet-in-place bound (Hof)",
-                zorder=5)
-        if radius.max() > rmax:
-            unit = LABELS[by].split("[")[-1].rstrip("]")
-            ax.text(0.5, -0.04, f"Hof bound {radius.min():.3g}-{radius.max():.3g} {unit}: "
-                    f"beyond the scale where not drawn", transform=ax.transAxes, ha="center",
-                    va="top", fontsize=7)
+        unit = LABELS[by].split("[")[-1].rstrip("]")
+        ax.plot(t, v, color="black", ls="--", lw=1.6, zorder=5,
+                label=f"feet-in-place bound (Hof): {radius.min():.3g}-{radius.max():.3g} {unit}")
     ax.set_ylim(0, rmax)
     ax.set_theta_zero_location("E")
     ax.set_theta_direction(1)
@@ -122,10 +122,8 @@ def plot_envelope(source: Any, ax: Any = None, *, by: str = "speed_m_s",
     _facing_arrow(ax, rmax)
     ctrl = cols["controller"][0] if cols["controller"] else "?"
     lim = cols["torque_limits"][0] if cols["torque_limits"] else "?"
-    ax.set_title(title or f"{ctrl}, torque limits: {lim}", pad=14)
-    # the radius's name on its own tick line, clear of the angle labels
-    ax.text(np.radians(RLABEL_DEG), 0.62 * rmax, LABELS[by], fontsize=7, color="0.25",
-            rotation=RLABEL_DEG, rotation_mode="anchor", ha="left", va="bottom")
+    ax.set_title(f"{title or f'{ctrl}, torque limits: {lim}'}\nradius: {LABELS[by]}", pad=14,
+                 fontsize=10)
     return ax
 
 
@@ -147,7 +145,7 @@ def plot_comparison(sources: Any, *, labels: Any = None, by: str = "speed_m_s",
     n = len(datas)
     panels = n + 1 if n > 1 else 1
     fig, axes = plt.subplots(1, panels, subplot_kw={"projection": "polar"},
-                             figsize=(4.6 * panels + 0.4, 5.3), squeeze=False)
+                             figsize=(4.6 * panels + 0.6, 6.0), squeeze=False)
     axes = axes[0]
     for ax, d, lab in zip(axes, datas, labels, strict=False):
         plot_envelope(d, ax, by=by, criterion=criterion, title=lab, rmax=rmax, bin_deg=bin_deg)
@@ -168,13 +166,14 @@ def plot_comparison(sources: Any, *, labels: Any = None, by: str = "speed_m_s",
         ax.set_theta_zero_location("E")
         ax.set_rlabel_position(RLABEL_DEG)
         _facing_arrow(ax, rmax)
-        ax.set_title("envelopes overlaid", pad=14)
+        ax.set_title(f"envelopes overlaid\nradius: {LABELS[by]}", pad=14, fontsize=10)
         h2, l2 = ax.get_legend_handles_labels()
         handles, labs = handles + h2, labs + l2
-    fig.legend(handles, labs, loc="lower center", ncol=min(6, len(labs)), fontsize=8,
-               frameon=False, bbox_to_anchor=(0.5, 0.045))
-    fig.text(0.5, 0.01, FACING_NOTE, ha="center", va="bottom", fontsize=8)
-    fig.tight_layout(rect=(0, 0.12, 1, 0.97))
+    fig.legend(handles, labs, loc="lower center", ncol=min(2 * panels, len(labs), 6), fontsize=8,
+               frameon=False, bbox_to_anchor=(0.5, 0.06))
+    note = textwrap.fill(FACING_NOTE, width=int(95 * min(panels, 2) / 2 + 10 * (panels > 1)))
+    fig.text(0.5, 0.01, note, ha="center", va="bottom", fontsize=8)
+    fig.tight_layout(rect=(0, 0.17, 1, 0.93))
     if out is not None:
         out = Path(out)
         out.parent.mkdir(parents=True, exist_ok=True)

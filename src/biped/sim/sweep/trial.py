@@ -15,7 +15,7 @@ from biped.control.joint_pd import JointPDController
 from biped.control.limits import clip_torques, torque_limits
 from biped.errors import ScenarioError
 from biped.model import TreeModel
-from biped.sim.push import PushResult, _run, orientation_error_deg, workspace_policy
+from biped.sim.push import PushResult, _run, workspace_policy
 from biped.sim.scenario import Scenario
 from biped.sim.scene import Scene, build_scene
 from biped.sim.sweep.record import Measured
@@ -154,7 +154,9 @@ def measure(result: PushResult, block_velocity: np.ndarray, *, scene: Scene | No
     ttr = float("nan")
     if result.recovered and n:
         com_err = np.linalg.norm(result.com - result.target_com, axis=1)
-        ori_err = np.array([orientation_error_deg(q, result.target_quat) for q in result.quat])
+        q, qt = result.quat, np.asarray(result.target_quat, dtype=float)
+        c = np.abs(q @ qt) / (np.linalg.norm(q, axis=1) * np.linalg.norm(qt))
+        ori_err = np.degrees(2.0 * np.arccos(np.minimum(1.0, c)))  # orientation_error_deg, rowwise
         bad = (com_err >= sc.recovery_com_tol_m) | (ori_err >= sc.recovery_orientation_tol_deg)
         t0 = tc if tc is not None else 0.0
         bad &= t >= t0
