@@ -15,7 +15,8 @@
    of the same number of cores. Goal of the speed issue: 1000 three-second trials in at most 60 s
    on 2 cores (16.7 trials/s) at a parallel efficiency of at least 85 %.
 
-    python benchmarks/sweep.py [--trials 40] [--repeat 3] [--reference 5] [--controller workspace|joint-pd]
+    python benchmarks/sweep.py [--trials 40] [--repeat 3] [--reference 5]
+                               [--controller workspace|joint-pd]
 """
 
 from __future__ import annotations

@@ -138,7 +138,8 @@ SCRIPT = textwrap.dedent("""
     sys.path.insert(0, {here!r})
     from biped.sim.sweep import SweepSpec, Terminated, run_sweep
     from test_sweep_storage import slow_trial
-    spec = SweepSpec(axes={{"speed_m_s": (1.0, 3.0, 5.0), "direction_deg": tuple(range(0, 360, 45))}})
+    axes = {{"speed_m_s": (1.0, 3.0, 5.0), "direction_deg": tuple(range(0, 360, 45))}}
+    spec = SweepSpec(axes=axes)
     try:
         s = run_sweep(spec, {out!r}, workers={workers}, trial_fn=slow_trial, progress=False)
     except Terminated:
@@ -221,8 +222,8 @@ def test_a_second_sweep_on_the_same_file_is_refused(tmp_path, monkeypatch):
 
 def test_a_torn_part_file_keeps_its_complete_batches(tmp_path):
     """SIGKILL while a batch is being written: the batches before it are read back."""
-    from biped.sim.sweep.store import PartWriter
     from biped.sim.sweep.runner import execute_trial
+    from biped.sim.sweep.store import PartWriter
 
     spec = SweepSpec(axes=GRID)
     w = PartWriter(tmp_path)

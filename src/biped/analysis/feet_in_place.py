@@ -96,15 +96,15 @@ def _support_polygon(scenario: Scenario) -> tuple[np.ndarray, float, float, np.n
     d.qpos[:], _ = initial_state(scene, scenario)
     mujoco.mj_kinematics(m, d)
     mujoco.mj_comPos(m, d)
-    corners = []
+    points = []
     for g in scene.sole_geoms:
         half = m.geom_size[g]
         R = d.geom_xmat[g].reshape(3, 3)
         for sx in (-1, 1):
             for sy in (-1, 1):
                 for sz in (-1, 1):
-                    corners.append(d.geom_xpos[g] + R @ (half * [sx, sy, sz]))
-    corners = np.array(corners)
+                    points.append(d.geom_xpos[g] + R @ (half * [sx, sy, sz]))
+    corners = np.array(points)
     z_sole = corners[:, 2].min()
     bottom = corners[corners[:, 2] < z_sole + 1e-3]
     hull = ConvexHull(bottom[:, :2])

@@ -10,10 +10,11 @@ Each trial is a dot at (direction the block travels, speed or impulse): filled g
 survived, red cross if not. The line is the envelope (per direction, the largest value below
 which every trial survived) and the dashed line Hof's feet-in-place bound J_max = m omega_0 d
 (:class:`biped.analysis.FeetInPlaceBound`), converted to block speed with the head-on impact
-law ``v = J / ((1 + e) m_block)`` when the radius is the speed. The radial scale reaches at least
-all of the bound when that does not squash the trials (a factor 2.5 at most), else its nearest
-point, so the bound is always drawn; its legend entry gives its range. Angles: 0 deg = +x, counter-clockwise toward +y. The biped faces -x (180 deg),
-its left side toward -y: a block travelling at 180 deg (W's throw) hits its back.
+law ``v = J / ((1 + e) m_block)`` when the radius is the speed. The radial scale reaches all of
+the bound when that does not squash the trials (a factor 2.5 at most), else its nearest point,
+so the bound is always drawn; its legend entry gives its range. Angles: 0 deg = +x,
+counter-clockwise toward +y. The biped faces -x (180 deg), its left side toward -y: a block
+travelling at 180 deg (W's throw) hits its back.
 """
 
 from __future__ import annotations

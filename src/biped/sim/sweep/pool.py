@@ -97,14 +97,16 @@ class _Worker:
         self.proc = subprocess.Popen(
             [sys.executable, "-c", _BOOT, str(os.getpid())], stdin=subprocess.PIPE,
             stdout=subprocess.PIPE, bufsize=0, close_fds=True)
-        self.fd = self.proc.stdout.fileno()
+        assert self.proc.stdin is not None and self.proc.stdout is not None
+        self.stdin, self.stdout = self.proc.stdin, self.proc.stdout
+        self.fd = self.stdout.fileno()
         self.buf = b""
         self.remaining = 0  # rows still due for the chunk it runs
         self.send(sys.path)
         self.send(trial_fn)
 
     def send(self, obj: Any) -> None:
-        _write_all(self.proc.stdin.fileno(), _frame(obj))
+        _write_all(self.stdin.fileno(), _frame(obj))
 
     def rows(self, data: bytes) -> list[dict]:
         """Complete rows in what has arrived so far."""
@@ -130,7 +132,7 @@ class _Worker:
         return rows
 
     def close(self) -> None:
-        for f in (self.proc.stdin, self.proc.stdout):
+        for f in (self.stdin, self.stdout):
             with contextlib.suppress(OSError, ValueError):
                 f.close()
         try:
