@@ -1,8 +1,8 @@
 """``biped push``: W's push-recovery experiment (section 4) on MuJoCo.
 
 With no arguments it runs W's scenario and writes summary.json, trajectory.csv, figures/,
-video.mp4 and replay.html into a new folder under ``runs/``. Thin: parsing here, work in
-:mod:`biped.sim`.
+video.mp4 and replay.html into a new folder under ``runs/``. Thin: parsing here, the simulation
+in :mod:`biped.sim`, the files in :mod:`biped.outputs.push`.
 """
 
 from __future__ import annotations
@@ -135,7 +135,8 @@ def _table(result, out: Path, paths: dict) -> str:
 
 
 def run(args) -> int:
-    from biped.sim.push import simulate, write_outputs
+    from biped.outputs.push import write_outputs
+    from biped.sim.push import simulate
     from biped.sim.scene import build_scene
 
     scenario = build_scenario(args)  # validated before anything is simulated

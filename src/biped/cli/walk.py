@@ -1,12 +1,12 @@
 """``biped walk``: Bediz's kinematic figure stepping forward, up stairs and jumping (B IV-B, V-D).
 
 Writes trajectory.csv, summary.json, figures/, replay.html and video.mp4 into ``--out``. Thin:
-parsing here, work in :mod:`biped.kinematic`; see docs/walk.md.
+parsing here, the motion in :mod:`biped.kinematic`, the files in :mod:`biped.outputs.walk`; see
+docs/walk.md.
 """
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
@@ -86,82 +86,29 @@ def _out_dir(args) -> Path:
 def run(args) -> int:
     from tqdm import tqdm
 
-    from biped.kinematic import stair_geometry, walk_metrics
-    from biped.kinematic.outputs import (
-        build_replay,
-        figure_model,
-        figure_qpos,
-        write_trajectory_csv,
-    )
+    from biped.outputs.walk import walk_stages, write_walk
 
     plan = build_plan(args)
     out = _out_dir(args)
-    out.mkdir(parents=True, exist_ok=True)
-    stages = ["motion", "trajectory.csv"] + (["dynamics"] if not args.no_dynamics else []) \
-        + (["figures"] if not args.no_figures else []) + (["replay.html"] if not args.no_replay else []) \
-        + (["video.mp4"] if not args.no_video else [])
-    bar = tqdm(stages, desc=f"biped walk {args.gait}", disable=args.quiet, unit="stage")
-    paths, notes = {}, {}
-    idyn = None
-    for stage in bar:
+    flags = {"dynamics": not args.no_dynamics, "figures": not args.no_figures,
+             "replay": not args.no_replay, "video": not args.no_video}
+    bar = tqdm(total=len(walk_stages(**flags)), desc=f"biped walk {args.gait}", disable=args.quiet,
+               unit="stage")
+
+    started = []
+
+    def on_stage(stage):  # the bar counts finished stages and names the running one
+        if started:
+            bar.update(1)
+        started.append(stage)
         bar.set_postfix_str(stage)
-        if stage == "motion":
-            motion = plan.sample(args.rate)
-            lm = motion.landmarks()
-            metrics = walk_metrics(motion, lm)
-        elif stage == "trajectory.csv":
-            paths["trajectory"] = str(write_trajectory_csv(motion, lm, out / "trajectory.csv"))
-        elif stage == "dynamics":
-            from biped.kinematic.dynamics import inverse_dynamics
 
-            idyn = inverse_dynamics(motion)
-        elif stage == "figures":
-            from biped.viz.walk_figures import plot_feet, plot_inverse_dynamics, plot_joint_angles
-
-            figs = [plot_joint_angles(motion, out / "figures" / "joint_angles.png"),
-                    plot_feet(motion, lm, out / "figures" / "feet.png")]
-            if idyn is not None:
-                figs.append(plot_inverse_dynamics(idyn, plan.markers, out / "figures" / "inverse_dynamics.png"))
-            paths["figures"] = [str(f) for f in figs]
-        elif stage == "replay.html":
-            from biped.viz.replay import write_replay
-
-            info = {"gait": args.gait, "distance_m": metrics.distance_m,
-                    "height_climbed_m": metrics.height_climbed_m,
-                    "max_stance_slip_m": metrics.max_stance_slip_m,
-                    "min_swing_clearance_m": metrics.min_swing_clearance_m}
-            rep = build_replay(motion, f"biped walk --gait {args.gait} (Bediz's kinematic figure)", info)
-            paths["replay"] = str(write_replay(rep, out / "replay.html"))
-        elif stage == "video.mp4":
-            from biped.viz.video import render_video
-
-            model = figure_model(motion)
-            res = render_video(model, motion.times, figure_qpos(model, motion), out / "video.mp4",
-                               track_body="pelvis", distance=4.0, azimuth=-125.0, elevation=-15.0,
-                               fps=25, width=480, height=360)
-            if res.path is None:
-                notes["video"] = res.reason
-            else:
-                paths["video"] = str(res.path)
+    walk = write_walk(plan, out, gait=args.gait, speed=args.speed, rate=args.rate,
+                      stair_rise=args.stair_rise, stair_run=args.stair_run, on_stage=on_stage,
+                      **flags)
+    bar.update(1)
     bar.close()
-    summary = {
-        "gait": args.gait,
-        "speed_m_s": args.speed,
-        "rate_hz": args.rate,
-        "somersault": plan.params.somersault,
-        **metrics.as_dict(),
-        "step_length_m": plan.dims.leg * math.sin(2 * math.radians(plan.params.alpha)),
-        "markers": list(plan.markers),
-    }
-    if args.gait in ("upstairs", "demo"):
-        rise, run_, a_up = stair_geometry(plan.dims, plan.params, args.stair_rise, args.stair_run)
-        summary["stairs"] = {"rise_m": rise, "run_m": run_, "alpha_up_deg": math.degrees(a_up),
-                             "alpha_down_deg": plan.params.alpha_down}
-    if idyn is not None:
-        summary["inverse_dynamics"] = idyn.summary()
-    summary["outputs"] = paths
-    summary["notes"] = notes
-    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    metrics, idyn, summary, notes = walk.metrics, walk.idyn, walk.summary, walk.notes
     rows = [("gait", args.gait), ("duration", f"{metrics.duration_s:.2f} s"),
             ("distance travelled", f"{metrics.distance_m:.3f} m"),
             ("height climbed", f"{metrics.height_climbed_m:.3f} m"),

@@ -49,7 +49,6 @@ __all__ = [
     "landmarks",
     "part_geoms",
     "part_poses",
-    "replay_geoms",
 ]
 
 #: The 12 joint angles that drive the hierarchy, in the column order of every angle array.
@@ -293,25 +292,6 @@ def landmarks(dims: FigureDims, poses: FigurePoses) -> dict:
         out[f"{side}_toe"] = p + np.einsum("tij,j->ti", R, [dims.toe_front, 0.0, -dims.ankle_height])
         out[f"{side}_hip"] = poses.part(f"{side}_thigh")[0]
     return out
-
-
-def replay_geoms(dims: FigureDims, poses: FigurePoses):
-    """The figure as :class:`biped.viz.replay.ReplayGeom` shapes with world poses.
-
-    Returns ``(geoms (15,), pos (T, 15, 3), quat (T, 15, 4))``, quaternions (w, x, y, z).
-    """
-    from biped.viz.replay import ReplayGeom
-
-    shapes = part_geoms(dims)
-    geoms, pos = [], np.empty_like(poses.pos)
-    quat = np.empty(poses.pos.shape[:2] + (4,))
-    for i, p in enumerate(PARTS):
-        kind, size, centre = shapes[p.name]
-        geoms.append(ReplayGeom(p.name, kind, size, p.rgba))
-        pos[:, i] = poses.pos[:, i] + np.einsum("tij,j->ti", poses.rot[:, i], centre)
-        for t in range(poses.pos.shape[0]):
-            quat[t, i] = rot_to_quat(np.ascontiguousarray(poses.rot[t, i]))
-    return tuple(geoms), pos, quat
 
 
 def _f(v) -> str:
