@@ -22,11 +22,32 @@ import numpy as np
 from numba import njit
 
 __all__ = [
-    "hat", "vee", "quat_to_rot", "rot_to_quat", "quat_mul", "quat_conj", "axis_angle_quat",
-    "adjoint", "adjoint_into", "ad", "ad_into", "transform", "inverse", "compose",
-    "cross", "rot_mul", "rot_T_mul", "adjoint_mul", "adjoint_inv_mul", "adjoint_T_mul",
-    "adjoint_inv_T_mul", "adjoint_inv_congruence_add", "mat6_mul_vec", "mat6_mul_vec_add", "dot6",
+    "ad",
+    "ad_into",
+    "adjoint",
+    "adjoint_T_mul",
+    "adjoint_into",
+    "adjoint_inv_T_mul",
+    "adjoint_inv_congruence_add",
+    "adjoint_inv_mul",
+    "adjoint_mul",
+    "axis_angle_quat",
     "cholesky6_solve",
+    "compose",
+    "cross",
+    "dot6",
+    "hat",
+    "inverse",
+    "mat6_mul_vec",
+    "mat6_mul_vec_add",
+    "quat_conj",
+    "quat_mul",
+    "quat_to_rot",
+    "rot_T_mul",
+    "rot_mul",
+    "rot_to_quat",
+    "transform",
+    "vee",
 ]
 
 

@@ -405,7 +405,7 @@ def alg4_desired_wrench(g, V, P, z, target, gains, q01, qd_conj, Re, X, qe, Fd):
     """
     R = g[0, :3, :3]
     pd0, pd1, pd2 = pdot = rot_mul(R, V[0, :3])  # world COM velocity
-    ws0, ws1, ws2 = ws = rot_mul(R, V[0, 3:])  # world angular velocity
+    ws = rot_mul(R, V[0, 3:])  # world angular velocity
     Xc0 = target[6] - gains[3] * (pd0 - target[3]) - gains[0] * (g[0, 0, 3] - target[0])
     Xc1 = target[7] - gains[4] * (pd1 - target[4]) - gains[1] * (g[0, 1, 3] - target[1])
     Xc2 = target[8] - gains[5] * (pd2 - target[5]) - gains[2] * (g[0, 2, 3] - target[2])

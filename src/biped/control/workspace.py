@@ -173,9 +173,9 @@ class WorkspaceController:
         self._mi = np.zeros(lay["ints"]["_size"][0], dtype=np.int64)
         self._mf = np.zeros(lay["model"]["_size"][0])
         for buf, name in ((self._mi, "ints"), (self._mf, "model")):
-            for field, (off, shape) in lay[name].items():
-                if field != "_size":
-                    buf[off:off + int(np.prod(shape))] = np.asarray(values[field]).reshape(-1)
+            for key, (off, shape) in lay[name].items():
+                if key != "_size":
+                    buf[off:off + int(np.prod(shape))] = np.asarray(values[key]).reshape(-1)
         self._both = np.ones(2, dtype=np.int64)
         self._contact_buf = np.ones(2, dtype=np.int64)
         self._work = np.zeros(lay["work"]["_size"][0])
@@ -321,8 +321,11 @@ class WorkspaceController:
     def torques(self, qpos: np.ndarray, qvel: np.ndarray, target: Target | None = None,
                 gains: Gains | None = None, feet_in_contact: tuple[bool, bool] | None = None
                 ) -> np.ndarray:
-        """Hot path: joint torques only, as a view into the controller's buffer (overwritten by the
-        next call; copy it to keep it). qpos/qvel must be contiguous float64 arrays.
-        ``feet_in_contact`` as in :meth:`compute`."""
+        """Joint torques (n_joints,) [N m] as a VIEW OF THE CONTROLLER'S REUSED OUTPUT BUFFER: the
+        next :meth:`torques` or :meth:`compute` call overwrites it; copy it to keep it.
+
+        The hot path: W Alg. 1-6 with no allocation. qpos/qvel must be contiguous float64
+        arrays; ``target``, ``gains`` and ``feet_in_contact`` as in :meth:`compute`, which
+        returns fresh arrays instead."""
         self._run(qpos, qvel, target, gains, feet_in_contact)
         return self._out[: self.tree.n_links - 1]
