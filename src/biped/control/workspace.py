@@ -28,9 +28,16 @@ from biped.errors import ScenarioError, SingularityError, StateError
 from biped.model import DEFAULT_FEET, TreeModel
 from biped.spatial import axis_angle_quat, rot_to_quat
 
-__all__ = ["DISTRIBUTIONS", "ControllerOutput", "Gains", "Target", "WorkspaceController"]
+__all__ = ["DISTRIBUTIONS", "TARGET_AXES", "W_TARGET_AXIS", "W_TARGET_COM_M", "W_TARGET_TILT_DEG",
+           "ControllerOutput", "Gains", "Target", "WorkspaceController"]
 
 _AXES = {"-y": (0.0, -1.0, 0.0), "-x": (-1.0, 0.0, 0.0)}
+#: Axes of the desired tilt: "-y" is W's text, "-x" the quaternion W prints (docs/controller.md).
+TARGET_AXES = tuple(_AXES)
+#: W section 4's set point: central-body COM [m], tilt [deg] about W_TARGET_AXIS.
+W_TARGET_COM_M = (-0.01, 0.0, 1.14)
+W_TARGET_TILT_DEG = 15.0
+W_TARGET_AXIS = "-y"
 
 #: W Alg. 5 readings: "statics" (default) moves each foot's wrench to the central body with
 #: Ad^T_{g_{foot,1}}, as power balance and W's eq. 3.6 require; "printed" uses W's print
@@ -56,10 +63,10 @@ class Target:
     ang_vel, ang_acc: (3,) desired angular velocity / acceleration in the space frame.
     """
 
-    com: tuple = (-0.01, 0.0, 1.14)
+    com: tuple = W_TARGET_COM_M
     com_vel: tuple = (0.0, 0.0, 0.0)
     com_acc: tuple = (0.0, 0.0, 0.0)
-    quat: tuple = tuple(axis_angle_quat(_AXES["-y"], np.radians(15.0)))
+    quat: tuple = tuple(axis_angle_quat(_AXES[W_TARGET_AXIS], np.radians(W_TARGET_TILT_DEG)))
     ang_vel: tuple = (0.0, 0.0, 0.0)
     ang_acc: tuple = (0.0, 0.0, 0.0)
     array: np.ndarray = field(init=False, repr=False, compare=False)
@@ -75,7 +82,8 @@ class Target:
         object.__setattr__(self, "array", arr)
 
     @classmethod
-    def wendlandt(cls, com=(-0.01, 0.0, 1.14), tilt_deg: float = 15.0, axis: str = "-y") -> Target:
+    def wendlandt(cls, com=W_TARGET_COM_M, tilt_deg: float = W_TARGET_TILT_DEG,
+                  axis: str = W_TARGET_AXIS) -> Target:
         """W's set point: COM (-1, 0, 114) cm, 15 deg about -y (text) or -x (the printed quaternion
         (0.99144486, -0.13052619, 0, 0)); see docs/controller.md."""
         if axis not in _AXES:

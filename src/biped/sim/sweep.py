@@ -42,6 +42,7 @@ from typing import Any
 
 import numpy as np
 
+from biped import models
 from biped.errors import ScenarioError
 from biped.sim.scenario import Scenario
 
@@ -59,7 +60,7 @@ AXES: dict[str, str] = {
 W_THROW = {"speed_m_s": 4.5, "direction_deg": 180.0, "block_mass_kg": 1.8, "height_m": 1.2,
            "gain_scale": 1.0}
 
-GRAVITY = 9.81  # [m/s^2], the scene's (W section 4)
+GRAVITY = float(-models.gravity("wendlandt")[2])  # [m/s^2], the biped model's, which the scene keeps
 SCHEMA_VERSION = 1
 
 
