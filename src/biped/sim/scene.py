@@ -72,8 +72,9 @@ def biped_spec() -> mujoco.MjSpec:
 def scene_spec(scenario: Scenario) -> mujoco.MjSpec:
     """Spec of the scene: the biped + floor (z = 0 plane) + block at ``block_position_m``.
 
-    Physics: the biped model's gravity (9.81 m/s^2 along -z), ``physics_timestep_s``, elliptic friction cones,
-    friction ``scenario.friction`` and the restitution-calibrated solref on every geom.
+    Physics: the biped model's own gravity (9.81 m/s^2 along -z), ``physics_timestep_s``,
+    elliptic friction cones, friction ``scenario.friction`` and the restitution-calibrated solref
+    on every geom.
     """
     spec = biped_spec()
     spec.modelname = "push_scene"
