@@ -15,11 +15,12 @@ import mujoco
 import numpy as np
 from scipy.spatial import ConvexHull
 
+from biped import models
 from biped.errors import ScenarioError
 from biped.sim.scenario import Scenario
 from biped.sim.scene import build_scene, initial_state
 
-GRAVITY = 9.81  # [m/s^2], the scene's (W section 4)
+GRAVITY = float(-models.gravity("wendlandt")[2])  # [m/s^2], the biped model's, which the scene keeps
 
 
 @dataclass(frozen=True)

@@ -22,14 +22,22 @@ from biped.control.recursions import (
     alg6_torques,
     compute_kernel,
     layout,
+    unpack,
 )
 from biped.errors import ScenarioError, SingularityError, StateError
 from biped.model import DEFAULT_FEET, TreeModel
 from biped.spatial import axis_angle_quat, rot_to_quat
 
-__all__ = ["DISTRIBUTIONS", "ControllerOutput", "Gains", "Target", "WorkspaceController"]
+__all__ = ["DISTRIBUTIONS", "TARGET_AXES", "W_TARGET_AXIS", "W_TARGET_COM_M", "W_TARGET_TILT_DEG",
+           "ControllerOutput", "Gains", "Target", "WorkspaceController"]
 
 _AXES = {"-y": (0.0, -1.0, 0.0), "-x": (-1.0, 0.0, 0.0)}
+#: Axes of the desired tilt: "-y" is W's text, "-x" the quaternion W prints (docs/controller.md).
+TARGET_AXES = tuple(_AXES)
+#: W section 4's set point: central-body COM [m], tilt [deg] about W_TARGET_AXIS.
+W_TARGET_COM_M = (-0.01, 0.0, 1.14)
+W_TARGET_TILT_DEG = 15.0
+W_TARGET_AXIS = "-y"
 
 #: W Alg. 5 readings: "statics" (default) moves each foot's wrench to the central body with
 #: Ad^T_{g_{foot,1}}, as power balance and W's eq. 3.6 require; "printed" uses W's print
@@ -55,10 +63,10 @@ class Target:
     ang_vel, ang_acc: (3,) desired angular velocity / acceleration in the space frame.
     """
 
-    com: tuple = (-0.01, 0.0, 1.14)
+    com: tuple = W_TARGET_COM_M
     com_vel: tuple = (0.0, 0.0, 0.0)
     com_acc: tuple = (0.0, 0.0, 0.0)
-    quat: tuple = tuple(axis_angle_quat(_AXES["-y"], np.radians(15.0)))
+    quat: tuple = tuple(axis_angle_quat(_AXES[W_TARGET_AXIS], np.radians(W_TARGET_TILT_DEG)))
     ang_vel: tuple = (0.0, 0.0, 0.0)
     ang_acc: tuple = (0.0, 0.0, 0.0)
     array: np.ndarray = field(init=False, repr=False, compare=False)
@@ -74,7 +82,8 @@ class Target:
         object.__setattr__(self, "array", arr)
 
     @classmethod
-    def wendlandt(cls, com=(-0.01, 0.0, 1.14), tilt_deg: float = 15.0, axis: str = "-y") -> Target:
+    def wendlandt(cls, com=W_TARGET_COM_M, tilt_deg: float = W_TARGET_TILT_DEG,
+                  axis: str = W_TARGET_AXIS) -> Target:
         """W's set point: COM (-1, 0, 114) cm, 15 deg about -y (text) or -x (the printed quaternion
         (0.99144486, -0.13052619, 0, 0)); see docs/controller.md."""
         if axis not in _AXES:
@@ -161,32 +170,27 @@ class WorkspaceController:
         n = tree.n_links
         lay = layout(n)
         self._layout = lay
-        mi = np.zeros(4 + 5 * n, dtype=np.int64)
-        mi[0] = n
-        mi[1:3] = tree.feet
-        mi[3] = 1 if distribution == "printed" else 0
-        for j, arr in enumerate((tree.parent, tree.qpos_adr, tree.dof_adr, tree.leg,
-                                 tree.beyond_foot.astype(np.int64))):
-            mi[4 + j * n:4 + (j + 1) * n] = arr
-        mf = np.zeros(lay["model"]["_size"][0])
-        g_bi = tree.G0[0]
-
-        values = {"H": tree.H, "G0": tree.G0, "mass": tree.mass, "inertia": tree.inertia,
-                  "qref": tree.qpos_ref, "gravity": tree.gravity,
-                  "root_qbi": rot_to_quat(np.ascontiguousarray(g_bi[:3, :3])), "big_base": [self.big_base]}
-        for name, (off, shape) in lay["model"].items():
-            if name != "_size":
-                mf[off:off + int(np.prod(shape))] = np.asarray(values[name], dtype=float).reshape(-1)
-        self._mi, self._mf = mi, mf
+        values = {
+            "n": [n], "feet": tree.feet, "printed": [1 if distribution == "printed" else 0],
+            "parent": tree.parent, "qadr": tree.qpos_adr, "dadr": tree.dof_adr, "leg": tree.leg,
+            "beyond": tree.beyond_foot,
+            "H": tree.H, "G0": tree.G0, "mass": tree.mass, "inertia": tree.inertia,
+            "qref": tree.qpos_ref, "gravity": tree.gravity,
+            "root_qbi": rot_to_quat(np.ascontiguousarray(tree.G0[0][:3, :3])), "big_base": [self.big_base],
+        }
+        self._mi = np.zeros(lay["ints"]["_size"][0], dtype=np.int64)
+        self._mf = np.zeros(lay["model"]["_size"][0])
+        for buf, name in ((self._mi, "ints"), (self._mf, "model")):
+            for key, (off, shape) in lay[name].items():
+                if key != "_size":
+                    buf[off:off + int(np.prod(shape))] = np.asarray(values[key]).reshape(-1)
         self._both = np.ones(2, dtype=np.int64)
         self._contact_buf = np.ones(2, dtype=np.int64)
         self._work = np.zeros(lay["work"]["_size"][0])
         self._out = np.zeros(lay["out"]["_size"][0])
-        # named views of the flat buffers, for the debugging methods below (not the hot path)
-        self._m = {k: mf[o:o + int(np.prod(sh))].reshape(sh)
-                   for k, (o, sh) in lay["model"].items() if k != "_size"}
-        self._w = {k: self._work[o:o + int(np.prod(sh))].reshape(sh)
-                   for k, (o, sh) in lay["work"].items() if k != "_size"}
+        # named views of the buffers, the kernel's own unpack, for the debugging methods below
+        # (not the hot path)
+        _, self._m, self._w, _ = unpack(self._mi, self._mf, self._work, self._out)
         # (slice, shape or None for 1-d) of each output field, in ControllerOutput's order
         self._fields = tuple((slice(o, o + int(np.prod(sh))), sh if len(sh) > 1 else None) for o, sh in (
             lay["out"][k] for k in ("tau", "P1", "z1", "X", "Fd", "Fl_tilde", "Fr_tilde", "Fl", "Fr", "qe")))
@@ -286,19 +290,17 @@ class WorkspaceController:
     def _kinematics(self, qpos, qvel):
         """W Alg. 1 and Alg. 2 alone (the kernel's own functions) into the work buffer."""
         t, m, w = self.tree, self._m, self._w
-        tmp44 = w["tmp66"].reshape(-1)[:48].reshape(3, 4, 4)
-        alg1_initialize(qpos, qvel, t.qpos_adr[0], t.dof_adr[0], m["G0"][0], m["root_qbi"], m["mass"],
-                        m["inertia"], m["gravity"], w["g"], w["V"], w["a"], w["b"], w["quat"])
-        alg2_velocity_propagation(qpos, qvel, t.parent, t.qpos_adr, t.dof_adr, m["H"], m["G0"],
-                                  m["qref"], m["mass"], m["inertia"], m["gravity"], w["g"], w["gl"],
-                                  w["V"], w["a"], w["b"], tmp44)
+        alg1_initialize(qpos, qvel, t.qpos_adr[0], t.dof_adr[0], m.G0[0], m.root_qbi, m.mass, m.inertia,
+                        m.gravity, w.g, w.V, w.a, w.b, w.q_root, w.q01)
+        alg2_velocity_propagation(qpos, qvel, t.parent, t.qpos_adr, t.dof_adr, m.H, m.G0, m.qref, m.mass,
+                                  m.inertia, m.gravity, w.g, w.gl, w.V, w.a, w.b, w.E)
 
     def link_poses(self, qpos) -> np.ndarray:
         """(n_links, 4, 4) world poses ``g_{0,k}`` of every link's COM principal frame (MuJoCo's
         ``xipos``/``ximat``), W Alg. 1-2. For checking and debugging; allocates."""
         qpos, qvel = self._state(qpos, None)
         self._kinematics(qpos, qvel)
-        return self._w["g"].copy()
+        return self._w.g.copy()
 
     def link_velocities(self, qpos, qvel) -> np.ndarray:
         """(n_links, 6) body velocities ``V_k^b = [v; w]`` of every link (W Alg. 1-2): velocity of
@@ -306,7 +308,7 @@ class WorkspaceController:
         principal frame [m/s, rad/s]. For checking and debugging; allocates."""
         qpos, qvel = self._state(qpos, qvel)
         self._kinematics(qpos, qvel)
-        return self._w["V"].copy()
+        return self._w.V.copy()
 
     def leg_torques(self, qpos, wrench_left, wrench_right) -> np.ndarray:
         """W Alg. 6 alone: joint torques (n_joints,) [N m] with which the legs exert the wrenches
@@ -320,15 +322,18 @@ class WorkspaceController:
         self._kinematics(qpos, qvel)  # the joint transforms g_{k.i,k.o}
         F = np.zeros((t.n_links, 6))
         tau = np.zeros(t.n_links - 1)
-        alg6_torques(t.parent, self._m["H"], t.leg, t.beyond_foot.astype(np.int64), self._w["gl"],
-                     fl, fr, F, tau)
+        alg6_torques(t.parent, self._m.H, t.leg, t.beyond_foot.astype(np.int64), self._w.gl, fl, fr, F,
+                     tau)
         return tau
 
     def torques(self, qpos: np.ndarray, qvel: np.ndarray, target: Target | None = None,
                 gains: Gains | None = None, feet_in_contact: tuple[bool, bool] | None = None
                 ) -> np.ndarray:
-        """Hot path: joint torques only, as a view into the controller's buffer (overwritten by the
-        next call; copy it to keep it). qpos/qvel must be contiguous float64 arrays.
-        ``feet_in_contact`` as in :meth:`compute`."""
+        """Joint torques (n_joints,) [N m] as a VIEW OF THE CONTROLLER'S REUSED OUTPUT BUFFER: the
+        next :meth:`torques` or :meth:`compute` call overwrites it; copy it to keep it.
+
+        The hot path: W Alg. 1-6 with no allocation. qpos/qvel must be contiguous float64
+        arrays; ``target``, ``gains`` and ``feet_in_contact`` as in :meth:`compute`, which
+        returns fresh arrays instead."""
         self._run(qpos, qvel, target, gains, feet_in_contact)
         return self._out[: self.tree.n_links - 1]

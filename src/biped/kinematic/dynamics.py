@@ -150,6 +150,7 @@ class InverseDynamics:
         residual: (T, 6) root force [N] (world) and torque [N m] (central-body frame) that no foot
             supplies (nonzero only in flight).
         mass: total mass of the biped [kg].
+        gravity: the biped model's gravitational acceleration (along -z) [m/s^2].
         qpos, qvel, qacc: the biped trajectory used, (T, nq), (T, nv), (T, nv).
         sole_half: half length and half width of a sole [m].
     """
@@ -164,6 +165,7 @@ class InverseDynamics:
     stance: np.ndarray
     residual: np.ndarray
     mass: float
+    gravity: float
     qpos: np.ndarray
     qvel: np.ndarray
     qacc: np.ndarray
@@ -180,7 +182,7 @@ class InverseDynamics:
         """Peaks and physical-plausibility counts (SI units)."""
         st = self.stance
         fz = self.grf[..., 2]
-        mg = self.mass * 9.81
+        mg = self.mass * self.gravity
         half_x, half_y = self.sole_half
         with np.errstate(invalid="ignore"):
             fr = self.friction_ratio()
@@ -308,4 +310,5 @@ def inverse_dynamics(motion: Motion, model=None, h: float = 1e-3) -> InverseDyna
         residual[t] = qf[r0:r0 + 6]
         torques[t] = qf[vidx]
     return InverseDynamics(times, tuple(names.hinges), torques, grf, grm, cop, centres, stance, residual,
-                           float(np.sum(model.body_mass)), qpos, qvel, qacc, names.sole_half)
+                           float(np.sum(model.body_mass)), -float(model.opt.gravity[2]), qpos, qvel,
+                           qacc, names.sole_half)

@@ -23,6 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
+from biped.models import LEG_JOINTS, W_INITIAL_ANGLES_DEG, W_INITIAL_COM_M, W_INITIAL_TILT_DEG
+
 #: de Leva (1996) Table 4, males: (length at 1.741 m [m], mass fraction, CM from proximal end,
 #: r_sagittal, r_transverse, r_longitudinal) with r as fractions of the segment length.
 DE_LEVA_MALE = {
@@ -55,21 +57,24 @@ ASSUMPTIONS = {
     "joint_damping_Nms_per_rad": 1.0,
 }
 
-#: W's initial state (section 4).
-INITIAL_COM = (0.0, 0.0, 1.035)
-INITIAL_TILT_DEG = 5.0  # about -y
-INITIAL_ANGLES_DEG = (0.0, 40.0, 0.0, -77.4595, 0.0, 42.4595)
+#: W's initial state (section 4), defined in biped.models; the legs start alike.
+INITIAL_COM = W_INITIAL_COM_M
+INITIAL_TILT_DEG = W_INITIAL_TILT_DEG  # about -y
+INITIAL_ANGLES_DEG = W_INITIAL_ANGLES_DEG[:6]
+assert W_INITIAL_ANGLES_DEG[6:] == INITIAL_ANGLES_DEG
 
 #: Per leg, in W's joint order (left 2..7, right 8..13): (name, axis for the left leg).
 #: The right leg mirrors the frontal-plane axes (abduction, rotation, inversion).
-JOINTS = (
-    ("hip_abduction", (-1.0, 0.0, 0.0)),
-    ("hip_flexion", (0.0, 1.0, 0.0)),
-    ("hip_rotation", (0.0, 0.0, -1.0)),  # internal rotation positive
-    ("knee", (0.0, 1.0, 0.0)),  # positive = extension; W's -77.5 deg is flexion
-    ("ankle_inversion", (1.0, 0.0, 0.0)),
-    ("ankle_dorsiflexion", (0.0, 1.0, 0.0)),
-)
+_LEFT_AXES = {
+    "hip_abduction": (-1.0, 0.0, 0.0),
+    "hip_flexion": (0.0, 1.0, 0.0),
+    "hip_rotation": (0.0, 0.0, -1.0),  # internal rotation positive
+    "knee": (0.0, 1.0, 0.0),  # positive = extension; W's -77.5 deg is flexion
+    "ankle_inversion": (1.0, 0.0, 0.0),
+    "ankle_dorsiflexion": (0.0, 1.0, 0.0),
+}
+JOINTS = tuple((name, _LEFT_AXES[name]) for name in LEG_JOINTS)
+
 MIRRORED = {"hip_abduction", "hip_rotation", "ankle_inversion"}
 
 

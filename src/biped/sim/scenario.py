@@ -19,19 +19,21 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from biped.control import Gains, Target
+from biped.control.workspace import TARGET_AXES, W_TARGET_AXIS, W_TARGET_TILT_DEG
 from biped.errors import ScenarioError
+from biped.models import (
+    JOINT_NAMES,
+    LEG_JOINTS,
+    W_INITIAL_ANGLES_DEG,
+    W_INITIAL_COM_M,
+    W_INITIAL_TILT_DEG,
+)
 
-#: W's joint order theta_2..theta_13: left leg then right leg, each hip abduction, hip flexion,
-#: hip rotation, knee, ankle inversion, ankle dorsiflexion (MJCF hinge names of the shipped model).
-LEG_JOINTS = ("hip_abduction", "hip_flexion", "hip_rotation", "knee", "ankle_inversion",
-              "ankle_dorsiflexion")
-JOINT_NAMES = tuple(f"{side}_{j}" for side in ("left", "right") for j in LEG_JOINTS)
-
-#: W section 4: theta_2..theta_13 [deg].
-W_JOINT_ANGLES_DEG = (0.0, 40.0, 0.0, -77.4595, 0.0, 42.4595) * 2
+#: W's initial joint angles theta_2..theta_13 [deg] (:data:`biped.models.W_INITIAL_ANGLES_DEG`).
+W_JOINT_ANGLES_DEG = W_INITIAL_ANGLES_DEG
 
 CONTROLLERS = ("workspace", "joint-pd")
-TARGET_AXES = ("-y", "-x")
 #: Which feet the workspace controller takes as fixed: "fixed" = both, always (W); "sensed" = the
 #: feet whose soles touch the floor at each control step (see WorkspaceController.compute).
 SUPPORTS = ("fixed", "sensed")
@@ -55,17 +57,17 @@ class Scenario:
     block_position_m: tuple = (0.5, 0.1, 1.2)
     block_velocity_m_s: tuple = (-4.5, 0.0, 0.2)
     block_size_m: tuple = (0.1, 0.1, 0.1)  # not in W: a 10 cm cube (1.8 kg: a brick's density)
-    initial_com_m: tuple = (0.0, 0.0, 1.035)
-    initial_tilt_deg: float = 5.0  # about -y
-    initial_joint_angles_deg: tuple = W_JOINT_ANGLES_DEG
+    initial_com_m: tuple = W_INITIAL_COM_M
+    initial_tilt_deg: float = W_INITIAL_TILT_DEG  # about -y
+    initial_joint_angles_deg: tuple = W_INITIAL_ANGLES_DEG
     joint_noise_deg: float = 0.0
-    target_com_m: tuple = (-0.01, 0.0, 1.14)
-    target_tilt_deg: float = 15.0
-    target_axis: str = "-y"
-    kp_com: tuple = (50.0, 50.0, 200.0)
-    kv_com: tuple = (7.07, 7.07, 14.142)
-    kp_rot: tuple = (50.0, 50.0, 50.0)
-    kv_rot: tuple = (7.07, 7.07, 7.07)
+    target_com_m: tuple = Target().com
+    target_tilt_deg: float = W_TARGET_TILT_DEG
+    target_axis: str = W_TARGET_AXIS
+    kp_com: tuple = Gains().kp_com
+    kv_com: tuple = Gains().kv_com
+    kp_rot: tuple = Gains().kp_rot
+    kv_rot: tuple = Gains().kv_rot
     controller: str = "workspace"
     support: str = "fixed"  # not in W: "sensed" drops a foot off the floor from Alg. 3 and 5
     torque_limits: Any = "none"
@@ -225,7 +227,8 @@ def validate(s: Scenario) -> None:
     _positive(s, "duration_s", "simulated time in s")
     dt = _positive(s, "physics_timestep_s", "physics step in s, at most 0.001")
     if dt > 0.001:
-        raise ScenarioError(f"physics_timestep_s must be <= 0.001 s (the issue's bound); got {dt}")
+        raise ScenarioError(f"physics_timestep_s must be <= 0.001 s (this project's bound, "
+                            f"docs/push.md); got {dt}")
     rate = _positive(s, "control_rate_hz", "controller calls per second")
     ratio = 1.0 / (rate * dt)
     if ratio < 1 - 1e-9 or abs(ratio - round(ratio)) > 1e-6:

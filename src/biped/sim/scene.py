@@ -20,8 +20,9 @@ import numpy as np
 
 import biped.models
 from biped.errors import ModelError, unknown_name
+from biped.models import JOINT_NAMES
 from biped.sim.contact import CONTACT_SOLIMP, SOLE_GEOMS, contact_solref
-from biped.sim.scenario import JOINT_NAMES, Scenario
+from biped.sim.scenario import Scenario
 from biped.spatial import axis_angle_quat
 
 BIPED_MODEL = "wendlandt"
@@ -71,13 +72,13 @@ def biped_spec() -> mujoco.MjSpec:
 def scene_spec(scenario: Scenario) -> mujoco.MjSpec:
     """Spec of the scene: the biped + floor (z = 0 plane) + block at ``block_position_m``.
 
-    Physics: gravity 9.81 m/s^2 along -z, ``physics_timestep_s``, elliptic friction cones,
-    friction ``scenario.friction`` and the restitution-calibrated solref on every geom.
+    Physics: the biped model's own gravity (9.81 m/s^2 along -z), ``physics_timestep_s``,
+    elliptic friction cones, friction ``scenario.friction`` and the restitution-calibrated solref
+    on every geom.
     """
     spec = biped_spec()
     spec.modelname = "push_scene"
     spec.option.timestep = scenario.physics_timestep_s
-    spec.option.gravity = [0.0, 0.0, -9.81]
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     solref = contact_solref(scenario.restitution, scenario.contact_timeconst_s,
                             scenario.physics_timestep_s)

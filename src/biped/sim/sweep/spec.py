@@ -46,7 +46,7 @@ W_THROW = {"speed_m_s": 4.5, "direction_deg": 180.0, "block_mass_kg": 1.8, "heig
 #: the memory asked for by a typo such as ``num = 100000000``. Split larger studies into sweeps.
 MAX_TRIALS = 1_000_000
 
-GRAVITY = 9.81  # [m/s^2], the scene's (W section 4)
+GRAVITY = float(-models.gravity("wendlandt")[2])  # [m/s^2], the biped model's, which the scene keeps
 SCHEMA_VERSION = 1
 
 
