@@ -146,6 +146,13 @@ def _limits(scenario: Scenario) -> np.ndarray | None:
     return np.broadcast_to(np.asarray(tl, dtype=float), (12,)).copy()
 
 
+def _as_slice(index: np.ndarray):
+    """``index`` as a slice when it is a contiguous range (a view, no copy), else itself."""
+    if len(index) and np.array_equal(index, np.arange(index[0], index[0] + len(index))):
+        return slice(int(index[0]), int(index[0]) + len(index))
+    return index
+
+
 def _run(scenario: Scenario, scene: Scene, policy, *, progress=None, on_step=None) -> PushResult:
     """The loop shared by :func:`simulate` (policy = a controller) and :func:`replay_torques`
     (policy = a row index into recorded torques)."""
@@ -162,16 +169,12 @@ def _run(scenario: Scenario, scene: Scene, policy, *, progress=None, on_step=Non
     sub = scenario.control_substeps
     period = 1.0 / scenario.control_rate_hz
     n = n_ctrl + 1
-    times = np.zeros(n)
     qpos = np.zeros((n, m.nq))
     com = np.zeros((n, 3))
-    quat = np.zeros((n, 4))
-    angles = np.zeros((n, 12))
     torques = np.zeros((n, 12))
-    block = np.zeros((n, 3))
     contacts = np.zeros((n, len(SOLE_GEOMS)), dtype=bool)
     limits = _limits(scenario)
-    iq, iv = scene.biped_qpos_index, scene.biped_qvel_index
+    iq, iv = _as_slice(scene.biped_qpos_index), _as_slice(scene.biped_qvel_index)
     act = scene.actuator_index
     bq = scene.block_qpos_index
     cb = scene.central_body
@@ -183,6 +186,7 @@ def _run(scenario: Scenario, scene: Scene, policy, *, progress=None, on_step=Non
     controller_error = None
     diverged = None
     rows = 0
+    warnings = d.warning.number  # a live view: MuJoCo counts its warnings there
     if not isinstance(policy, np.ndarray):  # compile/warm the controller outside the timer
         try:
             policy(d.qpos[iq], d.qvel[iv], (True, True))
@@ -195,8 +199,7 @@ def _run(scenario: Scenario, scene: Scene, policy, *, progress=None, on_step=Non
             q = d.qpos[iq]
             v = d.qvel[iv]
             fell = monitor.update(t, d)
-            flags = monitor.flags  # (left heel, left toe, right heel, right toe) on the floor
-            feet = (bool(flags[0] or flags[1]), bool(flags[2] or flags[3]))
+            feet = monitor.feet  # (left, right) on the floor
             try:
                 tau = policy(q, v, feet) if not isinstance(policy, np.ndarray) else policy[k]
             except BipedError as exc:  # a singular state is a result, like a fall
@@ -204,20 +207,16 @@ def _run(scenario: Scenario, scene: Scene, policy, *, progress=None, on_step=Non
                 tau = np.zeros(12)
             if limits is not None:
                 tau = np.clip(tau, -limits, limits)
-            times[k] = t
-            qpos[k] = d.qpos
+            qpos[k] = d.qpos  # quat, joint angles and block are read from it after the loop
             com[k] = d.xipos[cb]
-            quat[k] = d.qpos[iq[3:7]]
-            angles[k] = d.qpos[jq]
             torques[k] = tau
-            block[k] = d.qpos[bq[:3]]
-            contacts[k] = flags
+            contacts[k] = monitor.flags  # (left heel, left toe, right heel, right toe)
             rows = k + 1
             if fell or controller_error or k == n_ctrl:
                 break
             d.ctrl[act] = tau
             mujoco.mj_step(m, d, sub)
-            if d.warning[_BADQACC].number:  # MuJoCo reset the state: the integration diverged
+            if warnings[_BADQACC]:  # MuJoCo reset the state: the integration diverged
                 diverged = (f"MuJoCo's integration diverged (non-finite accelerations) between "
                             f"t = {t:.4f} s and {t + period:.4f} s")
                 break
@@ -231,6 +230,10 @@ def _run(scenario: Scenario, scene: Scene, policy, *, progress=None, on_step=Non
     if progress is not None:
         progress(max(rows - 1, 0) * period)
     sl = slice(0, rows)
+    times = np.arange(n) * period
+    quat = qpos[:, scene.biped_qpos_index[3:7]]
+    angles = qpos[:, jq]
+    block = qpos[:, bq[:3]]
     target_com = np.array(scenario.target_com_m)
     target_quat = tilt_quat(scenario.target_axis, scenario.target_tilt_deg)
     if rows:
