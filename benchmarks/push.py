@@ -89,11 +89,12 @@ def main() -> None:
         runs["closed"].append(w)
         cpu["closed"].append(c)
         steps = len(result.times) - 1  # the closed loop steps after every row but the last
-        d, w, c = _timed(lambda: physics_loop(scenario, scene, result.torques, steps))
+        tq = result.torques
+        d, w, c = _timed(lambda: physics_loop(scenario, scene, tq, steps))  # noqa: B023
         runs["loop"].append(w)
         cpu["loop"].append(c)
         q_loop = d.qpos.copy()
-        q_roll, w, c = _timed(lambda: physics_rollout(scenario, scene, result.torques, steps, rdata))
+        q_roll, w, c = _timed(lambda: physics_rollout(scenario, scene, tq, steps, rdata))  # noqa: B023
         runs["rollout"].append(w)
         cpu["rollout"].append(c)
     sim_time = result.times[-1]

@@ -22,6 +22,7 @@ from biped.sim.sweep import SweepSpec, hold_scenario
 from biped.spatial import axis_angle_quat, quat_mul
 
 E_TOL = 0.05
+PRESETS = ("faithful", "fast")  # every contact test runs on both physics presets
 
 
 def _delete(spec, obj):
@@ -74,10 +75,11 @@ def _bounce(model, data, normal_velocity, max_steps=20000):
     raise AssertionError("no separation after the impact")
 
 
+@pytest.mark.parametrize("physics", PRESETS)
 @pytest.mark.parametrize("speed", [0.5, 2.0])
-def test_restitution_foot_floor(speed):
+def test_restitution_foot_floor(speed, physics):
     """The rigid 73 kg biped lands flat on its soles: e = 0.2 +- 0.05 (W's e)."""
-    s = Scenario()
+    s = Scenario(physics=physics)
     model = rigid_biped_spec(s).compile()
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
@@ -88,10 +90,11 @@ def test_restitution_foot_floor(speed):
     assert abs(e - s.restitution) < E_TOL, e
 
 
+@pytest.mark.parametrize("physics", PRESETS)
 @pytest.mark.parametrize("mass", [1.8, 10.0])
-def test_restitution_block_body(mass):
+def test_restitution_block_body(mass, physics):
     """The block thrown square at the fixed trunk: e = 0.2 +- 0.05, for two block masses."""
-    s = Scenario(block_mass_kg=mass)
+    s = Scenario(block_mass_kg=mass, physics=physics)
     spec = scene_spec(s)
     spec.delete(spec.joint("root"))  # the central body is welded where the MJCF puts it
     for k in list(spec.keys):
@@ -123,11 +126,12 @@ def _slope_gravity(tan_slope: float) -> list:
     return [9.81 * math.sin(th), 0.0, -9.81 * math.cos(th)]
 
 
+@pytest.mark.parametrize("physics", PRESETS)
 @pytest.mark.parametrize("tan_slope, slides", [(0.25, False), (0.40, True)])
-def test_friction_block_on_floor(tan_slope, slides):
+def test_friction_block_on_floor(tan_slope, slides, physics):
     """The block on a floor tilted by atan(tan_slope) (gravity tilted instead): it sticks below
     mu = 0.3 and slides above with a = g (sin - mu cos) (Coulomb)."""
-    s = Scenario()
+    s = Scenario(physics=physics)
     spec = scene_spec(s)
     spec.body("block").pos = [2.0, 2.0, s.block_size_m[2] / 2 - 0.0005]
     spec.option.gravity = _slope_gravity(tan_slope)
@@ -156,11 +160,12 @@ def test_friction_block_on_floor(tan_slope, slides):
         assert data.time - t0 == pytest.approx(T, abs=2 * model.opt.timestep)
 
 
+@pytest.mark.parametrize("physics", PRESETS)
 @pytest.mark.parametrize("tan_slope, slides", [(0.25, False), (0.40, True)])
-def test_friction_feet_on_floor(tan_slope, slides):
+def test_friction_feet_on_floor(tan_slope, slides, physics):
     """The rigid biped standing on its soles (translation only) on a tilted floor: sticks below
     mu = 0.3, slides above with a = g (sin - mu cos)."""
-    s = Scenario()
+    s = Scenario(physics=physics)
     th = math.atan(tan_slope)
     model = rigid_biped_spec(s, slides=("x", "y", "z"), gravity=_slope_gravity(tan_slope)).compile()
     data = mujoco.MjData(model)
@@ -325,3 +330,14 @@ def test_heel_timeline_reads_w_events_through_chatter():
     assert line == {"block hits the body": 0.082, "left heel rises": 0.086,
                     "left heel back": 0.274, "right heel rises": 0.094, "right heel back": None}
     assert heel_timeline(ev, None)["left heel rises"] is None
+
+
+@pytest.mark.slow
+def test_fast_preset_keeps_w_timeline():
+    """``physics = "fast"`` (1 ms, 7.5 ms, sleep) against "faithful" on W's push: the block hit,
+    both heels' rise and return within 10 ms (the criterion of docs/sweep.md)."""
+    runs = {p: simulate(Scenario(physics=p, duration_s=1.0)) for p in PRESETS}
+    a, b = (heel_timeline(r.events, r.block_contact_time_s) for r in runs.values())
+    assert all(v is not None for v in a.values()), a
+    for name in a:
+        assert b[name] == pytest.approx(a[name], abs=0.010), (name, a[name], b[name])

@@ -331,9 +331,9 @@ def parse_assignment(text: str) -> tuple[str, Any]:
 __all__ = [
     "CONTROLLERS",
     "JOINT_NAMES",
+    "LEG_JOINTS",
     "PHYSICS",
     "PHYSICS_PRESETS",
-    "LEG_JOINTS",
     "TARGET_AXES",
     "W_JOINT_ANGLES_DEG",
     "Scenario",
