@@ -750,8 +750,9 @@ def _scene_for(scenario: Scenario):
     keys below (the block's start position and velocity are set in the initial state)."""
     from biped.sim.scene import build_scene
 
-    key = (scenario.physics_timestep_s, scenario.restitution, scenario.contact_timeconst_s,
-           scenario.friction, scenario.block_size_m, scenario.block_mass_kg)
+    key = (scenario.physics, scenario.physics_timestep_s, scenario.restitution,
+           scenario.contact_timeconst_s, scenario.friction, scenario.block_size_m,
+           scenario.block_mass_kg)  # physics: the preset's sleep flag
     scene = _SCENES.get(key)
     if scene is None:
         if len(_SCENES) >= _CACHE_SIZE:
