@@ -36,7 +36,7 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
-from numba import njit
+from numba import njit, types
 
 #: Constant impedance (d0 = d_width): a linear contact spring-damper; see the module docstring.
 CONTACT_SOLIMP = (0.95, 0.95, 0.001, 0.5, 2.0)
@@ -186,7 +186,10 @@ _FLAGS = _flag_arrays()
 _FEET = tuple((bool(b & 0b0011), bool(b & 0b1100)) for b in range(1 << len(SOLE_GEOMS)))
 
 
-@njit(cache=True, nogil=True)
+# One explicit signature, compiled (or loaded from numba's cache) at import: MuJoCo's
+# ``data.contact.geom`` is a strided view (layout "A"), but a C-contiguous one when ncon == 1, which
+# would otherwise compile a second version in the middle of a run.
+@njit(types.int64(types.int32[:, :], types.int64[:, ::1]), cache=True, nogil=True)
 def _contact_bits(geom, codes):  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
     """OR of ``codes[g0, g1]`` over the rows of ``geom`` (ncon, 2): MuJoCo's contact geom pairs."""
     bits = 0
@@ -227,8 +230,7 @@ class ContactMonitor:
         on_biped[soles] = True
         on_biped[[floor_geom, block_geom]] = False
         codes[block_geom, on_biped] |= _BLOCK_BIT
-        self.pair_codes = codes | codes.T
-        self.pair_codes.flags.writeable = False
+        self.pair_codes = np.ascontiguousarray(codes | codes.T)  # do not modify
         self._floor = floor_geom
         self._plain = plain
         self._central = central_body
