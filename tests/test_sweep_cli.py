@@ -107,3 +107,23 @@ def test_envelope_plot_shows_hofs_bound_the_facing_and_no_overlapping_labels(tmp
     two = plot_comparison([one, _toy_sweep(tmp_path, "b.parquet", "joint-pd")])
     assert len(two.axes) == 3 and two.axes[-1].get_title().startswith("envelopes overlaid")
     assert {ln.get_label() for ln in two.axes[-1].get_lines()} == {"workspace", "joint-pd"}
+
+
+@pytest.mark.parametrize("argv, grid, physics, step", [
+    ([], None, "fast", 0.001),                                           # the sweep's default
+    (["--physics", "faithful"], None, "faithful", 0.0005),
+    (["--set", "physics_timestep_s=0.00025"], None, "faithful", 0.00025),  # explicit step kept
+    ([], "physics_timestep_s = 0.0005\n", "faithful", 0.0005),         # ... also from the file
+    ([], 'physics = "faithful"\n', "faithful", 0.0005),
+    (["--physics", "fast"], 'physics = "faithful"\n', "fast", 0.001),  # the flag wins
+])
+def test_sweep_physics_preset_defaults_to_fast_unless_physics_is_given(tmp_path, argv, grid,
+                                                                       physics, step):
+    from biped.cli import build_parser
+    from biped.cli.sweep import build_spec
+
+    if grid is not None:
+        (tmp_path / "g.toml").write_text("[grid]\nspeed_m_s = [3.0]\n[scenario]\n" + grid)
+        argv = [*argv, "--grid", str(tmp_path / "g.toml")]
+    spec = build_spec(build_parser().parse_args(["sweep", "--speed", "2", *argv]))
+    assert (spec.base.physics, spec.base.physics_timestep_s) == (physics, step)

@@ -42,6 +42,10 @@ def register(subparsers) -> None:
     p.add_argument("--torque-limits", choices=("none", "human"), default=None,
                    help="joint torque limits: none (W) or human-like (docs/sweep.md)")
     p.add_argument("--duration", type=float, metavar="S", help="simulated time per trial [s] (3)")
+    p.add_argument("--physics", choices=("faithful", "fast"), default=None,
+                   help="physics preset (default fast: 1 ms step, 7.5 ms contacts, sleep; its "
+                        "envelopes are within one grid step of faithful's, docs/sweep.md), unless "
+                        "the grid file or --set gives physics or the step/contact keys")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="any scenario key (TOML value syntax), repeatable")
     p.add_argument("--workers", type=int, metavar="N", help="local processes (default: all cores)")
@@ -64,6 +68,19 @@ def register(subparsers) -> None:
     p.set_defaults(func=run)
 
 
+_PHYSICS_KEYS = ("physics_timestep_s", "contact_timeconst_s")
+
+
+def _grid_scenario_keys(path) -> set:
+    """The keys of a sweep file's [scenario] table (empty without a file)."""
+    if not path:
+        return set()
+    import tomllib
+
+    with open(path, "rb") as f:
+        return set(tomllib.load(f).get("scenario", {}))
+
+
 def build_spec(args):
     """The sweep from ``--grid``, then the task, --set and the named options (last wins)."""
     from biped.sim.scenario import Scenario, parse_assignment
@@ -79,6 +96,10 @@ def build_spec(args):
         overrides["controller"] = args.controller
     if args.duration is not None:
         overrides["duration_s"] = args.duration
+    if args.physics:
+        overrides["physics"] = args.physics
+    elif not ({"physics", *_PHYSICS_KEYS} & (set(overrides) | _grid_scenario_keys(args.grid))):
+        overrides["physics"] = "fast"  # the sweep's default preset (docs/sweep.md)
     if overrides:
         base = base.with_overrides(**overrides)
     axes = dict(spec.axes) if spec else {}
@@ -129,7 +150,8 @@ def run(args) -> int:
               f"{spec.base.controller}, torque limits {spec.torque_limits}, on {where} -> {out}")
         return 0
     print(f"biped sweep: {n} trials of {spec.base.duration_s:g} s, controller "
-          f"{spec.base.controller}, torque limits {spec.torque_limits}, on {where} -> {out}",
+          f"{spec.base.controller}, torque limits {spec.torque_limits}, physics "
+          f"{spec.base.physics}, on {where} -> {out}",
           file=sys.stderr)
     try:
         summary = run_sweep(spec, out, workers=args.workers, scheduler=args.scheduler,

@@ -189,6 +189,13 @@ class RecordedTorques:
 # the loop
 
 
+def _as_slice(index: np.ndarray):
+    """``index`` as a slice when it is a contiguous range (a view, no copy), else itself."""
+    if len(index) and np.array_equal(index, np.arange(index[0], index[0] + len(index))):
+        return slice(int(index[0]), int(index[0]) + len(index))
+    return index
+
+
 def _feet_poses(scene: Scene, qpos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(n, 2, 3) positions and (n, 2, 4) quaternions of :data:`FOOT_BODIES` (mj_kinematics)."""
     m = scene.model
@@ -229,17 +236,12 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
     sub = scenario.control_substeps
     period = 1.0 / scenario.control_rate_hz
     n = n_ctrl + 1
-    times = np.zeros(n)
     qpos = np.zeros((n, m.nq))
     qvel = np.zeros((n, m.nv))
     com = np.zeros((n, 3))
-    quat = np.zeros((n, 4))
-    angles = np.zeros((n, 12))
     torques = np.zeros((n, 12))
-    block = np.zeros((n, 3))
-    block_vel = np.zeros((n, 3))
     contacts = np.zeros((n, len(SOLE_GEOMS)), dtype=bool)
-    iq, iv = scene.biped_qpos_index, scene.biped_qvel_index
+    iq, iv = _as_slice(scene.biped_qpos_index), _as_slice(scene.biped_qvel_index)
     act = scene.actuator_index
     bq = scene.block_qpos_index
     bv = scene.block_qvel_index[:3]
@@ -252,6 +254,7 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
     controller_error = None
     diverged = None
     rows = 0
+    warnings = d.warning.number  # a live view: MuJoCo counts its warnings there
     try:  # compile/warm the controller outside the timer
         policy(0.0, d.qpos[iq], d.qvel[iv], (True, True))
     except BipedError:
@@ -263,29 +266,23 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
             q = d.qpos[iq]
             v = d.qvel[iv]
             fell = monitor.update(t, d)
-            flags = monitor.flags  # (left heel, left toe, right heel, right toe) on the floor
-            feet = (bool(flags[0] or flags[1]), bool(flags[2] or flags[3]))
+            feet = monitor.feet  # (left, right) on the floor
             try:
                 tau = policy(t, q, v, feet)
             except BipedError as exc:  # a singular state is a result, like a fall
                 controller_error = f"t = {t:.3f} s: {exc}"
                 tau = np.zeros(12)
-            times[k] = t
-            qpos[k] = d.qpos
+            qpos[k] = d.qpos  # quat, joint angles and block are read from it after the loop
             qvel[k] = d.qvel
             com[k] = d.xipos[cb]
-            quat[k] = d.qpos[iq[3:7]]
-            angles[k] = d.qpos[jq]
             torques[k] = tau
-            block[k] = d.qpos[bq[:3]]
-            block_vel[k] = d.qvel[bv]
-            contacts[k] = flags
+            contacts[k] = monitor.flags  # (left heel, left toe, right heel, right toe)
             rows = k + 1
             if fell or controller_error or k == n_ctrl:
                 break
             d.ctrl[act] = tau
             mujoco.mj_step(m, d, sub)
-            if d.warning[_BADQACC].number:  # MuJoCo reset the state: the integration diverged
+            if warnings[_BADQACC]:  # MuJoCo reset the state: the integration diverged
                 diverged = (f"MuJoCo's integration diverged (non-finite accelerations) between "
                             f"t = {t:.4f} s and {t + period:.4f} s")
                 break
@@ -299,6 +296,11 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
     if progress is not None:
         progress(max(rows - 1, 0) * period)
     sl = slice(0, rows)
+    times = np.arange(n) * period
+    quat = qpos[:, scene.biped_qpos_index[3:7]]
+    angles = qpos[:, jq]
+    block = qpos[:, bq[:3]]
+    block_vel = qvel[:, bv]
     target_com = np.array(scenario.target_com_m)
     target_quat = tilt_quat(scenario.target_axis, scenario.target_tilt_deg)
     if rows:

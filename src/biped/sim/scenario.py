@@ -38,6 +38,17 @@ CONTROLLERS = ("workspace", "joint-pd")
 #: feet whose soles touch the floor at each control step (see WorkspaceController.compute).
 SUPPORTS = ("fixed", "sensed")
 
+#: Physics presets (key ``physics``): the values they give ``physics_timestep_s`` and
+#: ``contact_timeconst_s`` when those keys are not set, and whether MuJoCo's sleep flag is on.
+#: "faithful" is the reference (0.5 ms step, 5 ms contact time constant); "fast" halves the cost
+#: of a step and is checked against it in docs/sweep.md ("Physics presets").
+PHYSICS_PRESETS = {
+    "faithful": {"physics_timestep_s": 0.0005, "contact_timeconst_s": 0.005, "sleep": False},
+    "fast": {"physics_timestep_s": 0.001, "contact_timeconst_s": 0.0075, "sleep": True},
+}
+PHYSICS = tuple(PHYSICS_PRESETS)
+_PRESET_KEYS = ("physics_timestep_s", "contact_timeconst_s")
+
 
 @dataclass(frozen=True)
 class Scenario:
@@ -48,10 +59,14 @@ class Scenario:
     ``torque_limits`` is ``"none"``, one positive number [N m] for every joint, or 12 of them in
     :data:`JOINT_NAMES` order. ``joint_noise_deg`` adds N(0, sigma^2) to the initial joint angles,
     drawn from ``numpy.random.default_rng(seed)`` (0 = W's exact state).
+    ``physics`` names a preset of :data:`PHYSICS_PRESETS`; ``physics_timestep_s`` and
+    ``contact_timeconst_s`` left unset (None) take the preset's value, so after construction they
+    are always numbers (an explicit value wins over the preset).
     """
 
     duration_s: float = 3.0
-    physics_timestep_s: float = 0.0005
+    physics: str = "faithful"  # not in W: "fast" = 1 ms step, 7.5 ms contacts, MuJoCo's sleep
+    physics_timestep_s: float = None  # type: ignore[assignment]  # None: from the preset
     control_rate_hz: float = 500.0
     block_mass_kg: float = 1.8
     block_position_m: tuple = (0.5, 0.1, 1.2)
@@ -73,13 +88,21 @@ class Scenario:
     torque_limits: Any = "none"
     friction: float = 0.3
     restitution: float = 0.2
-    contact_timeconst_s: float = 0.005  # not in W (Impulse is rigid); MuJoCo's contact stiffness
+    # not in W (Impulse is rigid): MuJoCo's contact stiffness [s]; None: from the preset
+    contact_timeconst_s: float = None  # type: ignore[assignment]
     fall_height_m: float = 0.6  # central-body COM below this height = fall
     recovery_com_tol_m: float = 0.02
     recovery_orientation_tol_deg: float = 2.0
     seed: int = 0
 
     def __post_init__(self):
+        preset = PHYSICS_PRESETS.get(self.physics)
+        if preset is None:
+            raise ScenarioError(f"physics must be one of {', '.join(map(repr, PHYSICS))}; "
+                                f"got {self.physics!r}")
+        for key in _PRESET_KEYS:
+            if getattr(self, key) is None:
+                object.__setattr__(self, key, preset[key])
         validate(self)
 
     # ------------------------------------------------------------------ construction
@@ -109,9 +132,20 @@ class Scenario:
         return cls.from_dict(values)
 
     def with_overrides(self, **values) -> Scenario:
-        """A copy with some keys changed (validated like every other route)."""
+        """A copy with some keys changed (validated like every other route). Changing ``physics``
+        also resets ``physics_timestep_s`` and ``contact_timeconst_s`` to the new preset's values
+        unless they are given in the same call."""
         _check_keys(values)
-        return dataclasses.replace(self, **{k: _coerce(k, v) for k, v in values.items()})
+        changes = {k: _coerce(k, v) for k, v in values.items()}
+        if "physics" in changes:
+            for key in _PRESET_KEYS:
+                changes.setdefault(key, None)
+        return dataclasses.replace(self, **changes)
+
+    @property
+    def sleep(self) -> bool:
+        """MuJoCo's sleep flag (bodies at rest stop being simulated): on for ``physics="fast"``."""
+        return bool(PHYSICS_PRESETS[self.physics]["sleep"])
 
     # ------------------------------------------------------------------ export
     def to_dict(self) -> dict:
@@ -156,7 +190,8 @@ _VECTORS = {
     "kp_rot": (3, "diagonal gains (x, y, z) [1/s^2]"),
     "kv_rot": (3, "diagonal gains (x, y, z) [1/s]"),
 }
-_STRINGS = {"target_axis": TARGET_AXES, "controller": CONTROLLERS, "support": SUPPORTS}
+_STRINGS = {"target_axis": TARGET_AXES, "controller": CONTROLLERS, "support": SUPPORTS,
+            "physics": PHYSICS}
 _INTS = {"seed"}
 
 
@@ -300,6 +335,8 @@ __all__ = [
     "CONTROLLERS",
     "JOINT_NAMES",
     "LEG_JOINTS",
+    "PHYSICS",
+    "PHYSICS_PRESETS",
     "TARGET_AXES",
     "W_JOINT_ANGLES_DEG",
     "Scenario",

@@ -74,12 +74,16 @@ def scene_spec(scenario: Scenario) -> mujoco.MjSpec:
 
     Physics: the biped model's own gravity (9.81 m/s^2 along -z), ``physics_timestep_s``,
     elliptic friction cones, friction ``scenario.friction`` and the restitution-calibrated solref
-    on every geom.
+    on every geom; MuJoCo's sleep flag when ``scenario.sleep`` (``physics = "fast"``): a tree at
+    rest stops being simulated until something touches it. Only the block can sleep: MuJoCo never
+    lets an actuated tree (the biped) sleep.
     """
     spec = biped_spec()
     spec.modelname = "push_scene"
     spec.option.timestep = scenario.physics_timestep_s
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    if scenario.sleep:
+        spec.option.enableflags |= int(mujoco.mjtEnableBit.mjENBL_SLEEP)
     solref = contact_solref(scenario.restitution, scenario.contact_timeconst_s,
                             scenario.physics_timestep_s)
 
