@@ -35,6 +35,9 @@ NONFINITE_RESULT = 2
 SINGULAR_DISTRIBUTION = 3
 ZERO_QUATERNION = 4
 
+# mi[3], the distribution mode: 0 W Alg. 5 (statics), 1 W's printed Alg. 5, 2 stop after Alg. 4
+STOP_AFTER_ALG4 = 2
+
 
 def layout(n: int) -> dict[str, tuple[int, tuple[int, ...]]]:
     """Offsets and shapes of the model, work and output buffers for ``n`` links."""
@@ -636,10 +639,11 @@ def compute_kernel(qpos, qvel, target, gains, contact, mi, mf, work, out):
         for j in range(6):
             P1[i, j] = P[0, i, j]
     alg4_desired_wrench(g, V, P, z, target, gains, quat, R3, X, qe, Fd)
-    if not alg5_wrench_distribution(g, feet, contact, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_tilde,
-                                    Fr_tilde, mi[3] == 1):
-        return SINGULAR_DISTRIBUTION
-    alg6_torques(parent, H, leg, beyond, gl, Fl_tilde, Fr_tilde, F, tau)
+    if mi[3] != STOP_AFTER_ALG4:  # else the caller distributes F_1^bd (biped.control.distribution)
+        if not alg5_wrench_distribution(g, feet, contact, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_tilde,
+                                        Fr_tilde, mi[3] == 1):
+            return SINGULAR_DISTRIBUTION
+        alg6_torques(parent, H, leg, beyond, gl, Fl_tilde, Fr_tilde, F, tau)
     for i in range(out.shape[0]):
         if not np.isfinite(out[i]):
             return NONFINITE_RESULT

@@ -98,13 +98,16 @@ def orientation_error_deg(quat, target_quat) -> float:
     return math.degrees(2.0 * math.acos(min(1.0, c)))
 
 
-def workspace_policy(scenario: Scenario, tree=None):
-    """W's controller for ``scenario``'s set point, gains and support, and its policy
+def workspace_policy(scenario: Scenario, tree=None, limits=None):
+    """W's controller for ``scenario``'s set point, gains, support and distribution, and its policy
     ``raw(qpos_biped, qvel_biped, feet) -> torques`` in ``ctrl.joint_names`` order (a view into the
     controller's buffer). The feet flags are used when ``scenario.support`` is "sensed"; with
-    "fixed" both feet are taken as fixed (W). ``tree`` defaults to the shipped biped's."""
+    "fixed" both feet are taken as fixed (W). ``tree`` defaults to the shipped biped's.
+    ``limits`` (a :class:`~biped.control.limits.TorqueLimits`, default: the scenario's
+    ``torque_limits``) enter the QP when ``scenario.distribution`` is "qp"."""
     import biped.models
     from biped.control import Gains, Target, WorkspaceController
+    from biped.control.distribution import QPWeights
     from biped.model import TreeModel
 
     target = Target.wendlandt(com=scenario.target_com_m, tilt_deg=scenario.target_tilt_deg,
@@ -112,10 +115,26 @@ def workspace_policy(scenario: Scenario, tree=None):
     gains = Gains(kp_com=scenario.kp_com, kv_com=scenario.kv_com, kp_rot=scenario.kp_rot,
                   kv_rot=scenario.kv_rot)
     tree = tree or TreeModel.from_mjcf(biped.models.path("wendlandt"))
-    ctrl = WorkspaceController(tree, target=target, gains=gains)
+    qp = {}
+    if scenario.distribution == "qp":
+        qp = dict(qp_weights=QPWeights(moment=scenario.qp_moment_weight, friction=scenario.friction,
+                                       min_normal_n=scenario.qp_min_normal_n),
+                  torque_limits=limits if limits is not None else scenario_limits(scenario))
+    ctrl = WorkspaceController(tree, target=target, gains=gains,
+                               distribution=scenario.distribution, **qp)
     if scenario.support == "sensed":
         return ctrl, lambda q, v, feet: ctrl.torques(q, v, feet_in_contact=feet)
     return ctrl, lambda q, v, feet: ctrl.torques(q, v)
+
+
+def scenario_limits(scenario: Scenario):
+    """The scenario's ``torque_limits`` as a symmetric :class:`~biped.control.limits.TorqueLimits`
+    (None for "none")."""
+    from biped.control.limits import TorqueLimits
+    from biped.sim.scenario import JOINT_NAMES
+
+    hi = _limits(scenario)
+    return None if hi is None else TorqueLimits("scenario", JOINT_NAMES, -hi, hi)
 
 
 def make_controller(scenario: Scenario, scene: Scene) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:

@@ -35,6 +35,9 @@ TARGET_AXES = ("-y", "-x")
 #: Which feet the workspace controller takes as fixed: "fixed" = both, always (W); "sensed" = the
 #: feet whose soles touch the floor at each control step (see WorkspaceController.compute).
 SUPPORTS = ("fixed", "sensed")
+#: The workspace controller's wrench distribution (W Alg. 5): W's min-norm split ("statics", its
+#: print's subscripts "printed") or the contact-feasible QP ("qp", biped.control.distribution).
+DISTRIBUTIONS = ("statics", "printed", "qp")
 
 
 @dataclass(frozen=True)
@@ -68,10 +71,14 @@ class Scenario:
     kv_rot: tuple = (7.07, 7.07, 7.07)
     controller: str = "workspace"
     support: str = "fixed"  # not in W: "sensed" drops a foot off the floor from Alg. 3 and 5
+    distribution: str = "statics"  # W's Alg. 5; "qp": not in W (docs/controller.md)
+    qp_moment_weight: float = 1e-2  # "qp": weight of the moment rows (force rows: 1)
+    qp_min_normal_n: float = 10.0  # "qp": minimum normal force of a foot in contact [N]
     torque_limits: Any = "none"
     friction: float = 0.3
     restitution: float = 0.2
     contact_timeconst_s: float = 0.005  # not in W (Impulse is rigid); MuJoCo's contact stiffness
+    joint_damping_n_m_s: float = 0.0  # passive damping of every hinge [N m s/rad] (W: none)
     fall_height_m: float = 0.6  # central-body COM below this height = fall
     recovery_com_tol_m: float = 0.02
     recovery_orientation_tol_deg: float = 2.0
@@ -154,7 +161,8 @@ _VECTORS = {
     "kp_rot": (3, "diagonal gains (x, y, z) [1/s^2]"),
     "kv_rot": (3, "diagonal gains (x, y, z) [1/s]"),
 }
-_STRINGS = {"target_axis": TARGET_AXES, "controller": CONTROLLERS, "support": SUPPORTS}
+_STRINGS = {"target_axis": TARGET_AXES, "controller": CONTROLLERS, "support": SUPPORTS,
+            "distribution": DISTRIBUTIONS}
 _INTS = {"seed"}
 
 
@@ -260,6 +268,9 @@ def validate(s: Scenario) -> None:
         raise ScenarioError(f"contact_timeconst_s must be >= 2 physics_timestep_s = {2 * dt} s "
                             f"(MuJoCo's stability rule); got {tc}")
     _positive(s, "fall_height_m", "central-body COM height in m")
+    _positive(s, "joint_damping_n_m_s", "passive hinge damping in N m s/rad", zero_ok=True)
+    _positive(s, "qp_moment_weight", "weight of the QP's moment rows, force rows 1")
+    _positive(s, "qp_min_normal_n", "N", zero_ok=True)
     _positive(s, "recovery_com_tol_m", "m")
     _positive(s, "recovery_orientation_tol_deg", "deg")
     if not isinstance(s.seed, int) or isinstance(s.seed, bool) or s.seed < 0:
@@ -295,6 +306,7 @@ def parse_assignment(text: str) -> tuple[str, Any]:
 
 __all__ = [
     "CONTROLLERS",
+    "DISTRIBUTIONS",
     "JOINT_NAMES",
     "LEG_JOINTS",
     "TARGET_AXES",

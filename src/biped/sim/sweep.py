@@ -751,7 +751,8 @@ def _scene_for(scenario: Scenario):
     from biped.sim.scene import build_scene
 
     key = (scenario.physics_timestep_s, scenario.restitution, scenario.contact_timeconst_s,
-           scenario.friction, scenario.block_size_m, scenario.block_mass_kg)
+           scenario.friction, scenario.block_size_m, scenario.block_mass_kg,
+           scenario.joint_damping_n_m_s)
     scene = _SCENES.get(key)
     if scene is None:
         if len(_SCENES) >= _CACHE_SIZE:
@@ -780,7 +781,7 @@ def make_policy(setup: TrialSetup, scene, model: str = "wendlandt"):
     if sc.controller == "workspace":
         from biped.sim.push import workspace_policy
 
-        ctrl, raw = workspace_policy(sc, _tree(model))
+        ctrl, raw = workspace_policy(sc, _tree(model), torque_limits(setup.torque_limits))
     elif sc.controller == "joint-pd":
         from biped import models
         from biped.control.joint_pd import JointPDController
