@@ -64,10 +64,12 @@ class QPWeights:
     friction: Coulomb coefficient of the sole-floor contact (the scenario's ``friction``).
     friction_scale: the QP's pyramid uses ``friction * friction_scale`` (1/sqrt(2): the pyramid
         inscribed in the circular cone that the scene's elliptic MuJoCo contact has).
+    cop_scale: the centre of pressure is kept inside the sole rectangle shrunk about its centre
+        by this factor (1: the whole sole; < 1 keeps it off the edges the foot would tip about).
     """
 
     force: float = 1.0
-    moment: float = 1e-2
+    moment: float = 1.0
     reg_force: float = 1e-6
     reg_moment: float = 1e-5
     split: float = 1e-5
@@ -75,11 +77,12 @@ class QPWeights:
     max_normal_n: float = 2150.0
     friction: float = 0.3
     friction_scale: float = 1.0 / math.sqrt(2.0)
+    cop_scale: float = 1.0
     array: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
         for name in ("force", "moment", "reg_force", "reg_moment", "friction", "friction_scale",
-                     "max_normal_n"):
+                     "max_normal_n", "cop_scale"):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ScenarioError(f"QP weight {name} must be a finite number > 0; got {v!r}")
@@ -251,9 +254,14 @@ def qp_build(g, gl, parent, H, leg, beyond, feet, contact, Fd, soles, dims, prm,
 
 
 @njit(cache=True)
-def qp_finish(x, A, T, soles, tau, Fl_tilde, Fr_tilde, Fl, Fr):
+def qp_finish(x, contact, A, T, soles, tau, Fl_tilde, Fr_tilde, Fl, Fr):
     """From the foot wrenches x (12,) (sole frames): joint torques tau = T x, the legs' shares
-    F~ = A_f x_f (central-body frame) and the feet's wrenches in their COM frames."""
+    F~ = A_f x_f (central-body frame) and the feet's wrenches in their COM frames. A foot not
+    in contact gets exactly zero (the solver's equality holds to rounding only)."""
+    for f in range(2):
+        if contact[f] == 0:
+            for c in range(6):
+                x[6 * f + c] = 0.0
     for j in range(T.shape[0]):
         s = 0.0
         for i in range(12):
@@ -304,7 +312,8 @@ class ContactQP:
         self._beyond = tree.beyond_foot.astype(np.int64)
         self.soles = soles
         self._soles = np.ascontiguousarray(np.stack([s.g_foot_sole for s in soles]), dtype=float)
-        self._dims = np.array([[s.half_length, s.half_width] for s in soles], dtype=float)
+        self._dims = self.weights.cop_scale * np.array([[s.half_length, s.half_width] for s in soles],
+                                                       dtype=float)
         if (lower is None) != (upper is None):
             raise ScenarioError("torque limits for the QP need both lower and upper bounds, or neither")
         self.limited = lower is not None
@@ -389,6 +398,6 @@ class ContactQP:
             self.fallbacks[ZEROED] += 1
         return x
 
-    def finish(self, tau, Fl_tilde, Fr_tilde, Fl, Fr):
+    def finish(self, contact, tau, Fl_tilde, Fr_tilde, Fl, Fr):
         """Write the torques and wrenches implied by ``self.x`` into the given buffers."""
-        qp_finish(self.x, self.A, self.T, self._soles, tau, Fl_tilde, Fr_tilde, Fl, Fr)
+        qp_finish(self.x, contact, self.A, self.T, self._soles, tau, Fl_tilde, Fr_tilde, Fl, Fr)

@@ -292,7 +292,7 @@ class WorkspaceController:
                 self.qp.x[:] = 0.0
             else:
                 self.qp.solve()
-            self.qp.finish(tau, Flt, Frt, Fl, Fr)
+            self.qp.finish(c, tau, Flt, Frt, Fl, Fr)
 
     def compute(self, qpos, qvel, target: Target | None = None, gains: Gains | None = None,
                 feet_in_contact: tuple[bool, bool] | None = None) -> ControllerOutput:

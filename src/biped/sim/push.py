@@ -118,7 +118,8 @@ def workspace_policy(scenario: Scenario, tree=None, limits=None):
     qp = {}
     if scenario.distribution == "qp":
         qp = dict(qp_weights=QPWeights(moment=scenario.qp_moment_weight, friction=scenario.friction,
-                                       min_normal_n=scenario.qp_min_normal_n),
+                                       min_normal_n=scenario.qp_min_normal_n,
+                                       cop_scale=scenario.qp_cop_scale),
                   torque_limits=limits if limits is not None else scenario_limits(scenario))
     ctrl = WorkspaceController(tree, target=target, gains=gains,
                                distribution=scenario.distribution, **qp)

@@ -72,8 +72,9 @@ class Scenario:
     controller: str = "workspace"
     support: str = "fixed"  # not in W: "sensed" drops a foot off the floor from Alg. 3 and 5
     distribution: str = "statics"  # W's Alg. 5; "qp": not in W (docs/controller.md)
-    qp_moment_weight: float = 1e-2  # "qp": weight of the moment rows (force rows: 1)
+    qp_moment_weight: float = 1.0  # "qp": weight of the moment rows [1/(N m)^2] (force rows: 1 /N^2)
     qp_min_normal_n: float = 10.0  # "qp": minimum normal force of a foot in contact [N]
+    qp_cop_scale: float = 1.0  # "qp": the CoP stays in the sole shrunk by this factor
     torque_limits: Any = "none"
     friction: float = 0.3
     restitution: float = 0.2
@@ -271,6 +272,9 @@ def validate(s: Scenario) -> None:
     _positive(s, "joint_damping_n_m_s", "passive hinge damping in N m s/rad", zero_ok=True)
     _positive(s, "qp_moment_weight", "weight of the QP's moment rows, force rows 1")
     _positive(s, "qp_min_normal_n", "N", zero_ok=True)
+    c = _positive(s, "qp_cop_scale", "fraction of the sole the CoP may use, in (0, 1]")
+    if c > 1:
+        raise ScenarioError(f"qp_cop_scale must be in (0, 1] (fraction of the sole); got {c!r}")
     _positive(s, "recovery_com_tol_m", "m")
     _positive(s, "recovery_orientation_tol_deg", "deg")
     if not isinstance(s.seed, int) or isinstance(s.seed, bool) or s.seed < 0:
