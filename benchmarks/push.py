@@ -28,7 +28,7 @@ import numpy as np
 from mujoco import rollout
 
 from biped.sim import Scenario, build_scene
-from biped.sim.push import _run, make_controller
+from biped.sim.push import controller_policy, run_closed_loop
 from biped.sim.scenario import parse_assignment
 from biped.sim.scene import initial_state
 
@@ -78,14 +78,14 @@ def main() -> None:
     scenario = Scenario(physics=args.physics).with_overrides(
         **dict(parse_assignment(a) for a in args.set))
     scene = build_scene(scenario)
-    policy = make_controller(scenario, scene)
-    result = _run(scenario.with_overrides(duration_s=0.02), scene, policy)  # compile, warm caches
+    policy = controller_policy(scenario, scene)
+    result = run_closed_loop(scenario.with_overrides(duration_s=0.02), scene, policy)  # compile, warm caches
     rdata = mujoco.MjData(scene.model)
 
     runs = {"closed": [], "loop": [], "rollout": []}
     cpu = {"closed": [], "loop": [], "rollout": []}
     for _ in range(args.repeat):
-        result, w, c = _timed(lambda: _run(scenario, scene, policy))
+        result, w, c = _timed(lambda: run_closed_loop(scenario, scene, policy))
         runs["closed"].append(w)
         cpu["closed"].append(c)
         steps = len(result.times) - 1  # the closed loop steps after every row but the last

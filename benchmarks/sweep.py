@@ -31,7 +31,7 @@ import time
 import mujoco
 import numpy as np
 
-from biped.sim.push import _run
+from biped.sim.push import run_closed_loop
 from biped.sim.scene import initial_state
 from biped.sim.sweep import SweepSpec, hold_scenario, run_sweep
 from biped.sim.sweep.trial import _scene_for, make_policy, run_trial
@@ -44,7 +44,7 @@ def physics_only(setup) -> tuple[float, float]:
     t0 = time.thread_time()
     run_trial(setup)
     t_trial = time.thread_time() - t0
-    result = _run(sc, scene, make_policy(setup, scene))
+    result = run_closed_loop(sc, scene, make_policy(setup, scene))
     m = scene.model
     d = mujoco.MjData(m)
     d.qpos[:], d.qvel[:] = initial_state(scene, sc)

@@ -31,6 +31,9 @@ def register(subparsers) -> None:
     p.add_argument("--physics", choices=("faithful", "fast"),
                    help="physics preset: faithful (default: 0.5 ms step, 5 ms contacts) or fast "
                         "(1 ms, 7.5 ms, sleep; checked against faithful in docs/sweep.md)")
+    p.add_argument("--distribution", choices=("statics", "printed", "qp"),
+                   help="the workspace controller's wrench distribution: W's min-norm split "
+                        "(statics, default), W's printed subscripts, or the contact-feasible QP")
     p.add_argument("--timestep", type=float, metavar="S", help="physics step [s], <= 0.001")
     p.add_argument("--seed", type=int, help="seed of the initial-state noise (joint_noise_deg)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
@@ -56,7 +59,7 @@ def build_scenario(args):
     named = {"duration_s": args.duration, "block_position_m": args.block_position,
              "block_velocity_m_s": args.block_velocity, "block_mass_kg": args.block_mass,
              "controller": args.controller, "physics": args.physics,
-             "physics_timestep_s": args.timestep,
+             "physics_timestep_s": args.timestep, "distribution": args.distribution,
              "seed": args.seed}
     overrides.update({k: v for k, v in named.items() if v is not None})
     return scenario.with_overrides(**overrides) if overrides else scenario

@@ -39,6 +39,9 @@ def register(subparsers) -> None:
                         "same task for both controllers); wendlandt: rise to W's set point")
     p.add_argument("--controller", choices=("workspace", "joint-pd"), default=None,
                    help="W's workspace controller (default) or the joint-space PD baseline")
+    p.add_argument("--distribution", choices=("statics", "printed", "qp"), default=None,
+                   help="the workspace controller's wrench distribution: W's min-norm split "
+                        "(statics, default) or the contact-feasible QP (docs/controller.md)")
     p.add_argument("--torque-limits", choices=("none", "human"), default=None,
                    help="joint torque limits: none (W) or human-like (docs/sweep.md)")
     p.add_argument("--duration", type=float, metavar="S", help="simulated time per trial [s] (3)")
@@ -94,6 +97,8 @@ def build_spec(args):
     overrides = dict(parse_assignment(a) for a in args.set)
     if args.controller:
         overrides["controller"] = args.controller
+    if getattr(args, "distribution", None):
+        overrides["distribution"] = args.distribution
     if args.duration is not None:
         overrides["duration_s"] = args.duration
     if args.physics:
@@ -114,6 +119,10 @@ def build_spec(args):
     limits = args.torque_limits or (spec.torque_limits if spec else "none")
     return SweepSpec(axes=axes, base=base, samples=samples, seed=seed, torque_limits=limits,
                      launch_distance_m=spec.launch_distance_m if spec else 0.5)
+
+
+def _qp_suffix(base) -> str:
+    return f"-{base.distribution}" if base.controller == "workspace" and base.distribution != "statics" else ""
 
 
 def _check_plot(path: str | None, compare: list[str]) -> None:
@@ -141,7 +150,7 @@ def run(args) -> int:
     _check_plot(args.plot, args.compare)
     spec = build_spec(args)
     out = Path(args.out) if args.out else Path("runs") / (
-        f"sweep-{spec.base.controller}-{spec.torque_limits}.parquet")
+        f"sweep-{spec.base.controller}{_qp_suffix(spec.base)}-{spec.torque_limits}.parquet")
     n = spec.n_trials
     where = args.scheduler or f"{args.workers or 'all'} local worker(s)"
     check_run_args(out, workers=args.workers, batch=args.batch, scheduler=args.scheduler)

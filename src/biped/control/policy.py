@@ -21,7 +21,8 @@ import numpy as np
 
 from biped.control.joint_pd import W_INITIAL_ANGLES_DEG, JointPDController
 from biped.control.limits import JOINT_NAMES, TorqueLimits, clip_torques
-from biped.control.workspace import Gains, Target, WorkspaceController
+from biped.control.distribution import QPWeights
+from biped.control.workspace import DISTRIBUTIONS, Gains, Target, WorkspaceController
 from biped.errors import ScenarioError, unknown_name
 from biped.model import TreeModel
 
@@ -42,7 +43,12 @@ class PolicyConfig:
         initial angles, :data:`biped.control.joint_pd.W_INITIAL_ANGLES_DEG`).
     control_period_s: the zero-order-hold period (caps the joint-PD's gains).
     gain_scale: the joint-PD's stiffness factor (damping by its square root).
-    torque_limits: bounds [N m] clipping the torques joint by joint, or None (W: unlimited).
+    torque_limits: bounds [N m] clipping the torques joint by joint, or None (W: unlimited);
+        with ``distribution="qp"`` they are also constraints of the QP (clipping is then a no-op).
+    distribution: the workspace controller's wrench distribution: ``"statics"`` (W's min-norm
+        split, default), ``"printed"`` (W's printed subscripts) or ``"qp"`` (contact-feasible QP,
+        :mod:`biped.control.distribution`).
+    qp_weights: :class:`~biped.control.distribution.QPWeights` for ``"qp"`` (None: defaults).
     model_path: the biped's MJCF (None: the shipped ``wendlandt`` model).
     """
 
@@ -55,12 +61,16 @@ class PolicyConfig:
     gain_scale: float = 1.0
     torque_limits: TorqueLimits | None = None
     model_path: str | PathLike | None = None
+    distribution: str = "statics"
+    qp_weights: QPWeights | None = None
 
     def __post_init__(self):
         if self.controller not in CONTROLLERS:
             raise ScenarioError(unknown_name("controller", self.controller, CONTROLLERS))
         if self.support not in SUPPORTS:
             raise ScenarioError(unknown_name("support", self.support, SUPPORTS))
+        if self.distribution not in DISTRIBUTIONS:
+            raise ScenarioError(unknown_name("distribution", self.distribution, DISTRIBUTIONS))
 
 
 class Policy:
@@ -99,8 +109,12 @@ def make_policy(config: PolicyConfig | None = None, joint_order=None, *,
     """
     config = config or PolicyConfig()
     if config.controller == "workspace":
+        qp = {}
+        if config.distribution == "qp":
+            qp = {"qp_weights": config.qp_weights, "torque_limits": config.torque_limits}
         ctrl = WorkspaceController(tree or TreeModel.from_mjcf(_model_path(config)),
-                                   target=config.target, gains=config.gains)
+                                   target=config.target, gains=config.gains,
+                                   distribution=config.distribution, **qp)
         if config.support == "sensed":
             raw = lambda q, v, feet: ctrl.torques(q, v, feet_in_contact=feet)
         else:

@@ -56,6 +56,9 @@ NONFINITE_RESULT = 2
 SINGULAR_DISTRIBUTION = 3
 ZERO_QUATERNION = 4
 
+#: ints "mode": 0 W Alg. 5 (statics), 1 W's printed Alg. 5, 2 stop after Alg. 4 (the QP distributes)
+STOP_AFTER_ALG4 = 2
+
 # ----------------------------------------------------------------------------- buffers
 # The controller's four flat buffers, field by field: (name, shape), "n" = number of links
 # (link 0 = W's link 1, the central body), "n-1" = number of joints. ``layout`` turns this table
@@ -63,7 +66,7 @@ ZERO_QUATERNION = 4
 # methods alike) cuts the buffers into these named views, in this order.
 _FIELDS = {
     "ints": (  # int64: the tree (biped.model.TreeModel) and options
-        ("n", (1,)), ("feet", (2,)), ("printed", (1,)),  # links; left/right foot links; W's print in Alg. 5
+        ("n", (1,)), ("feet", (2,)), ("mode", (1,)),  # links; left/right foot links; Alg. 5 mode
         ("parent", ("n",)), ("qadr", ("n",)), ("dadr", ("n",)),  # inboard link; qpos and qvel addresses
         ("leg", ("n",)), ("beyond", ("n",))),  # 0 left, 1 right, -1 neither; 1 outboard of a foot
     "model": (  # float64, constant
@@ -131,13 +134,13 @@ def unpack(mi, mf, work, out):
     o = 0
     v_n, o = _take1(mi, o, 1)
     feet, o = _take1(mi, o, 2)
-    printed, o = _take1(mi, o, 1)
+    mode, o = _take1(mi, o, 1)
     parent, o = _take1(mi, o, n)
     qadr, o = _take1(mi, o, n)
     dadr, o = _take1(mi, o, n)
     leg, o = _take1(mi, o, n)
     beyond, o = _take1(mi, o, n)
-    ints = Ints(v_n, feet, printed, parent, qadr, dadr, leg, beyond)
+    ints = Ints(v_n, feet, mode, parent, qadr, dadr, leg, beyond)
     o = 0
     H, o = _take2(mf, o, n, 6)
     G0, o = _take3(mf, o, n, 4, 4)
@@ -566,10 +569,11 @@ def compute_kernel(qpos, qvel, target, gains, contact, mi, mf, work, out):
     o.z1[:] = w.z[0]
     o.P1[:, :] = w.P[0]
     alg4_desired_wrench(w.g, w.V, w.P, w.z, target, gains, w.q01, w.qd_conj, w.Re, o.X, o.qe, o.Fd)
-    if not alg5_wrench_distribution(w.g, t.feet, contact, o.Fd, w.dist_vecs, w.dist_mats, w.R_foot,
-                                    o.Fl, o.Fr, o.Fl_tilde, o.Fr_tilde, t.printed[0] == 1):
-        return SINGULAR_DISTRIBUTION
-    alg6_torques(t.parent, m.H, t.leg, t.beyond, w.gl, o.Fl_tilde, o.Fr_tilde, w.F, o.tau)
+    if t.mode[0] != STOP_AFTER_ALG4:  # else the caller distributes F_1^bd (biped.control.distribution)
+        if not alg5_wrench_distribution(w.g, t.feet, contact, o.Fd, w.dist_vecs, w.dist_mats,
+                                        w.R_foot, o.Fl, o.Fr, o.Fl_tilde, o.Fr_tilde, t.mode[0] == 1):
+            return SINGULAR_DISTRIBUTION
+        alg6_torques(t.parent, m.H, t.leg, t.beyond, w.gl, o.Fl_tilde, o.Fr_tilde, w.F, o.tau)
     for i in range(out.shape[0]):
         if not np.isfinite(out[i]):
             return NONFINITE_RESULT

@@ -16,6 +16,7 @@ from biped.control.recursions import (
     NONFINITE_RESULT,
     NONFINITE_STATE,
     SINGULAR_DISTRIBUTION,
+    STOP_AFTER_ALG4,
     ZERO_QUATERNION,
     alg1_initialize,
     alg2_velocity_propagation,
@@ -24,8 +25,8 @@ from biped.control.recursions import (
     layout,
     unpack,
 )
-from biped.errors import ScenarioError, SingularityError, StateError
-from biped.model import DEFAULT_FEET, TreeModel
+from biped.errors import BipedError, ScenarioError, SingularityError, StateError
+from biped.model import DEFAULT_FEET, TreeModel, sole_rectangles
 from biped.spatial import axis_angle_quat, rot_to_quat
 
 __all__ = ["DISTRIBUTIONS", "TARGET_AXES", "W_TARGET_AXIS", "W_TARGET_COM_M", "W_TARGET_TILT_DEG",
@@ -41,8 +42,11 @@ W_TARGET_AXIS = "-y"
 
 #: W Alg. 5 readings: "statics" (default) moves each foot's wrench to the central body with
 #: Ad^T_{g_{foot,1}}, as power balance and W's eq. 3.6 require; "printed" uses W's print
-#: Ad^T_{g_{1,foot}} literally (same sum F_1^bd, a different and unphysical split).
-DISTRIBUTIONS = ("statics", "printed")
+#: Ad^T_{g_{1,foot}} literally (same sum F_1^bd, a different and unphysical split). Beyond W:
+#: "qp" splits F_1^bd by a QP inside the soles' contact wrench cones and the torque limits
+#: (:mod:`biped.control.distribution`).
+DISTRIBUTIONS = ("statics", "printed", "qp")
+_MODE = {"statics": 0, "printed": 1, "qp": STOP_AFTER_ALG4}
 
 
 def _vec(name: str, value, n: int) -> np.ndarray:
@@ -151,13 +155,19 @@ class WorkspaceController:
     W Alg. 1-6; set ``NUMBA_DISABLE_JIT=1`` to step through it in Python.
 
     Options: ``big_base`` is W Alg. 3's factor (feet get ``big_base * M_1``; W: 1e6);
-    ``distribution`` selects the reading of W Alg. 5 (:data:`DISTRIBUTIONS`: "statics", the
-    default, or W's "printed" subscripts); ``target`` and ``gains`` are the defaults of
-    :meth:`compute`.
+    ``distribution`` selects W Alg. 5 (:data:`DISTRIBUTIONS`: "statics", the default, W's
+    "printed" subscripts, or "qp", the contact-feasible QP of :mod:`biped.control.distribution`);
+    ``target`` and ``gains`` are the defaults of :meth:`compute`. For "qp" only:
+    ``qp_weights`` (:class:`~biped.control.distribution.QPWeights`), ``torque_limits`` (a
+    :class:`~biped.control.limits.TorqueLimits` in any joint order, or None: unlimited) put
+    into the QP, ``soles`` (left, right) :class:`~biped.model.SoleRectangle` (default: read from
+    the tree's MJCF file) and ``qp_solver`` ("quadprog" or "daqp"). ``self.qp`` is then the
+    :class:`~biped.control.distribution.ContactQP` (its ``status`` and ``fallbacks``).
     """
 
     def __init__(self, tree: TreeModel, *, big_base: float = 1e6, target: Target | None = None,
-                 gains: Gains | None = None, distribution: str = "statics"):
+                 gains: Gains | None = None, distribution: str = "statics", qp_weights=None,
+                 torque_limits=None, soles=None, qp_solver: str = "quadprog"):
         if not (np.isfinite(big_base) and big_base > 0):
             raise ScenarioError(f"big_base must be a positive finite factor, got {big_base}")
         if distribution not in DISTRIBUTIONS:
@@ -171,7 +181,7 @@ class WorkspaceController:
         lay = layout(n)
         self._layout = lay
         values = {
-            "n": [n], "feet": tree.feet, "printed": [1 if distribution == "printed" else 0],
+            "n": [n], "feet": tree.feet, "mode": [_MODE[distribution]],
             "parent": tree.parent, "qadr": tree.qpos_adr, "dadr": tree.dof_adr, "leg": tree.leg,
             "beyond": tree.beyond_foot,
             "H": tree.H, "G0": tree.G0, "mass": tree.mass, "inertia": tree.inertia,
@@ -194,6 +204,30 @@ class WorkspaceController:
         # (slice, shape or None for 1-d) of each output field, in ControllerOutput's order
         self._fields = tuple((slice(o, o + int(np.prod(sh))), sh if len(sh) > 1 else None) for o, sh in (
             lay["out"][k] for k in ("tau", "P1", "z1", "X", "Fd", "Fl_tilde", "Fr_tilde", "Fl", "Fr", "qe")))
+        self.qp = None
+        if distribution == "qp":
+            self._init_qp(qp_weights, torque_limits, soles, qp_solver)
+
+    def _init_qp(self, weights, limits, soles, solver):
+        from biped.control.distribution import ContactQP
+
+        tree = self.tree
+        if soles is None:
+            try:
+                soles = sole_rectangles(tree.source, tuple(tree.body_names[f] for f in tree.feet))
+            except BipedError:
+                raise ScenarioError(
+                    f"distribution 'qp' needs the soles: the tree's source {tree.source!r} is not "
+                    f"a model file; pass soles=biped.model.sole_rectangles(model)") from None
+        lower = upper = None
+        if limits is not None and not limits.unlimited:
+            lim = limits.reorder(tree.joint_names)
+            lower, upper = lim.lower, lim.upper
+        self.qp = ContactQP(tree, soles, weights, lower, upper, solver)
+        out, lay = self._out, self._layout
+        v = {k: out[o:o + int(np.prod(sh))].reshape(sh) for k, (o, sh) in lay["out"].items() if k != "_size"}
+        self._qp_views = (self._w.g, self._w.gl, v["Fd"], v["tau"], v["Fl_tilde"],
+                          v["Fr_tilde"], v["Fl"], v["Fr"])
 
     @classmethod
     def from_mjcf(cls, source: str | PathLike, feet: tuple[str, str] = DEFAULT_FEET, **kwargs
@@ -254,6 +288,15 @@ class WorkspaceController:
                 raise SingularityError(
                     "the controller produced non-finite values at this state: velocities too large for "
                     "double precision, or a joint axis with zero articulated inertia (W Alg. 3)")
+        if self.qp is not None:
+            g, gl, Fd, tau, Flt, Frt, Fl, Fr = self._qp_views
+            c = self._contact(feet_in_contact)
+            self.qp.build(g, gl, c, Fd)
+            if c[0] == 0 and c[1] == 0:
+                self.qp.x[:] = 0.0
+            else:
+                self.qp.solve()
+            self.qp.finish(c, tau, Flt, Frt, Fl, Fr)
 
     def compute(self, qpos, qvel, target: Target | None = None, gains: Gains | None = None,
                 feet_in_contact: tuple[bool, bool] | None = None) -> ControllerOutput:

@@ -38,7 +38,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from biped.errors import ModelError, StateError, unknown_name
-from biped.spatial import rot_to_quat
 
 __all__ = [
     "JOINT_NAMES",

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
+from biped.control.distribution import QPWeights
 from biped.control.limits import TorqueLimits
 from biped.control.policy import PolicyConfig, make_policy, symmetric_limits
 from biped.control.workspace import Gains, Target
@@ -142,10 +143,16 @@ def policy_config(scenario: Scenario, *, gain_scale: float = 1.0,
     elif scenario.torque_limits != "none":
         raise ScenarioError("give torque limits once: the scenario's torque_limits or the "
                             "torque_limits argument, not both")
+    qp_weights = None
+    if scenario.distribution == "qp":
+        qp_weights = QPWeights(moment=scenario.qp_moment_weight, friction=scenario.friction,
+                               min_normal_n=scenario.qp_min_normal_n,
+                               cop_scale=scenario.qp_cop_scale)
     return PolicyConfig(controller=scenario.controller, target=target, gains=gains,
                         support=scenario.support, q_ref_deg=tuple(scenario.initial_joint_angles_deg),
                         control_period_s=1.0 / scenario.control_rate_hz, gain_scale=gain_scale,
-                        torque_limits=torque_limits)
+                        torque_limits=torque_limits, distribution=scenario.distribution,
+                        qp_weights=qp_weights)
 
 
 class ControllerPolicy:
@@ -328,21 +335,6 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
         controller_error=controller_error, diverged=diverged, qvel=qvel[sl],
         block_velocity=block_vel[sl], feet_pos=feet_pos, feet_quat=feet_quat,
     )
-
-
-def _run(scenario: Scenario, scene: Scene, policy, *, progress=None, on_step=None) -> PushResult:
-    """Deprecated alias of :func:`run_closed_loop` that also takes a control-level policy
-    ``policy(qpos, qvel, feet)`` (what ``biped.sim.sweep`` passes today)."""
-    loop_policy = policy if isinstance(policy, (ControllerPolicy, RecordedTorques)) else \
-        (lambda t, q, v, feet: policy(q, v, feet))
-    return run_closed_loop(scenario, scene, loop_policy, progress=progress, on_step=on_step)
-
-
-def workspace_policy(scenario: Scenario, tree=None):
-    """Deprecated (use :func:`controller_policy`): W's controller for ``scenario`` and its
-    control-level policy ``(qpos, qvel, feet) -> torques`` in the controller's joint order."""
-    p = make_policy(policy_config(scenario.with_overrides(controller="workspace")), tree=tree)
-    return p.controller, p
 
 
 def simulate(scenario: Scenario | None = None, *, progress: Callable[[float], None] | None = None,

@@ -37,6 +37,9 @@ CONTROLLERS = ("workspace", "joint-pd")
 #: Which feet the workspace controller takes as fixed: "fixed" = both, always (W); "sensed" = the
 #: feet whose soles touch the floor at each control step (see WorkspaceController.compute).
 SUPPORTS = ("fixed", "sensed")
+#: The workspace controller's wrench distribution (W Alg. 5): W's min-norm split ("statics", its
+#: print's subscripts "printed") or the contact-feasible QP ("qp", biped.control.distribution).
+DISTRIBUTIONS = ("statics", "printed", "qp")
 
 #: Physics presets (key ``physics``): the values they give ``physics_timestep_s`` and
 #: ``contact_timeconst_s`` when those keys are not set, and whether MuJoCo's sleep flag is on.
@@ -85,11 +88,17 @@ class Scenario:
     kv_rot: tuple = Gains().kv_rot
     controller: str = "workspace"
     support: str = "fixed"  # not in W: "sensed" drops a foot off the floor from Alg. 3 and 5
+    distribution: str = "statics"  # W's Alg. 5; "qp": not in W (docs/controller.md)
+    qp_moment_weight: float = 1.0  # "qp": weight of the moment rows [1/(N m)^2] (force rows: 1 /N^2)
+    qp_min_normal_n: float = 10.0  # "qp": minimum normal force of a foot in contact [N]
+    qp_cop_scale: float = 1.0  # "qp": the CoP stays in the sole shrunk by this factor
     torque_limits: Any = "none"
     friction: float = 0.3
     restitution: float = 0.2
     # not in W (Impulse is rigid): MuJoCo's contact stiffness [s]; None: from the preset
     contact_timeconst_s: float = None  # type: ignore[assignment]
+    # passive damping of every hinge [N m s/rad]; 1.0 as in the shipped models (W: none)
+    joint_damping_n_m_s: float = 1.0
     fall_height_m: float = 0.6  # central-body COM below this height = fall
     recovery_com_tol_m: float = 0.02
     recovery_orientation_tol_deg: float = 2.0
@@ -191,7 +200,7 @@ _VECTORS = {
     "kv_rot": (3, "diagonal gains (x, y, z) [1/s]"),
 }
 _STRINGS = {"target_axis": TARGET_AXES, "controller": CONTROLLERS, "support": SUPPORTS,
-            "physics": PHYSICS}
+            "physics": PHYSICS, "distribution": DISTRIBUTIONS}
 _INTS = {"seed"}
 
 
@@ -298,6 +307,12 @@ def validate(s: Scenario) -> None:
         raise ScenarioError(f"contact_timeconst_s must be >= 2 physics_timestep_s = {2 * dt} s "
                             f"(MuJoCo's stability rule); got {tc}")
     _positive(s, "fall_height_m", "central-body COM height in m")
+    _positive(s, "joint_damping_n_m_s", "passive hinge damping in N m s/rad", zero_ok=True)
+    _positive(s, "qp_moment_weight", "weight of the QP's moment rows, force rows 1")
+    _positive(s, "qp_min_normal_n", "N", zero_ok=True)
+    c = _positive(s, "qp_cop_scale", "fraction of the sole the CoP may use, in (0, 1]")
+    if c > 1:
+        raise ScenarioError(f"qp_cop_scale must be in (0, 1] (fraction of the sole); got {c!r}")
     _positive(s, "recovery_com_tol_m", "m")
     _positive(s, "recovery_orientation_tol_deg", "deg")
     if not isinstance(s.seed, int) or isinstance(s.seed, bool) or s.seed < 0:
@@ -333,6 +348,7 @@ def parse_assignment(text: str) -> tuple[str, Any]:
 
 __all__ = [
     "CONTROLLERS",
+    "DISTRIBUTIONS",
     "JOINT_NAMES",
     "LEG_JOINTS",
     "PHYSICS",

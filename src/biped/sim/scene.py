@@ -74,9 +74,10 @@ def scene_spec(scenario: Scenario) -> mujoco.MjSpec:
 
     Physics: the biped model's own gravity (9.81 m/s^2 along -z), ``physics_timestep_s``,
     elliptic friction cones, friction ``scenario.friction`` and the restitution-calibrated solref
-    on every geom; MuJoCo's sleep flag when ``scenario.sleep`` (``physics = "fast"``): a tree at
-    rest stops being simulated until something touches it. Only the block can sleep: MuJoCo never
-    lets an actuated tree (the biped) sleep.
+    on every geom, passive damping ``scenario.joint_damping_n_m_s`` on every hinge (replacing the
+    MJCF's); MuJoCo's sleep flag when ``scenario.sleep`` (``physics = "fast"``): a tree at rest
+    stops being simulated until something touches it. Only the block can sleep: MuJoCo never lets
+    an actuated tree (the biped) sleep.
     """
     spec = biped_spec()
     spec.modelname = "push_scene"
@@ -100,6 +101,9 @@ def scene_spec(scenario: Scenario) -> mujoco.MjSpec:
     block.add_geom(name=BLOCK, type=mujoco.mjtGeom.mjGEOM_BOX,
                    size=[s / 2 for s in scenario.block_size_m], mass=scenario.block_mass_kg,
                    rgba=[0.9, 0.6, 0.1, 1.0], contype=1, conaffinity=1)
+    for j in spec.joints:  # the plant's passive damping (the controller does not model it)
+        if j.type == mujoco.mjtJoint.mjJNT_HINGE:
+            j.damping = [scenario.joint_damping_n_m_s, *list(j.damping)[1:]]
     for g in spec.geoms:
         g.friction = [scenario.friction, g.friction[1], g.friction[2]]
         g.solref = list(solref)

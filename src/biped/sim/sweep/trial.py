@@ -4,18 +4,15 @@ its MuJoCo scene (built once per process and reused), then :func:`measure` -> :c
 
 from __future__ import annotations
 
-from collections.abc import Callable
 from typing import Any
 
 import mujoco
 import numpy as np
 
 from biped import models
-from biped.control.joint_pd import JointPDController
-from biped.control.limits import clip_torques, torque_limits
-from biped.errors import ScenarioError
+from biped.control.limits import torque_limits
 from biped.model import TreeModel
-from biped.sim.push import PushResult, _run, workspace_policy
+from biped.sim.push import ControllerPolicy, PushResult, controller_policy, run_closed_loop
 from biped.sim.scenario import Scenario
 from biped.sim.scene import Scene, build_scene
 from biped.sim.sweep.record import Measured
@@ -50,28 +47,17 @@ def _tree(model: str) -> TreeModel:
     return _TREES[model]
 
 
-def make_policy(setup: TrialSetup, scene: Scene, model: str = "wendlandt"
-                ) -> Callable[[np.ndarray, np.ndarray, tuple[bool, bool]], np.ndarray]:
-    """``policy(qpos_biped, qvel_biped, feet) -> torques (12,)`` in ``scene.joint_names`` order for
-    the trial's controller (W's workspace controller with the scenario's set point and gains, or the
-    joint-space PD of :mod:`biped.control.joint_pd` holding the initial joint angles, its gains
-    times ``gain_scale``), clipped by the sweep's torque limits."""
-    sc = setup.scenario
-    if sc.controller == "workspace":
-        ctrl, raw = workspace_policy(sc, _tree(model))
-    elif sc.controller == "joint-pd":
-        ctrl = JointPDController.from_mjcf(
-            models.path(model), q_ref_deg=sc.initial_joint_angles_deg,
-            gain_scale=setup.trial.gain_scale, control_period_s=1.0 / sc.control_rate_hz)
-        raw = lambda q, v, feet: ctrl.compute(q, v).torques
-    else:  # pragma: no cover - Scenario validates the name
-        raise ScenarioError(f"unknown controller {sc.controller!r}")
-    names = tuple(ctrl.joint_names)
-    order = np.array([names.index(n) for n in scene.joint_names])
-    limits = torque_limits(setup.torque_limits).reorder(scene.joint_names)
-    if limits.unlimited:
-        return lambda q, v, feet: raw(q, v, feet)[order]
-    return lambda q, v, feet: clip_torques(raw(q, v, feet)[order], limits)
+def make_policy(setup: TrialSetup, scene: Scene, model: str = "wendlandt") -> ControllerPolicy:
+    """The trial's loop policy ``policy(t, qpos_biped, qvel_biped, feet) -> torques (12,)`` in
+    ``scene.joint_names`` order (:func:`biped.sim.push.controller_policy`): W's workspace
+    controller with the scenario's set point, gains and distribution, or the joint-space PD of
+    :mod:`biped.control.joint_pd` holding the initial joint angles (its gains times
+    ``gain_scale``); the sweep's torque limits clip the torques and, with the QP distribution,
+    are constraints of the QP."""
+    limits = torque_limits(setup.torque_limits)
+    tree = _tree(model) if setup.scenario.controller == "workspace" else None
+    return controller_policy(setup.scenario, scene, gain_scale=setup.trial.gain_scale,
+                             torque_limits=None if limits.unlimited else limits, tree=tree)
 
 
 def run_trial(setup: TrialSetup) -> dict[str, Any]:
@@ -87,7 +73,7 @@ def run_trial(setup: TrialSetup) -> dict[str, Any]:
     def on_step(m, d):
         vel.append(d.qvel[bv].copy())
 
-    result = _run(sc, scene, policy, on_step=on_step)
+    result = run_closed_loop(sc, scene, policy, on_step=on_step)
     if result.interrupted:
         raise KeyboardInterrupt
     n = len(result.times)
