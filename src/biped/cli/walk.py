@@ -39,6 +39,9 @@ def register(subparsers) -> None:
                    help="jump without B's 360 deg turn along the semicircle")
     p.add_argument("--rate", type=float, default=200.0, metavar="HZ",
                    help="samples per second of trajectory.csv and the dynamics (default 200)")
+    p.add_argument("--model", metavar="FILE.xml",
+                   help="the biped (MJCF with W's structure, e.g. from `biped model`): the figure "
+                        "takes its legs and the inverse dynamics its masses (default: W's shipped biped)")
     p.add_argument("--out", metavar="DIR", help="output folder (default: a new one under runs/)")
     p.add_argument("--overwrite", action="store_true",
                    help="allow writing into a folder that already holds a run")
@@ -63,7 +66,7 @@ def build_plan(args):
         raise ScenarioError(f"--stair-rise / --stair-run apply to --gait upstairs and demo, not {args.gait}")
     if not (math.isfinite(args.rate) and 20.0 <= args.rate <= 2000.0):
         raise ScenarioError(f"--rate must be in [20, 2000] Hz, got {args.rate!r}")
-    dims = FigureDims.from_anthropometry()
+    dims = FigureDims.from_mjcf(args.model) if getattr(args, "model", None) else FigureDims.from_anthropometry()
     params = GaitParams()
     if args.no_somersault:
         params = replace(params, somersault=False)
@@ -112,9 +115,9 @@ def run(args) -> int:
         elif stage == "trajectory.csv":
             paths["trajectory"] = str(write_trajectory_csv(motion, lm, out / "trajectory.csv"))
         elif stage == "dynamics":
-            from biped.kinematic.dynamics import inverse_dynamics
+            from biped.kinematic.dynamics import inverse_dynamics, load_biped
 
-            idyn = inverse_dynamics(motion)
+            idyn = inverse_dynamics(motion, load_biped(args.model) if args.model else None)
         elif stage == "figures":
             from biped.viz.walk_figures import plot_feet, plot_inverse_dynamics, plot_joint_angles
 
@@ -159,6 +162,7 @@ def run(args) -> int:
                              "alpha_down_deg": plan.params.alpha_down}
     if idyn is not None:
         summary["inverse_dynamics"] = idyn.summary()
+    summary["model"] = str(Path(args.model).resolve()) if args.model else "wendlandt"
     summary["outputs"] = paths
     summary["notes"] = notes
     (out / "summary.json").write_text(json.dumps(summary, indent=2))

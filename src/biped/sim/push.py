@@ -102,16 +102,16 @@ def workspace_policy(scenario: Scenario, tree=None):
     """W's controller for ``scenario``'s set point, gains and support, and its policy
     ``raw(qpos_biped, qvel_biped, feet) -> torques`` in ``ctrl.joint_names`` order (a view into the
     controller's buffer). The feet flags are used when ``scenario.support`` is "sensed"; with
-    "fixed" both feet are taken as fixed (W). ``tree`` defaults to the shipped biped's."""
-    import biped.models
+    "fixed" both feet are taken as fixed (W). ``tree`` defaults to ``scenario.model``'s."""
     from biped.control import Gains, Target, WorkspaceController
     from biped.model import TreeModel
+    from biped.models.subject import resolve
 
     target = Target.wendlandt(com=scenario.target_com_m, tilt_deg=scenario.target_tilt_deg,
                               axis=scenario.target_axis)
     gains = Gains(kp_com=scenario.kp_com, kv_com=scenario.kv_com, kp_rot=scenario.kp_rot,
                   kv_rot=scenario.kv_rot)
-    tree = tree or TreeModel.from_mjcf(biped.models.path("wendlandt"))
+    tree = tree or TreeModel.from_mjcf(resolve(scenario.model))
     ctrl = WorkspaceController(tree, target=target, gains=gains)
     if scenario.support == "sensed":
         return ctrl, lambda q, v, feet: ctrl.torques(q, v, feet_in_contact=feet)
@@ -125,10 +125,10 @@ def make_controller(scenario: Scenario, scene: Scene) -> Callable[[np.ndarray, n
     if scenario.controller == "workspace":
         ctrl, raw = workspace_policy(scenario)
     else:  # the project's joint-space PD baseline (the same as ``biped sweep``'s)
-        import biped.models
         from biped.control.joint_pd import JointPDController
+        from biped.models.subject import resolve
 
-        ctrl = JointPDController.from_mjcf(biped.models.path("wendlandt"),
+        ctrl = JointPDController.from_mjcf(resolve(scenario.model),
                                            q_ref_deg=scenario.initial_joint_angles_deg,
                                            control_period_s=1.0 / scenario.control_rate_hz)
         raw = lambda q, v, feet: ctrl.compute(q, v).torques

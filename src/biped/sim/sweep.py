@@ -265,7 +265,8 @@ class SweepSpec:
     @property
     def model_path(self) -> Path:
         from biped import models
-        return models.path(self.model)
+        from biped.models.subject import resolve
+        return resolve(self.base.model) if self.base.model != "wendlandt" else models.path(self.model)
 
     @property
     def model_sha256(self) -> str:
@@ -751,7 +752,7 @@ def _scene_for(scenario: Scenario):
     from biped.sim.scene import build_scene
 
     key = (scenario.physics_timestep_s, scenario.restitution, scenario.contact_timeconst_s,
-           scenario.friction, scenario.block_size_m, scenario.block_mass_kg)
+           scenario.friction, scenario.block_size_m, scenario.block_mass_kg, scenario.model)
     scene = _SCENES.get(key)
     if scene is None:
         if len(_SCENES) >= _CACHE_SIZE:
@@ -761,15 +762,15 @@ def _scene_for(scenario: Scenario):
 
 
 def _tree(model: str):
-    from biped import models
     from biped.model import TreeModel
+    from biped.models.subject import resolve
 
     if model not in _TREES:
-        _TREES[model] = TreeModel.from_mjcf(models.path(model))
+        _TREES[model] = TreeModel.from_mjcf(resolve(model))
     return _TREES[model]
 
 
-def make_policy(setup: TrialSetup, scene, model: str = "wendlandt"):
+def make_policy(setup: TrialSetup, scene, model: str | None = None):
     """``policy(qpos_biped, qvel_biped, feet) -> torques (12,)`` in ``scene.joint_names`` order for the
     trial's controller (W's workspace controller with the scenario's set point and gains, or the
     joint-space PD of :mod:`biped.control.joint_pd` holding the initial joint angles, its gains
@@ -777,16 +778,17 @@ def make_policy(setup: TrialSetup, scene, model: str = "wendlandt"):
     from biped.control.limits import clip_torques, torque_limits
 
     sc = setup.scenario
+    model = model or sc.model
     if sc.controller == "workspace":
         from biped.sim.push import workspace_policy
 
         ctrl, raw = workspace_policy(sc, _tree(model))
     elif sc.controller == "joint-pd":
-        from biped import models
         from biped.control.joint_pd import JointPDController
+        from biped.models.subject import resolve
 
         ctrl = JointPDController.from_mjcf(
-            models.path(model), q_ref_deg=sc.initial_joint_angles_deg,
+            resolve(model), q_ref_deg=sc.initial_joint_angles_deg,
             gain_scale=setup.trial.gain_scale, control_period_s=1.0 / sc.control_rate_hz)
         raw = lambda q, v, feet: ctrl.compute(q, v).torques
     else:  # pragma: no cover - Scenario validates the name
