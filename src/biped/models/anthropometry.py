@@ -161,8 +161,8 @@ def central_body(scale: float, mass_total: float, sex: str = "male"):
         sjc = np.array([0.0, side * sj_y, sj_z])
         parts += [(uarm, sjc), (farm, sjc - [0, 0, L_ua]), (hand, sjc - [0, 0, L_ua + L_fa])]
     m, c, inertia = _combine(parts)
-    dims = dict(trunk=L_tr, head=L_hd, upper_arm=L_ua, forearm=L_fa, hand=L_ha,
-                shoulder_z=sj_z, shoulder_y=sj_y)
+    dims = {"trunk": L_tr, "head": L_hd, "upper_arm": L_ua, "forearm": L_fa, "hand": L_ha,
+            "shoulder_z": sj_z, "shoulder_y": sj_y}
     return m, c, inertia, dims
 
 
