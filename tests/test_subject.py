@@ -319,3 +319,27 @@ def test_push_on_a_155m_50kg_female_recovers(female):
     assert r.block_contact_time_s is not None and 0.05 < r.block_contact_time_s < 0.12
     assert not r.fell and r.diverged is None and r.controller_error is None
     assert r.recovered, (r.final_com_error_m, r.final_orientation_error_deg)
+
+
+def test_push_and_sweep_record_the_model(female, tmp_path):
+    """The run's summary.json and scenario.toml and the sweep's Parquet metadata name the file;
+    a key given on the command line wins over the moved-on value (W's own 1.8 kg block)."""
+    import json
+
+    import pyarrow.parquet as pq
+
+    out = tmp_path / "push"
+    assert main(["push", "--model", str(female), "--duration", "0.02", "--set", "block_mass_kg=1.8",
+                 "--no-video", "--no-replay", "--no-figures", "--quiet", "--out", str(out)]) == 0
+    sc = json.loads((out / "summary.json").read_text())["scenario"]
+    moved = Scenario.for_model(str(female))
+    assert sc["model"] == str(female.resolve()) and sc["block_mass_kg"] == 1.8
+    assert sc["initial_com_m"] == list(moved.initial_com_m)
+    assert Scenario.from_toml(out / "scenario.toml").model == str(female.resolve())
+    sweep = tmp_path / "s.parquet"
+    assert main(["sweep", "--model", str(female), "--speed", "3", "--direction", "180",
+                 "--duration", "0.02", "--workers", "1", "--quiet", "--out", str(sweep)]) == 0
+    meta = pq.read_schema(sweep).metadata
+    assert meta[b"biped.model"].decode() == str(female.resolve())
+    import hashlib
+    assert meta[b"biped.model_sha256"].decode() == hashlib.sha256(female.read_bytes()).hexdigest()
