@@ -12,7 +12,7 @@ import sys
 
 from biped.errors import BipedError
 
-SUBCOMMANDS = ("push", "posture", "walk", "sweep")
+SUBCOMMANDS = ("push", "posture", "walk", "sweep", "model")
 
 
 def build_parser() -> argparse.ArgumentParser:

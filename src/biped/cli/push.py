@@ -20,6 +20,9 @@ def register(subparsers) -> None:
         description="Simulate W section 4 on MuJoCo: the biped rises to its set point while a "
                     "1.8 kg block hits it. Every parameter defaults to W's; see docs/push.md.")
     p.add_argument("--scenario", metavar="FILE.toml", help="scenario file (top-level key = value)")
+    p.add_argument("--model", metavar="FILE.xml",
+                   help="the biped: an MJCF file with W's structure (e.g. from `biped model`); W's "
+                        "initial state, set point and block height move onto it (docs/model.md)")
     p.add_argument("--duration", type=float, metavar="S", help="simulated time [s] (W: 3)")
     p.add_argument("--block-position", type=float, nargs=3, metavar=("X", "Y", "Z"),
                    help="block start [m] (W: 0.5 0.1 1.2)")
@@ -51,18 +54,21 @@ def register(subparsers) -> None:
 
 
 def build_scenario(args):
-    """The scenario from ``--scenario``, then ``--set``, then the named options (last wins)."""
-    from biped.sim.scenario import Scenario, parse_assignment
+    """The scenario from ``--scenario``, then ``--set``, then the named options (last wins), on
+    ``--model`` (or the ``model`` key): keys not given take W's values moved onto that biped."""
+    from biped.sim.scenario import Scenario, parse_assignment, toml_values
 
-    scenario = Scenario.from_toml(args.scenario) if args.scenario else Scenario()
-    overrides = dict(parse_assignment(a) for a in args.set)
+    values = toml_values(args.scenario) if args.scenario else {}
+    values.update(parse_assignment(a) for a in args.set)
     named = {"duration_s": args.duration, "block_position_m": args.block_position,
              "block_velocity_m_s": args.block_velocity, "block_mass_kg": args.block_mass,
              "controller": args.controller, "physics": args.physics,
              "physics_timestep_s": args.timestep, "distribution": args.distribution,
              "seed": args.seed}
-    overrides.update({k: v for k, v in named.items() if v is not None})
-    return scenario.with_overrides(**overrides) if overrides else scenario
+    values.update({k: v for k, v in named.items() if v is not None})
+    model = getattr(args, "model", None) or values.pop("model", None)
+    values.pop("model", None)
+    return Scenario.for_model(model, **values) if model else Scenario.from_dict(values)
 
 
 def _out_dir(args) -> Path:

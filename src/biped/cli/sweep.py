@@ -44,6 +44,9 @@ def register(subparsers) -> None:
                         "(statics, default) or the contact-feasible QP (docs/controller.md)")
     p.add_argument("--torque-limits", choices=("none", "human"), default=None,
                    help="joint torque limits: none (W) or human-like (docs/sweep.md)")
+    p.add_argument("--model", metavar="FILE.xml",
+                   help="the biped: an MJCF file with W's structure (e.g. from `biped model`); W's "
+                        "initial state, set point and aim height move onto it (docs/model.md)")
     p.add_argument("--duration", type=float, metavar="S", help="simulated time per trial [s] (3)")
     p.add_argument("--physics", choices=("faithful", "fast"), default=None,
                    help="physics preset (default fast: 1 ms step, 7.5 ms contacts, sleep; its "
@@ -91,10 +94,15 @@ def build_spec(args):
 
     spec = SweepSpec.from_toml(args.grid) if args.grid else None
     base = spec.base if spec else Scenario()
+    overrides = dict(parse_assignment(a) for a in args.set)
+    model = getattr(args, "model", None) or overrides.pop("model", None) or (
+        base.model if base.model != "wendlandt" else None)
+    overrides.pop("model", None)
+    if model:  # W's scenario moved onto the model, then the grid file's [scenario] keys
+        base = Scenario.for_model(model, **_grid_file(args.grid)[0])
     task = args.task or (None if spec else "hold")
     if task == "hold":
         base = hold_scenario(base)
-    overrides = dict(parse_assignment(a) for a in args.set)
     if args.controller:
         overrides["controller"] = args.controller
     if getattr(args, "distribution", None):
@@ -114,6 +122,8 @@ def build_spec(args):
             axes[name] = parse_axis(name, text)
     if not spec and not any(getattr(args, opt) for opt, _, _ in _AXIS_OPTIONS):
         axes.update(speed_m_s=(2.0, 4.0, 6.0), direction_deg=tuple(range(0, 360, 45)))
+    if model and not args.height and "height_m" not in _grid_file(args.grid)[1]:
+        axes["height_m"] = (base.block_position_m[2],)  # W's aim height moved onto the model
     samples = args.samples if args.samples is not None else (spec.samples if spec else None)
     seed = args.seed if args.seed is not None else (spec.seed if spec else 0)
     limits = args.torque_limits or (spec.torque_limits if spec else "none")
@@ -123,6 +133,18 @@ def build_spec(args):
 
 def _qp_suffix(base) -> str:
     return f"-{base.distribution}" if base.controller == "workspace" and base.distribution != "statics" else ""
+
+
+def _grid_file(grid) -> tuple[dict, dict]:
+    """The [scenario] keys and [grid] axes the sweep file sets (validated by SweepSpec.from_toml)."""
+    if not grid:
+        return {}, {}
+    import tomllib
+
+    values = tomllib.loads(Path(grid).read_text())
+    scenario = dict(values.get("scenario", {}))
+    scenario.pop("model", None)
+    return scenario, dict(values.get("grid", {}))
 
 
 def _check_plot(path: str | None, compare: list[str]) -> None:

@@ -39,6 +39,9 @@ def register(subparsers) -> None:
                    help="jump without B's 360 deg turn along the semicircle")
     p.add_argument("--rate", type=float, default=200.0, metavar="HZ",
                    help="samples per second of trajectory.csv and the dynamics (default 200)")
+    p.add_argument("--model", metavar="FILE.xml",
+                   help="the biped (MJCF with W's structure, e.g. from `biped model`): the figure "
+                        "takes its legs and the inverse dynamics its masses (default: W's shipped biped)")
     p.add_argument("--out", metavar="DIR", help="output folder (default: a new one under runs/)")
     p.add_argument("--overwrite", action="store_true",
                    help="allow writing into a folder that already holds a run")
@@ -63,7 +66,7 @@ def build_plan(args):
         raise ScenarioError(f"--stair-rise / --stair-run apply to --gait upstairs and demo, not {args.gait}")
     if not (math.isfinite(args.rate) and 20.0 <= args.rate <= 2000.0):
         raise ScenarioError(f"--rate must be in [20, 2000] Hz, got {args.rate!r}")
-    dims = FigureDims.from_anthropometry()
+    dims = FigureDims.from_mjcf(args.model) if getattr(args, "model", None) else FigureDims.from_anthropometry()
     params = GaitParams()
     if args.no_somersault:
         params = replace(params, somersault=False)
@@ -105,7 +108,7 @@ def run(args) -> int:
 
     walk = write_walk(plan, out, gait=args.gait, speed=args.speed, rate=args.rate,
                       stair_rise=args.stair_rise, stair_run=args.stair_run, on_stage=on_stage,
-                      **flags)
+                      model=args.model, **flags)
     bar.update(1)
     bar.close()
     metrics, idyn, summary, notes = walk.metrics, walk.idyn, walk.summary, walk.notes

@@ -42,13 +42,14 @@ _RZ_PI = np.diag([-1.0, -1.0, 1.0])
 
 
 def load_biped(name: str = "wendlandt"):
-    """The biped MJCF as a ``mujoco.MjModel`` with contacts disabled (the feet's wrenches are
-    solved for, not simulated)."""
+    """The biped MJCF (a shipped model's name or a checked MJCF path, see
+    :func:`biped.models.subject.resolve`) as a ``mujoco.MjModel`` with contacts disabled (the
+    feet's wrenches are solved for, not simulated)."""
     import mujoco
 
-    from biped import models
+    from biped.models.subject import resolve
 
-    m = mujoco.MjModel.from_xml_path(str(models.path(name)))
+    m = mujoco.MjModel.from_xml_path(str(resolve(name)))
     m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
     return m
 
@@ -106,7 +107,8 @@ def _check_dims(model, names: _Names, dims) -> None:
     for k, (b, f) in pairs.items():
         if abs(b - f) > 1e-4:
             raise ModelError(f"figure {k} = {f:.6g} m differs from the biped's {b:.6g} m; build the figure "
-                             f"with FigureDims.from_anthropometry() to run it on the biped")
+                             f"with FigureDims.from_anthropometry() (FigureDims.from_mjcf(path) for another "
+                             f"model) to run it on the biped")
 
 
 def biped_qpos(model, motion_or_arrays, names: _Names | None = None) -> np.ndarray:

@@ -135,6 +135,33 @@ class FigureDims:
             shoulder_height=d["shoulder_z"], shoulder_half_width=d["shoulder_y"],
             upper_arm=d["upper_arm"], forearm=d["forearm"], hand=d["hand"], scale=s)
 
+    @classmethod
+    def from_mjcf(cls, model) -> FigureDims:
+        """The figure of another biped model (a shipped name or an MJCF path with W's structure,
+        e.g. written by ``biped model``): legs and feet exactly as in the file (hip spacing, thigh,
+        shank, ankle height and the heel/toe sole boxes); the upper body, which the figure shows
+        but the inverse dynamics does not use, is the default figure's scaled by the ratio of leg
+        lengths."""
+        import mujoco
+
+        from biped.models.subject import resolve
+
+        m = mujoco.MjModel.from_xml_path(str(resolve(model)))
+        heel, toe = m.geom("left_heel"), m.geom("left_toe")
+        xb = float(heel.pos[0] + heel.size[0])  # back of the heel, ankle at x = 0
+        xf = float(toe.pos[0] - toe.size[0])  # toe tip (the biped faces -x)
+        thigh = -float(m.body("left_shank").pos[2])
+        shank = -float(m.body("left_ankle_1").pos[2])
+        d = cls.from_anthropometry()
+        k = (thigh + shank) / d.leg
+        return cls(
+            thigh=thigh, shank=shank, foot=xb - xf, heel_back=xb,
+            ankle_height=-float(heel.pos[2] - heel.size[2]), foot_width=2.0 * float(heel.size[1]),
+            hip_half_width=-float(m.body("left_hip_1").pos[1]),
+            lumbar=d.lumbar * k, trunk=d.trunk * k, head=d.head * k,
+            shoulder_height=d.shoulder_height * k, shoulder_half_width=d.shoulder_half_width * k,
+            upper_arm=d.upper_arm * k, forearm=d.forearm * k, hand=d.hand * k, scale=d.scale * k)
+
 
 @dataclass(frozen=True)
 class Part:

@@ -18,7 +18,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from biped.kinematic.dynamics import inverse_dynamics
+from biped.kinematic.dynamics import inverse_dynamics, load_biped
 from biped.kinematic.figure import (
     JOINT_NAMES,
     PARTS,
@@ -146,12 +146,14 @@ def walk_stages(*, dynamics: bool = True, figures: bool = True, replay: bool = T
 def write_walk(plan, out: Path, *, gait: str, speed: float, rate: float,
                stair_rise: float | None = None, stair_run: float | None = None,
                dynamics: bool = True, figures: bool = True, replay: bool = True,
-               video: bool = True, on_stage: Callable[[str], None] | None = None) -> WalkRun:
+               video: bool = True, on_stage: Callable[[str], None] | None = None,
+               model: str | Path | None = None) -> WalkRun:
     """Sample ``plan`` at ``rate`` [Hz] and write the walk's files into ``out`` (created):
     trajectory.csv, then (unless switched off) the inverse dynamics, figures/, replay.html,
     video.mp4, and summary.json last. ``on_stage(name)`` is called before each of
     :func:`walk_stages`; ``gait``, ``speed``, ``stair_rise`` / ``stair_run`` are recorded in the
-    summary (the stairs' geometry for the upstairs and demo gaits)."""
+    summary (the stairs' geometry for the upstairs and demo gaits). ``model``: the MJCF biped
+    whose inertias the inverse dynamics use (None: W's shipped biped), recorded in the summary."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     paths, notes = {}, {}
@@ -166,7 +168,7 @@ def write_walk(plan, out: Path, *, gait: str, speed: float, rate: float,
         elif stage == "trajectory.csv":
             paths["trajectory"] = str(write_trajectory_csv(motion, lm, out / "trajectory.csv"))
         elif stage == "dynamics":
-            idyn = inverse_dynamics(motion)
+            idyn = inverse_dynamics(motion, load_biped(model) if model else None)
         elif stage == "figures":
             figs = [plot_joint_angles(motion, out / "figures" / "joint_angles.png"),
                     plot_feet(motion, lm, out / "figures" / "feet.png")]
@@ -204,6 +206,7 @@ def write_walk(plan, out: Path, *, gait: str, speed: float, rate: float,
                              "alpha_down_deg": plan.params.alpha_down}
     if idyn is not None:
         summary["inverse_dynamics"] = idyn.summary()
+    summary["model"] = str(Path(model).resolve()) if model else "wendlandt"
     summary["outputs"] = paths
     summary["notes"] = notes
     (out / "summary.json").write_text(json.dumps(summary, indent=2))

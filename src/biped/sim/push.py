@@ -33,6 +33,7 @@ from biped.control.limits import TorqueLimits
 from biped.control.policy import PolicyConfig, make_policy, symmetric_limits
 from biped.control.workspace import Gains, Target
 from biped.errors import BipedError, ScenarioError
+from biped.models import subject
 from biped.sim.contact import SOLE_GEOMS, ContactMonitor
 from biped.sim.scenario import Scenario
 from biped.sim.scene import Scene, build_scene, initial_state, tilt_quat
@@ -148,11 +149,12 @@ def policy_config(scenario: Scenario, *, gain_scale: float = 1.0,
         qp_weights = QPWeights(moment=scenario.qp_moment_weight, friction=scenario.friction,
                                min_normal_n=scenario.qp_min_normal_n,
                                cop_scale=scenario.qp_cop_scale)
+    model_path = None if scenario.model == subject.DEFAULT else subject.resolve(scenario.model)
     return PolicyConfig(controller=scenario.controller, target=target, gains=gains,
                         support=scenario.support, q_ref_deg=tuple(scenario.initial_joint_angles_deg),
                         control_period_s=1.0 / scenario.control_rate_hz, gain_scale=gain_scale,
                         torque_limits=torque_limits, distribution=scenario.distribution,
-                        qp_weights=qp_weights)
+                        qp_weights=qp_weights, model_path=model_path)
 
 
 class ControllerPolicy:

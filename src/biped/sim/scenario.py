@@ -103,6 +103,8 @@ class Scenario:
     recovery_com_tol_m: float = 0.02
     recovery_orientation_tol_deg: float = 2.0
     seed: int = 0
+    # not in W: the biped, a shipped model's name or an MJCF path (see Scenario.for_model)
+    model: str = "wendlandt"
 
     def __post_init__(self):
         preset = PHYSICS_PRESETS.get(self.physics)
@@ -124,21 +126,35 @@ class Scenario:
     @classmethod
     def from_toml(cls, path: str | Path) -> Scenario:
         """A scenario from a TOML file of top-level ``key = value`` lines (others keep W's)."""
-        path = Path(path)
-        try:
-            text = path.read_text()
-        except OSError as exc:
-            raise ScenarioError(f"cannot read scenario file {str(path)!r}: {exc.strerror}") from None
-        try:
-            values = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise ScenarioError(f"scenario file {str(path)!r} is not valid TOML: {exc}") from None
-        for k, v in values.items():
-            if isinstance(v, dict):
-                raise ScenarioError(
-                    f"scenario file {str(path)!r}: tables such as [{k}] are not used; write "
-                    f"top-level 'key = value' lines with keys from: {', '.join(keys())}")
-        return cls.from_dict(values)
+        return cls.from_dict(toml_values(path))
+
+    @classmethod
+    def for_model(cls, model: str | Path, **values) -> Scenario:
+        """W's scenario on another biped (a shipped name or an MJCF path, checked first), then
+        ``values`` (any keys, taken as given). For a model other than W's shipped biped, the keys
+        W's numbers fix for W's body are moved onto the subject by
+        :func:`biped.models.subject.subject_state`: ``initial_com_m`` (W's crouch and tilt, soles
+        5 mm up), ``target_com_m`` (W's set point as joint angles, same angles on the subject),
+        the block's start height ``block_position_m[2]`` and ``fall_height_m`` times the ratio of
+        initial COM heights, and ``block_mass_kg`` times the ratio of total body masses (W's push
+        as momentum per kilogram of body; pass ``block_mass_kg=1.8`` for W's block itself).
+        ``model`` is recorded as an absolute path."""
+        from biped.models import subject
+
+        path = subject.resolve(str(model) if isinstance(model, Path) else model)
+        if isinstance(model, str) and model == subject.DEFAULT:
+            return cls.from_dict({**values, "model": model})
+        w = cls()
+        st = subject.subject_state(
+            path, initial_tilt_deg=w.initial_tilt_deg, joint_angles_deg=w.initial_joint_angles_deg,
+            target_com_m=w.target_com_m, target_tilt_deg=w.target_tilt_deg,
+            reference_com_m=w.initial_com_m)
+        bx, by, bz = w.block_position_m
+        scaled = {"initial_com_m": st.initial_com_m, "target_com_m": st.target_com_m,
+                  "block_position_m": (bx, by, bz * st.height_ratio),
+                  "block_mass_kg": w.block_mass_kg * st.mass_ratio,
+                  "fall_height_m": w.fall_height_m * st.height_ratio}
+        return cls.from_dict({**scaled, **values, "model": str(path.resolve())})
 
     def with_overrides(self, **values) -> Scenario:
         """A copy with some keys changed (validated like every other route). Changing ``physics``
@@ -182,6 +198,27 @@ class Scenario:
     def control_steps(self) -> int:
         """Number of control periods in ``duration_s``."""
         return round(self.duration_s * self.control_rate_hz)
+
+
+def toml_values(path: str | Path) -> dict:
+    """The ``{key: value}`` of a scenario TOML file (top-level ``key = value`` lines; keys
+    checked, values not yet)."""
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise ScenarioError(f"cannot read scenario file {str(path)!r}: {exc.strerror}") from None
+    try:
+        values = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"scenario file {str(path)!r} is not valid TOML: {exc}") from None
+    for k, v in values.items():
+        if isinstance(v, dict):
+            raise ScenarioError(
+                f"scenario file {str(path)!r}: tables such as [{k}] are not used; write "
+                f"top-level 'key = value' lines with keys from: {', '.join(keys())}")
+    _check_keys(values)
+    return values
 
 
 # ---------------------------------------------------------------------------------------------
@@ -233,6 +270,8 @@ def _coerce(key: str, v):
         return float(v) if _is_number(v) else v
     if key in _STRINGS or key in _INTS:
         return v
+    if key == "model":
+        return str(v) if isinstance(v, Path) else v
     return float(v) if _is_number(v) else v
 
 
@@ -317,6 +356,9 @@ def validate(s: Scenario) -> None:
     _positive(s, "recovery_orientation_tol_deg", "deg")
     if not isinstance(s.seed, int) or isinstance(s.seed, bool) or s.seed < 0:
         raise ScenarioError(f"seed must be an integer >= 0; got {s.seed!r}")
+    if not isinstance(s.model, str) or not s.model.strip():
+        raise ScenarioError(f"model must be a shipped model's name ('wendlandt') or the path of an "
+                            f"MJCF file; got {s.model!r}")
 
 
 def _toml_value(v) -> str:
@@ -358,5 +400,6 @@ __all__ = [
     "Scenario",
     "keys",
     "parse_assignment",
+    "toml_values",
     "validate",
 ]

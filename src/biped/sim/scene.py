@@ -1,4 +1,4 @@
-"""The push scene: W's biped (the shipped MJCF, untouched) + a floor + the thrown block.
+"""The push scene: W's biped (the scenario's ``model`` MJCF, untouched) + a floor + the thrown block.
 
 Built with :class:`mujoco.MjSpec` from the shipped model file, to which the floor and the block are
 added; no copy of the biped's XML exists anywhere. Every qpos/qvel/actuator index the simulation
@@ -18,7 +18,6 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
-import biped.models
 from biped.errors import ModelError, unknown_name
 from biped.models import JOINT_NAMES
 from biped.sim.contact import CONTACT_SOLIMP, SOLE_GEOMS, contact_solref
@@ -64,9 +63,12 @@ class Scene:
     solref: tuple = field(default=(0.02, 1.0))
 
 
-def biped_spec() -> mujoco.MjSpec:
-    """The shipped biped MJCF as an editable spec."""
-    return mujoco.MjSpec.from_file(str(biped.models.path(BIPED_MODEL)))
+def biped_spec(model: str = BIPED_MODEL) -> mujoco.MjSpec:
+    """The biped MJCF (a shipped model's name or a checked MJCF path, the scenario's ``model``)
+    as an editable spec."""
+    from biped.models.subject import resolve
+
+    return mujoco.MjSpec.from_file(str(resolve(model)))
 
 
 def scene_spec(scenario: Scenario) -> mujoco.MjSpec:
@@ -79,7 +81,7 @@ def scene_spec(scenario: Scenario) -> mujoco.MjSpec:
     stops being simulated until something touches it. Only the block can sleep: MuJoCo never lets
     an actuated tree (the biped) sleep.
     """
-    spec = biped_spec()
+    spec = biped_spec(scenario.model)
     spec.modelname = "push_scene"
     spec.option.timestep = scenario.physics_timestep_s
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
@@ -124,7 +126,7 @@ def build_scene(scenario: Scenario) -> Scene:
     """Compile :func:`scene_spec` and resolve every index by name (see :class:`Scene`)."""
     spec = scene_spec(scenario)
     model = spec.compile()
-    bm = biped_spec().compile()
+    bm = biped_spec(scenario.model).compile()
     qpos_index = np.full(bm.nq, -1, dtype=np.int64)
     qvel_index = np.full(bm.nv, -1, dtype=np.int64)
     for j in range(bm.njnt):

@@ -287,7 +287,10 @@ class SweepSpec:
 
     @property
     def model_path(self) -> Path:
-        return models.path(self.model)
+        """The biped's MJCF: the base scenario's ``model`` when it names another subject."""
+        from biped.models.subject import resolve
+
+        return resolve(self.base.model) if self.base.model != "wendlandt" else models.path(self.model)
 
     @property
     def model_sha256(self) -> str:

@@ -277,7 +277,7 @@ def write_manifest(spec: SweepSpec, out: Path) -> None:
 def metadata(spec: SweepSpec) -> dict[bytes, bytes]:
     return {b"biped.sweep": json.dumps(spec.to_dict()).encode(),
             b"biped.scenario": spec.base.to_toml().encode(),
-            b"biped.model": spec.model.encode(),
+            b"biped.model": (spec.model if spec.base.model == "wendlandt" else spec.base.model).encode(),
             b"biped.model_sha256": spec.model_sha256.encode(),
             b"biped.version": __version__.encode(),
             b"biped.sweep_id": spec.identity.encode()}

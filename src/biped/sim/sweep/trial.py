@@ -9,9 +9,9 @@ from typing import Any
 import mujoco
 import numpy as np
 
-from biped import models
 from biped.control.limits import torque_limits
 from biped.model import TreeModel
+from biped.models import subject
 from biped.sim.push import ControllerPolicy, PushResult, controller_policy, run_closed_loop
 from biped.sim.scenario import Scenario
 from biped.sim.scene import Scene, build_scene
@@ -43,11 +43,11 @@ def _scene_for(scenario: Scenario) -> Scene:
 
 def _tree(model: str) -> TreeModel:
     if model not in _TREES:
-        _TREES[model] = TreeModel.from_mjcf(models.path(model))
+        _TREES[model] = TreeModel.from_mjcf(subject.resolve(model))
     return _TREES[model]
 
 
-def make_policy(setup: TrialSetup, scene: Scene, model: str = "wendlandt") -> ControllerPolicy:
+def make_policy(setup: TrialSetup, scene: Scene) -> ControllerPolicy:
     """The trial's loop policy ``policy(t, qpos_biped, qvel_biped, feet) -> torques (12,)`` in
     ``scene.joint_names`` order (:func:`biped.sim.push.controller_policy`): W's workspace
     controller with the scenario's set point, gains and distribution, or the joint-space PD of
@@ -55,7 +55,7 @@ def make_policy(setup: TrialSetup, scene: Scene, model: str = "wendlandt") -> Co
     ``gain_scale``); the sweep's torque limits clip the torques and, with the QP distribution,
     are constraints of the QP."""
     limits = torque_limits(setup.torque_limits)
-    tree = _tree(model) if setup.scenario.controller == "workspace" else None
+    tree = _tree(setup.scenario.model) if setup.scenario.controller == "workspace" else None
     return controller_policy(setup.scenario, scene, gain_scale=setup.trial.gain_scale,
                              torque_limits=None if limits.unlimited else limits, tree=tree)
 
