@@ -9,8 +9,10 @@ The MJCF is the single source of truth: the simulator (MuJoCo) and the controlle
 file, so they cannot disagree about masses, lengths or axes.
 
 Supported trees: one floating root body (a ``free`` joint) and, on every other body, exactly one
-``hinge`` joint; two named feet that descend from the root on different branches. Anything else
-raises :class:`biped.errors.ModelError` naming the problem and the valid choices.
+``hinge`` joint; two named feet that descend from the root on different branches, every jointed
+body on one of the two legs (root to foot) or beyond a foot (W's controller actuates the legs
+only: a third leg or an arm would get no torque). Anything else raises
+:class:`biped.errors.ModelError` naming the problem and the valid choices.
 """
 
 from __future__ import annotations
@@ -104,8 +106,13 @@ class TreeModel:
 def _load(source):
     if isinstance(source, mujoco.MjModel):
         return source, "<MjModel>"
+    if isinstance(source, (str, PathLike)) and not str(source).strip():
+        raise ModelError(f"empty model source {str(source)!r}: expected an MJCF file path, MJCF XML "
+                         f"text or a mujoco.MjModel")
     if isinstance(source, (str, PathLike)) and not str(source).lstrip().startswith("<"):
         path = Path(source)
+        if path.is_dir():
+            raise ModelError(f"model file {str(path)!r} is a folder; give an MJCF (.xml) file")
         if not path.is_file():
             raise ModelError(f"model file {str(path)!r} does not exist")
         try:
@@ -159,6 +166,10 @@ def _build(model: mujoco.MjModel, feet: tuple[str, str], label: str) -> TreeMode
             raise ModelError(unknown_name("foot body", f, names))
     if len(feet) != 2 or feet[0] == feet[1]:
         raise ModelError(f"need two different feet (left, right), got {feet}")
+    for f in feet:
+        if f == names[0]:
+            raise ModelError(f"foot {f!r} is the floating root (the central body); the feet must be "
+                             f"bodies below it, one at the end of each leg")
     index = {b: i for i, b in enumerate(bodies)}
     n = len(bodies)
     parent = np.full(n, -1, dtype=np.int64)
@@ -179,6 +190,13 @@ def _build(model: mujoco.MjModel, feet: tuple[str, str], label: str) -> TreeMode
     for k in range(1, n):
         p = parent[k]
         beyond[k] = beyond[p] or (p in foot_idx)
+    off_legs = [names[k] for k in range(1, n) if leg[k] < 0 and not beyond[k]]
+    if off_legs:
+        raise ModelError(
+            f"bodies {off_legs} are on neither leg ({names[0]!r} to {feet[0]!r}, {names[0]!r} to "
+            f"{feet[1]!r}) nor beyond a foot: W's controller actuates only the two legs, so their "
+            f"joints would get no torque; valid models have two legs (a third leg or arms are not "
+            f"supported: weld them into the central body)")
     # --- geometry and inertia (MuJoCo body frames -> inertial frames)
     def body_to_inertial(b):
         return transform(quat_to_rot(model.body_iquat[b]), model.body_ipos[b])

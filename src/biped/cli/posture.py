@@ -12,11 +12,15 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-from pathlib import Path
 
 import numpy as np
 
+from biped.cli._common import check_range, run_dir
 from biped.errors import ScenarioError, unknown_name
+
+#: Bounds on the work one command may ask for (a run must end in minutes and fit in memory).
+MAX_STEPS = 1_000_000  # integration steps, duration / dt (~30 s of pure-Python stepping)
+MAX_GRID = 401  # stability map points per axis (401^2 = 160801 eigenvalue problems, ~5 s)
 
 
 def register(subparsers) -> None:
@@ -53,9 +57,11 @@ def register(subparsers) -> None:
                        help="re-evaluate the torques in every integrator stage "
                             "(default: held over each step, as B's code)")  # fmt: skip
         p.add_argument("--no-animation", action="store_true", help="skip the GIF")
-        p.add_argument(
-            "--out", type=Path, default=Path(out), help=f"output directory (default {out})"
-        )
+        p.add_argument("--out", metavar="DIR",
+                       help=f"output folder (default: a new runs/{out}-<date>-<time>)")
+        p.add_argument("--overwrite", action="store_true",
+                       help="allow writing into a folder that already holds a run (its files "
+                            "are removed first)")
 
     pp = sub.add_parser("pendulum", help="single-link inverted pendulum (B Fig. 25)")
     common(pp, pd.PENDULUM_METHODS, "newton-euler", "euler", 0.02, 20.0, 2, runs.PENDULUM_GAINS,
@@ -72,17 +78,22 @@ def register(subparsers) -> None:
 
     pg = sub.add_parser("gains", help="linear analysis, pole placement, LQR, best local gains, map")
     pg.add_argument(
-        "--grid", type=int, default=81, help="stability map points per axis (default 81)"
+        "--grid", type=int, default=81,
+        help=f"stability map points per axis, 2..{MAX_GRID} (default 81)"
     )
     pg.add_argument("--k1-max", type=float, default=60000.0, help="map K_theta1 range end")
     pg.add_argument("--k2-max", type=float, default=60000.0, help="map K_theta2 range end")
     pg.add_argument("--rate-gains", type=float, nargs=2, default=[2500.0, 400.0],
                     metavar=("K1D", "K2D"), help="rate gains fixed on the map (default B's)")  # fmt: skip
     pg.add_argument("--poles", type=float, nargs=4, default=None, metavar="P",
-                    help="real closed-loop poles for pole placement [1/s] "
-                         "(default: those of the best local gains)")  # fmt: skip
+                    help="real closed-loop poles for pole placement [1/s], each value at most "
+                         "twice (rank of B) (default: those of the best local gains)")  # fmt: skip
     pg.add_argument("--param", action="append", default=[], metavar="NAME=VALUE")
-    pg.add_argument("--out", type=Path, default=Path("posture-gains"))
+    pg.add_argument("--out", metavar="DIR",
+                    help="output folder (default: a new runs/posture-gains-<date>-<time>)")
+    pg.add_argument("--overwrite", action="store_true",
+                    help="allow writing into a folder that already holds a run (its files are "
+                         "removed first)")
     pg.set_defaults(func=run)
 
 
@@ -107,9 +118,10 @@ def _run_model(args) -> int:
     from biped.planar import body_leg as bl
     from biped.planar import pendulum as pd
 
+    _check_steps(args)
     cls = pd.PendulumParams if args.model == "pendulum" else bl.BodyLegParams
     params = _params(cls, args.param)
-    out: Path = args.out
+    out = run_dir(args.out, f"posture-{args.model}", overwrite=args.overwrite)
     traj, lin = run_model(args.model, params, args.method, args.gains, args.x0, args.alpha,
                           out=out, dt=args.dt, duration=args.duration, integrator=args.integrator,
                           hold=not args.continuous, compare=getattr(args, "compare", False),
@@ -125,16 +137,48 @@ def _run_gains(args) -> int:
     from biped.outputs.posture import run_gains
     from biped.planar import body_leg as bl
 
-    if args.grid < 2:
-        raise ScenarioError(f"--grid must be >= 2, got {args.grid}")
+    if not 2 <= args.grid <= MAX_GRID:
+        raise ScenarioError(f"--grid must be in [2, {MAX_GRID}] points per axis (bounds the "
+                            f"work: {MAX_GRID}^2 eigenvalue problems); got {args.grid}")
+    for flag, v in (("--k1-max", args.k1_max), ("--k2-max", args.k2_max)):
+        check_range(flag, v, 0.0, 1e12, "map range end, lb ft^2/s^2 per rad", lo_open=True)
+    for i, v in enumerate(args.rate_gains):
+        check_range(f"--rate-gains[{i}]", v, -1e12, 1e12, "lb ft^2/s^2 per rad/s")
     params = _params(bl.BodyLegParams, args.param)
-    out: Path = args.out
+    if args.poles is not None:
+        from biped.planar import analysis
+
+        _check_poles(args.poles, np.linalg.matrix_rank(analysis.ab_matrices(params)[1]))
+    out = run_dir(args.out, "posture-gains", overwrite=args.overwrite)
     result, best = run_gains(params, out=out, grid=args.grid, k1_max=args.k1_max,
                              k2_max=args.k2_max, rate_gains=args.rate_gains, poles=args.poles)
     print(f"best local gains {np.array2string(best.gains, precision=1)} margin {best.margin:.3f} 1/s "
           f"(B's: {result['bediz_gains']['B eq. 5.5-5.8 (K2 = 40000)']['stability_margin']:.3f}); "
           f"wrote {out}/")  # fmt: skip
     return 0
+
+
+def _check_steps(args) -> None:
+    """Bound the integration before any work: finite positive dt, duration >= 0, and at most
+    MAX_STEPS steps."""
+    check_range("--dt", args.dt, 0.0, 1.0, "time step in s", lo_open=True)
+    check_range("--duration", args.duration, 0.0, 1e6, "simulated time in s")
+    steps = args.duration / args.dt
+    if steps > MAX_STEPS:
+        raise ScenarioError(
+            f"--duration / --dt = {steps:.4g} steps, more than the limit of {MAX_STEPS:,} (bounds "
+            f"the run's time and memory); use a larger --dt or a shorter --duration")
+
+
+def _check_poles(poles, rank: int) -> None:
+    """Pole placement needs finite real poles, none repeated more often than rank(B)."""
+    for i, p in enumerate(poles):
+        check_range(f"--poles[{i}]", p, -1e6, 1e6, "real closed-loop pole in 1/s")
+    values, counts = np.unique(np.asarray(poles), return_counts=True)
+    if counts.max() > rank:
+        raise ScenarioError(
+            f"--poles: {values[counts.argmax()]:g} is given {counts.max()} times; with {rank} "
+            f"inputs (rank of B) a pole may be repeated at most {rank} times")
 
 
 def run(args) -> int:

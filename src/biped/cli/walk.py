@@ -10,10 +10,15 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from biped.cli._common import run_dir
+from biped.cli._common import check_range, run_dir
 from biped.errors import ScenarioError
 
 _DEFAULT_STEPS = {"forward": 6, "upstairs": 5}
+#: Human walking speeds [m/s] (slow shuffle to the walk-run transition and a brisk walk beyond it);
+#: outside them B's kinematic gait leaves the figure's physics (stance slip, friction > 5).
+SPEED_RANGE = (0.1, 2.5)
+MAX_STEPS = 100  # footfalls of one run
+MAX_SAMPLES = 200_000  # duration x rate: bounds the run's time and memory
 
 
 def register(subparsers) -> None:
@@ -27,10 +32,11 @@ def register(subparsers) -> None:
                    help="forward, upstairs, jump, or B's demo: 6 forward, 5 up, a jump, 4 forward "
                         "(default demo)")
     p.add_argument("--steps", type=int, metavar="N",
-                   help="footfalls for forward (default 6) and upstairs (default 5); "
+                   help=f"footfalls for forward (default 6) and upstairs (default 5), 1..{MAX_STEPS}; "
                         "not used by jump and demo")
     p.add_argument("--speed", type=float, default=1.0, metavar="M/S",
-                   help="forward walking speed; sets the pace of every gait (default 1.0)")
+                   help=f"forward walking speed, {SPEED_RANGE[0]:g}..{SPEED_RANGE[1]:g} m/s; sets the "
+                        f"pace of every gait (default 1.0)")
     p.add_argument("--stair-rise", type=float, metavar="M",
                    help="stair rise (default eq. 4.23 at 30 deg: (l1 + l2)(1 - cos 30 deg) = 0.111 m)")
     p.add_argument("--stair-run", type=float, metavar="M",
@@ -66,20 +72,33 @@ def build_plan(args):
         raise ScenarioError(f"--stair-rise / --stair-run apply to --gait upstairs and demo, not {args.gait}")
     if not (math.isfinite(args.rate) and 20.0 <= args.rate <= 2000.0):
         raise ScenarioError(f"--rate must be in [20, 2000] Hz, got {args.rate!r}")
+    if not (math.isfinite(args.speed) and args.speed > 0):
+        raise ScenarioError(f"--speed: speed must be a positive number of m/s, got {args.speed!r}")
+    check_range("--speed", args.speed, *SPEED_RANGE, "m/s, human walking speeds")
+    for flag, v in (("--stair-rise", args.stair_rise), ("--stair-run", args.stair_run)):
+        if v is not None:
+            check_range(flag, v, 0.0, 2.0, "m", lo_open=True)
     dims = FigureDims.from_mjcf(args.model) if getattr(args, "model", None) else FigureDims.from_anthropometry()
     params = GaitParams()
     if args.no_somersault:
         params = replace(params, somersault=False)
     steps = args.steps if args.steps is not None else _DEFAULT_STEPS.get(args.gait)
-    if steps is not None and steps < 1:
-        raise ScenarioError(f"--steps must be >= 1, got {steps}")
+    if steps is not None and not 1 <= steps <= MAX_STEPS:
+        raise ScenarioError(f"--steps must be in [1, {MAX_STEPS}] (bounds the run), got {steps}")
     if args.gait == "forward":
-        return step_forward(dims, steps, args.speed, params)
-    if args.gait == "upstairs":
-        return step_upward(dims, steps, args.speed, params, args.stair_rise, args.stair_run)
-    if args.gait == "jump":
-        return jump(dims, args.speed, params)
-    return demo(dims, args.speed, params, rise=args.stair_rise, run=args.stair_run)
+        plan = step_forward(dims, steps, args.speed, params)
+    elif args.gait == "upstairs":
+        plan = step_upward(dims, steps, args.speed, params, args.stair_rise, args.stair_run)
+    elif args.gait == "jump":
+        plan = jump(dims, args.speed, params)
+    else:
+        plan = demo(dims, args.speed, params, rise=args.stair_rise, run=args.stair_run)
+    samples = plan.duration * args.rate
+    if samples > MAX_SAMPLES:
+        raise ScenarioError(f"the motion lasts {plan.duration:.1f} s: at --rate {args.rate:g} Hz that "
+                            f"is {samples:,.0f} samples, more than the limit of {MAX_SAMPLES:,}; use "
+                            f"fewer --steps, a higher --speed or a lower --rate")
+    return plan
 
 
 def _out_dir(args) -> Path:
@@ -92,7 +111,7 @@ def run(args) -> int:
     from biped.outputs.walk import walk_stages, write_walk
 
     plan = build_plan(args)
-    out = _out_dir(args)
+    out = _out_dir(args)  # checked and created before any work
     flags = {"dynamics": not args.no_dynamics, "figures": not args.no_figures,
              "replay": not args.no_replay, "video": not args.no_video}
     bar = tqdm(total=len(walk_stages(**flags)), desc=f"biped walk {args.gait}", disable=args.quiet,

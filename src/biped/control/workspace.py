@@ -25,7 +25,7 @@ from biped.control.recursions import (
     layout,
     unpack,
 )
-from biped.errors import BipedError, ScenarioError, SingularityError, StateError
+from biped.errors import BipedError, ModelError, ScenarioError, SingularityError, StateError
 from biped.model import DEFAULT_FEET, TreeModel, sole_rectangles
 from biped.spatial import axis_angle_quat, rot_to_quat
 
@@ -172,6 +172,7 @@ class WorkspaceController:
             raise ScenarioError(f"big_base must be a positive finite factor, got {big_base}")
         if distribution not in DISTRIBUTIONS:
             raise ScenarioError(f"unknown wrench distribution {distribution!r}; valid: {DISTRIBUTIONS}")
+        _check_feet(tree)
         self.distribution = distribution
         self.tree = tree
         self.big_base = float(big_base)
@@ -265,20 +266,47 @@ class WorkspaceController:
         if bad:
             raise StateError(f"non-finite state entries: {', '.join(bad)}; qpos and qvel must be finite")
         a = self.tree.qpos_adr[0] + 3
-        if np.dot(qpos[a:a + 4], qpos[a:a + 4]) < 1e-20:
+        if not np.any(qpos[a:a + 4]):
             raise StateError(f"the root quaternion qpos[{a}:{a + 4}] is zero; it must be a "
                              f"(w, x, y, z) quaternion of nonzero norm (it is normalized)")
+
+    def _unit_quaternion(self, qpos):
+        """A copy of qpos with its root quaternion normalized without overflow or underflow (the
+        kernel normalizes by sqrt(q.q), which fails beyond ~1e154 or below ~1e-154), or None if the
+        quaternion is zero or non-finite, or already of unit norm."""
+        a = self.tree.qpos_adr[0] + 3
+        q = qpos[a:a + 4]
+        m = float(np.max(np.abs(q))) if q.size == 4 else 0.0
+        if not np.isfinite(m) or m == 0.0:
+            return None
+        u = q / m
+        u = u / np.sqrt(u @ u)
+        if np.allclose(u, q, rtol=0.0, atol=1e-12):
+            return None
+        out = qpos.copy()
+        out[a:a + 4] = u
+        return out
 
     def _run(self, qpos, qvel, target, gains, feet_in_contact=None):
         if qpos.shape != (self.tree.nq,) or qvel.shape != (self.tree.nv,):
             self._check_state(qpos, qvel)
         t = (target or self.target).array
         k = (gains or self.gains).array
-        status = compute_kernel(qpos, qvel, t, k, self._contact(feet_in_contact), self._mi, self._mf,
-                                self._work, self._out)
+        try:
+            status = compute_kernel(qpos, qvel, t, k, self._contact(feet_in_contact), self._mi,
+                                    self._mf, self._work, self._out)
+        except ZeroDivisionError:  # numba's float division: a quaternion of overflowing norm
+            status = NONFINITE_RESULT
+        if status in (ZERO_QUATERNION, NONFINITE_RESULT):
+            unit = self._unit_quaternion(qpos)  # a badly scaled quaternion: normalize safely
+            if unit is not None:
+                return self._run(unit, qvel, target, gains, feet_in_contact)
         if status:
             if status in (NONFINITE_STATE, ZERO_QUATERNION):
                 self._check_state(qpos, qvel)
+                a = self.tree.qpos_adr[0] + 3
+                raise StateError(f"the root quaternion qpos[{a}:{a + 4}] = {qpos[a:a + 4].tolist()} "
+                                 f"cannot be normalized in double precision")
             if status == SINGULAR_DISTRIBUTION:
                 raise SingularityError(
                     "wrench distribution: G G^T is singular to working precision (W Alg. 5); it is the "
@@ -328,7 +356,8 @@ class WorkspaceController:
         qpos = np.ascontiguousarray(qpos, dtype=float)
         qvel = np.zeros(self.tree.nv) if qvel is None else np.ascontiguousarray(qvel, dtype=float)
         self._check_state(qpos, qvel)
-        return qpos, qvel
+        unit = self._unit_quaternion(qpos)
+        return (qpos if unit is None else unit), qvel
 
     def _kinematics(self, qpos, qvel):
         """W Alg. 1 and Alg. 2 alone (the kernel's own functions) into the work buffer."""
@@ -380,3 +409,15 @@ class WorkspaceController:
         returns fresh arrays instead."""
         self._run(qpos, qvel, target, gains, feet_in_contact)
         return self._out[: self.tree.n_links - 1]
+
+
+def _check_feet(tree: TreeModel) -> None:
+    """The feet must be two different links below the root, each ending its own leg (W Alg. 3, 5
+    and 6 fix them to the ground and push the central body through the legs above them)."""
+    feet = [int(f) for f in np.asarray(tree.feet).reshape(-1)]
+    if len(feet) != 2 or feet[0] == feet[1] or not all(0 <= f < tree.n_links for f in feet):
+        raise ModelError(f"the tree must name two different feet, got link indices {feet}")
+    for f in feet:
+        if f == 0:
+            raise ModelError(f"foot {tree.body_names[0]!r} is the floating root (the central body); "
+                             f"the feet must be bodies below it, one at the end of each leg")
