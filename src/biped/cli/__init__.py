@@ -45,6 +45,7 @@ class Parser(argparse.ArgumentParser):
         namespace, rest = super().parse_known_args(args, namespace)
         if not hasattr(namespace, "_prog"):  # the innermost subcommand sets it first
             namespace._prog = self.prog
+            namespace._parser = self
         return namespace, rest
 
 
@@ -73,7 +74,9 @@ def main(argv: list[str] | None = None) -> int:
     from biped.cli._common import finish_runs
 
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, rest = parser.parse_known_args(argv)
+    if rest:  # said by the subcommand that got them, with its usage line
+        getattr(args, "_parser", parser).error(f"unrecognized arguments: {' '.join(rest)}")
     if not getattr(args, "func", None):
         parser.print_help()
         return EXIT_BAD_INPUT

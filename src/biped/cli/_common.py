@@ -75,9 +75,10 @@ def _previous_run_files(path: Path, entries: set[str]) -> set[str]:
     return files & entries
 
 
-def _check_writable(path: Path, flag: str) -> Path | None:
-    """Raise if nothing can be written at ``path``; return the nearest existing ancestor."""
-    if path.exists() and not path.is_dir():
+def _check_writable(path: Path, flag: str, shown: Path | None = None) -> Path | None:
+    """Raise if nothing can be written at ``path``; return the nearest existing ancestor. Messages
+    name ``shown`` (default ``path``)."""
+    if shown is None and path.exists() and not path.is_dir():
         raise ScenarioError(f"{flag} {str(path)!r} is an existing file; give a folder (new, empty, or "
                             f"one that holds a previous run, with --overwrite)")
     probe = path
@@ -85,16 +86,27 @@ def _check_writable(path: Path, flag: str) -> Path | None:
         if probe.parent == probe:
             break
         probe = probe.parent
+    shown = path if shown is None else shown
     if not probe.is_dir():
-        raise ScenarioError(f"{flag} {str(path)!r}: {str(probe)!r} is a file, not a folder")
+        raise ScenarioError(f"{flag} {str(shown)!r}: {str(probe)!r} is a file, not a folder")
     try:
         fd, tmp = tempfile.mkstemp(prefix=".biped-write-test-", dir=probe)
         os.close(fd)
         os.unlink(tmp)
     except OSError as exc:
-        raise ScenarioError(f"{flag} {str(path)!r}: cannot write in {str(probe)!r} "
+        raise ScenarioError(f"{flag} {str(shown)!r}: cannot write in {str(probe)!r} "
                             f"({exc.strerror or exc}); choose a writable folder") from None
     return probe
+
+
+def check_file_writable(path: str | os.PathLike, flag: str = "--out") -> Path:
+    """Raise a one-line error before any work if the file ``path`` cannot be written: its folder
+    (or the nearest existing ancestor, the folders are created later) must accept a new file."""
+    path = Path(path)
+    if path.is_dir():
+        raise ScenarioError(f"{flag} {str(path)!r} is a folder; name a file")
+    _check_writable(path.parent, flag, shown=path)
+    return path
 
 
 def run_dir(out: str | os.PathLike | None, prefix: str, *, overwrite: bool = False,

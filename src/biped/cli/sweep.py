@@ -10,6 +10,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from biped.cli._common import check_file_writable
 from biped.errors import ScenarioError
 
 _AXIS_OPTIONS = (("speed", "speed_m_s", "block speed [m/s]"),
@@ -176,6 +177,7 @@ def run(args) -> int:
     n = spec.n_trials
     where = args.scheduler or f"{args.workers or 'all'} local worker(s)"
     check_run_args(out, workers=args.workers, batch=args.batch, scheduler=args.scheduler)
+    check_file_writable(out)  # a probe file, not os.access (which says yes to root everywhere)
     if args.dry_run:
         print(f"biped sweep (dry run): {n} trials of {spec.base.duration_s:g} s, controller "
               f"{spec.base.controller}, torque limits {spec.torque_limits}, on {where} -> {out}")

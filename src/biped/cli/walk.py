@@ -19,6 +19,10 @@ _DEFAULT_STEPS = {"forward": 6, "upstairs": 5}
 SPEED_RANGE = (0.1, 2.5)
 MAX_STEPS = 100  # footfalls of one run
 MAX_SAMPLES = 200_000  # duration x rate: bounds the run's time and memory
+#: Longest motion [s] of one run: the video renders every frame of it (docs/walk.md: 79 s in all
+#: for the 15.5 s demo on a 2-core machine, ~5 s per second of motion), so this keeps a run
+#: within about half an hour.
+MAX_MOTION_S = 300.0
 
 
 def register(subparsers) -> None:
@@ -93,6 +97,10 @@ def build_plan(args):
         plan = jump(dims, args.speed, params)
     else:
         plan = demo(dims, args.speed, params, rise=args.stair_rise, run=args.stair_run)
+    if plan.duration > MAX_MOTION_S:
+        raise ScenarioError(f"the motion lasts {plan.duration:.1f} s, more than the limit of "
+                            f"{MAX_MOTION_S:g} s (bounds the run: every second is simulated, "
+                            f"drawn and rendered); use fewer --steps or a higher --speed")
     samples = plan.duration * args.rate
     if samples > MAX_SAMPLES:
         raise ScenarioError(f"the motion lasts {plan.duration:.1f} s: at --rate {args.rate:g} Hz that "
