@@ -76,7 +76,8 @@ def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args, rest = parser.parse_known_args(argv)
     if rest:  # said by the subcommand that got them, with its usage line
-        getattr(args, "_parser", parser).error(f"unrecognized arguments: {' '.join(rest)}")
+        sub = getattr(args, "_parser", parser)
+        sub.error(f"unrecognized arguments: {' '.join(rest)}{_extra_values(sub, argv, rest)}")
     if not getattr(args, "func", None):
         parser.print_help()
         return EXIT_BAD_INPUT
@@ -102,6 +103,28 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_FAILED
     finally:
         finish_runs(ok, prog.removeprefix("biped "))
+
+
+def _extra_values(parser: argparse.ArgumentParser, argv: list[str] | None, rest: list[str]) -> str:
+    """`` (--opt takes N values)`` when the first unrecognized word is a value left over after an
+    option of fixed arity (``--block-position 0 0 0 0``), else ''."""
+    argv = list(sys.argv[1:] if argv is None else argv)
+    first = rest[0]
+    if first.startswith("-") and not _NEGATIVE_NUMBER.match(first):
+        return ""
+    for i in range(len(argv) - 1, -1, -1):  # the last occurrence: the leftover value
+        if argv[i] == first:
+            break
+    else:
+        return ""
+    for word in reversed(argv[:i]):
+        if word.startswith("-") and not _NEGATIVE_NUMBER.match(word):
+            action = parser._option_string_actions.get(word.split("=", 1)[0])
+            n = 1 if action is not None and action.nargs is None else getattr(action, "nargs", None)
+            if isinstance(n, int):
+                return f" ({word} takes {n or 'no'} value{'s' if n != 1 else ''})"
+            return ""
+    return ""
 
 
 def _one_line(exc: BaseException) -> str:

@@ -434,7 +434,7 @@ def _toml_value(v) -> str:
 def parse_assignment(text: str) -> tuple[str, Any]:
     """``"key=value"`` (value in TOML syntax, e.g. ``block_mass_kg=2.5`` or
     ``kp_com=[60, 60, 200]``) -> ``(key, value)``; for the command line's ``--set``."""
-    if "=" not in text:
+    if "=" not in text or not text.split("=", 1)[0].strip():
         raise ScenarioError(f"--set expects KEY=VALUE with a key from: {', '.join(keys())}; "
                             f"got {text!r}")
     key, raw = (p.strip() for p in text.split("=", 1))
