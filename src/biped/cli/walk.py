@@ -89,14 +89,23 @@ def build_plan(args):
     steps = args.steps if args.steps is not None else _DEFAULT_STEPS.get(args.gait)
     if steps is not None and not 1 <= steps <= MAX_STEPS:
         raise ScenarioError(f"--steps must be in [1, {MAX_STEPS}] (bounds the run), got {steps}")
-    if args.gait == "forward":
-        plan = step_forward(dims, steps, args.speed, params)
-    elif args.gait == "upstairs":
-        plan = step_upward(dims, steps, args.speed, params, args.stair_rise, args.stair_run)
-    elif args.gait == "jump":
-        plan = jump(dims, args.speed, params)
-    else:
-        plan = demo(dims, args.speed, params, rise=args.stair_rise, run=args.stair_run)
+    try:
+        if args.gait == "forward":
+            plan = step_forward(dims, steps, args.speed, params)
+        elif args.gait == "upstairs":
+            plan = step_upward(dims, steps, args.speed, params, args.stair_rise, args.stair_run)
+        elif args.gait == "jump":
+            plan = jump(dims, args.speed, params)
+        else:
+            plan = demo(dims, args.speed, params, rise=args.stair_rise, run=args.stair_run)
+    except ScenarioError as exc:  # the stairs' geometric limits: name the options
+        msg = str(exc)
+        flag = ("--stair-rise / --stair-run" if msg.startswith("stair rise") and " and run " in msg
+                else "--stair-rise" if msg.startswith("stair rise")
+                else "--stair-run" if msg.startswith("stair run") else None)
+        if flag is None:
+            raise
+        raise ScenarioError(f"{flag}: {msg}") from None
     if plan.duration > MAX_MOTION_S:
         raise ScenarioError(f"the motion lasts {plan.duration:.1f} s, more than the limit of "
                             f"{MAX_MOTION_S:g} s (bounds the run: every second is simulated, "
