@@ -107,7 +107,7 @@ class Scenario:
     model: str = "wendlandt"
 
     def __post_init__(self):
-        preset = PHYSICS_PRESETS.get(self.physics)
+        preset = PHYSICS_PRESETS.get(self.physics) if isinstance(self.physics, str) else None
         if preset is None:
             raise ScenarioError(f"physics must be one of {', '.join(map(repr, PHYSICS))}; "
                                 f"got {self.physics!r}")
