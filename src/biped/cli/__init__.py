@@ -11,7 +11,8 @@ Exit status of every command (see docs/cli.md):
     2    bad input, refused before any work: a one-line ``biped COMMAND: error: ...`` naming the
          parameter and what is valid (argparse's own errors use the same prefix and status);
     130  interrupted (Ctrl-C / SIGINT): outputs of what had been computed are written if the
-         command can (``biped push``, ``biped sweep``), then it stops.
+         command can (``biped push``, ``biped sweep``), then it stops;
+    143  terminated (SIGTERM): as 130.
 """
 
 from __future__ import annotations
@@ -19,13 +20,15 @@ from __future__ import annotations
 import argparse
 import importlib
 import re
+import signal
 import sys
+import threading
 
 from biped.errors import BipedError
 
 SUBCOMMANDS = ("push", "posture", "walk", "sweep", "model")
 
-EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_TERMINATED = 0, 1, 2, 130, 143
 
 #: Negative numbers as values, e.g. ``--block-velocity -1e6 0 0`` (argparse's own pattern misses
 #: exponents, infinities and NaN, so such values were read as unknown options).
@@ -83,16 +86,21 @@ def main(argv: list[str] | None = None) -> int:
         return EXIT_BAD_INPUT
     prog = getattr(args, "_prog", None) or f"biped {args.command}"
     ok = False
+    terminated = {"by": False}
+    previous = _sigterm_as_interrupt(terminated)
     try:
         code = int(args.func(args) or 0)
-        ok = code in (EXIT_OK, EXIT_INTERRUPTED)
+        if code == EXIT_INTERRUPTED and terminated["by"]:
+            code = EXIT_TERMINATED
+        ok = code in (EXIT_OK, EXIT_INTERRUPTED, EXIT_TERMINATED)
         return code
     except BipedError as exc:
         print(f"{prog}: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
-        print(f"{prog}: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+        print(f"{prog}: {'terminated (SIGTERM)' if terminated['by'] else 'interrupted'}",
+              file=sys.stderr)
+        return EXIT_TERMINATED if terminated["by"] else EXIT_INTERRUPTED
     except MemoryError:
         print(f"{prog}: error: out of memory; use a smaller problem (see --help for the bounds)",
               file=sys.stderr)
@@ -102,7 +110,23 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{prog}: error: file system:{where} {exc.strerror or exc}", file=sys.stderr)
         return EXIT_FAILED
     finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
         finish_runs(ok, prog.removeprefix("biped "))
+
+
+def _sigterm_as_interrupt(state: dict):
+    """SIGTERM raises KeyboardInterrupt (and sets ``state["by"]``), so a terminated command ends
+    as an interrupted one: what was computed is written, then exit 143. Returns the previous
+    handler (None outside the main thread, where signals cannot be handled)."""
+    if threading.current_thread() is not threading.main_thread():
+        return None
+
+    def handler(signum, frame):
+        state["by"] = True
+        raise KeyboardInterrupt
+
+    return signal.signal(signal.SIGTERM, handler)
 
 
 def _extra_values(parser: argparse.ArgumentParser, argv: list[str] | None, rest: list[str]) -> str:
