@@ -31,7 +31,7 @@ def test_exit_status_table_is_documented():
 
     doc = (Path(__file__).resolve().parents[1] / "docs" / "cli.md").read_text(encoding="utf-8")
     for code in (EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_TERMINATED):
-        assert re.search(rf"^\| `{code}` \|", doc, re.M), f"exit status {code} not in docs/cli.md"
+        assert re.search(rf"^\| `{code}` \|", doc, re.MULTILINE), f"exit status {code} not in docs/cli.md"
     for command in ("push", "walk", "posture", "sweep", "model"):
         assert f"`biped {command}`" in doc
 
@@ -44,7 +44,7 @@ def test_exit_status_table_is_documented():
 ])
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, argv):
     p = _biped(*argv, cwd=tmp_path)
-    out, err = p.communicate(timeout=120)
+    _out, err = p.communicate(timeout=120)
     assert p.returncode == 2, err
     assert "Traceback" not in err
     if argv:

@@ -22,7 +22,7 @@ from biped.cli import main
 from biped.sim.scenario import keys
 
 
-class _WorkStarted(Exception):  # noqa: N818 - a sentinel, not an error
+class _WorkStarted(Exception):
     """Raised in place of the work: every check before it passed."""
 
 

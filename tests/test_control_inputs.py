@@ -72,7 +72,7 @@ def _target(draw):
     n = math.sqrt(sum(x * x for x in quat))
     if n > 1e-3 and draw(st.integers(0, 3)):
         quat = [x / n for x in quat]  # a unit quaternion, usually accepted
-    return _spoil(draw, dict(com=draw(_VEC3), com_vel=draw(_VEC3), quat=quat))
+    return _spoil(draw, {"com": draw(_VEC3), "com_vel": draw(_VEC3), "quat": quat})
 
 
 @st.composite
@@ -80,7 +80,7 @@ def _gains(draw):
     if draw(st.booleans()):
         return None
     g = st.lists(st.floats(0, 1e4), min_size=3, max_size=3)
-    return _spoil(draw, dict(kp_com=draw(g), kv_com=draw(g), kp_rot=draw(g), kv_rot=draw(g)))
+    return _spoil(draw, {"kp_com": draw(g), "kv_com": draw(g), "kp_rot": draw(g), "kv_rot": draw(g)})
 
 
 def test_compute_on_any_input_is_finite_or_a_one_line_error(setup):

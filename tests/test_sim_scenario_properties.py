@@ -36,7 +36,7 @@ def _near_default(key):
         return st.floats(min_value=0.0, max_value=3 * d if d > 0 else 1.0)
     if isinstance(d, (list, tuple)) and d and isinstance(d[0], float):
         return st.lists(st.floats(min_value=-1.5, max_value=1.5), min_size=len(d),
-                        max_size=len(d)).map(lambda v, d=d: [a + b for a, b in zip(d, v)])
+                        max_size=len(d)).map(lambda v, d=d: [a + b for a, b in zip(d, v, strict=True)])
     return st.just(d)
 
 
