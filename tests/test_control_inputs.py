@@ -127,3 +127,26 @@ def test_non_finite_and_scaled_quaternions_are_named(setup):
     q[9] = math.nan
     with pytest.raises(BipedError, match=r"qpos\[9\]"):
         ctrl.compute(q, v0)
+
+
+# ---------------------------------------------------------------------------------------------
+# the reported model inputs
+
+_THIRD_LEG = ('<body name="t1" pos="0.1 0 -0.2"><joint name="tj1" axis="0 1 0"/>'
+              '<inertial pos="0 0 -0.2" mass="2" diaginertia="0.03 0.03 0.006"/></body>')
+
+
+def test_a_root_foot_a_third_leg_and_an_empty_source_are_model_errors(tmp_path,
+                                                                       wendlandt_path):
+    from biped.errors import ModelError
+    from conftest import ASYM_XML
+
+    with pytest.raises(ModelError, match="floating root"):
+        WorkspaceController.from_mjcf(wendlandt_path, feet=("central_body", "right_foot"))
+    three = tmp_path / "three.xml"
+    three.write_text(ASYM_XML.replace("</body></worldbody>", _THIRD_LEG + "</body></worldbody>"))
+    mujoco.MjModel.from_xml_path(str(three))  # a valid MJCF that MuJoCo simulates...
+    with pytest.raises(ModelError, match="no torque"):  # ...but the controller cannot drive
+        WorkspaceController.from_mjcf(three, feet=("lfoot", "rfoot"))
+    with pytest.raises(ModelError, match="empty model source"):
+        WorkspaceController.from_mjcf("")

@@ -209,9 +209,9 @@ def toml_values(path: str | Path) -> dict:
     except OSError as exc:
         raise ScenarioError(f"cannot read scenario file {str(path)!r}: {exc.strerror}") from None
     except UnicodeDecodeError as exc:
-        raise ScenarioError(f"scenario file {str(path)!r} is not UTF-8 text (byte {exc.start}: "
-                            f"{exc.object[exc.start:exc.start + 1]!r}); TOML files are UTF-8"
-                            ) from None
+        raise ScenarioError(f"scenario file {str(path)!r} is not UTF-8 text (byte "
+                            f"0x{exc.object[exc.start]:02x} at offset {exc.start}); TOML files "
+                            f"must be UTF-8") from None
     try:
         values = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
