@@ -250,11 +250,12 @@ RANGES = {
     "duration_s": (0.0, 60.0, "simulated time in s; a push recovery is over in seconds"),
     "physics_timestep_s": (1e-5, 0.001, "physics step in s"),
     "control_rate_hz": (1.0, 100_000.0, "controller calls per second"),
-    "block_mass_kg": (0.0, 100.0, "block mass in kg"),
+    "block_mass_kg": (0.01, 100.0, "block mass in kg; MuJoCo needs a body's mass and inertia "
+                                   "well above zero"),
     "block_speed_m_s": (0.0, 100.0, "block speed |block_velocity_m_s| in m/s at its start: a "
                                     "thrown, swung or launched object (a sweep's slow hits from "
                                     "metres away start fast)"),
-    "block_size_m": (0.0, 1.0, "edge length in m"),
+    "block_size_m": (0.005, 1.0, "edge length in m"),
     "position_m": (-10.0, 10.0, "world coordinate in m, the scene is a few metres wide"),
     "gain": (0.0, 1e6, "PD gain"),
     "tilt_deg": (-90.0, 90.0, "deg"),
@@ -263,6 +264,11 @@ RANGES = {
     "friction": (0.0, 10.0, "Coulomb coefficient"),
     "contact_timeconst_s": (0.0, 1.0, "MuJoCo solref time constant in s"),
     "fall_height_m": (0.0, 10.0, "central-body COM height in m"),
+    "joint_damping_n_m_s": (0.0, 1000.0, "passive hinge damping in N m s/rad"),
+    "qp_moment_weight": (0.0, 1e6, "weight of the QP's moment rows, force rows 1"),
+    "qp_min_normal_n": (0.0, 1000.0, "minimum normal force of a foot in contact in N"),
+    "recovery_com_tol_m": (0.0, 1.0, "COM distance from the set point in m"),
+    "recovery_orientation_tol_deg": (0.0, 180.0, "orientation error in deg"),
 }
 MAX_SEED = 2**63 - 1
 
@@ -338,7 +344,7 @@ def validate(s: Scenario) -> None:
         if min(getattr(s, key)) <= 0:
             raise ScenarioError(f"{key} must be 3 positive edge lengths in m; got {getattr(s, key)}")
         for i, x in enumerate(getattr(s, key)):
-            _in_range(f"{key}[{i}]", x, "block_size_m", lo_open=True)
+            _in_range(f"{key}[{i}]", x, "block_size_m")
     for key in ("kp_com", "kv_com", "kp_rot", "kv_rot"):
         if min(getattr(s, key)) < 0:
             raise ScenarioError(f"{key} must be >= 0 (PD gains); got {getattr(s, key)}")
@@ -362,7 +368,7 @@ def validate(s: Scenario) -> None:
         raise ScenarioError(
             f"control_rate_hz must make the control period a whole number of physics steps "
             f"(physics_timestep_s = {dt} s); got {rate} Hz, i.e. {ratio:.6g} steps")
-    _in_range("block_mass_kg", _positive(s, "block_mass_kg", "block mass in kg"), lo_open=True)
+    _in_range("block_mass_kg", _positive(s, "block_mass_kg", "block mass in kg"))
     speed = math.sqrt(sum(x * x for x in s.block_velocity_m_s))
     if not speed <= RANGES["block_speed_m_s"][1]:
         raise ScenarioError(f"block_velocity_m_s: the block's speed must be at most "
@@ -404,14 +410,16 @@ def validate(s: Scenario) -> None:
         raise ScenarioError(f"contact_timeconst_s must be >= 2 physics_timestep_s = {2 * dt} s "
                             f"(MuJoCo's stability rule); got {tc}")
     _in_range("fall_height_m", _positive(s, "fall_height_m", "central-body COM height in m"))
-    _positive(s, "joint_damping_n_m_s", "passive hinge damping in N m s/rad", zero_ok=True)
-    _positive(s, "qp_moment_weight", "weight of the QP's moment rows, force rows 1")
-    _positive(s, "qp_min_normal_n", "N", zero_ok=True)
+    _in_range("joint_damping_n_m_s", _positive(s, "joint_damping_n_m_s",
+                                               "passive hinge damping in N m s/rad", zero_ok=True))
+    _in_range("qp_moment_weight", _positive(s, "qp_moment_weight",
+                                            "weight of the QP's moment rows, force rows 1"))
+    _in_range("qp_min_normal_n", _positive(s, "qp_min_normal_n", "N", zero_ok=True))
     c = _positive(s, "qp_cop_scale", "fraction of the sole the CoP may use, in (0, 1]")
     if c > 1:
         raise ScenarioError(f"qp_cop_scale must be in (0, 1] (fraction of the sole); got {c!r}")
-    _positive(s, "recovery_com_tol_m", "m")
-    _positive(s, "recovery_orientation_tol_deg", "deg")
+    _in_range("recovery_com_tol_m", _positive(s, "recovery_com_tol_m", "m"))
+    _in_range("recovery_orientation_tol_deg", _positive(s, "recovery_orientation_tol_deg", "deg"))
     if not isinstance(s.seed, int) or isinstance(s.seed, bool) or not 0 <= s.seed <= MAX_SEED:
         raise ScenarioError(f"seed must be an integer >= 0 and < 2^63; got {s.seed!r}")
     if not isinstance(s.model, str) or not s.model.strip():
