@@ -40,6 +40,7 @@ def test_exit_status_table_is_documented():
     ["push", "--duration", "0"], ["walk", "--speed", "0"], ["posture", "pendulum", "--dt", "0"],
     ["sweep", "--speed", "0"], ["model", "--stature", "9", "--mass", "50", "--sex", "female",
                                 "--out", "m.xml"],
+    ["model", "--stature", "1.7", "--mass", "50", "--sex", "female", "--out", "/proc/no/m.xml"],
     ["push", "--no-such-option"], [],
 ])
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, argv):

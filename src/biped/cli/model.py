@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from biped.cli._common import check_file_writable
 from biped.errors import ModelError
 
 
@@ -46,6 +47,7 @@ def _check_out(out: str, overwrite: bool) -> Path:
         head = path.read_bytes()[:4096].lstrip()
         if not head.startswith(b"<"):
             raise ModelError(f"--out {out!r} exists and is not an XML file; refusing to replace it")
+    check_file_writable(path)  # before any work: a file in the way, an unwritable folder
     return path
 
 
