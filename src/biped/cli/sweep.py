@@ -142,7 +142,7 @@ def _grid_file(grid) -> tuple[dict, dict]:
         return {}, {}
     import tomllib
 
-    values = tomllib.loads(Path(grid).read_text())
+    values = tomllib.loads(Path(grid).read_text(encoding="utf-8"))
     scenario = dict(values.get("scenario", {}))
     scenario.pop("model", None)
     return scenario, dict(values.get("grid", {}))
