@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 
 from biped.cli import main
 from biped.errors import BipedError
+from biped.sim.scenario import keys as scenario_keys
 from biped.sim.sweep import MAX_TRIALS, SweepSpec
 
 
@@ -156,3 +157,41 @@ def test_any_command_line_is_a_dry_run_or_a_one_line_error_naming_the_option(tmp
         last = err.strip().splitlines()[-1]
         words = [w for k in opts for w in (*_OPTIONS[k], k)]
         assert any(w in last for w in words), (opts, last)
+
+
+_SET = st.tuples(st.sampled_from([*scenario_keys(), "x"]),
+                 st.sampled_from(["1e300", "0", "-1", "nan", "[]", "[1, 2, 3]", '"a"', "none",
+                                  "joint-pd", "fast", "{a = 1}", "1", "0.5"]))
+_CHOICES = {"--controller": ["workspace", "joint-pd", "pd"], "--task": ["hold", "wendlandt", "x"],
+            "--torque-limits": ["none", "human", "x"], "--physics": ["fast", "faithful", "x"],
+            "--distribution": ["statics", "printed", "qp", "x"],
+            "--model": ["wendlandt", "", "/nonexistent.xml", "/dev/null"],
+            "--compare": ["/nonexistent.parquet", "x.csv"]}
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[
+    HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(st.lists(_SET, max_size=2),
+       st.dictionaries(st.sampled_from(sorted(_CHOICES)), st.integers(0, 3), max_size=3))
+def test_any_set_and_choice_line_is_a_dry_run_or_a_one_line_error_naming_it(tmp_path, capsys,
+                                                                           sets, choices):
+    argv = ["sweep", "--dry-run", "--quiet", "--speed", "2", "--direction", "0",
+            "--out", str(tmp_path / "s.parquet")]
+    names = []
+    for key, value in sets:
+        argv += ["--set", f"{key}={value}"]
+        names += [key, "--set"]
+    for opt, i in choices.items():
+        values = _CHOICES[opt]
+        argv += [opt, values[i % len(values)]]
+        names += [opt, opt.lstrip("-").replace("-", "_"), "model", "--plot"]
+    try:
+        rc = main(argv)
+    except SystemExit as exc:
+        rc = exc.code
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    assert rc in (0, 2), err
+    if rc == 2:
+        last = err.strip().splitlines()[-1]
+        assert last.startswith("biped sweep: error: ") and any(w in last for w in names), (argv, last)

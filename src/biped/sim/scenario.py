@@ -141,6 +141,9 @@ class Scenario:
         ``model`` is recorded as an absolute path."""
         from biped.models import subject
 
+        if not isinstance(model, (str, Path)) or not str(model).strip():
+            raise ScenarioError(f"model must be a shipped model's name ('wendlandt') or the path "
+                                f"of an MJCF file; got {model!r}")
         path = subject.resolve(str(model) if isinstance(model, Path) else model)
         if isinstance(model, str) and model == subject.DEFAULT:
             return cls.from_dict({**values, "model": model})
@@ -250,8 +253,7 @@ RANGES = {
     "duration_s": (0.0, 60.0, "simulated time in s; a push recovery is over in seconds"),
     "physics_timestep_s": (1e-5, 0.001, "physics step in s"),
     "control_rate_hz": (1.0, 100_000.0, "controller calls per second"),
-    "block_mass_kg": (0.01, 100.0, "block mass in kg; MuJoCo needs a body's mass and inertia "
-                                   "well above zero"),
+    "block_mass_kg": (0.01, 100.0, "block mass in kg, MuJoCo needs it well above zero"),
     "block_speed_m_s": (0.0, 100.0, "block speed |block_velocity_m_s| in m/s at its start: a "
                                     "thrown, swung or launched object (a sweep's slow hits from "
                                     "metres away start fast)"),
