@@ -57,8 +57,11 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, argv):
 @pytest.mark.parametrize(("sig", "status", "word"), [(signal.SIGTERM, 143, "interrupted"),
                                                      (signal.SIGINT, 130, "interrupted")])
 def test_a_stopped_push_writes_what_it_computed(tmp_path, sig, status, word):
-    p = _biped("push", "--duration", "30", "--no-video", "--no-replay", "--no-figures",
-               "--out", "run", cwd=tmp_path)
+    # SIGINT back to its default in the child: a shell's background job (CI, nohup ... &) starts
+    # with SIGINT ignored, and Python then rightly leaves it ignored
+    p = _biped("push", "--duration", "60", "--no-video", "--no-replay", "--no-figures",
+               "--out", "run", cwd=tmp_path,
+               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     # wait until the simulation has advanced (the progress bar shows simulated time > 0.1 s)
     buf, t0 = "", time.monotonic()
     fd = p.stderr.fileno()
@@ -68,7 +71,7 @@ def test_a_stopped_push_writes_what_it_computed(tmp_path, sig, status, word):
             buf += os.read(fd, 65536).decode(errors="replace")
         except BlockingIOError:
             pass
-        done = [float(x) for x in re.findall(r"(\d+\.\d\d)/30\.00 s sim", buf)]
+        done = [float(x) for x in re.findall(r"(\d+\.\d\d)/60\.00 s sim", buf)]
         if done and max(done) > 0.1:
             break
         assert p.poll() is None, buf
