@@ -12,6 +12,10 @@ processes start, so that they all load the cache instead of each compiling).
     >>> from biped.sim.jit import cold_kernels, warm_up
     >>> cold_kernels()            # [] once compiled on this machine
     >>> warm_up(log=print)        # prints "compiling ..." only when something is cold
+
+Chosen over compiling at install (a wheel or editable install runs no package code, and the
+machine code is tied to the CPU that runs it) and at ``import biped`` (which would charge ~15 s
+to every user of :mod:`biped.planar` or :mod:`biped.kinematic`, which do not use these kernels).
 """
 
 from __future__ import annotations
@@ -23,6 +27,11 @@ from collections.abc import Callable
 #: Kernel names for :func:`cold_kernels` / :func:`warm_up` and what they are, for the message.
 KERNELS = {"controller": "W's controller (numba, ~15 s)",
            "contact": "the contact monitor (numba, ~1 s)"}
+
+
+def kernels_for(controller: str) -> tuple[str, ...]:
+    """The kernels a push run with ``controller`` (``"workspace"`` or ``"joint-pd"``) uses."""
+    return ("controller", "contact") if controller == "workspace" else ("contact",)
 
 
 def _dispatcher(name: str):
@@ -66,9 +75,9 @@ def _compile(name: str) -> None:
     import numpy as np
 
     if name == "contact":
-        from biped.sim.contact import _contact_bits
+        from biped.sim.contact import compile_kernel
 
-        _contact_bits(np.zeros((0, 2), dtype=np.int32)[:, ::1][:, :], np.zeros((1, 1), np.int64))
+        compile_kernel()
         return
     import biped.models
     from biped.control import WorkspaceController
