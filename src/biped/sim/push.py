@@ -253,6 +253,10 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
     com = np.zeros((n, 3))
     torques = np.zeros((n, 12))
     contacts = np.zeros((n, len(SOLE_GEOMS)), dtype=bool)
+    feet_pos = np.zeros((n, 2, 3))
+    feet_quat = np.zeros((n, 2, 4))
+    f0, f1 = (m.body(f).id for f in FOOT_BODIES)
+    feet_rows = 0  # rows whose foot poses were read in the loop
     iq, iv = _as_slice(scene.biped_qpos_index), _as_slice(scene.biped_qvel_index)
     act = scene.actuator_index
     bq = scene.block_qpos_index
@@ -268,6 +272,7 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
     rows = 0
     warnings = d.warning.number  # a live view: MuJoCo counts its warnings there
     dq, dv, xipos = d.qpos, d.qvel, d.xipos  # live views of MuJoCo's buffers, bound once
+    xpos, xquat = d.xpos, d.xquat
     live = isinstance(iq, slice) and isinstance(iv, slice)  # then q and v are live views too
     q, v = dq[iq], dv[iv]
     try:  # compile/warm the controller outside the timer
@@ -296,8 +301,16 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
             if fell or controller_error or k == n_ctrl:
                 break
             d.ctrl[act] = tau
-            mujoco.mj_step(m, d, sub)
+            mujoco.mj_step(m, d, 1)  # its forward pass computed the kinematics of row k's qpos
+            feet_pos[k, 0] = xpos[f0]
+            feet_pos[k, 1] = xpos[f1]
+            feet_quat[k, 0] = xquat[f0]
+            feet_quat[k, 1] = xquat[f1]
+            feet_rows = k + 1
+            if sub > 1:
+                mujoco.mj_step(m, d, sub - 1)  # = mj_step(m, d, sub): MuJoCo loops the same way
             if warnings[_BADQACC]:  # MuJoCo reset the state: the integration diverged
+                feet_rows = k  # (a reset in the first step left the reset state's kinematics)
                 diverged = (f"MuJoCo's integration diverged (non-finite accelerations) between "
                             f"t = {t:.4f} s and {t + period:.4f} s")
                 break
@@ -328,7 +341,8 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
     recovered = bool(complete and not fell and com_err < scenario.recovery_com_tol_m
                      and ori_err < scenario.recovery_orientation_tol_deg)
     sim_time = max(rows - 1, 0) * period
-    feet_pos, feet_quat = _feet_poses(scene, qpos[sl])
+    if feet_rows < rows:  # the last row (no step after it) and any row a stop left unread
+        feet_pos[feet_rows:rows], feet_quat[feet_rows:rows] = _feet_poses(scene, qpos[feet_rows:rows])
     return PushResult(
         scenario=scenario, joint_names=scene.joint_names, times=times[sl], qpos=qpos[sl],
         com=com[sl], quat=quat[sl], joint_angles=angles[sl], torques=torques[sl],
@@ -341,7 +355,7 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
         final_com_error_m=com_err, final_orientation_error_deg=ori_err, recovered=recovered,
         wall_time_s=wall, realtime_factor=sim_time / wall if wall > 0 else float("inf"),
         controller_error=controller_error, diverged=diverged, qvel=qvel[sl],
-        block_velocity=block_vel[sl], feet_pos=feet_pos, feet_quat=feet_quat,
+        block_velocity=block_vel[sl], feet_pos=feet_pos[sl], feet_quat=feet_quat[sl],
     )
 
 
