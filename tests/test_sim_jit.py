@@ -105,3 +105,32 @@ def test_cold_cache_says_compiling_once_then_nothing(tmp_path):
     assert not any(ln.startswith("compiling") for ln in p.stderr.splitlines()), p.stderr
     hits, misses = map(int, p.stdout.split()[-2:])
     assert (hits, misses) == (1, 0)
+
+
+def test_warm_up_one_line_when_cold_nothing_when_warm(monkeypatch):
+    from biped.sim import jit
+
+    compiled = []
+    monkeypatch.setattr(jit, "_compile", compiled.append)
+    for cold in (["controller", "qp", "contact"], ["contact"], []):
+        monkeypatch.setattr(jit, "cold_kernels", lambda names, cold=cold: [n for n in names
+                                                                          if n in cold])
+        lines, compiled[:] = [], []
+        jit.warm_up(jit.kernels_for("workspace", "qp"), log=lines.append)
+        assert compiled == cold
+        assert len(lines) == (1 if cold else 0)
+        if cold:
+            assert lines[0].startswith("compiling ") and "first run only" in lines[0]
+            assert all(jit.KERNELS[n][0] in lines[0] for n in cold)
+    assert jit.kernels_for("joint-pd", "qp") == ("contact",)
+    assert "qp" not in jit.kernels_for("workspace")
+
+
+def test_compile_runs_each_kernel():
+    """_compile really runs each kernel (numba then holds compiled code for it)."""
+    from biped.sim import jit
+
+    for name in jit.KERNELS:
+        jit._compile(name)
+        assert jit._dispatcher(name).overloads, name
+        assert jit.cold_kernels((name,)) == []

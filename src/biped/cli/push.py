@@ -156,7 +156,7 @@ def run(args) -> int:
     scenario = build_scenario(args)  # validated before anything is simulated
     out = _out_dir(args)
     scene = build_scene(scenario)
-    warm_up(kernels_for(scenario.controller), log=lambda line: print(line, file=sys.stderr))
+    warm_up(kernels_for(scenario.controller, scenario.distribution), log=lambda line: print(line, file=sys.stderr))
     on_step, close = _viewer(args.viewer)
     bar = None
     progress = None
