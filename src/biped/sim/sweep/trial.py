@@ -70,7 +70,7 @@ def run_trial(setup: TrialSetup) -> dict[str, Any]:
     result = run_closed_loop(sc, scene, policy)
     if result.interrupted:
         raise KeyboardInterrupt
-    return measure(result, result.block_velocity, scene=scene).row()
+    return measure(result, np.asarray(result.block_velocity), scene=scene).row()
 
 
 def ballistic_impulse(times, velocity, mass_kg: float, gravity=(0.0, 0.0, -GRAVITY),
