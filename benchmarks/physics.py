@@ -25,9 +25,10 @@ from pathlib import Path
 
 import numpy as np
 
+from biped.analysis.envelope import envelope
 from biped.sim import Scenario, simulate
 from biped.sim.contact import heel_timeline
-from biped.sim.sweep import SweepSpec, envelope, hold_scenario, load, parse_axis, run_sweep
+from biped.sim.sweep import SweepSpec, hold_scenario, load, parse_axis, run_sweep
 
 PRESETS = ("faithful", "fast")
 

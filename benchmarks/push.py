@@ -6,7 +6,9 @@ contact monitor, controller, records, MuJoCo; the controller built outside the t
 closed loop recorded, two ways: ``mj_step(m, d, substeps)`` in a bare Python loop that sets
 ``ctrl`` once per control period, and ``mujoco.rollout`` (no Python at all per step). Both
 reproduce the closed loop's final state bit for bit (checked and printed), so they do exactly the
-same physics work. The three are interleaved ``--repeat`` times; the medians of wall time and of
+same physics work. Also the loop itself driven by the recorded torques (:class:`RecordedTorques`:
+contact monitor, records and foot poses, no controller), which splits the difference into the
+loop's bookkeeping and the controller. The four are interleaved ``--repeat`` times; the medians of wall time and of
 thread CPU time (less sensitive to other work on a shared machine) are printed with real-time
 factors and the ratios closed loop / physics-only. Goals: closed loop <= 1.25x the bare
 ``mj_step`` loop (``physics = "faithful"``); >= 30x real time with ``--physics fast``.
@@ -28,7 +30,7 @@ import numpy as np
 from mujoco import rollout
 
 from biped.sim import Scenario, build_scene
-from biped.sim.push import controller_policy, run_closed_loop
+from biped.sim.push import RecordedTorques, controller_policy, run_closed_loop
 from biped.sim.scenario import parse_assignment
 from biped.sim.scene import initial_state
 
@@ -82,14 +84,18 @@ def main() -> None:
     result = run_closed_loop(scenario.with_overrides(duration_s=0.02), scene, policy)  # compile, warm caches
     rdata = mujoco.MjData(scene.model)
 
-    runs = {"closed": [], "loop": [], "rollout": []}
-    cpu = {"closed": [], "loop": [], "rollout": []}
+    runs = {"closed": [], "replay": [], "loop": [], "rollout": []}
+    cpu = {"closed": [], "replay": [], "loop": [], "rollout": []}
     for _ in range(args.repeat):
         result, w, c = _timed(lambda: run_closed_loop(scenario, scene, policy))
         runs["closed"].append(w)
         cpu["closed"].append(c)
         steps = len(result.times) - 1  # the closed loop steps after every row but the last
         tq = result.torques
+        replay = RecordedTorques(tq, scenario.control_rate_hz)
+        _, w, c = _timed(lambda: run_closed_loop(scenario, scene, replay))  # noqa: B023
+        runs["replay"].append(w)
+        cpu["replay"].append(c)
         d, w, c = _timed(lambda: physics_loop(scenario, scene, tq, steps))  # noqa: B023
         runs["loop"].append(w)
         cpu["loop"].append(c)
@@ -116,7 +122,8 @@ def main() -> None:
     print(f"physics-only reproduces the closed loop's final state exactly: bare loop {same_loop}, "
           f"rollout {same_roll}")
     print(f"median of {args.repeat}      wall [ms]  x real time   thread CPU [ms]  x real time")
-    names = {"closed": "closed loop", "loop": "physics only, mj_step loop",
+    names = {"closed": "closed loop", "replay": "the loop, recorded torques",
+             "loop": "physics only, mj_step loop",
              "rollout": "physics only, mujoco.rollout"}
     for k, name in names.items():
         print(f"  {name:28s} {med[k] * 1e3:8.1f}  {sim_time / med[k]:8.1f}    "
@@ -130,6 +137,9 @@ def main() -> None:
     print(f"per control period: closed loop {medc['closed'] / steps * 1e6:.1f} us CPU, physics "
           f"{medc['loop'] / steps * 1e6:.1f} us, the difference (controller, contact monitor, "
           f"records) {(medc['closed'] - medc['loop']) / steps * 1e6:.1f} us")
+    print(f"  of which the loop's bookkeeping (contact monitor, records, foot poses; the loop "
+          f"replaying the torques) {(medc['replay'] - medc['loop']) / steps * 1e6:.1f} us and the "
+          f"controller in the loop {(medc['closed'] - medc['replay']) / steps * 1e6:.1f} us")
     print(f"W (1997): 3 s in 2066 s = {3 / 2066:.4f}x real time")
 
 

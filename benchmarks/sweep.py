@@ -14,8 +14,13 @@
    speed-up, the parallel efficiency (speed-up / 2), and each rate against the physics-only rate
    of the same number of cores. Goal of the speed issue: 1000 three-second trials in at most 60 s
    on 2 cores (16.7 trials/s) at a parallel efficiency of at least 85 %.
+3. CPU time of each sweep (this process plus its worker processes, ``getrusage``): on a machine
+   shared with other work the wall times measure the other work too, the CPU times much less.
+   The CPU-based efficiency is CPU(1 worker) / CPU(2 workers): what running in parallel costs
+   (worker start-up, pickling, the parent's bookkeeping, two workers sharing caches); the
+   projected 1000 trials assume two otherwise idle cores (2-worker CPU time / 2).
 
-    python benchmarks/sweep.py [--trials 40] [--repeat 3] [--reference 5]
+    python benchmarks/sweep.py [--trials 40] [--repeat 3] [--reference 5] [--physics fast]
                                [--controller workspace|joint-pd]
 """
 
@@ -24,6 +29,7 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import resource
 import statistics
 import tempfile
 import time
@@ -31,10 +37,17 @@ import time
 import mujoco
 import numpy as np
 
+from biped.sim import Scenario
 from biped.sim.push import run_closed_loop
 from biped.sim.scene import initial_state
 from biped.sim.sweep import SweepSpec, hold_scenario, run_sweep
 from biped.sim.sweep.trial import _scene_for, make_policy, run_trial
+
+
+def _cpu() -> float:
+    """CPU seconds of this process and of its finished child processes (user + system)."""
+    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
 
 
 def physics_only(setup) -> tuple[float, float]:
@@ -63,8 +76,10 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--reference", type=int, default=5, help="trials timed against bare physics")
     ap.add_argument("--controller", choices=("workspace", "joint-pd"), default="workspace")
+    ap.add_argument("--physics", choices=("faithful", "fast"), default="fast",
+                    help="physics preset (biped sweep's default: fast)")
     args = ap.parse_args()
-    base = hold_scenario().with_overrides(controller=args.controller)
+    base = hold_scenario(Scenario(physics=args.physics)).with_overrides(controller=args.controller)
     spec = SweepSpec(axes={"speed_m_s": (2.0, 5.0), "direction_deg": (150.0, 210.0)},
                      samples=args.trials, seed=1, base=base)
     warm = SweepSpec(axes={"speed_m_s": 3.0}, base=base.with_overrides(duration_s=0.05))
@@ -74,13 +89,16 @@ def main() -> None:
         trial_cpu = statistics.median(p[0] for p in pairs)
         phys_cpu = statistics.median(p[1] for p in pairs)
         times: dict[int, list[float]] = {1: [], 2: []}
+        cpus: dict[int, list[float]] = {1: [], 2: []}
         sim = None
         for r in range(args.repeat):
             for w in (1, 2):
                 out = os.path.join(tmp, f"w{w}-{r}.parquet")
+                c = _cpu()
                 t = time.perf_counter()
                 s = run_sweep(spec, out, workers=w, progress=False)
                 times[w].append(time.perf_counter() - t)
+                cpus[w].append(_cpu() - c)
                 assert s.complete and s.ran == args.trials and s.failed == 0
                 if sim is None:
                     import pyarrow.parquet as pq
@@ -88,6 +106,7 @@ def main() -> None:
                     tab = pq.read_table(out, columns=["simulated_time_s"])
                     sim = sum(tab.column(0).to_pylist())
     t1, t2 = statistics.median(times[1]), statistics.median(times[2])
+    c1, c2 = statistics.median(cpus[1]), statistics.median(cpus[2])
     r1, r2 = args.trials / t1, args.trials / t2
     phys_rate = 1.0 / phys_cpu
     print(f"machine: {platform.machine()}, {os.cpu_count()} cores, "
@@ -107,6 +126,11 @@ def main() -> None:
           f"= {r2 / (2 * phys_rate):.2f} of physics-only on 2 cores")
     print(f"  speed-up 2 vs 1: {t1 / t2:.2f}   parallel efficiency: {t1 / t2 / 2:.0%}")
     print(f"  projected 1000 trials on 2 workers: {1000 / r2:.0f} s (goal: <= 60 s)")
+    print("sweeps, CPU time (this process + its workers; median):")
+    print(f"  1 worker: {c1:7.2f} s = {1e3 * c1 / args.trials:6.1f} ms per trial   "
+          f"2 workers: {c2:7.2f} s = {1e3 * c2 / args.trials:6.1f} ms per trial")
+    print(f"  CPU-based parallel efficiency CPU(1) / CPU(2): {c1 / c2:.0%}   projected 1000 "
+          f"trials on 2 idle cores: {1000 * c2 / args.trials / 2:.0f} s (goal: <= 60 s)")
 
 
 if __name__ == "__main__":

@@ -149,12 +149,14 @@ def _table(result, out: Path, paths: dict) -> str:
 
 def run(args) -> int:
     from biped.outputs.push import write_outputs
+    from biped.sim.jit import kernels_for, warm_up
     from biped.sim.push import simulate
     from biped.sim.scene import build_scene
 
     scenario = build_scenario(args)  # validated before anything is simulated
     out = _out_dir(args)
     scene = build_scene(scenario)
+    warm_up(kernels_for(scenario.controller, scenario.distribution), log=lambda line: print(line, file=sys.stderr))
     on_step, close = _viewer(args.viewer)
     bar = None
     progress = None

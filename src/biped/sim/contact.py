@@ -186,16 +186,28 @@ _FLAGS = _flag_arrays()
 _FEET = tuple((bool(b & 0b0011), bool(b & 0b1100)) for b in range(1 << len(SOLE_GEOMS)))
 
 
-# One explicit signature, compiled (or loaded from numba's cache) at import: MuJoCo's
-# ``data.contact.geom`` is a strided view (layout "A"), but a C-contiguous one when ncon == 1, which
-# would otherwise compile a second version in the middle of a run.
-@njit(types.int64(types.int32[:, :], types.int64[:, ::1]), cache=True, nogil=True)
+# One explicit signature: MuJoCo's ``data.contact.geom`` is a strided view (layout "A"), but a
+# C-contiguous one when ncon == 1, which would otherwise compile a second version in the middle of
+# a run. Compiled (or loaded from numba's cache) on first use by :func:`compile_kernel`, not at
+# import, so that :mod:`biped.sim.jit` can tell whether it is cold and say so before it compiles.
+_KERNEL_SIGNATURE = types.int64(types.int32[:, :], types.int64[:, ::1])
+
+
+@njit(cache=True, nogil=True)
 def _contact_bits(geom, codes):  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
     """OR of ``codes[g0, g1]`` over the rows of ``geom`` (ncon, 2): MuJoCo's contact geom pairs."""
     bits = 0
     for k in range(geom.shape[0]):
         bits |= codes[geom[k, 0], geom[k, 1]]
     return bits
+
+
+def compile_kernel() -> None:
+    """Compile :func:`_contact_bits` for its one signature (or load it from numba's cache) and
+    allow no other; a no-op once done, or when numba's JIT is disabled."""
+    if hasattr(_contact_bits, "compile") and not _contact_bits.signatures:
+        _contact_bits.compile(_KERNEL_SIGNATURE)
+        _contact_bits.disable_compile()
 
 
 class ContactMonitor:
@@ -231,6 +243,7 @@ class ContactMonitor:
         on_biped[[floor_geom, block_geom]] = False
         codes[block_geom, on_biped] |= _BLOCK_BIT
         self.pair_codes = np.ascontiguousarray(codes | codes.T)  # do not modify
+        compile_kernel()
         self._floor = floor_geom
         self._plain = plain
         self._central = central_body

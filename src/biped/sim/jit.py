@@ -12,6 +12,10 @@ processes start, so that they all load the cache instead of each compiling).
     >>> from biped.sim.jit import cold_kernels, warm_up
     >>> cold_kernels()            # [] once compiled on this machine
     >>> warm_up(log=print)        # prints "compiling ..." only when something is cold
+
+Chosen over compiling at install (a wheel or editable install runs no package code, and the
+machine code is tied to the CPU that runs it) and at ``import biped`` (which would charge ~15 s
+to every user of :mod:`biped.planar` or :mod:`biped.kinematic`, which do not use these kernels).
 """
 
 from __future__ import annotations
@@ -20,9 +24,19 @@ import hashlib
 import time
 from collections.abc import Callable
 
-#: Kernel names for :func:`cold_kernels` / :func:`warm_up` and what they are, for the message.
-KERNELS = {"controller": "W's controller (numba, ~15 s)",
-           "contact": "the contact monitor (numba, ~1 s)"}
+#: Kernel names for :func:`cold_kernels` / :func:`warm_up`: what they are and about how long
+#: they take to compile [s] on an idle 2-core x86_64 machine (several times that under load).
+KERNELS = {"controller": ("W's controller", 15),
+           "qp": ("the contact QP", 5),
+           "contact": ("the contact monitor", 1)}
+
+
+def kernels_for(controller: str, distribution: str = "statics") -> tuple[str, ...]:
+    """The kernels a push run with ``controller`` (``"workspace"`` or ``"joint-pd"``) and the
+    workspace controller's ``distribution`` uses."""
+    if controller != "workspace":
+        return ("contact",)
+    return ("controller", "qp", "contact") if distribution == "qp" else ("controller", "contact")
 
 
 def _dispatcher(name: str):
@@ -34,6 +48,10 @@ def _dispatcher(name: str):
         from biped.sim.contact import _contact_bits
 
         return _contact_bits
+    if name == "qp":
+        from biped.control.distribution import qp_build
+
+        return qp_build
     raise ValueError(f"unknown kernel {name!r}; valid: {', '.join(KERNELS)}")
 
 
@@ -66,16 +84,16 @@ def _compile(name: str) -> None:
     import numpy as np
 
     if name == "contact":
-        from biped.sim.contact import _contact_bits
+        from biped.sim.contact import compile_kernel
 
-        _contact_bits(np.zeros((0, 2), dtype=np.int32)[:, ::1][:, :], np.zeros((1, 1), np.int64))
+        compile_kernel()
         return
     import biped.models
     from biped.control import WorkspaceController
     from biped.model import TreeModel
 
     tree = TreeModel.from_mjcf(biped.models.path("wendlandt"))
-    ctrl = WorkspaceController(tree)
+    ctrl = WorkspaceController(tree, distribution="qp" if name == "qp" else "statics")
     qpos = np.zeros(tree.nq)
     qpos[3] = 1.0
     ctrl.torques(qpos, np.zeros(tree.nv))
@@ -88,9 +106,10 @@ def warm_up(names=tuple(KERNELS), *, log: Callable[[str], None] | None = print) 
     if not cold:
         return 0.0
     if log is not None:
-        what = " and ".join(KERNELS[n].split(" (")[0] for n in cold)
-        secs = "~15 s" if "controller" in cold else "~1 s"
-        log(f"compiling {what} (first run only, {secs}; cached for later runs)")
+        names = [KERNELS[n][0] for n in cold]
+        what = " and ".join([", ".join(names[:-1]), names[-1]] if len(names) > 1 else names)
+        secs = sum(KERNELS[n][1] for n in cold)
+        log(f"compiling {what} (first run only, ~{secs} s; cached for later runs)")
     t0 = time.perf_counter()
     for n in cold:
         _compile(n)

@@ -209,15 +209,18 @@ def _feet_poses(scene: Scene, qpos: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     """(n, 2, 3) positions and (n, 2, 4) quaternions of :data:`FOOT_BODIES` (mj_kinematics)."""
     m = scene.model
     d = mujoco.MjData(m)
-    feet = [m.body(f).id for f in FOOT_BODIES]
+    f0, f1 = (m.body(f).id for f in FOOT_BODIES)
     n = len(qpos)
-    pos = np.zeros((n, 2, 3))
-    quat = np.zeros((n, 2, 4))
-    for k in range(n):
-        d.qpos[:] = qpos[k]
-        mujoco.mj_kinematics(m, d)
-        pos[k] = d.xpos[feet]
-        quat[k] = d.xquat[feet]
+    pos = np.empty((n, 2, 3))
+    quat = np.empty((n, 2, 4))
+    dq, xpos, xquat, kinematics = d.qpos, d.xpos, d.xquat, mujoco.mj_kinematics
+    for k in range(n):  # ~3 us a row: no temporary arrays
+        dq[:] = qpos[k]
+        kinematics(m, d)
+        pos[k, 0] = xpos[f0]
+        pos[k, 1] = xpos[f1]
+        quat[k, 0] = xquat[f0]
+        quat[k, 1] = xquat[f1]
     return pos, quat
 
 
@@ -250,6 +253,10 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
     com = np.zeros((n, 3))
     torques = np.zeros((n, 12))
     contacts = np.zeros((n, len(SOLE_GEOMS)), dtype=bool)
+    feet_pos = np.zeros((n, 2, 3))
+    feet_quat = np.zeros((n, 2, 4))
+    f0, f1 = (m.body(f).id for f in FOOT_BODIES)
+    feet_rows = 0  # rows whose foot poses were read in the loop
     iq, iv = _as_slice(scene.biped_qpos_index), _as_slice(scene.biped_qvel_index)
     act = scene.actuator_index
     bq = scene.block_qpos_index
@@ -264,6 +271,10 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
     diverged = None
     rows = 0
     warnings = d.warning.number  # a live view: MuJoCo counts its warnings there
+    dq, dv, xipos = d.qpos, d.qvel, d.xipos  # live views of MuJoCo's buffers, bound once
+    xpos, xquat = d.xpos, d.xquat
+    live = isinstance(iq, slice) and isinstance(iv, slice)  # then q and v are live views too
+    q, v = dq[iq], dv[iv]
     try:  # compile/warm the controller outside the timer
         policy(0.0, d.qpos[iq], d.qvel[iv], (True, True))
     except BipedError:
@@ -272,8 +283,8 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
     try:
         for k in range(n):
             t = k * period
-            q = d.qpos[iq]
-            v = d.qvel[iv]
+            if not live:
+                q, v = dq[iq], dv[iv]
             fell = monitor.update(t, d)
             feet = monitor.feet  # (left, right) on the floor
             try:
@@ -281,17 +292,25 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
             except BipedError as exc:  # a singular state is a result, like a fall
                 controller_error = f"t = {t:.3f} s: {exc}"
                 tau = np.zeros(12)
-            qpos[k] = d.qpos  # quat, joint angles and block are read from it after the loop
-            qvel[k] = d.qvel
-            com[k] = d.xipos[cb]
+            qpos[k] = dq  # quat, joint angles and block are read from it after the loop
+            qvel[k] = dv
+            com[k] = xipos[cb]
             torques[k] = tau
             contacts[k] = monitor.flags  # (left heel, left toe, right heel, right toe)
             rows = k + 1
             if fell or controller_error or k == n_ctrl:
                 break
             d.ctrl[act] = tau
-            mujoco.mj_step(m, d, sub)
+            mujoco.mj_step(m, d, 1)  # its forward pass computed the kinematics of row k's qpos
+            feet_pos[k, 0] = xpos[f0]
+            feet_pos[k, 1] = xpos[f1]
+            feet_quat[k, 0] = xquat[f0]
+            feet_quat[k, 1] = xquat[f1]
+            feet_rows = k + 1
+            if sub > 1:
+                mujoco.mj_step(m, d, sub - 1)  # = mj_step(m, d, sub): MuJoCo loops the same way
             if warnings[_BADQACC]:  # MuJoCo reset the state: the integration diverged
+                feet_rows = k  # (a reset in the first step left the reset state's kinematics)
                 diverged = (f"MuJoCo's integration diverged (non-finite accelerations) between "
                             f"t = {t:.4f} s and {t + period:.4f} s")
                 break
@@ -322,7 +341,8 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
     recovered = bool(complete and not fell and com_err < scenario.recovery_com_tol_m
                      and ori_err < scenario.recovery_orientation_tol_deg)
     sim_time = max(rows - 1, 0) * period
-    feet_pos, feet_quat = _feet_poses(scene, qpos[sl])
+    if feet_rows < rows:  # the last row (no step after it) and any row a stop left unread
+        feet_pos[feet_rows:rows], feet_quat[feet_rows:rows] = _feet_poses(scene, qpos[feet_rows:rows])
     return PushResult(
         scenario=scenario, joint_names=scene.joint_names, times=times[sl], qpos=qpos[sl],
         com=com[sl], quat=quat[sl], joint_angles=angles[sl], torques=torques[sl],
@@ -335,7 +355,7 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
         final_com_error_m=com_err, final_orientation_error_deg=ori_err, recovered=recovered,
         wall_time_s=wall, realtime_factor=sim_time / wall if wall > 0 else float("inf"),
         controller_error=controller_error, diverged=diverged, qvel=qvel[sl],
-        block_velocity=block_vel[sl], feet_pos=feet_pos, feet_quat=feet_quat,
+        block_velocity=block_vel[sl], feet_pos=feet_pos[sl], feet_quat=feet_quat[sl],
     )
 
 

@@ -67,17 +67,10 @@ def run_trial(setup: TrialSetup) -> dict[str, Any]:
     sc = setup.scenario
     scene = _scene_for(sc)
     policy = make_policy(setup, scene)
-    bv = scene.block_qvel_index[:3]
-    vel = [np.array(sc.block_velocity_m_s, dtype=float)]
-
-    def on_step(m, d):
-        vel.append(d.qvel[bv].copy())
-
-    result = run_closed_loop(sc, scene, policy, on_step=on_step)
+    result = run_closed_loop(sc, scene, policy)
     if result.interrupted:
         raise KeyboardInterrupt
-    n = len(result.times)
-    return measure(result, np.array(vel[:n]), scene=scene).row()
+    return measure(result, np.asarray(result.block_velocity), scene=scene).row()
 
 
 def ballistic_impulse(times, velocity, mass_kg: float, gravity=(0.0, 0.0, -GRAVITY),
@@ -173,17 +166,19 @@ def measure(result: PushResult, block_velocity: np.ndarray, *, scene: Scene | No
 
 def _foot_motion(result, scene) -> tuple[tuple[float, float], float]:
     """((left slip, right slip) [m], max foot rise [m]); see :func:`measure`."""
-    if scene is None:
-        scene = _scene_for(result.scenario)
-    m = scene.model
-    d = mujoco.MjData(m)
-    feet = [m.body(f"{side}_foot").id for side in ("left", "right")]
-    n = len(result.times)
-    pos = np.zeros((n, 2, 3))
-    for k in range(n):
-        d.qpos[:] = result.qpos[k]
-        mujoco.mj_kinematics(m, d)
-        pos[k] = d.xpos[feet]
+    pos = result.feet_pos  # MuJoCo kinematics of the recorded qpos (biped.sim.push)
+    if pos is None:
+        if scene is None:
+            scene = _scene_for(result.scenario)
+        m = scene.model
+        d = mujoco.MjData(m)
+        feet = [m.body(f"{side}_foot").id for side in ("left", "right")]
+        n = len(result.times)
+        pos = np.zeros((n, 2, 3))
+        for k in range(n):
+            d.qpos[:] = result.qpos[k]
+            mujoco.mj_kinematics(m, d)
+            pos[k] = d.xpos[feet]
     slips, rise = [], 0.0
     for i, flags in enumerate((result.contacts[:, 0:2], result.contacts[:, 2:4])):
         planted = np.flatnonzero(flags.all(axis=1))

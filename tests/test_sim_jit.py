@@ -1,0 +1,136 @@
+"""First-run cost of the compiled kernels (biped.sim.jit): the cache check agrees with numba's own
+accounting, and the commands say "compiling ..." once, on a cold cache only.
+
+Each case runs in a fresh interpreter with a fresh ``NUMBA_CACHE_DIR`` (numba picks its cache at
+import). The oracle is numba itself: ``dispatcher.stats.cache_hits / cache_misses`` count what it
+loaded from disk and what it had to compile.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+SRC = str(Path(__file__).resolve().parents[1] / "src")
+
+
+def _python(code: str, cache: Path, cwd: Path, *args: str) -> subprocess.CompletedProcess:
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache),
+           "PYTHONPATH": os.pathsep.join([SRC, str(cwd)])}
+    env.pop("NUMBA_DISABLE_JIT", None)
+    return subprocess.run([sys.executable, "-c", textwrap.dedent(code), *args], check=False,
+                          cwd=cwd, env=env,
+                          capture_output=True, text=True, timeout=600)
+
+
+_KERNEL = """
+from numba import njit
+
+@njit(cache=True)
+def twice(x):
+    return 2.0 * x
+"""
+
+_PROBE = """
+import json
+import kernelmod
+from biped.sim.jit import is_cached
+before = is_cached(kernelmod.twice)
+assert kernelmod.twice(1.5) == 3.0
+stats = kernelmod.twice.stats
+print(json.dumps({"before": before, "hits": sum(stats.cache_hits.values()),
+                  "misses": sum(stats.cache_misses.values())}))
+"""
+
+
+def test_is_cached_agrees_with_numbas_cache(tmp_path):
+    (tmp_path / "kernelmod.py").write_text(_KERNEL)
+    cache = tmp_path / "cache"
+
+    def probe():
+        p = _python(_PROBE, cache, tmp_path)
+        assert p.returncode == 0, p.stderr
+        return json.loads(p.stdout.strip().splitlines()[-1])
+
+    cold = probe()  # empty cache: numba compiles (a miss)
+    assert cold == {"before": False, "hits": 0, "misses": 1}
+    warm = probe()  # a new process: numba loads it (a hit, no miss)
+    assert warm == {"before": True, "hits": 1, "misses": 0}
+    (tmp_path / "kernelmod.py").write_text(_KERNEL.replace("2.0 * x", "x + x"))
+    os.utime(tmp_path / "kernelmod.py", (1e9, 1e9))  # a different source stamp
+    edited = probe()  # the source changed: numba compiles again, and is_cached knew it
+    assert edited == {"before": False, "hits": 0, "misses": 1}
+
+
+_PUSH = """
+import sys
+from biped.cli import main
+assert main(["push", "--controller", "joint-pd", "--duration", "0.02", "--out", sys.argv[1],
+             "--quiet", "--no-video", "--no-replay", "--no-figures"]) == 0
+from biped.sim.contact import _contact_bits as k
+print(sum(k.stats.cache_hits.values()), sum(k.stats.cache_misses.values()))
+"""
+
+
+@pytest.mark.slow
+def test_cold_cache_says_compiling_once_then_nothing(tmp_path):
+    """A fresh numba cache: ``biped sweep`` (the joint-PD, whose only kernel is the contact
+    monitor's: a short compile) says "compiling ..." once, in the parent before its two workers
+    start; a later ``biped push`` in a new process says nothing and numba loads the kernel from
+    the cache (its counters: a hit, no miss). The controller's kernel goes through the same
+    path (:func:`biped.sim.jit.warm_up`), ~15 s cold, so it is not compiled here."""
+    import pyarrow.parquet as pq
+
+    cache = tmp_path / "cache"
+    out = tmp_path / "s.parquet"
+    args = ["sweep", "--controller", "joint-pd", "--speed", "2", "--direction", "0,180",
+            "--duration", "0.02", "--workers", "2", "--quiet", "--out", str(out)]
+    p = _python("import sys; from biped.cli import main; sys.exit(main(sys.argv[1:]))",
+                cache, tmp_path, *args)
+    assert p.returncode == 0, p.stderr
+    lines = [ln for ln in p.stderr.splitlines() if ln.startswith("compiling")]
+    assert len(lines) == 1 and "contact monitor" in lines[0] and "first run only" in lines[0], \
+        p.stderr
+    rows = pq.read_table(out).to_pylist()
+    assert len(rows) == 2 and all(r["error"] is None for r in rows)
+    assert len({r["worker"] for r in rows}) == 2  # two worker processes ran
+    p = _python(_PUSH, cache, tmp_path, str(tmp_path / "push"))
+    assert p.returncode == 0, p.stderr
+    assert not any(ln.startswith("compiling") for ln in p.stderr.splitlines()), p.stderr
+    hits, misses = map(int, p.stdout.split()[-2:])
+    assert (hits, misses) == (1, 0)
+
+
+def test_warm_up_one_line_when_cold_nothing_when_warm(monkeypatch):
+    from biped.sim import jit
+
+    compiled = []
+    monkeypatch.setattr(jit, "_compile", compiled.append)
+    for cold in (["controller", "qp", "contact"], ["contact"], []):
+        monkeypatch.setattr(jit, "cold_kernels", lambda names, cold=cold: [n for n in names
+                                                                          if n in cold])
+        lines, compiled[:] = [], []
+        jit.warm_up(jit.kernels_for("workspace", "qp"), log=lines.append)
+        assert compiled == cold
+        assert len(lines) == (1 if cold else 0)
+        if cold:
+            assert lines[0].startswith("compiling ") and "first run only" in lines[0]
+            assert all(jit.KERNELS[n][0] in lines[0] for n in cold)
+    assert jit.kernels_for("joint-pd", "qp") == ("contact",)
+    assert "qp" not in jit.kernels_for("workspace")
+
+
+def test_compile_runs_each_kernel():
+    """_compile really runs each kernel (numba then holds compiled code for it)."""
+    from biped.sim import jit
+
+    for name in jit.KERNELS:
+        jit._compile(name)
+        assert jit._dispatcher(name).overloads, name
+        assert jit.cold_kernels((name,)) == []
