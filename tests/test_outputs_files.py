@@ -97,9 +97,11 @@ def test_finite_json_replaces_every_non_finite_value(tmp_path):
     assert finite_json(float("nan")) is None
 
 
-def test_posture_summary_is_strict_json(tmp_path):
-    out = tmp_path / "p"
-    assert main(["posture", "pendulum", "--duration", "0.2", "--no-animation", "--out", str(out)]) == 0
+def test_posture_writes_strict_json_under_runs(tmp_path, monkeypatch):
+    """`biped posture` without --out writes a new folder under runs/, like the other commands."""
+    monkeypatch.chdir(tmp_path)
+    assert main(["posture", "pendulum", "--duration", "0.2", "--no-animation"]) == 0
+    (out,) = (tmp_path / "runs").glob("posture-pendulum-*")
     _strict((out / "summary.json").read_text())
 
 

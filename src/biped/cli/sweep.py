@@ -180,6 +180,9 @@ def run(args) -> int:
         print(f"biped sweep (dry run): {n} trials of {spec.base.duration_s:g} s, controller "
               f"{spec.base.controller}, torque limits {spec.torque_limits}, on {where} -> {out}")
         return 0
+    from biped.sim.mjlog import route_to
+
+    route_to(out.with_suffix(".mujoco.log"))  # MuJoCo's warnings (workers too) beside the results
     print(f"biped sweep: {n} trials of {spec.base.duration_s:g} s, controller "
           f"{spec.base.controller}, torque limits {spec.torque_limits}, physics "
           f"{spec.base.physics}, on {where} -> {out}",
