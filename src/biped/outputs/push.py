@@ -275,7 +275,7 @@ def write_outputs(result: PushResult, out_dir: str | Path, *, figures: bool = Tr
     if replay:
         stage("replay.html")
         try:
-            info = {"recovered": result.recovered, "fell": result.fell,
+            info = {"recovered": judged_set_point(result)["recovered"], "fell": result.fell,
                     "final COM error [m]": round(result.final_com_error_m, 4),
                     "final orientation error [deg]": round(result.final_orientation_error_deg, 3)}
             rp = replay_from_mujoco(scene.model, result.times, result.qpos,
