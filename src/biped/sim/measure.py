@@ -6,9 +6,14 @@ pressure (W section 4's outputs, and what a biomechanics lab measures with force
 >>> from biped.sim.measure import measure_rows
 >>> scenario = Scenario(duration_s=0.5)
 >>> scene = build_scene(scenario)
->>> rows = measure_rows(scene, simulate(scenario, scene=scene))
+>>> result = simulate(scenario, scene=scene)
+>>> rows = measure_rows(scene, result)
 >>> rows.grf[:, 0, 2] + rows.grf[:, 1, 2]      # (n,) total vertical ground force [N]
 >>> block_separation(result, rows).momentum   # the block's momentum when it leaves the body
+>>> foot_drift(result)                         # how far the feet moved from the hit to the end
+
+``biped.outputs.push`` writes these as trajectory.csv's columns (tests/test_outputs_push.py
+checks them against MuJoCo and closed forms).
 
 Each row k is re-evaluated with ``mj_forward`` at the recorded state (qpos_k, qvel_k) with the
 torques of that row (those held on [t_k, t_k+1)) applied, so every quantity is at exactly t_k:
@@ -196,7 +201,7 @@ def block_separation(result, rows: RowMeasurements, block_mass_kg: float | None 
     return BlockSeparation(t0, float(result.times[k]), mass * np.asarray(result.block_velocity[k]), k)
 
 
-def foot_drift(result) -> dict:
+def foot_drift(result) -> dict | None:
     """How far each foot moved on the floor between the block's hit and the end of the run:
     ``{"from_s": t_hit, "to_s": t_end, "left": [dx, dy, dz], "right": [...]}`` [m], the foot
     frames' displacement (MuJoCo kinematics of the recorded qpos). Without a hit the reference is
