@@ -110,6 +110,7 @@ def run(args) -> int:
 
     from tqdm import tqdm
 
+    from biped.cli.push import command_seconds
     from biped.outputs.walk import walk_stages, write_walk
     from biped.sim.mjlog import route_to
 
@@ -155,7 +156,7 @@ def run(args) -> int:
     for k, v in notes.items():
         rows.append((k, v))
     rows.append(("outputs", str(out)))
-    rows.append(("wall time", f"{time.perf_counter() - t_start:.1f} s, the whole command"))
+    rows.append(("wall time", f"{command_seconds(t_start):.1f} s, the whole command"))
     w = max(len(k) for k, _ in rows)
     print("\n".join(f"  {k:<{w}}  {v}" for k, v in rows))
     return 0
