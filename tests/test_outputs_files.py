@@ -53,6 +53,8 @@ def test_walk_inverse_dynamics_csv_obeys_newtons_law(tmp_path, gait):
     head, data = _read_csv(out / "inverse_dynamics.csv")
     summary = _strict((out / "summary.json").read_text())
     assert list(summary["inverse_dynamics_columns"]) == head
+    with open(out / "trajectory.csv") as f:
+        assert list(summary["trajectory_columns"]) == next(csv.reader(f))
     c = lambda n: data[:, head.index(n)]
     t = c("time")
     m = load_biped()

@@ -214,6 +214,17 @@ def _writer_progress(quiet: bool):
 
 
 def run(args) -> int:
+    """The command; MuJoCo's warnings go to its output's log while it runs (then back)."""
+    from biped.sim.mjlog import current_log, route_to
+
+    previous = current_log()
+    try:
+        return _run(args)
+    finally:
+        route_to(previous)
+
+
+def _run(args) -> int:
     import time
 
     from biped.outputs.push import write_outputs

@@ -166,6 +166,17 @@ def _check_plot(path: str | None, compare: list[str]) -> None:
 
 
 def run(args) -> int:
+    """The command; MuJoCo's warnings go to its output's log while it runs (then back)."""
+    from biped.sim.mjlog import current_log, route_to
+
+    previous = current_log()
+    try:
+        return _run(args)
+    finally:
+        route_to(previous)
+
+
+def _run(args) -> int:
     from biped.analysis import survived
     from biped.sim.sweep import Terminated, check_run_args, load, parts_dir, run_sweep
 

@@ -106,6 +106,17 @@ def _out_dir(args) -> Path:
 
 
 def run(args) -> int:
+    """The command; MuJoCo's warnings go to its output's log while it runs (then back)."""
+    from biped.sim.mjlog import current_log, route_to
+
+    previous = current_log()
+    try:
+        return _run(args)
+    finally:
+        route_to(previous)
+
+
+def _run(args) -> int:
     import time
 
     from tqdm import tqdm

@@ -53,6 +53,23 @@ CSV_COLUMNS = (("time",) + JOINT_NAMES + ("pelvis_x", "pelvis_y", "pelvis_z")
                + tuple(f"{p}_{a}" for p in _POINTS for a in "xyz") + ("left_stance", "right_stance"))
 
 
+def trajectory_column_units() -> dict[str, dict[str, str]]:
+    """``{column: {"unit", "meaning"}}`` of trajectory.csv (:data:`CSV_COLUMNS`)."""
+    out = {"time": {"unit": "s", "meaning": "time of the sample"}}
+    for name in CSV_COLUMNS[1:]:
+        if name in JOINT_NAMES:
+            out[name] = {"unit": "rad", "meaning": f"the figure's joint angle {name}"}
+        elif name.endswith("_stance"):
+            out[name] = {"unit": "0/1", "meaning": f"the {name.split('_')[0]} foot bears weight"}
+        elif name.startswith("pelvis_"):
+            out[name] = {"unit": "m", "meaning": f"mid-hip point, world {name[-1]}"}
+        else:
+            point = name[:-2].replace("_", " ")
+            out[name] = {"unit": "m", "meaning": f"{point} (end of the sole's centre line), "
+                                                 f"world {name[-1]}"}
+    return out
+
+
 def write_trajectory_csv(motion, landmarks: dict, path) -> Path:
     """trajectory.csv: one row per sample, columns :data:`CSV_COLUMNS` (SI units, rad)."""
     path = Path(path)
@@ -238,11 +255,11 @@ def write_walk(plan, out: Path, *, gait: str, speed: float, rate: float,
             rep = build_replay(motion, f"biped walk --gait {gait} (Bediz's kinematic figure)", info)
             paths["replay"] = str(write_replay(rep, out / "replay.html"))
         elif stage == "video.mp4":
-            model = figure_model(motion)
+            fig_model = figure_model(motion)  # not `model`: that is the biped of the summary
             kwargs = {}
             if on_frame is not None and "progress" in inspect.signature(render_video).parameters:
                 kwargs["progress"] = on_frame
-            res = render_video(model, motion.times, figure_qpos(model, motion), out / "video.mp4",
+            res = render_video(fig_model, motion.times, figure_qpos(fig_model, motion), out / "video.mp4",
                                track_body="pelvis", distance=4.0, azimuth=-125.0, elevation=-15.0,
                                fps=25, width=480, height=360, **kwargs)
             if res.path is None:
@@ -267,6 +284,7 @@ def write_walk(plan, out: Path, *, gait: str, speed: float, rate: float,
         summary["inverse_dynamics_columns"] = {
             name: {"unit": unit, "meaning": meaning}
             for name, unit, meaning in inverse_dynamics_columns(idyn.joint_names)}
+    summary["trajectory_columns"] = trajectory_column_units()
     summary["model"] = str(Path(model).resolve()) if model else "wendlandt"
     summary["outputs"] = paths
     summary["notes"] = notes

@@ -13,11 +13,13 @@ inherit that choice through the environment variable :data:`ENV`.
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import mujoco
 
-__all__ = ["ENV", "configure_from_env", "current_log", "route_to"]
+__all__ = ["ENV", "configure_from_env", "current_log", "route_to", "routed"]
 
 #: Environment variable holding the log file MuJoCo's warnings are appended to ("" = none).
 ENV = "BIPED_MUJOCO_LOG"
@@ -59,3 +61,15 @@ def current_log() -> str | None:
 def configure_from_env() -> None:
     """Apply :data:`ENV` (unset or empty: no log file) to this process's MuJoCo."""
     _apply(current_log())
+
+
+@contextmanager
+def routed(path: str | os.PathLike | None) -> Iterator[None]:
+    """:func:`route_to` ``path`` for the ``with`` block, then back to the previous choice (a
+    command run from Python, e.g. by the tests, leaves no routing behind)."""
+    previous = current_log()
+    route_to(path)
+    try:
+        yield
+    finally:
+        route_to(previous)
