@@ -157,3 +157,59 @@ def test_push_says_what_it_writes_and_the_whole_time(tmp_path, capsys, monkeypat
     assert "W's set point" in text
     assert not (tmp_path / "MUJOCO_LOG.TXT").exists()
     assert (out / "columns.json").exists()
+
+
+def test_walk_cli_writes_the_dynamics_csv_and_the_whole_time(tmp_path, capsys):
+    out = tmp_path / "w"
+    assert main(["walk", "--gait", "forward", "--steps", "1", "--out", str(out), "--no-video",
+                 "--no-replay", "--no-figures", "--quiet"]) == 0
+    text = capsys.readouterr().out
+    assert "the whole command" in text
+    head, _data = _read_csv(out / "inverse_dynamics.csv")
+    assert head[0] == "time" and "left_grf_z" in head and "residual_mz" in head
+    manifest = json.loads((out / ".biped-run.json").read_text())
+    assert "inverse_dynamics.csv" in manifest["files"]
+
+
+def test_walk_with_video_records_the_biped_model_not_the_figure(tmp_path, monkeypatch):
+    """Regression: the video stage rebound ``model`` to the figure's MjModel, and the summary
+    then failed on Path(MjModel) (TypeError after the whole run). The renderer is stubbed here:
+    it reports its frames through the progress callback, which reaches on_frame."""
+    import biped.outputs.walk as walk_out
+    from biped.kinematic import FigureDims, GaitParams, step_forward
+    from biped.viz.video import VideoResult
+
+    frames = []
+
+    def fake_render(model, times, qpos, path, progress=None, **kw):
+        assert isinstance(model, mujoco.MjModel) and qpos.shape == (len(times), model.nq)
+        for i in range(3):
+            if progress is not None:
+                progress(i + 1, 3)
+        return VideoResult(None, "stubbed", None, 0)
+
+    monkeypatch.setattr(walk_out, "render_video", fake_render)
+    plan = step_forward(FigureDims.from_anthropometry(), 1, 1.0, GaitParams())
+    run = walk_out.write_walk(plan, tmp_path / "w", gait="forward", speed=1.0, rate=100.0,
+                              figures=False, replay=False, dynamics=False,
+                              on_frame=lambda done, total: frames.append((done, total)))
+    assert run.summary["model"] == "wendlandt" and run.summary["notes"]["video"] == "stubbed"
+    assert frames == [(1, 3), (2, 3), (3, 3)]
+
+
+def test_push_outputs_report_stages_and_video_frames(tmp_path, monkeypatch):
+    import biped.outputs.push as push_out
+    from biped.sim import Scenario, simulate
+    from biped.viz.video import VideoResult
+
+    def fake_render(model, times, qpos, path, progress=None, **kw):
+        for i in range(2):
+            progress(i + 1, 2)
+        return VideoResult(None, "stubbed", None, 0)
+
+    monkeypatch.setattr(push_out, "render_video", fake_render)
+    stages, frames = [], []
+    push_out.write_outputs(simulate(Scenario(duration_s=0.02)), tmp_path, figures=False,
+                           replay=False, log=lambda m: None, on_stage=stages.append,
+                           on_frame=lambda d, n: frames.append((d, n)))
+    assert stages == ["trajectory.csv", "video.mp4"] and frames == [(1, 2), (2, 2)]
