@@ -19,7 +19,7 @@ README = Path(__file__).resolve().parents[1] / "README.md"
 def _block() -> str:
     text = README.read_text(encoding="utf-8")
     section = text.split("## A push from Python", 1)[1]
-    return re.search(r"```python\n(.*?)```", section, re.S).group(1)
+    return re.search(r"```python\n(.*?)```", section, re.DOTALL).group(1)
 
 
 @pytest.mark.slow
