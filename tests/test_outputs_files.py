@@ -213,3 +213,34 @@ def test_push_outputs_report_stages_and_video_frames(tmp_path, monkeypatch):
                            replay=False, log=lambda m: None, on_stage=stages.append,
                            on_frame=lambda d, n: frames.append((d, n)))
     assert stages == ["trajectory.csv", "video.mp4"] and frames == [(1, 2), (2, 2)]
+
+
+def test_any_nested_value_gives_strict_json(tmp_path):
+    """Property: whatever floats (NaN, +-Infinity, huge, tiny) sit in nested dicts, lists and
+    arrays, write_json gives text that a strict parser accepts, with finite values kept and
+    the others null."""
+    from hypothesis import given, settings
+    from hypothesis import strategies as st
+
+    leaf = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.integers(), st.booleans(),
+                     st.none(), st.text(max_size=5))
+    tree = st.recursive(leaf, lambda ch: st.one_of(st.lists(ch, max_size=4),
+                                                   st.dictionaries(st.text(max_size=4), ch, max_size=4)),
+                        max_leaves=20)
+
+    def same(a, b):
+        if isinstance(a, float):
+            return b is None if not np.isfinite(a) else b == a
+        if isinstance(a, dict):
+            return set(a) == set(b) and all(same(a[k], b[k]) for k in a)
+        if isinstance(a, list):
+            return len(a) == len(b) and all(same(x, y) for x, y in zip(a, b, strict=True))
+        return a == b
+
+    @settings(max_examples=200, deadline=None)
+    @given(tree)
+    def check(obj):
+        path = write_json(tmp_path / "p.json", obj)
+        assert same(obj, _strict(path.read_text()))
+
+    check()
