@@ -10,6 +10,11 @@ import mujoco
 import pytest
 
 from biped import models
+from biped.sim import mjlog
+
+# MuJoCo's warnings of the test session (and of the processes it starts) go to no file: never
+# MUJOCO_LOG.TXT in the directory pytest runs from.
+mjlog.route_to(None)
 
 
 @pytest.fixture(scope="session")

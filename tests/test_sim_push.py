@@ -127,12 +127,13 @@ def test_outputs_columns_and_summary(tmp_path):
         rows = list(csv.DictReader(f))
     assert len(rows) == 51  # t = 0, 2 ms, ..., 100 ms: the control rate
     assert float(rows[1]["time"]) == pytest.approx(0.002)
-    need = ["time", "com_x", "com_y", "com_z", "quat_w", "quat_x", "quat_y", "quat_z",
+    need = ["time", "central_body_com_x", "central_body_com_y", "central_body_com_z",
+            "quat_w", "quat_x", "quat_y", "quat_z",
             "block_x", "block_y", "block_z", "left_contact", "right_contact"]
     for j in r.joint_names:
         need += [f"q_{j}", f"tau_{j}"]
     assert set(need) <= set(rows[0])
-    assert float(rows[0]["com_z"]) == pytest.approx(1.035)
+    assert float(rows[0]["central_body_com_z"]) == pytest.approx(1.035)
     summary = json.loads((tmp_path / "summary.json").read_text())
     for k in ("recovered", "fell", "final_com_error_m", "final_orientation_error_deg",
               "block_contact_time_s", "events", "wall_time_s", "realtime_factor",

@@ -7,6 +7,7 @@ in :mod:`biped.sim`, the files in :mod:`biped.outputs.push`.
 
 from __future__ import annotations
 
+import math
 import os
 import sys
 from pathlib import Path
@@ -107,25 +108,37 @@ def _viewer(enabled: bool):
     return on_step, close
 
 
-def _table(result, out: Path, paths: dict) -> str:
+def _table(result, out: Path, paths: dict, times: dict | None = None) -> str:
+    from biped.outputs.push import judged_set_point
+
     def f(x, fmt):
-        return "n/a" if x is None else format(x, fmt)
+        return "n/a" if x is None or math.isnan(x) else format(x, fmt)
 
     s = result.scenario
-    status = ("recovered" if result.recovered else "fell" if result.fell
+    judged = judged_set_point(result)
+    status = ("recovered" if judged["recovered"] else "fell" if result.fell
               else "diverged" if result.diverged else "interrupted" if result.interrupted
               else "controller error" if result.controller_error else "not recovered")
+    own = s.controller == "joint-pd"
+    if own:  # the baseline holds its initial posture: judged against that, said on the line
+        status += " (joint-pd judged against its own set point, the initial state it holds)"
+    com_err, ori_err = judged["final_com_error_m"], judged["final_orientation_error_deg"]
     rows = [
         ("result", status),
-        ("final COM error", (f"{f(result.final_com_error_m * 100, '.2f')} cm "
-                            f"(tolerance {s.recovery_com_tol_m * 100:g} cm)")),
-        ("final orientation error", (f"{f(result.final_orientation_error_deg, '.3f')} deg "
+        ("final COM error", (f"{f(None if com_err is None else com_err * 1e3, '.3f')} mm "
+                            f"(tolerance {s.recovery_com_tol_m * 1e3:g} mm)")),
+        ("final orientation error", (f"{f(ori_err, '.3f')} deg "
                                     f"(tolerance {s.recovery_orientation_tol_deg:g} deg)")),
         ("block hits the body", f"{f(result.block_contact_time_s, '.3f')} s"),
         ("simulated", f"{result.times[-1] if len(result.times) else 0:.3f} of {s.duration_s:g} s"),
-        ("wall time", (f"{result.wall_time_s:.2f} s ({result.realtime_factor:.1f}x real time, "
-                      f"physics {s.physics} {s.physics_timestep_s * 1e3:g} ms, control {s.control_rate_hz:g} Hz)")),
+        ("simulation time", (f"{result.wall_time_s:.2f} s ({result.realtime_factor:.1f}x real time, "
+                            f"physics {s.physics} {s.physics_timestep_s * 1e3:g} ms, control "
+                            f"{s.control_rate_hz:g} Hz)")),
     ]
+    if own:
+        rows.insert(3, ("W's set point", (
+            f"{'reached' if result.recovered else 'not reached'} (COM error "
+            f"{f(result.final_com_error_m * 1e3, '.1f')} mm; joint-pd does not try to reach it)")))
     if result.fell:
         rows.append(("fall", f"{result.fall_time_s:.3f} s: {result.fall_reason}"))
     if result.diverged:
@@ -143,18 +156,89 @@ def _table(result, out: Path, paths: dict) -> str:
             if rise is not None and downs and downs[-1].time_s > rise.time_s:
                 rows.append((f"{foot} foot back down", f"{downs[-1].time_s:.3f} s ({downs[-1].part})"))
     rows.append(("outputs", str(out)))
+    if times:
+        rows.append(("wall time", (f"{times['total']:.1f} s, the whole command (simulation "
+                                   f"{result.wall_time_s:.1f} s, writing outputs "
+                                   f"{times['write']:.1f} s)")))
     w = max(len(k) for k, _ in rows)
     return "\n".join(f"  {k:<{w}}  {v}" for k, v in rows)
 
 
+def command_seconds(fallback_start: float) -> float:
+    """Wall time of the command [s]: since this process started (Linux: /proc), so that the
+    last line counts the start-up (imports) too; since ``fallback_start`` (a
+    ``time.perf_counter()`` value taken when the command began) elsewhere, or when the process
+    is older than a start-up (the command was called from a running Python, e.g. a test)."""
+    import time
+
+    elapsed = time.perf_counter() - fallback_start
+    try:
+        with open("/proc/self/stat") as fh:
+            start_ticks = float(fh.read().rsplit(")", 1)[1].split()[19])
+        with open("/proc/uptime") as fh:
+            uptime = float(fh.read().split()[0])
+        age = uptime - start_ticks / os.sysconf("SC_CLK_TCK")
+        if elapsed <= age < elapsed + 30.0:  # start-up: seconds, not a long-lived process
+            return age
+    except (OSError, ValueError, IndexError):
+        pass
+    return elapsed
+
+
+def _writer_progress(quiet: bool):
+    """(on_stage, on_frame, close) that tell what is being written after the simulation."""
+    if quiet:
+        return None, None, lambda: None
+    state: dict = {}
+
+    def close():
+        if state.get("bar") is not None:
+            state["bar"].close()
+            state["bar"] = None
+
+    def on_stage(name):
+        close()
+        what = {"trajectory.csv": "trajectory.csv, columns.json, summary.json (contact forces "
+                                  "from MuJoCo)",
+                "figures": "figures/ (W's Figs. 3-6)", "video.mp4": "video.mp4",
+                "replay.html": "replay.html"}.get(name, name)
+        print(f"writing {what} ...", flush=True)
+
+    def on_frame(done, total=None, *_):
+        from tqdm import tqdm
+
+        if state.get("bar") is None:
+            state["bar"] = tqdm(total=total, desc="rendering video.mp4", unit="frame")
+        bar = state["bar"]
+        bar.update(max(0, int(done) - bar.n))
+
+    return on_stage, on_frame, close
+
+
 def run(args) -> int:
+    """The command; MuJoCo's warnings go to its output's log while it runs (then back)."""
+    from biped.sim.mjlog import current_log, route_to
+
+    previous = current_log()
+    try:
+        return _run(args)
+    finally:
+        route_to(previous)
+
+
+def _run(args) -> int:
+    import time
+
     from biped.outputs.push import write_outputs
     from biped.sim.jit import kernels_for, warm_up
+    from biped.sim.mjlog import route_to
     from biped.sim.push import simulate
     from biped.sim.scene import build_scene
 
+    t_start = time.perf_counter()
     scenario = build_scenario(args)  # validated before anything is simulated
     out = _out_dir(args)
+    route_to(out / "mujoco.log")  # MuJoCo's warnings, if any, go to the run's folder
     scene = build_scene(scenario)
     warm_up(kernels_for(scenario.controller, scenario.distribution), log=lambda line: print(line, file=sys.stderr))
     on_step, close = _viewer(args.viewer)
@@ -176,9 +260,16 @@ def run(args) -> int:
             bar.close()
         if close is not None:
             close()
-    paths = write_outputs(result, out, figures=not args.no_figures, video=not args.no_video,
-                          replay=not args.no_replay, scene=scene)
-    print(_table(result, out, paths))
+    t_write = time.perf_counter()
+    on_stage, on_frame, close_bar = _writer_progress(args.quiet)
+    try:
+        paths = write_outputs(result, out, figures=not args.no_figures, video=not args.no_video,
+                              replay=not args.no_replay, scene=scene, on_stage=on_stage,
+                              on_frame=on_frame)
+    finally:
+        close_bar()
+    t_end = time.perf_counter()
+    print(_table(result, out, paths, {"total": command_seconds(t_start), "write": t_end - t_write}))
     if result.interrupted:
         return 130
     return 0

@@ -167,6 +167,17 @@ def _check_plot(path: str | None, compare: list[str]) -> None:
 
 
 def run(args) -> int:
+    """The command; MuJoCo's warnings go to its output's log while it runs (then back)."""
+    from biped.sim.mjlog import current_log, route_to
+
+    previous = current_log()
+    try:
+        return _run(args)
+    finally:
+        route_to(previous)
+
+
+def _run(args) -> int:
     from biped.analysis import survived
     from biped.sim.sweep import Terminated, check_run_args, load, parts_dir, run_sweep
 
@@ -182,6 +193,9 @@ def run(args) -> int:
         print(f"biped sweep (dry run): {n} trials of {spec.base.duration_s:g} s, controller "
               f"{spec.base.controller}, torque limits {spec.torque_limits}, on {where} -> {out}")
         return 0
+    from biped.sim.mjlog import route_to
+
+    route_to(out.with_suffix(".mujoco.log"))  # MuJoCo's warnings (workers too) beside the results
     print(f"biped sweep: {n} trials of {spec.base.duration_s:g} s, controller "
           f"{spec.base.controller}, torque limits {spec.torque_limits}, physics "
           f"{spec.base.physics}, on {where} -> {out}",

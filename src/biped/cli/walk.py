@@ -123,12 +123,29 @@ def _out_dir(args) -> Path:
 
 
 def run(args) -> int:
+    """The command; MuJoCo's warnings go to its output's log while it runs (then back)."""
+    from biped.sim.mjlog import current_log, route_to
+
+    previous = current_log()
+    try:
+        return _run(args)
+    finally:
+        route_to(previous)
+
+
+def _run(args) -> int:
+    import time
+
     from tqdm import tqdm
 
+    from biped.cli.push import command_seconds
     from biped.outputs.walk import walk_stages, write_walk
+    from biped.sim.mjlog import route_to
 
+    t_start = time.perf_counter()
     plan = build_plan(args)
     out = _out_dir(args)  # checked and created before any work
+    route_to(out / "mujoco.log")  # MuJoCo's warnings, if any, go to the run's folder
     flags = {"dynamics": not args.no_dynamics, "figures": not args.no_figures,
              "replay": not args.no_replay, "video": not args.no_video}
     bar = tqdm(total=len(walk_stages(**flags)), desc=f"biped walk {args.gait}", disable=args.quiet,
@@ -140,11 +157,16 @@ def run(args) -> int:
         if started:
             bar.update(1)
         started.append(stage)
-        bar.set_postfix_str(stage)
+        bar.set_postfix_str("inverse dynamics, inverse_dynamics.csv" if stage == "dynamics"
+                            else stage)
+
+    def on_frame(done, total=None, *_):  # the video stage names its frames
+        bar.set_postfix_str(f"video.mp4 {int(done)}/{total} frames" if total
+                            else f"video.mp4 {int(done)} frames")
 
     walk = write_walk(plan, out, gait=args.gait, speed=args.speed, rate=args.rate,
                       stair_rise=args.stair_rise, stair_run=args.stair_run, on_stage=on_stage,
-                      model=args.model, **flags)
+                      model=args.model, on_frame=on_frame, **flags)
     bar.update(1)
     bar.close()
     metrics, idyn, summary, notes = walk.metrics, walk.idyn, walk.summary, walk.notes
@@ -162,6 +184,7 @@ def run(args) -> int:
     for k, v in notes.items():
         rows.append((k, v))
     rows.append(("outputs", str(out)))
+    rows.append(("wall time", f"{command_seconds(t_start):.1f} s, the whole command"))
     w = max(len(k) for k, _ in rows)
     print("\n".join(f"  {k:<{w}}  {v}" for k, v in rows))
     return 0

@@ -15,12 +15,12 @@ from __future__ import annotations
 
 import csv
 import dataclasses
-import json
 from pathlib import Path
 
 import numpy as np
 
 from biped.errors import StateError
+from biped.outputs._json import write_json
 from biped.planar import analysis, runs
 from biped.viz import posture as viz
 
@@ -41,17 +41,8 @@ def _write_csv(path: Path, header: list[str], columns: list[np.ndarray]) -> None
 
 
 def _write_json(path: Path, obj) -> None:
-    path.write_text(json.dumps(obj, indent=2, default=_jsonable) + "\n")
+    write_json(path, obj)  # strict JSON: NaN / Infinity become null
 
-
-def _jsonable(o):
-    if isinstance(o, np.ndarray):
-        return o.tolist()
-    if isinstance(o, (np.floating, np.integer)):
-        return o.item()
-    if dataclasses.is_dataclass(o):
-        return dataclasses.asdict(o)
-    raise TypeError(type(o))
 
 
 def write_trajectory_csv(traj, path: Path) -> None:

@@ -8,19 +8,25 @@ video.mp4 and replay.html.
 
 from __future__ import annotations
 
-import json
+import inspect
 import math
 from collections.abc import Callable
 from pathlib import Path
 
+import numpy as np
+
+from biped.outputs._json import write_json
 from biped.sim.contact import SOLE_GEOMS
-from biped.sim.push import PushResult
-from biped.sim.scene import Scene, build_scene
+from biped.sim.measure import FEET, RowMeasurements, block_separation, foot_drift, measure_rows
+from biped.sim.push import PushResult, orientation_error_deg
+from biped.sim.scene import Scene, build_scene, tilt_quat
 from biped.viz.push_figures import plot_push
 from biped.viz.replay import replay_from_mujoco, write_replay
 from biped.viz.video import render_video
 
 __all__ = [
+    "column_dictionary",
+    "judged_set_point",
     "summary_dict",
     "trajectory_columns",
     "write_outputs",
@@ -30,29 +36,81 @@ __all__ = [
 
 
 def _fmt(x: float) -> str:
-    return repr(float(x))
+    x = float(x)
+    return repr(x) if math.isfinite(x) else ""  # empty: the quantity does not exist at this row
+
+
+def column_dictionary(joint_names) -> dict[str, dict[str, str]]:
+    """``{column: {"unit": ..., "meaning": ...}}`` of trajectory.csv, in column order (world
+    frame: z up, the biped faces -x at the start; every row at exactly its ``time``)."""
+    cols: list[tuple[str, str, str]] = [("time", "s", "time of the row (one row per control period)")]
+    xyz = "xyz"
+    cols += [(f"central_body_com_{a}", "m", (f"central body's COM (head, arms and trunk: W's body "
+              f"1, the controlled body), world {a}")) for a in xyz]
+    cols += [(f"central_body_vel_{a}", "m/s", f"central body's COM velocity, world {a}") for a in xyz]
+    cols += [(f"central_body_angvel_{a}", "rad/s", f"central body's angular velocity, world {a}")
+             for a in xyz]
+    cols += [(f"quat_{a}", "1", f"central body's orientation quaternion (w, x, y, z), {a}")
+             for a in "wxyz"]
+    cols += [(f"whole_body_com_{a}", "m", f"the biped's whole-body COM (block excluded), world {a}")
+             for a in xyz]
+    cols += [(f"whole_body_com_vel_{a}", "m/s", f"whole-body COM velocity, world {a}") for a in xyz]
+    cols += [(f"q_{n}", "rad", f"joint angle {n}") for n in joint_names]
+    cols += [(f"tau_{n}", "N m", f"torque at {n}, held from this row to the next") for n in joint_names]
+    for foot in FEET:
+        cols += [(f"{foot}_foot_{a}", "m", f"{foot} foot frame origin (the ankle), world {a}")
+                 for a in xyz]
+        cols += [(f"{foot}_foot_quat_{a}", "1", f"{foot} foot orientation quaternion (w, x, y, z), {a}")
+                 for a in "wxyz"]
+    for foot in FEET:
+        cols += [(f"{foot}_grf_{a}", "N", (f"force of the floor on the {foot} foot (sum of MuJoCo's "
+                  f"contact forces, mj_contactForce), world {a}")) for a in xyz]
+        cols += [(f"{foot}_cop_{a}", "m", (f"{foot} foot's centre of pressure on the floor plane, "
+                  f"world {a} (empty when the foot carries no load)")) for a in "xy"]
+    cols += [(f"block_{a}", "m", f"block centre, world {a}") for a in xyz]
+    cols += [(f"block_vel_{a}", "m/s", f"block velocity, world {a}") for a in xyz]
+    cols += [("block_contact", "0/1", "the block touches the biped")]
+    cols += [("left_contact", "0/1", "the left heel or toe touches the floor"),
+             ("right_contact", "0/1", "the right heel or toe touches the floor")]
+    cols += [(f"{foot}_{part}_contact", "0/1", f"the {foot} {part} box touches the floor")
+             for foot, part in SOLE_GEOMS]
+    return {name: {"unit": unit, "meaning": meaning} for name, unit, meaning in cols}
 
 
 def trajectory_columns(joint_names) -> list[str]:
-    cols = ["time", "com_x", "com_y", "com_z", "quat_w", "quat_x", "quat_y", "quat_z"]
-    cols += [f"q_{n}" for n in joint_names] + [f"tau_{n}" for n in joint_names]
-    cols += ["block_x", "block_y", "block_z", "left_contact", "right_contact"]
-    cols += [f"{foot}_{part}_contact" for foot, part in SOLE_GEOMS]
-    return cols
+    """The column names of trajectory.csv (see :func:`column_dictionary`)."""
+    return list(column_dictionary(joint_names))
 
 
-def write_trajectory_csv(result: PushResult, path: str | Path) -> Path:
-    """``trajectory.csv``: one row per control period (columns: :func:`trajectory_columns`;
-    angles [rad], torques [N m], positions [m]). Floats are written with ``repr`` (shortest
-    round-trip form), so equal runs give byte-identical files."""
+def write_trajectory_csv(result: PushResult, path: str | Path, *,
+                         rows: RowMeasurements | None = None, scene: Scene | None = None) -> Path:
+    """``trajectory.csv``: one row per control period, the columns of :func:`column_dictionary`
+    (SI units, world frame). The per-row whole-body and contact quantities come from
+    :func:`biped.sim.measure.measure_rows` (``rows``; computed on ``scene`` when not given).
+    Floats are written with ``repr`` (shortest round-trip form), so equal runs give
+    byte-identical files; a quantity that does not exist at a row (a CoP without load) is empty."""
     path = Path(path)
+    if rows is None:
+        rows = measure_rows(scene or build_scene(result.scenario), result)
     lines = [",".join(trajectory_columns(result.joint_names))]
     lc, rc = result.left_contact, result.right_contact
-    for k in range(len(result.times)):
-        vals = [_fmt(result.times[k]), *map(_fmt, result.com[k]), *map(_fmt, result.quat[k]),
-                *map(_fmt, result.joint_angles[k]), *map(_fmt, result.torques[k]),
-                *map(_fmt, result.block[k]), str(int(lc[k])), str(int(rc[k])),
-                *(str(int(c)) for c in result.contacts[k])]
+    n = len(result.times)
+    feet_pos = result.feet_pos if result.feet_pos is not None else np.full((n, 2, 3), np.nan)
+    feet_quat = result.feet_quat if result.feet_quat is not None else np.full((n, 2, 4), np.nan)
+    bvel = result.block_velocity if result.block_velocity is not None else np.full((n, 3), np.nan)
+    for k in range(n):
+        vals = [_fmt(result.times[k]), *map(_fmt, rows.central_body_com[k]),
+                *map(_fmt, rows.central_body_com_vel[k]), *map(_fmt, rows.central_body_angvel[k]),
+                *map(_fmt, result.quat[k]), *map(_fmt, rows.whole_body_com[k]),
+                *map(_fmt, rows.whole_body_com_vel[k]),
+                *map(_fmt, result.joint_angles[k]), *map(_fmt, result.torques[k])]
+        for i in range(2):
+            vals += [*map(_fmt, feet_pos[k, i]), *map(_fmt, feet_quat[k, i])]
+        for i in range(2):
+            vals += [*map(_fmt, rows.grf[k, i]), *map(_fmt, rows.cop[k, i])]
+        vals += [*map(_fmt, result.block[k]), *map(_fmt, bvel[k]),
+                 str(int(rows.block_touches_biped[k])), str(int(lc[k])), str(int(rc[k])),
+                 *(str(int(c)) for c in result.contacts[k])]
         lines.append(",".join(vals))
     tmp = path.with_suffix(".csv.part")
     tmp.write_text("\n".join(lines) + "\n")
@@ -67,11 +125,50 @@ def _num(x):
     return x if math.isfinite(x) else None
 
 
-def summary_dict(result: PushResult) -> dict:
-    """The content of ``summary.json``."""
+def judged_set_point(result: PushResult) -> dict:
+    """The set point a run is judged against and the verdict: each controller against its own.
+
+    W's workspace controller drives the central body to the scenario's set point
+    (``target_com_m``, ``target_tilt_deg`` about ``target_axis``). The joint-PD baseline holds
+    the initial joint angles, so it never tries to reach that set point: it is judged against the
+    initial state it holds (COM at ``initial_com_m``, ``initial_tilt_deg`` about -y, the sweep's
+    ``--task hold`` set point), with the same tolerances. ``recovered``: the run is complete, did
+    not fall and ends within ``recovery_com_tol_m`` and ``recovery_orientation_tol_deg``."""
     s = result.scenario
+    if s.controller != "joint-pd":
+        return {"controller": s.controller, "set_point": "the scenario's (W's) set point",
+                "com_m": result.target_com.tolist(), "quat": result.target_quat.tolist(),
+                "final_com_error_m": _num(result.final_com_error_m),
+                "final_orientation_error_deg": _num(result.final_orientation_error_deg),
+                "recovered": bool(result.recovered)}
+    com = np.array(s.initial_com_m, dtype=float)
+    quat = tilt_quat("-y", s.initial_tilt_deg)
+    n = len(result.times)
+    com_err = float(np.linalg.norm(result.com[-1] - com)) if n else float("nan")
+    ori_err = orientation_error_deg(result.quat[-1], quat) if n else float("nan")
+    complete = (n == s.control_steps + 1 and not result.interrupted and not result.fell
+                and result.controller_error is None and result.diverged is None)
+    ok = bool(complete and com_err < s.recovery_com_tol_m
+              and ori_err < s.recovery_orientation_tol_deg)
+    return {"controller": s.controller,
+            "set_point": "its own: the initial state it holds (initial_com_m, initial_tilt_deg "
+                         "about -y), not W's set point",
+            "com_m": com.tolist(), "quat": quat.tolist(), "final_com_error_m": _num(com_err),
+            "final_orientation_error_deg": _num(ori_err), "recovered": ok}
+
+
+def summary_dict(result: PushResult, rows: RowMeasurements | None = None) -> dict:
+    """The content of ``summary.json`` (``rows``: the run's :func:`~biped.sim.measure.measure_rows`,
+    for the block's momentum when it leaves the body; without it that entry is null)."""
+    s = result.scenario
+    judged = judged_set_point(result)
+    sep = block_separation(result, rows) if rows is not None else None
+    p_end = (s.block_mass_kg * result.block_velocity[-1] if result.block_velocity is not None
+             and len(result.times) else result.block_momentum_after)
     return {
-        "recovered": result.recovered,
+        "recovered": judged["recovered"],
+        "judged_against": judged,
+        "scenario_set_point_reached": bool(result.recovered),
         "fell": result.fell,
         "fall_time_s": _num(result.fall_time_s),
         "fall_reason": result.fall_reason,
@@ -86,26 +183,28 @@ def summary_dict(result: PushResult) -> dict:
         "target_com_m": result.target_com.tolist(),
         "target_quat": result.target_quat.tolist(),
         "block_contact_time_s": _num(result.block_contact_time_s),
+        "block_leaves_body_time_s": _num(sep.time_s) if sep is not None else None,
         "block_momentum_before_kg_m_s": result.block_momentum_before.tolist(),
-        "block_momentum_after_kg_m_s": result.block_momentum_after.tolist(),
+        "block_momentum_after_kg_m_s": sep.momentum.tolist() if sep is not None else None,
+        "block_momentum_end_kg_m_s": np.asarray(p_end).tolist(),
+        "feet_drift_m": foot_drift(result),
         "events": [e.to_dict() for e in result.events],
         "wall_time_s": result.wall_time_s,
         "realtime_factor": _num(result.realtime_factor),
         "control_rate_hz": s.control_rate_hz,
         "physics_timestep_s": s.physics_timestep_s,
+        "trajectory_columns": "columns.json",
         "scenario": s.to_dict(),
     }
 
 
-def write_summary(result: PushResult, path: str | Path, extra: dict | None = None) -> Path:
-    path = Path(path)
-    data = summary_dict(result)
+def write_summary(result: PushResult, path: str | Path, extra: dict | None = None, *,
+                  rows: RowMeasurements | None = None) -> Path:
+    """``summary.json`` (:func:`summary_dict`, plus ``extra``): strict JSON, atomic."""
+    data = summary_dict(result, rows)
     if extra:
         data.update(extra)
-    tmp = path.with_suffix(".json.part")
-    tmp.write_text(json.dumps(data, indent=2) + "\n")
-    tmp.replace(path)
-    return path
+    return write_json(path, data)
 
 
 def _markers(result: PushResult) -> list[dict]:
@@ -119,32 +218,54 @@ def _markers(result: PushResult) -> list[dict]:
     return out
 
 
+def _render_video(scene: Scene, result: PushResult, path: Path, on_frame):
+    """:func:`render_video` of the run, reporting frames through ``on_frame(done, total)`` when
+    the renderer takes a progress callback."""
+    kwargs = {}
+    if on_frame is not None and "progress" in inspect.signature(render_video).parameters:
+        kwargs["progress"] = on_frame
+    return render_video(scene.model, result.times, result.qpos, path, fps=30,
+                        track_body="central_body", distance=3.0, **kwargs)
+
+
 def write_outputs(result: PushResult, out_dir: str | Path, *, figures: bool = True,
                   video: bool = True, replay: bool = True, scene: Scene | None = None,
-                  log: Callable[[str], None] = print) -> dict:
+                  log: Callable[[str], None] = print,
+                  on_stage: Callable[[str], None] | None = None,
+                  on_frame: Callable[..., None] | None = None) -> dict:
     """Write every output of a run into ``out_dir`` (created if needed); returns ``{name: path}``.
 
     Order: ``trajectory.csv`` and ``summary.json`` first (atomic writes), then ``scenario.toml``,
     ``figures/``, ``video.mp4``, ``replay.html``. A failing optional output (no OpenGL, no
     ffmpeg...) is reported through ``log`` in one line and never removes what was written.
+    ``on_stage(name)`` is called before each product ("trajectory.csv", "figures", "video.mp4",
+    "replay.html"); ``on_frame(done, total)`` while the video renders (when the renderer reports
+    frames).
     """
+    def stage(name: str) -> None:
+        if on_stage is not None:
+            on_stage(name)
+
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    written = {"trajectory": write_trajectory_csv(result, out / "trajectory.csv"),
-               "summary": write_summary(result, out / "summary.json")}
+    stage("trajectory.csv")
+    scene = scene or build_scene(result.scenario)
+    rows = measure_rows(scene, result)
+    written = {"trajectory": write_trajectory_csv(result, out / "trajectory.csv", rows=rows),
+               "columns": write_json(out / "columns.json", column_dictionary(result.joint_names)),
+               "summary": write_summary(result, out / "summary.json", rows=rows)}
     (out / "scenario.toml").write_text(result.scenario.to_toml())
     written["scenario"] = out / "scenario.toml"
     if figures:
+        stage("figures")
         try:
             written["figures"] = plot_push(result, out / "figures")
         except Exception as exc:  # noqa: BLE001 - an optional output must not lose the run
             log(f"figures: not written ({type(exc).__name__}: {exc})")
-    if video or replay:
-        scene = scene or build_scene(result.scenario)
     if video:
+        stage("video.mp4")
         try:
-            res = render_video(scene.model, result.times, result.qpos, out / "video.mp4",
-                               fps=30, track_body="central_body", distance=3.0)
+            res = _render_video(scene, result, out / "video.mp4", on_frame)
             if res.path:
                 written["video"] = Path(res.path)
             else:
@@ -152,8 +273,9 @@ def write_outputs(result: PushResult, out_dir: str | Path, *, figures: bool = Tr
         except Exception as exc:  # noqa: BLE001 - an optional output must not lose the run
             log(f"video: not written ({type(exc).__name__}: {exc})")
     if replay:
+        stage("replay.html")
         try:
-            info = {"recovered": result.recovered, "fell": result.fell,
+            info = {"recovered": judged_set_point(result)["recovered"], "fell": result.fell,
                     "final COM error [m]": round(result.final_com_error_m, 4),
                     "final orientation error [deg]": round(result.final_orientation_error_deg, 3)}
             rp = replay_from_mujoco(scene.model, result.times, result.qpos,

@@ -9,7 +9,7 @@ Each of :func:`write_trajectory_csv`, :func:`build_replay`, :func:`figure_model`
 from __future__ import annotations
 
 import csv
-import json
+import inspect
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -28,19 +28,46 @@ from biped.kinematic.figure import (
     part_geoms,
 )
 from biped.kinematic.gaits import stair_geometry, walk_metrics
+from biped.outputs._json import write_json
 from biped.spatial import rot_to_quat
 from biped.viz.replay import Replay, ReplayGeom, write_replay
 from biped.viz.video import render_video
 from biped.viz.walk_figures import plot_feet, plot_inverse_dynamics, plot_joint_angles
 
-__all__ = ["CSV_COLUMNS", "build_replay", "figure_model", "figure_qpos", "replay_geoms",
-           "write_trajectory_csv", "write_walk"]
+__all__ = [
+    "CSV_COLUMNS",
+    "build_replay",
+    "figure_model",
+    "figure_qpos",
+    "inverse_dynamics_columns",
+    "replay_geoms",
+    "write_inverse_dynamics_csv",
+    "write_trajectory_csv",
+    "write_walk",
+]
 
 _POINTS = ("left_heel", "left_toe", "right_heel", "right_toe")
 #: Columns of trajectory.csv: time [s], the 12 joint angles [rad], the pelvis (mid-hip point) and
 #: the sole points [m, world], and whether each foot bears weight (0/1).
 CSV_COLUMNS = (("time",) + JOINT_NAMES + ("pelvis_x", "pelvis_y", "pelvis_z")
                + tuple(f"{p}_{a}" for p in _POINTS for a in "xyz") + ("left_stance", "right_stance"))
+
+
+def trajectory_column_units() -> dict[str, dict[str, str]]:
+    """``{column: {"unit", "meaning"}}`` of trajectory.csv (:data:`CSV_COLUMNS`)."""
+    out = {"time": {"unit": "s", "meaning": "time of the sample"}}
+    for name in CSV_COLUMNS[1:]:
+        if name in JOINT_NAMES:
+            out[name] = {"unit": "rad", "meaning": f"the figure's joint angle {name}"}
+        elif name.endswith("_stance"):
+            out[name] = {"unit": "0/1", "meaning": f"the {name.split('_')[0]} foot bears weight"}
+        elif name.startswith("pelvis_"):
+            out[name] = {"unit": "m", "meaning": f"mid-hip point, world {name[-1]}"}
+        else:
+            point = name[:-2].replace("_", " ")
+            out[name] = {"unit": "m", "meaning": f"{point} (end of the sole's centre line), "
+                                                 f"world {name[-1]}"}
+    return out
 
 
 def write_trajectory_csv(motion, landmarks: dict, path) -> Path:
@@ -56,6 +83,46 @@ def write_trajectory_csv(motion, landmarks: dict, path) -> Path:
         w.writerow(CSV_COLUMNS)
         for row in table:
             w.writerow([f"{v:.9g}" for v in row])
+    return path
+
+
+def inverse_dynamics_columns(joint_names) -> list[tuple[str, str, str]]:
+    """(name, unit, meaning) of each column of inverse_dynamics.csv."""
+    cols = [("time", "s", "time of the sample")]
+    cols += [(f"tau_{j}", "N m", f"joint torque the motion needs at {j} (mj_inverse)")
+             for j in joint_names]
+    for side in ("left", "right"):
+        cols += [(f"{side}_stance", "0/1", f"the {side} foot bears weight")]
+        cols += [(f"{side}_grf_{a}", "N", (f"ground force on the {side} sole, world {a} "
+                  f"(min-norm split with two feet down)")) for a in "xyz"]
+        cols += [(f"{side}_grm_{a}", "N m", (f"ground moment on the {side} sole about its centre, "
+                  f"world {a}")) for a in "xyz"]
+        cols += [(f"{side}_cop_{a}", "m", (f"{side} centre of pressure, world {a} (empty when "
+                  f"the foot carries no load)")) for a in "xyz"]
+    cols += [(f"residual_{a}", "N", "root force no foot can supply (flight), world frame")
+             for a in ("fx", "fy", "fz")]
+    cols += [(f"residual_{a}", "N m", ("root torque no foot can supply (flight), central-body "
+              "frame")) for a in ("mx", "my", "mz")]
+    return cols
+
+
+def write_inverse_dynamics_csv(idyn, path) -> Path:
+    """inverse_dynamics.csv: one row per sample of the inverse dynamics ``idyn``
+    (:class:`~biped.kinematic.dynamics.InverseDynamics`), columns
+    :func:`inverse_dynamics_columns` (SI units, world frame); empty fields are quantities that do
+    not exist at that sample (the CoP of a foot in the air)."""
+    path = Path(path)
+    cols = [idyn.times[:, None], idyn.torques]
+    for j in range(2):
+        cols += [idyn.stance[:, j:j + 1].astype(float), idyn.grf[:, j], idyn.grf_moment[:, j],
+                 idyn.cop[:, j]]
+    cols.append(idyn.residual)
+    table = np.hstack(cols)
+    with path.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow([c[0] for c in inverse_dynamics_columns(idyn.joint_names)])
+        for row in table:
+            w.writerow(["" if not np.isfinite(v) else f"{v:.9g}" for v in row])
     return path
 
 
@@ -147,13 +214,16 @@ def write_walk(plan, out: Path, *, gait: str, speed: float, rate: float,
                stair_rise: float | None = None, stair_run: float | None = None,
                dynamics: bool = True, figures: bool = True, replay: bool = True,
                video: bool = True, on_stage: Callable[[str], None] | None = None,
-               model: str | Path | None = None) -> WalkRun:
+               model: str | Path | None = None,
+               on_frame: Callable[..., None] | None = None) -> WalkRun:
     """Sample ``plan`` at ``rate`` [Hz] and write the walk's files into ``out`` (created):
     trajectory.csv, then (unless switched off) the inverse dynamics, figures/, replay.html,
     video.mp4, and summary.json last. ``on_stage(name)`` is called before each of
     :func:`walk_stages`; ``gait``, ``speed``, ``stair_rise`` / ``stair_run`` are recorded in the
     summary (the stairs' geometry for the upstairs and demo gaits). ``model``: the MJCF biped
-    whose inertias the inverse dynamics use (None: W's shipped biped), recorded in the summary."""
+    whose inertias the inverse dynamics use (None: W's shipped biped), recorded in the summary.
+    ``on_frame(done, total)`` reports the video's frames when the renderer takes a progress
+    callback. The inverse dynamics stage also writes inverse_dynamics.csv."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     paths, notes = {}, {}
@@ -169,6 +239,8 @@ def write_walk(plan, out: Path, *, gait: str, speed: float, rate: float,
             paths["trajectory"] = str(write_trajectory_csv(motion, lm, out / "trajectory.csv"))
         elif stage == "dynamics":
             idyn = inverse_dynamics(motion, load_biped(model) if model else None)
+            paths["inverse_dynamics"] = str(write_inverse_dynamics_csv(
+                idyn, out / "inverse_dynamics.csv"))
         elif stage == "figures":
             figs = [plot_joint_angles(motion, out / "figures" / "joint_angles.png"),
                     plot_feet(motion, lm, out / "figures" / "feet.png")]
@@ -183,10 +255,13 @@ def write_walk(plan, out: Path, *, gait: str, speed: float, rate: float,
             rep = build_replay(motion, f"biped walk --gait {gait} (Bediz's kinematic figure)", info)
             paths["replay"] = str(write_replay(rep, out / "replay.html"))
         elif stage == "video.mp4":
-            model = figure_model(motion)
-            res = render_video(model, motion.times, figure_qpos(model, motion), out / "video.mp4",
+            fig_model = figure_model(motion)  # not `model`: that is the biped of the summary
+            kwargs = {}
+            if on_frame is not None and "progress" in inspect.signature(render_video).parameters:
+                kwargs["progress"] = on_frame
+            res = render_video(fig_model, motion.times, figure_qpos(fig_model, motion), out / "video.mp4",
                                track_body="pelvis", distance=4.0, azimuth=-125.0, elevation=-15.0,
-                               fps=25, width=480, height=360)
+                               fps=25, width=480, height=360, **kwargs)
             if res.path is None:
                 notes["video"] = res.reason
             else:
@@ -206,8 +281,12 @@ def write_walk(plan, out: Path, *, gait: str, speed: float, rate: float,
                              "alpha_down_deg": plan.params.alpha_down}
     if idyn is not None:
         summary["inverse_dynamics"] = idyn.summary()
+        summary["inverse_dynamics_columns"] = {
+            name: {"unit": unit, "meaning": meaning}
+            for name, unit, meaning in inverse_dynamics_columns(idyn.joint_names)}
+    summary["trajectory_columns"] = trajectory_column_units()
     summary["model"] = str(Path(model).resolve()) if model else "wendlandt"
     summary["outputs"] = paths
     summary["notes"] = notes
-    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    write_json(out / "summary.json", summary)  # strict JSON: NaN / Infinity become null
     return WalkRun(motion, metrics, idyn, summary, notes)

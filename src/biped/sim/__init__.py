@@ -6,9 +6,12 @@
 >>> write_outputs(result, "runs/w-default")
 """
 
+from biped.sim import mjlog as _mjlog
 from biped.sim.push import PushResult, replay_torques, run_closed_loop, simulate
 from biped.sim.scenario import Scenario
 from biped.sim.scene import Scene, build_scene
+
+_mjlog.configure_from_env()  # never MUJOCO_LOG.TXT in the current directory
 
 __all__ = [
     "PushResult",

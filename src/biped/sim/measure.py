@@ -6,8 +6,14 @@ pressure (W section 4's outputs, and what a biomechanics lab measures with force
 >>> from biped.sim.measure import measure_rows
 >>> scenario = Scenario(duration_s=0.5)
 >>> scene = build_scene(scenario)
->>> rows = measure_rows(scene, simulate(scenario, scene=scene))
+>>> result = simulate(scenario, scene=scene)
+>>> rows = measure_rows(scene, result)
 >>> rows.grf[:, 0, 2] + rows.grf[:, 1, 2]      # (n,) total vertical ground force [N]
+>>> block_separation(result, rows).momentum   # the block's momentum when it leaves the body
+>>> foot_drift(result)                         # how far the feet moved from the hit to the end
+
+``biped.outputs.push`` writes these as trajectory.csv's columns (tests/test_outputs_push.py
+checks them against MuJoCo and closed forms).
 
 Each row k is re-evaluated with ``mj_forward`` at the recorded state (qpos_k, qvel_k) with the
 torques of that row (those held on [t_k, t_k+1)) applied, so every quantity is at exactly t_k:
@@ -24,7 +30,8 @@ import numpy as np
 
 from biped.sim.scene import Scene
 
-__all__ = ["FEET", "RowMeasurements", "centre_of_pressure", "foot_bodies", "measure_rows"]
+__all__ = ["FEET", "BlockSeparation", "RowMeasurements", "block_separation", "centre_of_pressure",
+           "foot_bodies", "foot_drift", "measure_rows"]
 
 #: The two feet, in the order of every (n, 2, ...) array.
 FEET = ("left", "right")
@@ -159,3 +166,58 @@ def measure_rows(scene: Scene, result) -> RowMeasurements:
                            whole_body_com_vel=wcom_vel, grf=grf, cop=cop,
                            block_touches_biped=touch, biped_mass_kg=biped_mass,
                            gravity=np.array(m.opt.gravity))
+
+
+@dataclass(frozen=True)
+class BlockSeparation:
+    """The end of the block's first contact with the biped.
+
+    contact_time_s: the first row with a block-biped contact (None: no hit); time_s: the first
+    row after it without one (None: still touching at the end); momentum (3,) [kg m/s]: the
+    block's momentum at ``time_s`` (NaN when it never left); row: its row index (or None)."""
+
+    contact_time_s: float | None
+    time_s: float | None
+    momentum: np.ndarray
+    row: int | None
+
+
+def block_separation(result, rows: RowMeasurements, block_mass_kg: float | None = None
+                     ) -> BlockSeparation:
+    """When the block leaves the body after its first hit, and its momentum then: the first row
+    after the first block-biped contact (``rows.block_touches_biped``, MuJoCo's contacts at the
+    row's state) with no such contact. ``block_mass_kg`` defaults to the scenario's."""
+    mass = result.scenario.block_mass_kg if block_mass_kg is None else block_mass_kg
+    touch = np.asarray(rows.block_touches_biped, dtype=bool)
+    hit = np.flatnonzero(touch)
+    if hit.size == 0:
+        return BlockSeparation(None, None, np.full(3, np.nan), None)
+    k0 = int(hit[0])
+    free = np.flatnonzero(~touch[k0:])
+    t0 = float(result.times[k0])
+    if free.size == 0:
+        return BlockSeparation(t0, None, np.full(3, np.nan), None)
+    k = k0 + int(free[0])
+    return BlockSeparation(t0, float(result.times[k]), mass * np.asarray(result.block_velocity[k]), k)
+
+
+def foot_drift(result) -> dict | None:
+    """How far each foot moved on the floor between the block's hit and the end of the run:
+    ``{"from_s": t_hit, "to_s": t_end, "left": [dx, dy, dz], "right": [...]}`` [m], the foot
+    frames' displacement (MuJoCo kinematics of the recorded qpos). Without a hit the reference is
+    the first row where both feet are flat (heel and toe on the floor); None if there is none.
+    The same numbers are the differences of trajectory.csv's ``<foot>_foot_x/y/z`` at those
+    two times."""
+    n = len(result.times)
+    if result.feet_pos is None or n == 0:
+        return None
+    if result.block_contact_time_s is not None:
+        k = int(np.argmin(np.abs(result.times - result.block_contact_time_s)))
+    else:
+        flat = np.flatnonzero(np.asarray(result.contacts).all(axis=1))
+        if flat.size == 0:
+            return None
+        k = int(flat[0])
+    d = result.feet_pos[-1] - result.feet_pos[k]
+    return {"from_s": float(result.times[k]), "to_s": float(result.times[-1]),
+            **{foot: d[i].tolist() for i, foot in enumerate(FEET)}}

@@ -1,0 +1,75 @@
+"""Where MuJoCo's warnings go: never ``MUJOCO_LOG.TXT`` in the user's current directory.
+
+MuJoCo's default warning handler prints the warning and appends it to ``MUJOCO_LOG.TXT`` in the
+current directory. Importing :mod:`biped.sim` calls :func:`configure_from_env`: with no log file
+chosen MuJoCo writes no file (the warning is still printed); a command that writes a run folder
+calls :func:`route_to` with the run's own ``mujoco.log``, and child processes (a sweep's workers)
+inherit that choice through the environment variable :data:`ENV`.
+
+>>> from biped.sim.mjlog import route_to
+>>> route_to("runs/mine/mujoco.log")   # MuJoCo's warnings of this process and its children go there
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import mujoco
+
+__all__ = ["ENV", "configure_from_env", "current_log", "route_to", "routed"]
+
+#: Environment variable holding the log file MuJoCo's warnings are appended to ("" = none).
+ENV = "BIPED_MUJOCO_LOG"
+
+
+def _apply(path: str | None) -> None:
+    cfg_cls = getattr(mujoco, "MjLogConfig", None)
+    if cfg_cls is not None:  # MuJoCo >= 3.4: the log file is configurable
+        cfg = cfg_cls.get()
+        cfg.logto_file = bool(path)
+        if path:
+            cfg.logfile = path
+        cfg.set()
+        return
+    # older MuJoCo: a Python handler replaces the default one (which writes MUJOCO_LOG.TXT)
+
+    def handler(msg: str) -> None:
+        print(f"WARNING: {msg}")
+        if path:
+            with open(path, "a", encoding="utf-8") as fh:
+                fh.write(f"WARNING: {msg}\n")
+
+    mujoco.set_mju_user_warning(handler)
+
+
+def route_to(path: str | os.PathLike | None) -> None:
+    """Append MuJoCo's warnings to ``path`` (None: write no log file) in this process and in
+    child processes started afterwards (through :data:`ENV`)."""
+    value = str(Path(path).resolve()) if path else ""
+    os.environ[ENV] = value
+    _apply(value or None)
+
+
+def current_log() -> str | None:
+    """The file MuJoCo's warnings go to, or None."""
+    return os.environ.get(ENV) or None
+
+
+def configure_from_env() -> None:
+    """Apply :data:`ENV` (unset or empty: no log file) to this process's MuJoCo."""
+    _apply(current_log())
+
+
+@contextmanager
+def routed(path: str | os.PathLike | None) -> Iterator[None]:
+    """:func:`route_to` ``path`` for the ``with`` block, then back to the previous choice (a
+    command run from Python, e.g. by the tests, leaves no routing behind)."""
+    previous = current_log()
+    route_to(path)
+    try:
+        yield
+    finally:
+        route_to(previous)
