@@ -1,12 +1,18 @@
-"""Speed of W's push experiment: closed loop vs an open-loop replay of its torques.
+"""Speed of W's push experiment: the closed loop against MuJoCo's own stepping of the same run.
 
-Runs the scenario (default W's) closed loop without video, then replays the recorded torques open
-loop on the same scene from the same initial state in the same process: the same physics work
-without the controller. Prints the medians of ``--repeat`` runs of each, their real-time factors
-(simulated time / wall time) and the ratio closed / open. Goals from the issue: >= 30x real time,
-ratio <= 1.5. W's 3 s run took 2066 s on a 100 MHz SGI R4000 (0.0015x real time).
+In one process and one run: the scenario (default W's) closed loop (``biped.sim.push``'s loop:
+contact monitor, controller, records, MuJoCo; the controller built outside the timer), then a
+**physics-only** rollout of the same scene from the same initial state driven by the torques the
+closed loop recorded, two ways: ``mj_step(m, d, substeps)`` in a bare Python loop that sets
+``ctrl`` once per control period, and ``mujoco.rollout`` (no Python at all per step). Both
+reproduce the closed loop's final state bit for bit (checked and printed), so they do exactly the
+same physics work. The three are interleaved ``--repeat`` times; the medians of wall time and of
+thread CPU time (less sensitive to other work on a shared machine) are printed with real-time
+factors and the ratios closed loop / physics-only. Goals: closed loop <= 1.25x the bare
+``mj_step`` loop (``physics = "faithful"``); >= 30x real time with ``--physics fast``.
+W's 3 s run took 2066 s on a 100 MHz SGI R4000 (0.0015x real time).
 
-    python benchmarks/push.py [--repeat 5] [--set KEY=VALUE ...]
+    python benchmarks/push.py [--repeat 7] [--physics faithful|fast] [--set KEY=VALUE ...]
 """
 
 from __future__ import annotations
@@ -17,41 +23,113 @@ import platform
 import statistics
 import time
 
-from biped.sim import Scenario, build_scene, replay_torques, simulate
+import mujoco
+import numpy as np
+from mujoco import rollout
+
+from biped.sim import Scenario, build_scene
+from biped.sim.push import controller_policy, run_closed_loop
 from biped.sim.scenario import parse_assignment
+from biped.sim.scene import initial_state
+
+
+def _timed(fn):
+    w, c = time.perf_counter(), time.thread_time()
+    out = fn()
+    return out, time.perf_counter() - w, time.thread_time() - c
+
+
+def physics_loop(scenario, scene, torques, steps):
+    """The bare reference: same scene and initial state, ``ctrl`` set per control period,
+    ``mj_step`` for the period's substeps; returns the final data."""
+    m = scene.model
+    d = mujoco.MjData(m)
+    d.qpos[:], d.qvel[:] = initial_state(scene, scenario)
+    mujoco.mj_forward(m, d)
+    act, sub = scene.actuator_index, scenario.control_substeps
+    for k in range(steps):
+        d.ctrl[act] = torques[k]
+        mujoco.mj_step(m, d, sub)
+    return d
+
+
+def physics_rollout(scenario, scene, torques, steps, data):
+    """The same with ``mujoco.rollout`` (the whole run in C); returns the final qpos."""
+    m = scene.model
+    d = mujoco.MjData(m)
+    d.qpos[:], d.qvel[:] = initial_state(scene, scenario)
+    mujoco.mj_forward(m, d)
+    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
+    x0 = np.empty(mujoco.mj_stateSize(m, spec))
+    mujoco.mj_getState(m, d, x0, spec)
+    ctrl = np.zeros((steps, m.nu))
+    ctrl[:, scene.actuator_index] = torques[:steps]
+    ctrl = np.repeat(ctrl, scenario.control_substeps, axis=0)
+    state, _ = rollout.rollout(m, data, x0, ctrl)
+    return state[0, -1, 1:1 + m.nq]  # FULLPHYSICS = (time, qpos, qvel, ...)
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--repeat", type=int, default=5)
+    ap.add_argument("--repeat", type=int, default=7)
+    ap.add_argument("--physics", choices=("faithful", "fast"), default="faithful")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     args = ap.parse_args()
-    scenario = Scenario().with_overrides(**dict(parse_assignment(a) for a in args.set))
+    scenario = Scenario(physics=args.physics).with_overrides(
+        **dict(parse_assignment(a) for a in args.set))
     scene = build_scene(scenario)
-    warm = simulate(scenario.with_overrides(duration_s=0.02), scene=scene)  # numba compile
-    replay_torques(warm, scene=scene)
+    policy = controller_policy(scenario, scene)
+    result = run_closed_loop(scenario.with_overrides(duration_s=0.02), scene, policy)  # compile, warm caches
+    rdata = mujoco.MjData(scene.model)
 
-    closed, opened, result = [], [], None
+    runs = {"closed": [], "loop": [], "rollout": []}
+    cpu = {"closed": [], "loop": [], "rollout": []}
     for _ in range(args.repeat):
-        t = time.perf_counter()
-        result = simulate(scenario, scene=scene)
-        closed.append(time.perf_counter() - t)
-        t = time.perf_counter()
-        rep = replay_torques(result, scene=scene)
-        opened.append(time.perf_counter() - t)
+        result, w, c = _timed(lambda: run_closed_loop(scenario, scene, policy))
+        runs["closed"].append(w)
+        cpu["closed"].append(c)
+        steps = len(result.times) - 1  # the closed loop steps after every row but the last
+        tq = result.torques
+        d, w, c = _timed(lambda: physics_loop(scenario, scene, tq, steps))  # noqa: B023
+        runs["loop"].append(w)
+        cpu["loop"].append(c)
+        q_loop = d.qpos.copy()
+        q_roll, w, c = _timed(lambda: physics_rollout(scenario, scene, tq, steps, rdata))  # noqa: B023
+        runs["rollout"].append(w)
+        cpu["rollout"].append(c)
     sim_time = result.times[-1]
-    c, o = statistics.median(closed), statistics.median(opened)
+    same_loop = np.array_equal(q_loop, result.qpos[-1])
+    same_roll = np.array_equal(q_roll, result.qpos[-1])
+    med = {k: statistics.median(v) for k, v in runs.items()}
+    medc = {k: statistics.median(v) for k, v in cpu.items()}
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-          f"python {platform.python_version()}")
-    print(f"scenario: physics {scenario.physics_timestep_s * 1e3:g} ms, control "
-          f"{scenario.control_rate_hz:g} Hz, simulated {sim_time:.3f} s of {scenario.duration_s:g} s"
-          + ("" if sim_time >= scenario.duration_s else
+          f"python {platform.python_version()}, mujoco {mujoco.__version__}; load average "
+          f"{load:.1f} at the end (the machine is shared: wall times move with other work)")
+    print(f"scenario: physics {scenario.physics!r} ({scenario.physics_timestep_s * 1e3:g} ms step, "
+          f"contact time constant {scenario.contact_timeconst_s * 1e3:g} ms"
+          f"{', sleep' if scenario.sleep else ''}), control {scenario.control_rate_hz:g} Hz, "
+          f"controller {scenario.controller}, simulated {sim_time:.3f} s of "
+          f"{scenario.duration_s:g} s"
+          + ("" if sim_time >= scenario.duration_s - 1e-9 else
              f" (the run ended early: fell={result.fell}, diverged={bool(result.diverged)})"))
-    print(f"closed loop (controller + physics): median {c * 1e3:8.1f} ms  "
-          f"{sim_time / c:7.1f}x real time")
-    print(f"open-loop replay (physics only):    median {o * 1e3:8.1f} ms  "
-          f"{(rep.times[-1]) / o:7.1f}x real time")
-    print(f"ratio closed / open: {c / o:.3f}   (goal <= 1.5; goal >= 30x real time)")
+    print(f"physics-only reproduces the closed loop's final state exactly: bare loop {same_loop}, "
+          f"rollout {same_roll}")
+    print(f"median of {args.repeat}      wall [ms]  x real time   thread CPU [ms]  x real time")
+    names = {"closed": "closed loop", "loop": "physics only, mj_step loop",
+             "rollout": "physics only, mujoco.rollout"}
+    for k, name in names.items():
+        print(f"  {name:28s} {med[k] * 1e3:8.1f}  {sim_time / med[k]:8.1f}    "
+              f"{medc[k] * 1e3:10.1f}    {sim_time / medc[k]:8.1f}")
+    print(f"ratio closed loop / physics-only (mj_step loop): wall {med['closed'] / med['loop']:.3f}, "
+          f"CPU {medc['closed'] / medc['loop']:.3f}   (goal <= 1.25 on faithful)")
+    print(f"ratio closed loop / physics-only (rollout):      wall "
+          f"{med['closed'] / med['rollout']:.3f}, CPU {medc['closed'] / medc['rollout']:.3f}")
+    print(f"closed loop: {sim_time / med['closed']:.1f}x real time wall, "
+          f"{sim_time / medc['closed']:.1f}x on CPU time (goal >= 30x with --physics fast)")
+    print(f"per control period: closed loop {medc['closed'] / steps * 1e6:.1f} us CPU, physics "
+          f"{medc['loop'] / steps * 1e6:.1f} us, the difference (controller, contact monitor, "
+          f"records) {(medc['closed'] - medc['loop']) / steps * 1e6:.1f} us")
     print(f"W (1997): 3 s in 2066 s = {3 / 2066:.4f}x real time")
 
 

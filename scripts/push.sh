@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # Installs biped with everything it needs and runs W's push experiment on the defaults.
+# Debian packages: libosmesa6 and libgl1 (MuJoCo's offscreen rendering of video.mp4).
+# Python: the active virtual environment, else the project's own .venv (see scripts/_env.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-if command -v apt-get >/dev/null && [ "$(id -u)" = 0 ]; then
-  if ! dpkg -s libosmesa6 >/dev/null 2>&1; then
-    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq libosmesa6 libgl1 >/dev/null
-  fi
-fi
-python -m pip install -q -e .
-biped push "$@"
+. scripts/_env.sh
+ensure_env libosmesa6 libgl1
+echo "installing biped and its Python dependencies (first run: a few minutes)"
+"$PY" -m pip install -q -e .
+exec "$PY" -m biped push "$@"

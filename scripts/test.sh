@@ -1,11 +1,19 @@
 #!/usr/bin/env bash
-# Installs what the tests need (system packages included) and runs the whole test suite.
+# Installs what the tests need and runs the whole test suite; exits non-zero if any test fails
+# or if no test ran.
+# Debian packages: libosmesa6 and libgl1 (offscreen rendering of the videos), chromium (the
+# browser tests open replay.html headless; ~130 packages with its dependencies).
+# Python: the active virtual environment, else the project's own .venv (see scripts/_env.sh).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-if command -v apt-get >/dev/null && [ "$(id -u)" = 0 ]; then
-  if ! command -v chromium >/dev/null || ! dpkg -s libosmesa6 >/dev/null 2>&1; then
-    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium libosmesa6 libgl1 >/dev/null
-  fi
+. scripts/_env.sh
+ensure_env libosmesa6 libgl1 chromium
+echo "installing biped and the test dependencies (first run: a few minutes)"
+"$PY" -m pip install -q -e ".[test]"
+rc=0
+"$PY" -m pytest -n 2 -q "$@" || rc=$?
+if [ "$rc" = 5 ]; then
+  echo "error: pytest collected no tests (exit 5): treated as a failure" >&2
+  exit 1
 fi
-python -m pip install -q -e ".[test]"
-python -m pytest -n 2 -q "$@"
+exit "$rc"

@@ -331,5 +331,5 @@ def test_alg5_printed_reading_is_selectable_and_differs(wendlandt_path, wendland
 
 
 def test_unknown_distribution_is_rejected(wendlandt_path):
-    with pytest.raises(ScenarioError, match="valid: \\('statics', 'printed'\\)"):
+    with pytest.raises(ScenarioError, match="valid: \\('statics', 'printed', 'qp'\\)"):
         WorkspaceController.from_mjcf(wendlandt_path, distribution="paper")

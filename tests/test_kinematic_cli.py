@@ -19,7 +19,7 @@ import pytest
 
 from biped.cli import main
 from biped.kinematic import step_upward
-from biped.kinematic.outputs import CSV_COLUMNS, build_replay, figure_model, figure_qpos
+from biped.outputs.walk import CSV_COLUMNS, build_replay, figure_model, figure_qpos
 
 
 def _read_csv(path):

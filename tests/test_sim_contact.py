@@ -14,11 +14,15 @@ import mujoco
 import numpy as np
 import pytest
 
+from biped.sim import simulate
+from biped.sim.contact import SOLE_GEOMS, ContactEvent, ContactMonitor, heel_timeline
 from biped.sim.scenario import JOINT_NAMES, Scenario
-from biped.sim.scene import scene_spec
+from biped.sim.scene import build_scene, initial_state, scene_spec
+from biped.sim.sweep import SweepSpec, hold_scenario
 from biped.spatial import axis_angle_quat, quat_mul
 
 E_TOL = 0.05
+PRESETS = ("faithful", "fast")  # every contact test runs on both physics presets
 
 
 def _delete(spec, obj):
@@ -71,10 +75,11 @@ def _bounce(model, data, normal_velocity, max_steps=20000):
     raise AssertionError("no separation after the impact")
 
 
+@pytest.mark.parametrize("physics", PRESETS)
 @pytest.mark.parametrize("speed", [0.5, 2.0])
-def test_restitution_foot_floor(speed):
+def test_restitution_foot_floor(speed, physics):
     """The rigid 73 kg biped lands flat on its soles: e = 0.2 +- 0.05 (W's e)."""
-    s = Scenario()
+    s = Scenario(physics=physics)
     model = rigid_biped_spec(s).compile()
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)
@@ -85,10 +90,11 @@ def test_restitution_foot_floor(speed):
     assert abs(e - s.restitution) < E_TOL, e
 
 
+@pytest.mark.parametrize("physics", PRESETS)
 @pytest.mark.parametrize("mass", [1.8, 10.0])
-def test_restitution_block_body(mass):
+def test_restitution_block_body(mass, physics):
     """The block thrown square at the fixed trunk: e = 0.2 +- 0.05, for two block masses."""
-    s = Scenario(block_mass_kg=mass)
+    s = Scenario(block_mass_kg=mass, physics=physics)
     spec = scene_spec(s)
     spec.delete(spec.joint("root"))  # the central body is welded where the MJCF puts it
     for k in list(spec.keys):
@@ -120,11 +126,12 @@ def _slope_gravity(tan_slope: float) -> list:
     return [9.81 * math.sin(th), 0.0, -9.81 * math.cos(th)]
 
 
+@pytest.mark.parametrize("physics", PRESETS)
 @pytest.mark.parametrize("tan_slope, slides", [(0.25, False), (0.40, True)])
-def test_friction_block_on_floor(tan_slope, slides):
+def test_friction_block_on_floor(tan_slope, slides, physics):
     """The block on a floor tilted by atan(tan_slope) (gravity tilted instead): it sticks below
     mu = 0.3 and slides above with a = g (sin - mu cos) (Coulomb)."""
-    s = Scenario()
+    s = Scenario(physics=physics)
     spec = scene_spec(s)
     spec.body("block").pos = [2.0, 2.0, s.block_size_m[2] / 2 - 0.0005]
     spec.option.gravity = _slope_gravity(tan_slope)
@@ -153,11 +160,12 @@ def test_friction_block_on_floor(tan_slope, slides):
         assert data.time - t0 == pytest.approx(T, abs=2 * model.opt.timestep)
 
 
+@pytest.mark.parametrize("physics", PRESETS)
 @pytest.mark.parametrize("tan_slope, slides", [(0.25, False), (0.40, True)])
-def test_friction_feet_on_floor(tan_slope, slides):
+def test_friction_feet_on_floor(tan_slope, slides, physics):
     """The rigid biped standing on its soles (translation only) on a tilted floor: sticks below
     mu = 0.3, slides above with a = g (sin - mu cos)."""
-    s = Scenario()
+    s = Scenario(physics=physics)
     th = math.atan(tan_slope)
     model = rigid_biped_spec(s, slides=("x", "y", "z"), gravity=_slope_gravity(tan_slope)).compile()
     data = mujoco.MjData(model)
@@ -188,3 +196,148 @@ def test_calibration_matches_closed_form_without_clipping_trend():
     assert z04 < z02
     assert closed_form == pytest.approx(0.456, abs=1e-3)
     assert z02 > closed_form
+
+
+# ---------------------------------------------------------------------------------------------
+# events: the compiled ContactMonitor against a plain reference
+
+
+class ReferenceMonitor:
+    """The contact classification as first written (a role per geom, every contact looked at in
+    Python), from MuJoCo's ``geom1`` / ``geom2`` arrays one contact at a time, independently of
+    :class:`biped.sim.contact.ContactMonitor`'s pair table and compiled OR."""
+
+    def __init__(self, model, scene, fall_height_m):
+        self.model, self.floor, self.block = model, scene.floor_geom, scene.block_geom
+        self.sole = {g: i for i, g in enumerate(scene.sole_geoms)}
+        self.biped = set(scene.biped_geoms) - {self.floor, self.block}
+        self.central, self.fall_height = scene.central_body, fall_height_m
+        self.flags = [False] * 4
+        self.rows, self.events = [], []
+        self.block_time = self.fall_time = self.fall_reason = None
+
+    def update(self, t, d):
+        flags, block, lying = [False] * 4, False, None
+        for j in range(d.ncon):
+            a, b = int(d.contact.geom1[j]), int(d.contact.geom2[j])
+            for x, y in ((a, b), (b, a)):
+                if x == self.floor and y in self.sole:
+                    flags[self.sole[y]] = True
+                elif x == self.floor and y in self.biped and lying is None:
+                    lying = self.model.geom(y).name
+                if x == self.block and y in self.biped:
+                    block = True
+        if self.rows:
+            for i, (old, new) in enumerate(zip(self.flags, flags)):
+                if old != new:
+                    foot, part = SOLE_GEOMS[i]
+                    self.events.append(ContactEvent(round(float(t), 9), foot, part,
+                                                    "touch_down" if new else "lift_off"))
+        self.flags = flags
+        self.rows.append(flags)
+        if block and self.block_time is None:
+            self.block_time = float(t)
+        if self.fall_time is None:
+            z = d.xipos[self.central, 2]
+            if lying is not None:
+                self.fall_time, self.fall_reason = float(t), f"{lying} touched the floor"
+            elif z < self.fall_height:
+                self.fall_time = float(t)
+                self.fall_reason = f"central-body COM at {z:.3f} m, below {self.fall_height} m"
+
+
+def _sweep_scenario(controller, speed, direction, duration):
+    base = hold_scenario(Scenario(controller=controller, duration_s=duration))
+    spec = SweepSpec(axes={"speed_m_s": speed, "direction_deg": direction}, base=base)
+    return spec.scenario(spec.trials()[0])
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scenario, ends", [
+    (Scenario(), "recovered"),                                            # W's run
+    (Scenario(physics="fast", duration_s=2.0), "recovered"),  # the block falls asleep ~1.5 s
+    (_sweep_scenario("workspace", 9.0, 0.0, 0.5), "left_shank touched"),  # a shank on the floor
+    (_sweep_scenario("joint-pd", 9.0, 180.0, 1.6), "central-body COM"),   # sinks below 0.6 m
+    (_sweep_scenario("workspace", 3.0, 90.0, 0.5), "diverged"),           # MuJoCo gives up
+], ids=["w", "w-fast", "sweep-shank", "sweep-com", "sweep-diverged"])
+def test_monitor_events_are_the_reference_classification(scenario, ends):
+    """Every period of a closed-loop run, the compiled monitor (inside the loop) and the plain
+    reference (fed the same MjData after every control period) agree exactly: per-period sole
+    flags, every foot event (time, foot, part, kind), the first block hit, the fall and its
+    reason."""
+    scene = build_scene(scenario)
+    m = scene.model
+    ref = ReferenceMonitor(m, scene, scenario.fall_height_m)
+    d0 = mujoco.MjData(m)  # the loop's own start: initial state + mj_forward
+    d0.qpos[:], d0.qvel[:] = initial_state(scene, scenario)
+    mujoco.mj_forward(m, d0)
+    ref.update(0.0, d0)
+    period = 1.0 / scenario.control_rate_hz
+
+    def on_step(model, data):
+        ref.update(len(ref.rows) * period, data)
+
+    r = simulate(scenario, scene=scene, on_step=on_step)
+    outcome = ("recovered" if r.recovered else r.fall_reason if r.fell
+               else "diverged" if r.diverged else "completed")
+    assert outcome.startswith(ends), outcome
+    assert len(ref.rows) == len(r.times)
+    np.testing.assert_array_equal(r.contacts, np.array(ref.rows, dtype=bool))
+    assert r.events == tuple(ref.events)
+    assert r.block_contact_time_s == ref.block_time and r.block_contact_time_s is not None
+    assert (r.fall_time_s, r.fall_reason) == (ref.fall_time, ref.fall_reason)
+    if ends == "recovered":
+        assert len(r.events) >= 8  # the landing, the heels' rise and return
+
+
+def test_monitor_classifies_a_lying_biped_and_a_resting_block():
+    """A static check of the same equivalence without a controller: the biped dropped on its
+    side with the block dropped on it; both monitors read the same MjData after each of 300
+    steps."""
+    s = Scenario(block_position_m=(0.0, 0.0, 0.6), block_velocity_m_s=(0.0, 0.0, 0.0),
+                 fall_height_m=0.01)
+    scene = build_scene(s)
+    m = scene.model
+    d = mujoco.MjData(m)
+    d.qpos[:], d.qvel[:] = initial_state(scene, s)
+    d.qpos[scene.biped_qpos_index[3:7]] = axis_angle_quat(np.array([1.0, 0.0, 0.0]), math.pi / 2)
+    d.qpos[scene.biped_qpos_index[2]] = 0.25
+    mujoco.mj_forward(m, d)
+    mon = ContactMonitor(m, floor_geom=scene.floor_geom, block_geom=scene.block_geom,
+                         sole_geoms=scene.sole_geoms, biped_geoms=scene.biped_geoms,
+                         central_body=scene.central_body, fall_height_m=s.fall_height_m)
+    ref = ReferenceMonitor(m, scene, s.fall_height_m)
+    for k in range(300):
+        mon.update(k * 0.001, d)
+        ref.update(k * 0.001, d)
+        np.testing.assert_array_equal(mon.flags, ref.flags)
+        assert mon.feet == (ref.flags[0] or ref.flags[1], ref.flags[2] or ref.flags[3])
+        mujoco.mj_step(m, d, 2)
+    assert mon.fall_reason == ref.fall_reason and "touched the floor" in mon.fall_reason
+    assert mon.fall_time_s == ref.fall_time
+    assert mon.block_contact_time_s == ref.block_time and ref.block_time is not None
+    assert mon.events == ref.events
+
+
+def test_heel_timeline_reads_w_events_through_chatter():
+    """Hand-made events: a 2 ms bounce before the long rise and one after the return are not
+    W's events; a heel that never comes back has no return time."""
+    ev = [ContactEvent(t, foot, "heel", kind) for t, foot, kind in [
+        (0.010, "left", "touch_down"), (0.086, "left", "lift_off"), (0.088, "left", "touch_down"),
+        (0.090, "left", "lift_off"), (0.274, "left", "touch_down"), (0.300, "left", "lift_off"),
+        (0.302, "left", "touch_down"), (0.094, "right", "lift_off")]]
+    line = heel_timeline(ev, 0.082)
+    assert line == {"block hits the body": 0.082, "left heel rises": 0.086,
+                    "left heel back": 0.274, "right heel rises": 0.094, "right heel back": None}
+    assert heel_timeline(ev, None)["left heel rises"] is None
+
+
+@pytest.mark.slow
+def test_fast_preset_keeps_w_timeline():
+    """``physics = "fast"`` (1 ms, 7.5 ms, sleep) against "faithful" on W's push: the block hit,
+    both heels' rise and return within 10 ms (the criterion of docs/sweep.md)."""
+    runs = {p: simulate(Scenario(physics=p, duration_s=1.0)) for p in PRESETS}
+    a, b = (heel_timeline(r.events, r.block_contact_time_s) for r in runs.values())
+    assert all(v is not None for v in a.values()), a
+    for name in a:
+        assert b[name] == pytest.approx(a[name], abs=0.010), (name, a[name], b[name])

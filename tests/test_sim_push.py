@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 
 from biped.cli import main
-from biped.sim import Scenario, build_scene, simulate, write_outputs
-from biped.sim.push import make_controller, orientation_error_deg, write_trajectory_csv
+from biped.outputs.push import write_outputs, write_trajectory_csv
+from biped.sim import Scenario, build_scene, simulate
+from biped.sim.push import controller_policy, orientation_error_deg
 from biped.sim.scene import initial_state, scene_spec, tilt_quat
 
 MISS = {"block_position_m": (3.0, 3.0, 0.06), "block_velocity_m_s": (0.0, 0.0, 0.0)}
@@ -71,9 +72,9 @@ def test_controller_wiring_recovers_with_welded_feet():
     errors far below the 2 cm / 2 deg of the issue at 3 s."""
     s = Scenario()
     scene, model, data = _welded_feet_model(s)
-    policy = make_controller(s, scene)
-    for _ in range(s.control_steps):
-        data.ctrl[scene.actuator_index] = policy(data.qpos[scene.biped_qpos_index],
+    policy = controller_policy(s, scene)
+    for k in range(s.control_steps):
+        data.ctrl[scene.actuator_index] = policy(k / s.control_rate_hz, data.qpos[scene.biped_qpos_index],
                                                  data.qvel[scene.biped_qvel_index], (True, True))
         mujoco.mj_step(model, data, s.control_substeps)
     com = data.xipos[scene.central_body]

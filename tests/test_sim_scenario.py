@@ -96,3 +96,36 @@ def test_cli_refuses_to_overwrite_a_run(tmp_path, capsys):
     assert main(["push", "--quiet", "--out", str(out), "--duration", "0.01"]) == 2
     assert "--overwrite" in capsys.readouterr().err
     assert json.loads((out / "summary.json").read_text()) == {"recovered": True}
+
+
+def test_physics_preset_sets_step_and_contact_unless_given(tmp_path):
+    """The presets' numbers (typed here from docs/sweep.md, not read from the code); an explicit
+    key wins over the preset; changing the preset resets what it sets; TOML round trip."""
+    assert (Scenario().physics_timestep_s, Scenario().contact_timeconst_s) == (0.0005, 0.005)
+    fast = Scenario(physics="fast")
+    assert (fast.physics_timestep_s, fast.contact_timeconst_s, fast.sleep) == (0.001, 0.0075, True)
+    assert not Scenario().sleep
+    assert Scenario(physics="fast", physics_timestep_s=0.0005).physics_timestep_s == 0.0005
+    assert Scenario().with_overrides(physics="fast") == fast
+    assert fast.with_overrides(physics="faithful") == Scenario()
+    assert fast.with_overrides(physics="faithful", contact_timeconst_s=0.01).contact_timeconst_s == 0.01
+    p = tmp_path / "fast.toml"
+    p.write_text('physics = "fast"\n')
+    assert Scenario.from_toml(p) == fast
+    p.write_text(fast.to_toml())
+    assert Scenario.from_toml(p) == fast
+    with pytest.raises(ScenarioError, match="physics must be one of 'faithful', 'fast'"):
+        Scenario(physics="quick")
+
+
+def test_push_cli_physics_flag():
+    """``biped push`` stays faithful unless --physics says otherwise; --timestep still wins."""
+    from biped.cli import build_parser
+    from biped.cli.push import build_scenario
+
+    def scenario(*argv):
+        return build_scenario(build_parser().parse_args(["push", *argv]))
+
+    assert scenario().physics == "faithful" and scenario().physics_timestep_s == 0.0005
+    assert scenario("--physics", "fast") == Scenario(physics="fast")
+    assert scenario("--physics", "fast", "--timestep", "0.0005").physics_timestep_s == 0.0005

@@ -23,6 +23,7 @@ import biped
 from biped import models
 from biped.errors import ScenarioError
 from biped.sim.scenario import Scenario
+from biped.sim.sweep.store import part_files, read_part
 from biped.sim.sweep import (
     AXES,
     SweepSpec,
@@ -213,8 +214,8 @@ def test_ctrl_c_keeps_finished_trials_and_a_rerun_finishes_the_rest(tmp_path, mo
     with pytest.raises(KeyboardInterrupt):
         run_sweep(spec, out, workers=1, trial_fn=interrupting_trial, progress=False)
     assert not out.exists()
-    parts = list(parts_dir(out).glob("part-*.parquet"))
-    assert sum(pq.ParquetFile(p).metadata.num_rows for p in parts) == 4
+    parts = part_files(parts_dir(out))
+    assert sum(read_part(p).num_rows for p in parts) == 4
     log = tmp_path / "log"
     monkeypatch.setenv("BIPED_TEST_SWEEP_LOG", str(log))
     summary = run_sweep(spec, out, workers=1, trial_fn=logging_trial, progress=False)

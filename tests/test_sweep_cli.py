@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from biped.cli import main
-from biped.sim.sweep import feet_in_place_bound, load
+from biped.analysis import feet_in_place_bound
+from biped.sim.sweep import load
 
 
 def test_cli_runs_a_tiny_sweep_and_plots_it(tmp_path, capsys):
@@ -49,3 +50,80 @@ def test_envelope_plot_draws_hofs_bound(tmp_path):
     theta, r = line.get_data()
     b = feet_in_place_bound(np.degrees(theta[:-1]), load(out).scenario)
     np.testing.assert_allclose(r[:-1], b.j_max_n_s)
+
+
+# ---------------------------------------------------------------------------------------------
+# the envelope plot: what a reader must be able to see
+
+def _toy(setup) -> dict:
+    t = setup.trial
+    return {"impulse_n_s": 2.2 * t.speed_m_s, "completed": True, "fell": t.speed_m_s > 4}
+
+
+def _toy_sweep(tmp_path, name, controller="workspace"):
+    from biped.sim.scenario import Scenario
+    from biped.sim.sweep import SweepSpec, run_sweep
+
+    out = tmp_path / name
+    spec = SweepSpec(axes={"speed_m_s": (2.0, 4.0, 6.0), "direction_deg": tuple(range(0, 360, 45))},
+                     base=Scenario(controller=controller))
+    run_sweep(spec, out, workers=1, trial_fn=_toy, progress=False)
+    return out
+
+
+def _boxes_overlap(a, b) -> bool:
+    return a.x0 < b.x1 and b.x0 < a.x1 and a.y0 < b.y1 and b.y0 < a.y1
+
+
+def test_envelope_plot_shows_hofs_bound_the_facing_and_no_overlapping_labels(tmp_path):
+    pytest.importorskip("matplotlib")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from biped.viz.envelope import plot_comparison
+
+    one = _toy_sweep(tmp_path, "a.parquet")
+    fig = plot_comparison([one])
+    assert len(fig.axes) == 1  # one sweep: no "overlaid" panel repeating it
+    ax = fig.axes[0]
+    (line,) = [ln for ln in ax.get_lines() if ln.get_linestyle() == "--"]
+    theta, r = line.get_data()
+    b = feet_in_place_bound(np.degrees(theta[:-1]), load(one).scenario)
+    speed = b.j_max_n_s / ((1 + load(one).scenario.restitution) * 1.8)
+    np.testing.assert_allclose(r[:-1], speed)
+    assert speed.min() < ax.get_ylim()[1]  # drawn inside the axes, not only in the legend
+    # no text of the axes overlaps an angle label (the radius's name used to sit on 225 deg)
+    fig.canvas.draw()
+    renderer = fig.canvas.get_renderer()
+    angles = [t for t in ax.get_xticklabels() if t.get_text()]
+    assert any("225" in t.get_text() for t in angles)
+    others = [t for t in [*ax.get_yticklabels(), *ax.texts, ax.title] if t.get_text()]
+    for a in angles:
+        for o in others:
+            assert not _boxes_overlap(a.get_window_extent(renderer),
+                                      o.get_window_extent(renderer)), (a.get_text(), o.get_text())
+    text = " ".join(t.get_text() for t in fig.texts)
+    assert "faces -x" in text and "180 deg is W's push, from behind" in text
+    two = plot_comparison([one, _toy_sweep(tmp_path, "b.parquet", "joint-pd")])
+    assert len(two.axes) == 3 and two.axes[-1].get_title().startswith("envelopes overlaid")
+    assert {ln.get_label() for ln in two.axes[-1].get_lines()} == {"workspace", "joint-pd"}
+
+
+@pytest.mark.parametrize("argv, grid, physics, step", [
+    ([], None, "fast", 0.001),                                           # the sweep's default
+    (["--physics", "faithful"], None, "faithful", 0.0005),
+    (["--set", "physics_timestep_s=0.00025"], None, "faithful", 0.00025),  # explicit step kept
+    ([], "physics_timestep_s = 0.0005\n", "faithful", 0.0005),         # ... also from the file
+    ([], 'physics = "faithful"\n', "faithful", 0.0005),
+    (["--physics", "fast"], 'physics = "faithful"\n', "fast", 0.001),  # the flag wins
+])
+def test_sweep_physics_preset_defaults_to_fast_unless_physics_is_given(tmp_path, argv, grid,
+                                                                       physics, step):
+    from biped.cli import build_parser
+    from biped.cli.sweep import build_spec
+
+    if grid is not None:
+        (tmp_path / "g.toml").write_text("[grid]\nspeed_m_s = [3.0]\n[scenario]\n" + grid)
+        argv = [*argv, "--grid", str(tmp_path / "g.toml")]
+    spec = build_spec(build_parser().parse_args(["sweep", "--speed", "2", *argv]))
+    assert (spec.base.physics, spec.base.physics_timestep_s) == (physics, step)

@@ -13,16 +13,10 @@ from biped import models
 from biped.control.joint_pd import JointPDController
 from biped.control.limits import HUMAN_N_M_PER_KG, JOINT_NAMES, clip_torques, torque_limits
 from biped.errors import ScenarioError
-from biped.sim.scenario import Scenario
-from biped.sim.sweep import (
-    SweepSpec,
-    ballistic_impulse,
-    envelope,
-    hof_bound,
-    ray_to_polygon_edge,
-    run_trial,
-    support_polygon,
-)
+from biped.analysis import envelope, hof_bound, ray_to_polygon_edge, support_polygon
+from biped.sim.contact import contact_solref
+from biped.sim.scenario import PHYSICS, Scenario
+from biped.sim.sweep import SweepSpec, ballistic_impulse, run_trial
 
 G = np.array([0.0, 0.0, -9.81])
 
@@ -52,12 +46,16 @@ def test_impulse_is_m_delta_v_of_a_piecewise_ballistic_block():
     assert np.all(np.isnan(ballistic_impulse(t, v, m, contact_time_s=0.2)[0]))
 
 
-def test_impulse_equals_the_momentum_the_target_gains_in_mujoco():
+@pytest.mark.parametrize("physics", PHYSICS)
+def test_impulse_equals_the_momentum_the_target_gains_in_mujoco(physics):
     """Conservation of momentum: in zero gravity a 1.8 kg box hits a free 40 kg sphere; the
-    impulse measured from the box's velocity at 500 Hz equals the sphere's momentum change."""
-    model = mujoco.MjModel.from_xml_string("""
-    <mujoco><option timestep="0.0005" gravity="0 0 0"/>
-      <default><geom solref="0.005 0.65" solimp="0.95 0.95 0.001 0.5 2" friction="0.3"/></default>
+    impulse measured from the box's velocity at 500 Hz equals the sphere's momentum change
+    (with each physics preset's step and calibrated contact)."""
+    s = Scenario(physics=physics)
+    dt, (tc, z) = s.physics_timestep_s, contact_solref(0.2, s.contact_timeconst_s, s.physics_timestep_s)
+    model = mujoco.MjModel.from_xml_string(f"""
+    <mujoco><option timestep="{dt}" gravity="0 0 0"/>
+      <default><geom solref="{tc} {z}" solimp="0.95 0.95 0.001 0.5 2" friction="0.3"/></default>
       <worldbody>
         <body name="box" pos="0.5 0.03 0.05"><freejoint/><geom type="box" size=".05 .05 .05" mass="1.8"/></body>
         <body name="ball"><freejoint/><geom type="sphere" size="0.2" mass="40"/></body>
@@ -68,7 +66,7 @@ def test_impulse_equals_the_momentum_the_target_gains_in_mujoco():
     for k in range(150):
         times.append(k * 0.002)
         vel.append(data.qvel[:3].copy())
-        mujoco.mj_step(model, data, 4)
+        mujoco.mj_step(model, data, s.control_substeps)
     J, _ = ballistic_impulse(times, vel, 1.8, gravity=(0, 0, 0))
     p_ball = 40.0 * data.qvel[6:9]
     np.testing.assert_allclose(J, p_ball, atol=1e-9 + 1e-9 * np.linalg.norm(p_ball))
@@ -204,12 +202,13 @@ def test_human_limits_clip_each_direction(pd):
 # ---------------------------------------------------------------------------------------------
 # one real trial
 
-def test_real_trial_measures_the_block_hit_and_the_baseline_holds_still():
+@pytest.mark.parametrize("physics", PHYSICS)
+def test_real_trial_measures_the_block_hit_and_the_baseline_holds_still(physics):
     """W's throw at the joint-space PD baseline for 0.3 s on the real push scene: the block hits
     at about 0.08 s, pushes the body toward -x with an impulse between its momentum m v (a
     plastic hit) and 2 m v (a perfectly elastic one); then an unpushed 0.6 s stand survives."""
     base = Scenario(duration_s=0.3, controller="joint-pd", target_com_m=(0.0, 0.0, 1.035),
-                    target_tilt_deg=5.0)
+                    target_tilt_deg=5.0, physics=physics)
     spec = SweepSpec(axes={"speed_m_s": 4.5, "direction_deg": 180.0}, base=base)
     row = run_trial(spec.setup(spec.trials()[0]))
     assert row["block_contact_time_s"] == pytest.approx(0.08, abs=0.01)

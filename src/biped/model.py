@@ -9,8 +9,10 @@ The MJCF is the single source of truth: the simulator (MuJoCo) and the controlle
 file, so they cannot disagree about masses, lengths or axes.
 
 Supported trees: one floating root body (a ``free`` joint) and, on every other body, exactly one
-``hinge`` joint; two named feet that descend from the root on different branches. Anything else
-raises :class:`biped.errors.ModelError` naming the problem and the valid choices.
+``hinge`` joint; two named feet that descend from the root on different branches, every jointed
+body on one of the two legs (root to foot) or beyond a foot (W's controller actuates the legs
+only: a third leg or an arm would get no torque). Anything else raises
+:class:`biped.errors.ModelError` naming the problem and the valid choices.
 """
 
 from __future__ import annotations
@@ -104,8 +106,13 @@ class TreeModel:
 def _load(source):
     if isinstance(source, mujoco.MjModel):
         return source, "<MjModel>"
+    if isinstance(source, (str, PathLike)) and not str(source).strip():
+        raise ModelError(f"empty model source {str(source)!r}: expected an MJCF file path, MJCF XML "
+                         f"text or a mujoco.MjModel")
     if isinstance(source, (str, PathLike)) and not str(source).lstrip().startswith("<"):
         path = Path(source)
+        if path.is_dir():
+            raise ModelError(f"model file {str(path)!r} is a folder; give an MJCF (.xml) file")
         if not path.is_file():
             raise ModelError(f"model file {str(path)!r} does not exist")
         try:
@@ -159,6 +166,10 @@ def _build(model: mujoco.MjModel, feet: tuple[str, str], label: str) -> TreeMode
             raise ModelError(unknown_name("foot body", f, names))
     if len(feet) != 2 or feet[0] == feet[1]:
         raise ModelError(f"need two different feet (left, right), got {feet}")
+    for f in feet:
+        if f == names[0]:
+            raise ModelError(f"foot {f!r} is the floating root (the central body); the feet must be "
+                             f"bodies below it, one at the end of each leg")
     index = {b: i for i, b in enumerate(bodies)}
     n = len(bodies)
     parent = np.full(n, -1, dtype=np.int64)
@@ -179,6 +190,13 @@ def _build(model: mujoco.MjModel, feet: tuple[str, str], label: str) -> TreeMode
     for k in range(1, n):
         p = parent[k]
         beyond[k] = beyond[p] or (p in foot_idx)
+    off_legs = [names[k] for k in range(1, n) if leg[k] < 0 and not beyond[k]]
+    if off_legs:
+        raise ModelError(
+            f"bodies {off_legs} are on neither leg ({names[0]!r} to {feet[0]!r}, {names[0]!r} to "
+            f"{feet[1]!r}) nor beyond a foot: W's controller actuates only the two legs, so their "
+            f"joints would get no torque; valid models have two legs (a third leg or arms are not "
+            f"supported: weld them into the central body)")
     # --- geometry and inertia (MuJoCo body frames -> inertial frames)
     def body_to_inertial(b):
         return transform(quat_to_rot(model.body_iquat[b]), model.body_ipos[b])
@@ -212,3 +230,55 @@ def _build(model: mujoco.MjModel, feet: tuple[str, str], label: str) -> TreeMode
         qpos_adr=qadr, dof_adr=dadr, qpos_ref=qref, feet=foot_idx, leg=leg, beyond_foot=beyond,
         gravity=model.opt.gravity.copy(), nq=model.nq, nv=model.nv, source=label,
     )
+
+
+@dataclass(frozen=True)
+class SoleRectangle:
+    """The rectangular sole of a foot, read from the MJCF's box geoms on the foot body.
+
+    ``g_foot_sole`` (4, 4): pose of the sole frame in the foot's COM principal (inertial) frame;
+    the sole frame sits at the centre of the rectangle, on its bottom face, its z axis the outward
+    normal reversed (pointing up into the foot), x and y along the rectangle's edges (the foot
+    body's axes). ``half_length`` (along the sole's x) and ``half_width`` (along y) [m].
+    """
+
+    g_foot_sole: np.ndarray
+    half_length: float
+    half_width: float
+
+
+def sole_rectangles(source, feet: tuple[str, str] = DEFAULT_FEET) -> tuple[SoleRectangle, SoleRectangle]:
+    """(left, right) :class:`SoleRectangle` of ``feet`` in an MJCF (path, XML text or MjModel):
+    the bounding rectangle of the bottom faces of the box geoms attached to each foot body (boxes
+    axis-aligned with the foot body; W's model: a heel and a toe box)."""
+    model, _ = _load(source)
+    out = []
+    for foot in feet:
+        try:
+            b = model.body(foot).id
+        except KeyError:
+            raise ModelError(unknown_name("foot body", foot, [model.body(i).name
+                                                             for i in range(model.nbody)])) from None
+        boxes = [g for g in range(model.ngeom)
+                 if model.geom_bodyid[g] == b and model.geom_type[g] == mujoco.mjtGeom.mjGEOM_BOX]
+        if not boxes:
+            raise ModelError(f"foot body {foot!r} has no box geoms: the sole rectangle is read from "
+                             f"them (give each foot one or more axis-aligned box geoms)")
+        corners = []
+        for g in boxes:
+            R = quat_to_rot(model.geom_quat[g])
+            if not np.allclose(np.abs(R), np.eye(3), atol=1e-9):
+                raise ModelError(f"sole geom {_name(model, mujoco.mjtObj.mjOBJ_GEOM, g)!r} is not "
+                                 f"axis-aligned with the foot body {foot!r}")
+            s = model.geom_size[g]
+            lo, hi = model.geom_pos[g] - np.abs(R) @ s, model.geom_pos[g] + np.abs(R) @ s
+            corners.append((lo, hi))
+        z = min(lo[2] for lo, _ in corners)
+        bottom = [(lo, hi) for lo, hi in corners if abs(lo[2] - z) < 1e-9]
+        x0, x1 = min(lo[0] for lo, _ in bottom), max(hi[0] for _, hi in bottom)
+        y0, y1 = min(lo[1] for lo, _ in bottom), max(hi[1] for _, hi in bottom)
+        g_body_sole = transform(np.eye(3), np.array([(x0 + x1) / 2, (y0 + y1) / 2, z]))
+        g_body_inertial = transform(quat_to_rot(model.body_iquat[b]), model.body_ipos[b])
+        out.append(SoleRectangle(inverse(g_body_inertial) @ g_body_sole, float(x1 - x0) / 2,
+                                float(y1 - y0) / 2))
+    return out[0], out[1]

@@ -10,6 +10,10 @@
 
 Every function is compiled with numba and callable from Python and from other compiled code.
 The ``*_into`` forms write into a given output and allocate nothing (the controller's hot path).
+The products at the end (``adjoint_mul`` ... ``cholesky6_solve``) are the steps W's Alg. 1-6
+repeat, inlined into the compiled recursions: they apply ``Ad_g`` and its relatives to a 6-vector
+or a 6x6 matrix without forming ``Ad_g``, and never allocate. Each keeps one fixed order of
+floating-point operations, so the controller's numbers do not depend on how it is composed.
 """
 
 from __future__ import annotations
@@ -18,8 +22,32 @@ import numpy as np
 from numba import njit
 
 __all__ = [
-    "hat", "vee", "quat_to_rot", "rot_to_quat", "quat_mul", "quat_conj", "axis_angle_quat",
-    "adjoint", "adjoint_into", "ad", "ad_into", "transform", "inverse", "compose",
+    "ad",
+    "ad_into",
+    "adjoint",
+    "adjoint_T_mul",
+    "adjoint_into",
+    "adjoint_inv_T_mul",
+    "adjoint_inv_congruence_add",
+    "adjoint_inv_mul",
+    "adjoint_mul",
+    "axis_angle_quat",
+    "cholesky6_solve",
+    "compose",
+    "cross",
+    "dot6",
+    "hat",
+    "inverse",
+    "mat6_mul_vec",
+    "mat6_mul_vec_add",
+    "quat_conj",
+    "quat_mul",
+    "quat_to_rot",
+    "rot_T_mul",
+    "rot_mul",
+    "rot_to_quat",
+    "transform",
+    "vee",
 ]
 
 
@@ -201,3 +229,193 @@ def compose(*gs) -> np.ndarray:
     for g in gs:
         out = out @ g
     return out
+
+
+# ----------------------------------------------------------------------------- inlined products
+# Arguments are arrays (or tuples for the 3-vectors); ``out`` must not alias an input.
+
+
+@njit(cache=True, inline="always")
+def cross(a, b):
+    """``a x b`` of two 3-vectors (arrays or tuples), returned as a tuple (allocates nothing)."""
+    return a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]
+
+
+@njit(cache=True, inline="always")
+def rot_mul(R, x):
+    """``R x`` for a (3, 3) matrix and a 3-vector, returned as a tuple."""
+    return (R[0, 0] * x[0] + R[0, 1] * x[1] + R[0, 2] * x[2],
+            R[1, 0] * x[0] + R[1, 1] * x[1] + R[1, 2] * x[2],
+            R[2, 0] * x[0] + R[2, 1] * x[1] + R[2, 2] * x[2])
+
+
+@njit(cache=True, inline="always")
+def rot_T_mul(R, x):
+    """``R^T x`` for a (3, 3) matrix and a 3-vector, returned as a tuple."""
+    return (R[0, 0] * x[0] + R[1, 0] * x[1] + R[2, 0] * x[2],
+            R[0, 1] * x[0] + R[1, 1] * x[1] + R[2, 1] * x[2],
+            R[0, 2] * x[0] + R[1, 2] * x[1] + R[2, 2] * x[2])
+
+
+@njit(cache=True, inline="always")
+def adjoint_mul(R, p, x, out):
+    """``out = Ad_g x = [R v + p x (R w); R w]`` for ``g = (R, p)`` (W eq. 3.6-3.7): the twist
+    ``x = [v; w]`` of frame K in frame J when ``g = g_{j,k}``."""
+    w0, w1, w2 = rot_mul(R, x[3:])
+    v0, v1, v2 = rot_mul(R, x[:3])
+    out[0] = v0 + p[1] * w2 - p[2] * w1
+    out[1] = v1 + p[2] * w0 - p[0] * w2
+    out[2] = v2 + p[0] * w1 - p[1] * w0
+    out[3] = w0
+    out[4] = w1
+    out[5] = w2
+
+
+@njit(cache=True, inline="always")
+def adjoint_inv_mul(R, p, x, out):
+    """``out = Ad_g^-1 x = Ad_{g^-1} x`` for ``g = (R, p)``, with ``g^-1 = (R^T, -R^T p)``
+    (W eq. 3.2): the twist ``x`` of frame J in frame K when ``g = g_{j,k}``."""
+    q0, q1, q2 = rot_T_mul(R, p)
+    q0, q1, q2 = -q0, -q1, -q2
+    w0, w1, w2 = rot_T_mul(R, x[3:])
+    v0, v1, v2 = rot_T_mul(R, x[:3])
+    out[0] = v0 + q1 * w2 - q2 * w1
+    out[1] = v1 + q2 * w0 - q0 * w2
+    out[2] = v2 + q0 * w1 - q1 * w0
+    out[3] = w0
+    out[4] = w1
+    out[5] = w2
+
+
+@njit(cache=True, inline="always")
+def adjoint_T_mul(R, p, F, out):
+    """``out = Ad_g^T F = [R^T f; R^T (tau - p x f)]`` for ``g = (R, p)`` (W eq. 3.8): the wrench
+    ``F = [f; tau]`` of frame J in frame K when ``g = g_{j,k}``."""
+    t0 = F[3] - (p[1] * F[2] - p[2] * F[1])
+    t1 = F[4] - (p[2] * F[0] - p[0] * F[2])
+    t2 = F[5] - (p[0] * F[1] - p[1] * F[0])
+    out[0], out[1], out[2] = rot_T_mul(R, F[:3])
+    out[3], out[4], out[5] = rot_T_mul(R, (t0, t1, t2))
+
+
+@njit(cache=True, inline="always")
+def adjoint_inv_T_mul(R, p, F, out):
+    """``out = Ad_g^-T F = [R f; R tau + p x (R f)]`` for ``g = (R, p)``: the wrench ``F`` of
+    frame K in frame J when ``g = g_{j,k}`` (W eq. 3.8 with ``Ad^T_{g_{k,j}} = Ad^-T_{g_{j,k}}``)."""
+    f0, f1, f2 = rot_mul(R, F[:3])
+    out[0] = f0
+    out[1] = f1
+    out[2] = f2
+    out[3] = R[0, 0] * F[3] + R[0, 1] * F[4] + R[0, 2] * F[5] + p[1] * f2 - p[2] * f1
+    out[4] = R[1, 0] * F[3] + R[1, 1] * F[4] + R[1, 2] * F[5] + p[2] * f0 - p[0] * f2
+    out[5] = R[2, 0] * F[3] + R[2, 1] * F[4] + R[2, 2] * F[5] + p[0] * f1 - p[1] * f0
+
+
+@njit(cache=True, inline="always")
+def adjoint_inv_congruence_add(R, p, M, out, Q, S):
+    """``out += Ad_g^-T M Ad_g^-1`` for ``g = (R, p)`` and a symmetric (6, 6) ``M``: the inertia
+    ``M`` of frame K added in frame J when ``g = g_{j,k}`` (``A^T M A`` with ``A = Ad_{g_{k,j}}``,
+    W Alg. 3). Scratch ``Q`` (6, 6) and ``S`` (3, 3).
+
+    With ``Ad_g^-T = [[I, 0], [p^, I]] blockdiag(R, R)``: first ``Q = blockdiag(R, R) M
+    blockdiag(R, R)^T`` (blocks 11, 12, 22), then the shift by ``p``: ``B11 = Q11``,
+    ``B12 = Q12 - Q11 p^ = S``, ``B22 = Q22 + p^ Q12 - S^T p^``, ``B21 = B12^T``.
+    """
+    r00, r01, r02 = R[0, 0], R[0, 1], R[0, 2]
+    r10, r11, r12 = R[1, 0], R[1, 1], R[1, 2]
+    r20, r21, r22 = R[2, 0], R[2, 1], R[2, 2]
+    px, py, pz = p[0], p[1], p[2]
+    for blk in range(3):  # Q_blk = R M_blk R^T, through S = M_blk R^T
+        bi = 0 if blk < 2 else 3
+        bj = 0 if blk == 0 else 3
+        for i in range(3):
+            m0, m1, m2 = M[bi + i, bj], M[bi + i, bj + 1], M[bi + i, bj + 2]
+            S[i, 0] = m0 * r00 + m1 * r01 + m2 * r02
+            S[i, 1] = m0 * r10 + m1 * r11 + m2 * r12
+            S[i, 2] = m0 * r20 + m1 * r21 + m2 * r22
+        for j in range(3):
+            s0, s1, s2 = S[0, j], S[1, j], S[2, j]
+            Q[bi, bj + j] = r00 * s0 + r01 * s1 + r02 * s2
+            Q[bi + 1, bj + j] = r10 * s0 + r11 * s1 + r12 * s2
+            Q[bi + 2, bj + j] = r20 * s0 + r21 * s1 + r22 * s2
+    for i in range(3):  # S = B12 = Q12 - Q11 p^
+        S[i, 0] = Q[i, 3] - (Q[i, 1] * pz - Q[i, 2] * py)
+        S[i, 1] = Q[i, 4] - (Q[i, 2] * px - Q[i, 0] * pz)
+        S[i, 2] = Q[i, 5] - (Q[i, 0] * py - Q[i, 1] * px)
+    for j in range(3):  # B22 = Q22 + p^ Q12 - S^T p^
+        h0 = py * Q[2, 3 + j] - pz * Q[1, 3 + j]
+        h1 = pz * Q[0, 3 + j] - px * Q[2, 3 + j]
+        h2 = px * Q[1, 3 + j] - py * Q[0, 3 + j]
+        if j == 0:
+            s0, s1, s2 = S[1, 0] * pz - S[2, 0] * py, S[1, 1] * pz - S[2, 1] * py, S[1, 2] * pz - S[2, 2] * py
+        elif j == 1:
+            s0, s1, s2 = S[2, 0] * px - S[0, 0] * pz, S[2, 1] * px - S[0, 1] * pz, S[2, 2] * px - S[0, 2] * pz
+        else:
+            s0, s1, s2 = S[0, 0] * py - S[1, 0] * px, S[0, 1] * py - S[1, 1] * px, S[0, 2] * py - S[1, 2] * px
+        out[3, 3 + j] += Q[3, 3 + j] + h0 - s0
+        out[4, 3 + j] += Q[4, 3 + j] + h1 - s1
+        out[5, 3 + j] += Q[5, 3 + j] + h2 - s2
+    for i in range(3):
+        for j in range(3):
+            out[i, j] += Q[i, j]
+            out[i, 3 + j] += S[i, j]
+            out[3 + j, i] += S[i, j]
+
+
+@njit(cache=True, inline="always")
+def mat6_mul_vec(M, x, out):
+    """``out = M x`` for a (6, 6) matrix and a 6-vector."""
+    for i in range(6):
+        s = 0.0
+        for j in range(6):
+            s += M[i, j] * x[j]
+        out[i] = s
+
+
+@njit(cache=True, inline="always")
+def mat6_mul_vec_add(M, x, y, out):
+    """``out = y + M x`` for a (6, 6) matrix and 6-vectors (``out`` may be ``y``)."""
+    for i in range(6):
+        s = y[i]
+        for j in range(6):
+            s += M[i, j] * x[j]
+        out[i] = s
+
+
+@njit(cache=True, inline="always")
+def dot6(x, y):
+    """``x . y`` of two 6-vectors."""
+    s = 0.0
+    for i in range(6):
+        s += x[i] * y[i]
+    return s
+
+
+@njit(cache=True, inline="always")
+def cholesky6_solve(A, b, y):
+    """Solve ``A y = b`` for a symmetric positive-definite (6, 6) ``A``; ``A`` is overwritten by
+    its lower Cholesky factor. Returns False, leaving ``y`` unset, when a pivot is not positive
+    to working precision (``A`` not positive definite, or not finite)."""
+    for j in range(6):
+        s = A[j, j]
+        for m in range(j):
+            s -= A[j, m] * A[j, m]
+        if not (s > 1e-12 * (1.0 + abs(A[j, j]))):
+            return False
+        A[j, j] = np.sqrt(s)
+        for i in range(j + 1, 6):
+            s = A[i, j]
+            for m in range(j):
+                s -= A[i, m] * A[j, m]
+            A[i, j] = s / A[j, j]
+    for i in range(6):  # L u = b
+        s = b[i]
+        for m in range(i):
+            s -= A[i, m] * y[m]
+        y[i] = s / A[i, i]
+    for i in range(5, -1, -1):  # L^T y = u
+        s = y[i]
+        for m in range(i + 1, 6):
+            s -= A[m, i] * y[m]
+        y[i] = s / A[i, i]
+    return True

@@ -2,23 +2,56 @@
 
 Each subcommand lives in its own module ``biped.cli.<name>`` exposing ``register(subparsers)``,
 which adds its parser and sets ``func(args) -> int``.
+
+Exit status of every command (see docs/cli.md):
+    0    the command ran to its end and wrote its outputs (whatever the physics did: a fall is a
+         result, reported in the summary);
+    1    the run failed for a reason outside its inputs: out of memory, a file that could not be
+         written (disk full, permissions changed meanwhile);
+    2    bad input, refused before any work: a one-line ``biped COMMAND: error: ...`` naming the
+         parameter and what is valid (argparse's own errors use the same prefix and status);
+    130  interrupted (Ctrl-C / SIGINT): outputs of what had been computed are written if the
+         command can (``biped push``, ``biped sweep``), then it stops.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import re
 import sys
 
 from biped.errors import BipedError
 
-SUBCOMMANDS = ("push", "posture", "walk", "sweep")
+SUBCOMMANDS = ("push", "posture", "walk", "sweep", "model")
+
+EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+#: Negative numbers as values, e.g. ``--block-velocity -1e6 0 0`` (argparse's own pattern misses
+#: exponents, infinities and NaN, so such values were read as unknown options).
+_NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$",
+                              re.IGNORECASE)
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse with negative numbers in any float syntax read as values, and the full name of the
+    (sub)command that parsed the line kept in ``args._prog`` for error messages."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = _NEGATIVE_NUMBER
+
+    def parse_known_args(self, args=None, namespace=None):
+        namespace, rest = super().parse_known_args(args, namespace)
+        if not hasattr(namespace, "_prog"):  # the innermost subcommand sets it first
+            namespace._prog = self.prog
+        return namespace, rest
 
 
 def build_parser() -> argparse.ArgumentParser:
     from biped import __version__
 
-    parser = argparse.ArgumentParser(
+    parser = Parser(
         prog="biped",
         description="Balance of human-like bipeds: Wendlandt's workspace controller, Bediz's models.",
     )
@@ -36,19 +69,40 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run one command; returns its exit status (module docstring). argparse's errors exit 2."""
+    from biped.cli._common import finish_runs
+
     parser = build_parser()
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help()
-        return 2
+        return EXIT_BAD_INPUT
+    prog = getattr(args, "_prog", None) or f"biped {args.command}"
+    ok = False
     try:
-        return int(args.func(args) or 0)
+        code = int(args.func(args) or 0)
+        ok = code in (EXIT_OK, EXIT_INTERRUPTED)
+        return code
     except BipedError as exc:
-        print(f"biped {args.command}: error: {exc}", file=sys.stderr)
-        return 2
+        print(f"{prog}: error: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_BAD_INPUT
     except KeyboardInterrupt:
-        print(f"biped {args.command}: interrupted", file=sys.stderr)
-        return 130
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except MemoryError:
+        print(f"{prog}: error: out of memory; use a smaller problem (see --help for the bounds)",
+              file=sys.stderr)
+        return EXIT_FAILED
+    except OSError as exc:
+        where = f" {exc.filename!r}" if getattr(exc, "filename", None) else ""
+        print(f"{prog}: error: file system:{where} {exc.strerror or exc}", file=sys.stderr)
+        return EXIT_FAILED
+    finally:
+        finish_runs(ok, prog.removeprefix("biped "))
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split())
 
 
 if __name__ == "__main__":

@@ -1,8 +1,8 @@
 """``biped push``: W's push-recovery experiment (section 4) on MuJoCo.
 
 With no arguments it runs W's scenario and writes summary.json, trajectory.csv, figures/,
-video.mp4 and replay.html into a new folder under ``runs/``. Thin: parsing here, work in
-:mod:`biped.sim`.
+video.mp4 and replay.html into a new folder under ``runs/``. Thin: parsing here, the simulation
+in :mod:`biped.sim`, the files in :mod:`biped.outputs.push`.
 """
 
 from __future__ import annotations
@@ -20,6 +20,9 @@ def register(subparsers) -> None:
         description="Simulate W section 4 on MuJoCo: the biped rises to its set point while a "
                     "1.8 kg block hits it. Every parameter defaults to W's; see docs/push.md.")
     p.add_argument("--scenario", metavar="FILE.toml", help="scenario file (top-level key = value)")
+    p.add_argument("--model", metavar="FILE.xml",
+                   help="the biped: an MJCF file with W's structure (e.g. from `biped model`); W's "
+                        "initial state, set point and block height move onto it (docs/model.md)")
     p.add_argument("--duration", type=float, metavar="S", help="simulated time [s] (W: 3)")
     p.add_argument("--block-position", type=float, nargs=3, metavar=("X", "Y", "Z"),
                    help="block start [m] (W: 0.5 0.1 1.2)")
@@ -28,6 +31,12 @@ def register(subparsers) -> None:
     p.add_argument("--block-mass", type=float, metavar="KG", help="block mass [kg] (W: 1.8)")
     p.add_argument("--controller", choices=("workspace", "joint-pd"),
                    help="W's workspace controller (default) or the joint-PD baseline")
+    p.add_argument("--physics", choices=("faithful", "fast"),
+                   help="physics preset: faithful (default: 0.5 ms step, 5 ms contacts) or fast "
+                        "(1 ms, 7.5 ms, sleep; checked against faithful in docs/sweep.md)")
+    p.add_argument("--distribution", choices=("statics", "printed", "qp"),
+                   help="the workspace controller's wrench distribution: W's min-norm split "
+                        "(statics, default), W's printed subscripts, or the contact-feasible QP")
     p.add_argument("--timestep", type=float, metavar="S", help="physics step [s], <= 0.001")
     p.add_argument("--seed", type=int, help="seed of the initial-state noise (joint_noise_deg)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
@@ -45,17 +54,21 @@ def register(subparsers) -> None:
 
 
 def build_scenario(args):
-    """The scenario from ``--scenario``, then ``--set``, then the named options (last wins)."""
-    from biped.sim.scenario import Scenario, parse_assignment
+    """The scenario from ``--scenario``, then ``--set``, then the named options (last wins), on
+    ``--model`` (or the ``model`` key): keys not given take W's values moved onto that biped."""
+    from biped.sim.scenario import Scenario, parse_assignment, toml_values
 
-    scenario = Scenario.from_toml(args.scenario) if args.scenario else Scenario()
-    overrides = dict(parse_assignment(a) for a in args.set)
+    values = toml_values(args.scenario) if args.scenario else {}
+    values.update(parse_assignment(a) for a in args.set)
     named = {"duration_s": args.duration, "block_position_m": args.block_position,
              "block_velocity_m_s": args.block_velocity, "block_mass_kg": args.block_mass,
-             "controller": args.controller, "physics_timestep_s": args.timestep,
+             "controller": args.controller, "physics": args.physics,
+             "physics_timestep_s": args.timestep, "distribution": args.distribution,
              "seed": args.seed}
-    overrides.update({k: v for k, v in named.items() if v is not None})
-    return scenario.with_overrides(**overrides) if overrides else scenario
+    values.update({k: v for k, v in named.items() if v is not None})
+    model = getattr(args, "model", None) or values.pop("model", None)
+    values.pop("model", None)
+    return Scenario.for_model(model, **values) if model else Scenario.from_dict(values)
 
 
 def _out_dir(args) -> Path:
@@ -111,7 +124,7 @@ def _table(result, out: Path, paths: dict) -> str:
         ("block hits the body", f"{f(result.block_contact_time_s, '.3f')} s"),
         ("simulated", f"{result.times[-1] if len(result.times) else 0:.3f} of {s.duration_s:g} s"),
         ("wall time", (f"{result.wall_time_s:.2f} s ({result.realtime_factor:.1f}x real time, "
-                      f"physics {s.physics_timestep_s * 1e3:g} ms, control {s.control_rate_hz:g} Hz)")),
+                      f"physics {s.physics} {s.physics_timestep_s * 1e3:g} ms, control {s.control_rate_hz:g} Hz)")),
     ]
     if result.fell:
         rows.append(("fall", f"{result.fall_time_s:.3f} s: {result.fall_reason}"))
@@ -135,7 +148,8 @@ def _table(result, out: Path, paths: dict) -> str:
 
 
 def run(args) -> int:
-    from biped.sim.push import simulate, write_outputs
+    from biped.outputs.push import write_outputs
+    from biped.sim.push import simulate
     from biped.sim.scene import build_scene
 
     scenario = build_scenario(args)  # validated before anything is simulated

@@ -1,7 +1,8 @@
 """``biped sweep``: push-recovery envelopes, many push trials on every local core or a Dask cluster.
 
 Thin: parsing here, work in :mod:`biped.sim.sweep`, plots in :mod:`biped.viz.envelope`.
-See docs/sweep.md.
+See docs/sweep.md. Exit status: 0 done; 1 incomplete (a worker died: rerun to finish);
+2 bad input (one line on stderr, before any work); 130 Ctrl-C, 143 SIGTERM (finished trials kept).
 """
 
 from __future__ import annotations
@@ -38,9 +39,19 @@ def register(subparsers) -> None:
                         "same task for both controllers); wendlandt: rise to W's set point")
     p.add_argument("--controller", choices=("workspace", "joint-pd"), default=None,
                    help="W's workspace controller (default) or the joint-space PD baseline")
+    p.add_argument("--distribution", choices=("statics", "printed", "qp"), default=None,
+                   help="the workspace controller's wrench distribution: W's min-norm split "
+                        "(statics, default) or the contact-feasible QP (docs/controller.md)")
     p.add_argument("--torque-limits", choices=("none", "human"), default=None,
                    help="joint torque limits: none (W) or human-like (docs/sweep.md)")
+    p.add_argument("--model", metavar="FILE.xml",
+                   help="the biped: an MJCF file with W's structure (e.g. from `biped model`); W's "
+                        "initial state, set point and aim height move onto it (docs/model.md)")
     p.add_argument("--duration", type=float, metavar="S", help="simulated time per trial [s] (3)")
+    p.add_argument("--physics", choices=("faithful", "fast"), default=None,
+                   help="physics preset (default fast: 1 ms step, 7.5 ms contacts, sleep; its "
+                        "envelopes are within one grid step of faithful's, docs/sweep.md), unless "
+                        "the grid file or --set gives physics or the step/contact keys")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
                    help="any scenario key (TOML value syntax), repeatable")
     p.add_argument("--workers", type=int, metavar="N", help="local processes (default: all cores)")
@@ -58,7 +69,22 @@ def register(subparsers) -> None:
     p.add_argument("--by", choices=("speed_m_s", "impulse_n_s"), default="speed_m_s",
                    help="radius of the polar plot")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.add_argument("--dry-run", action="store_true",
+                   help="check everything and say what would run, run nothing")
     p.set_defaults(func=run)
+
+
+_PHYSICS_KEYS = ("physics_timestep_s", "contact_timeconst_s")
+
+
+def _grid_scenario_keys(path) -> set:
+    """The keys of a sweep file's [scenario] table (empty without a file)."""
+    if not path:
+        return set()
+    import tomllib
+
+    with open(path, "rb") as f:
+        return set(tomllib.load(f).get("scenario", {}))
 
 
 def build_spec(args):
@@ -68,14 +94,25 @@ def build_spec(args):
 
     spec = SweepSpec.from_toml(args.grid) if args.grid else None
     base = spec.base if spec else Scenario()
+    overrides = dict(parse_assignment(a) for a in args.set)
+    model = getattr(args, "model", None) or overrides.pop("model", None) or (
+        base.model if base.model != "wendlandt" else None)
+    overrides.pop("model", None)
+    if model:  # W's scenario moved onto the model, then the grid file's [scenario] keys
+        base = Scenario.for_model(model, **_grid_file(args.grid)[0])
     task = args.task or (None if spec else "hold")
     if task == "hold":
         base = hold_scenario(base)
-    overrides = dict(parse_assignment(a) for a in args.set)
     if args.controller:
         overrides["controller"] = args.controller
+    if getattr(args, "distribution", None):
+        overrides["distribution"] = args.distribution
     if args.duration is not None:
         overrides["duration_s"] = args.duration
+    if args.physics:
+        overrides["physics"] = args.physics
+    elif not ({"physics", *_PHYSICS_KEYS} & (set(overrides) | _grid_scenario_keys(args.grid))):
+        overrides["physics"] = "fast"  # the sweep's default preset (docs/sweep.md)
     if overrides:
         base = base.with_overrides(**overrides)
     axes = dict(spec.axes) if spec else {}
@@ -85,6 +122,8 @@ def build_spec(args):
             axes[name] = parse_axis(name, text)
     if not spec and not any(getattr(args, opt) for opt, _, _ in _AXIS_OPTIONS):
         axes.update(speed_m_s=(2.0, 4.0, 6.0), direction_deg=tuple(range(0, 360, 45)))
+    if model and not args.height and "height_m" not in _grid_file(args.grid)[1]:
+        axes["height_m"] = (base.block_position_m[2],)  # W's aim height moved onto the model
     samples = args.samples if args.samples is not None else (spec.samples if spec else None)
     seed = args.seed if args.seed is not None else (spec.seed if spec else 0)
     limits = args.torque_limits or (spec.torque_limits if spec else "none")
@@ -92,22 +131,68 @@ def build_spec(args):
                      launch_distance_m=spec.launch_distance_m if spec else 0.5)
 
 
-def run(args) -> int:
-    from biped.sim.sweep import load, run_sweep, survived
+def _qp_suffix(base) -> str:
+    return f"-{base.distribution}" if base.controller == "workspace" and base.distribution != "statics" else ""
 
-    if args.compare and not args.plot:
+
+def _grid_file(grid) -> tuple[dict, dict]:
+    """The [scenario] keys and [grid] axes the sweep file sets (validated by SweepSpec.from_toml)."""
+    if not grid:
+        return {}, {}
+    import tomllib
+
+    values = tomllib.loads(Path(grid).read_text())
+    scenario = dict(values.get("scenario", {}))
+    scenario.pop("model", None)
+    return scenario, dict(values.get("grid", {}))
+
+
+def _check_plot(path: str | None, compare: list[str]) -> None:
+    """--plot and --compare, checked before the sweep runs."""
+    if compare and not path:
         raise ScenarioError("--compare needs --plot FILE.png")
+    if not path:
+        return
+    import matplotlib.figure
+
+    kinds = matplotlib.figure.Figure().canvas.get_supported_filetypes()
+    suffix = Path(path).suffix.lstrip(".").lower()
+    if suffix not in kinds:
+        raise ScenarioError(f"--plot {path!r}: unknown image type {suffix or '(none)'!r}; "
+                            f"valid: {', '.join('.' + k for k in sorted(kinds))}")
+    for other in compare:
+        if Path(other).suffix != ".parquet" or not Path(other).is_file():
+            raise ScenarioError(f"--compare {other!r}: no finished sweep file (.parquet) there")
+
+
+def run(args) -> int:
+    from biped.analysis import survived
+    from biped.sim.sweep import Terminated, check_run_args, load, parts_dir, run_sweep
+
+    _check_plot(args.plot, args.compare)
     spec = build_spec(args)
     out = Path(args.out) if args.out else Path("runs") / (
-        f"sweep-{spec.base.controller}-{spec.torque_limits}.parquet")
-    n = len(spec.trials())
+        f"sweep-{spec.base.controller}{_qp_suffix(spec.base)}-{spec.torque_limits}.parquet")
+    n = spec.n_trials
     where = args.scheduler or f"{args.workers or 'all'} local worker(s)"
+    check_run_args(out, workers=args.workers, batch=args.batch, scheduler=args.scheduler)
+    if args.dry_run:
+        print(f"biped sweep (dry run): {n} trials of {spec.base.duration_s:g} s, controller "
+              f"{spec.base.controller}, torque limits {spec.torque_limits}, on {where} -> {out}")
+        return 0
     print(f"biped sweep: {n} trials of {spec.base.duration_s:g} s, controller "
-          f"{spec.base.controller}, torque limits {spec.torque_limits}, on {where} -> {out}",
+          f"{spec.base.controller}, torque limits {spec.torque_limits}, physics "
+          f"{spec.base.physics}, on {where} -> {out}",
           file=sys.stderr)
-    summary = run_sweep(spec, out, workers=args.workers, scheduler=args.scheduler,
-                        progress=not args.quiet, retry_failed=args.retry_failed,
-                        overwrite=args.overwrite, batch=args.batch)
+    try:
+        summary = run_sweep(spec, out, workers=args.workers, scheduler=args.scheduler,
+                            progress=not args.quiet, retry_failed=args.retry_failed,
+                            overwrite=args.overwrite, batch=args.batch)
+    except KeyboardInterrupt as exc:
+        what = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
+        print(f"biped sweep: {what}; every finished trial is kept in {parts_dir(out)}/. Run the "
+              f"same command again to finish.", file=sys.stderr)
+        return 143 if isinstance(exc, Terminated) else 130
     rate = summary.ran / summary.wall_time_s if summary.wall_time_s > 0 else float("nan")
     print(f"ran {summary.ran} (skipped {summary.skipped} already done), failed {summary.failed}, "
           f"wall {summary.wall_time_s:.1f} s, {rate:.2f} trials/s ({summary.backend})")

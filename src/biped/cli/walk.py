@@ -1,19 +1,24 @@
 """``biped walk``: Bediz's kinematic figure stepping forward, up stairs and jumping (B IV-B, V-D).
 
 Writes trajectory.csv, summary.json, figures/, replay.html and video.mp4 into ``--out``. Thin:
-parsing here, work in :mod:`biped.kinematic`; see docs/walk.md.
+parsing here, the motion in :mod:`biped.kinematic`, the files in :mod:`biped.outputs.walk`; see
+docs/walk.md.
 """
 
 from __future__ import annotations
 
-import json
 import math
 from pathlib import Path
 
-from biped.cli._common import run_dir
+from biped.cli._common import check_range, run_dir
 from biped.errors import ScenarioError
 
 _DEFAULT_STEPS = {"forward": 6, "upstairs": 5}
+#: Human walking speeds [m/s] (slow shuffle to the walk-run transition and a brisk walk beyond it);
+#: outside them B's kinematic gait leaves the figure's physics (stance slip, friction > 5).
+SPEED_RANGE = (0.1, 2.5)
+MAX_STEPS = 100  # footfalls of one run
+MAX_SAMPLES = 200_000  # duration x rate: bounds the run's time and memory
 
 
 def register(subparsers) -> None:
@@ -27,10 +32,11 @@ def register(subparsers) -> None:
                    help="forward, upstairs, jump, or B's demo: 6 forward, 5 up, a jump, 4 forward "
                         "(default demo)")
     p.add_argument("--steps", type=int, metavar="N",
-                   help="footfalls for forward (default 6) and upstairs (default 5); "
+                   help=f"footfalls for forward (default 6) and upstairs (default 5), 1..{MAX_STEPS}; "
                         "not used by jump and demo")
     p.add_argument("--speed", type=float, default=1.0, metavar="M/S",
-                   help="forward walking speed; sets the pace of every gait (default 1.0)")
+                   help=f"forward walking speed, {SPEED_RANGE[0]:g}..{SPEED_RANGE[1]:g} m/s; sets the "
+                        f"pace of every gait (default 1.0)")
     p.add_argument("--stair-rise", type=float, metavar="M",
                    help="stair rise (default eq. 4.23 at 30 deg: (l1 + l2)(1 - cos 30 deg) = 0.111 m)")
     p.add_argument("--stair-run", type=float, metavar="M",
@@ -39,6 +45,9 @@ def register(subparsers) -> None:
                    help="jump without B's 360 deg turn along the semicircle")
     p.add_argument("--rate", type=float, default=200.0, metavar="HZ",
                    help="samples per second of trajectory.csv and the dynamics (default 200)")
+    p.add_argument("--model", metavar="FILE.xml",
+                   help="the biped (MJCF with W's structure, e.g. from `biped model`): the figure "
+                        "takes its legs and the inverse dynamics its masses (default: W's shipped biped)")
     p.add_argument("--out", metavar="DIR", help="output folder (default: a new one under runs/)")
     p.add_argument("--overwrite", action="store_true",
                    help="allow writing into a folder that already holds a run")
@@ -63,20 +72,33 @@ def build_plan(args):
         raise ScenarioError(f"--stair-rise / --stair-run apply to --gait upstairs and demo, not {args.gait}")
     if not (math.isfinite(args.rate) and 20.0 <= args.rate <= 2000.0):
         raise ScenarioError(f"--rate must be in [20, 2000] Hz, got {args.rate!r}")
-    dims = FigureDims.from_anthropometry()
+    if not (math.isfinite(args.speed) and args.speed > 0):
+        raise ScenarioError(f"--speed: speed must be a positive number of m/s, got {args.speed!r}")
+    check_range("--speed", args.speed, *SPEED_RANGE, "m/s, human walking speeds")
+    for flag, v in (("--stair-rise", args.stair_rise), ("--stair-run", args.stair_run)):
+        if v is not None:
+            check_range(flag, v, 0.0, 2.0, "m", lo_open=True)
+    dims = FigureDims.from_mjcf(args.model) if getattr(args, "model", None) else FigureDims.from_anthropometry()
     params = GaitParams()
     if args.no_somersault:
         params = replace(params, somersault=False)
     steps = args.steps if args.steps is not None else _DEFAULT_STEPS.get(args.gait)
-    if steps is not None and steps < 1:
-        raise ScenarioError(f"--steps must be >= 1, got {steps}")
+    if steps is not None and not 1 <= steps <= MAX_STEPS:
+        raise ScenarioError(f"--steps must be in [1, {MAX_STEPS}] (bounds the run), got {steps}")
     if args.gait == "forward":
-        return step_forward(dims, steps, args.speed, params)
-    if args.gait == "upstairs":
-        return step_upward(dims, steps, args.speed, params, args.stair_rise, args.stair_run)
-    if args.gait == "jump":
-        return jump(dims, args.speed, params)
-    return demo(dims, args.speed, params, rise=args.stair_rise, run=args.stair_run)
+        plan = step_forward(dims, steps, args.speed, params)
+    elif args.gait == "upstairs":
+        plan = step_upward(dims, steps, args.speed, params, args.stair_rise, args.stair_run)
+    elif args.gait == "jump":
+        plan = jump(dims, args.speed, params)
+    else:
+        plan = demo(dims, args.speed, params, rise=args.stair_rise, run=args.stair_run)
+    samples = plan.duration * args.rate
+    if samples > MAX_SAMPLES:
+        raise ScenarioError(f"the motion lasts {plan.duration:.1f} s: at --rate {args.rate:g} Hz that "
+                            f"is {samples:,.0f} samples, more than the limit of {MAX_SAMPLES:,}; use "
+                            f"fewer --steps, a higher --speed or a lower --rate")
+    return plan
 
 
 def _out_dir(args) -> Path:
@@ -86,82 +108,29 @@ def _out_dir(args) -> Path:
 def run(args) -> int:
     from tqdm import tqdm
 
-    from biped.kinematic import stair_geometry, walk_metrics
-    from biped.kinematic.outputs import (
-        build_replay,
-        figure_model,
-        figure_qpos,
-        write_trajectory_csv,
-    )
+    from biped.outputs.walk import walk_stages, write_walk
 
     plan = build_plan(args)
-    out = _out_dir(args)
-    out.mkdir(parents=True, exist_ok=True)
-    stages = ["motion", "trajectory.csv"] + (["dynamics"] if not args.no_dynamics else []) \
-        + (["figures"] if not args.no_figures else []) + (["replay.html"] if not args.no_replay else []) \
-        + (["video.mp4"] if not args.no_video else [])
-    bar = tqdm(stages, desc=f"biped walk {args.gait}", disable=args.quiet, unit="stage")
-    paths, notes = {}, {}
-    idyn = None
-    for stage in bar:
+    out = _out_dir(args)  # checked and created before any work
+    flags = {"dynamics": not args.no_dynamics, "figures": not args.no_figures,
+             "replay": not args.no_replay, "video": not args.no_video}
+    bar = tqdm(total=len(walk_stages(**flags)), desc=f"biped walk {args.gait}", disable=args.quiet,
+               unit="stage")
+
+    started = []
+
+    def on_stage(stage):  # the bar counts finished stages and names the running one
+        if started:
+            bar.update(1)
+        started.append(stage)
         bar.set_postfix_str(stage)
-        if stage == "motion":
-            motion = plan.sample(args.rate)
-            lm = motion.landmarks()
-            metrics = walk_metrics(motion, lm)
-        elif stage == "trajectory.csv":
-            paths["trajectory"] = str(write_trajectory_csv(motion, lm, out / "trajectory.csv"))
-        elif stage == "dynamics":
-            from biped.kinematic.dynamics import inverse_dynamics
 
-            idyn = inverse_dynamics(motion)
-        elif stage == "figures":
-            from biped.viz.walk_figures import plot_feet, plot_inverse_dynamics, plot_joint_angles
-
-            figs = [plot_joint_angles(motion, out / "figures" / "joint_angles.png"),
-                    plot_feet(motion, lm, out / "figures" / "feet.png")]
-            if idyn is not None:
-                figs.append(plot_inverse_dynamics(idyn, plan.markers, out / "figures" / "inverse_dynamics.png"))
-            paths["figures"] = [str(f) for f in figs]
-        elif stage == "replay.html":
-            from biped.viz.replay import write_replay
-
-            info = {"gait": args.gait, "distance_m": metrics.distance_m,
-                    "height_climbed_m": metrics.height_climbed_m,
-                    "max_stance_slip_m": metrics.max_stance_slip_m,
-                    "min_swing_clearance_m": metrics.min_swing_clearance_m}
-            rep = build_replay(motion, f"biped walk --gait {args.gait} (Bediz's kinematic figure)", info)
-            paths["replay"] = str(write_replay(rep, out / "replay.html"))
-        elif stage == "video.mp4":
-            from biped.viz.video import render_video
-
-            model = figure_model(motion)
-            res = render_video(model, motion.times, figure_qpos(model, motion), out / "video.mp4",
-                               track_body="pelvis", distance=4.0, azimuth=-125.0, elevation=-15.0,
-                               fps=25, width=480, height=360)
-            if res.path is None:
-                notes["video"] = res.reason
-            else:
-                paths["video"] = str(res.path)
+    walk = write_walk(plan, out, gait=args.gait, speed=args.speed, rate=args.rate,
+                      stair_rise=args.stair_rise, stair_run=args.stair_run, on_stage=on_stage,
+                      model=args.model, **flags)
+    bar.update(1)
     bar.close()
-    summary = {
-        "gait": args.gait,
-        "speed_m_s": args.speed,
-        "rate_hz": args.rate,
-        "somersault": plan.params.somersault,
-        **metrics.as_dict(),
-        "step_length_m": plan.dims.leg * math.sin(2 * math.radians(plan.params.alpha)),
-        "markers": list(plan.markers),
-    }
-    if args.gait in ("upstairs", "demo"):
-        rise, run_, a_up = stair_geometry(plan.dims, plan.params, args.stair_rise, args.stair_run)
-        summary["stairs"] = {"rise_m": rise, "run_m": run_, "alpha_up_deg": math.degrees(a_up),
-                             "alpha_down_deg": plan.params.alpha_down}
-    if idyn is not None:
-        summary["inverse_dynamics"] = idyn.summary()
-    summary["outputs"] = paths
-    summary["notes"] = notes
-    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    metrics, idyn, summary, notes = walk.metrics, walk.idyn, walk.summary, walk.notes
     rows = [("gait", args.gait), ("duration", f"{metrics.duration_s:.2f} s"),
             ("distance travelled", f"{metrics.distance_m:.3f} m"),
             ("height climbed", f"{metrics.height_climbed_m:.3f} m"),

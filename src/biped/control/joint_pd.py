@@ -54,14 +54,10 @@ import numpy as np
 
 from biped.errors import ScenarioError, StateError, unknown_name
 from biped.model import DEFAULT_FEET, TreeModel
-
-#: W section 4: theta_2..theta_13 [deg] (per leg: hip abduction, hip flexion, hip rotation, knee,
-#: ankle inversion, ankle dorsiflexion).
-W_INITIAL_ANGLES_DEG = (0.0, 40.0, 0.0, -77.4595, 0.0, 42.4595) * 2
+from biped.models import W_INITIAL_ANGLES_DEG
 
 OMEGA = math.sqrt(50.0)  # [rad/s], W's K_c^p = 50
 ZETA = 0.5               # W's K_c^v = 7.07 = 2 * 0.5 * sqrt(50)
-GRAVITY = 9.81
 
 
 @dataclass(frozen=True)
@@ -100,10 +96,12 @@ def whole_body_com_height(model: mujoco.MjModel, qpos: np.ndarray) -> tuple[floa
 def default_gains(tree: TreeModel, mass_kg: float, com_height_m: float,
                   omega: float = OMEGA, zeta: float = ZETA, *, apparent_inertia=None,
                   control_period_s: float = 0.002) -> JointPDGains:
-    """The documented gains (module docstring) for every joint of ``tree``; with
-    ``apparent_inertia`` (12,) [kg m^2] the sampled-data caps for ``control_period_s``."""
+    """The documented gains (module docstring) for every joint of ``tree``, with the vertical
+    gravity of its model; with ``apparent_inertia`` (12,) [kg m^2] the sampled-data caps for
+    ``control_period_s``."""
     inertia = mass_kg * com_height_m ** 2
-    kp = 0.5 * (inertia * omega ** 2 + mass_kg * GRAVITY * com_height_m)
+    g = -float(tree.gravity[2])  # [m/s^2]
+    kp = 0.5 * (inertia * omega ** 2 + mass_kg * g * com_height_m)
     kd = 2.0 * zeta * omega * 0.5 * inertia
     scale = np.array([0.25 if name.endswith("hip_rotation") else 1.0 for name in tree.joint_names])
     gains = JointPDGains(kp * scale, kd * scale)

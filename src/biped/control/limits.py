@@ -10,7 +10,7 @@ positive torque on ``*_hip_abduction`` abducts, ``*_hip_flexion`` flexes the hip
 negative when flexed), ``*_ankle_inversion`` inverts and ``*_ankle_dorsiflexion`` dorsiflexes.
 
 The human-like set: maximal voluntary isometric joint torques of healthy young adult men,
-normalised by body mass [N m / kg] and scaled to the model's mass (73 kg), with the weaker
+normalised by body mass [N m / kg] and scaled to the model's mass (73.06 kg), with the weaker
 direction of each joint limited separately (plantarflexion is ~3.5x dorsiflexion). Sources:
 
 * knee extension 3.2 and flexion 1.4 N m/kg: the midpoints of the pooled 95 % confidence
@@ -33,11 +33,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from biped import models
 from biped.errors import ScenarioError, unknown_name
-
-#: W's joint order (the shipped model's hinge names), left leg then right leg.
-JOINT_NAMES = tuple(f"{side}_{j}" for side in ("left", "right") for j in (
-    "hip_abduction", "hip_flexion", "hip_rotation", "knee", "ankle_inversion", "ankle_dorsiflexion"))
+from biped.models import JOINT_NAMES
 
 #: Human-like maximal isometric torques [N m / kg body mass] per joint: (negative direction,
 #: positive direction) with the anatomical names of each direction (see the module docstring).
@@ -50,8 +48,9 @@ HUMAN_N_M_PER_KG: dict[str, tuple[tuple[str, float], tuple[str, float]]] = {
     "ankle_dorsiflexion": (("plantarflexion", 2.2), ("dorsiflexion", 0.6)),
 }
 
-#: Body mass of the shipped model [kg] (biped.models.anthropometry, de Leva 1996 scaled).
-MODEL_MASS_KG = 73.0
+#: Total mass of the shipped model [kg] (73.06: de Leva's 73 kg body and W's intermediate hip and
+#: ankle bodies), read from the MJCF.
+MODEL_MASS_KG = models.total_mass_kg("wendlandt")
 
 KINDS = ("none", "human")
 

@@ -18,15 +18,36 @@ Where the transcribed paper is ambiguous the code follows the derivation, as SEE
   (the print's ``Ad^T_{g_{1,7}}`` follows W eq. 3.8, whose subscripts are swapped with respect to
   W eq. 3.6 and Alg. 6; see :func:`alg5_wrench_distribution`).
 
-Buffers are flat float64 arrays whose layout :func:`layout` defines; ``biped.control`` wraps them.
+Buffers are flat arrays whose fields :data:`_FIELDS` lists, :func:`layout` places and :func:`unpack`
+cuts into named views; :class:`biped.control.WorkspaceController` owns them. The kernel allocates
+nothing; the spatial products it repeats (adjoint actions, the congruence of Alg. 3, the 6x6 solve of
+Alg. 5) are inlined helpers of :mod:`biped.spatial`.
 """
 
 from __future__ import annotations
 
+from collections import namedtuple
+
 import numpy as np
 from numba import njit
 
-from biped.spatial import adjoint_into, quat_mul_into, quat_to_rot_into
+from biped.spatial import (
+    adjoint_into,
+    adjoint_inv_congruence_add,
+    adjoint_inv_mul,
+    adjoint_inv_T_mul,
+    adjoint_mul,
+    adjoint_T_mul,
+    cholesky6_solve,
+    cross,
+    dot6,
+    mat6_mul_vec,
+    mat6_mul_vec_add,
+    quat_mul_into,
+    quat_to_rot_into,
+    rot_mul,
+    rot_T_mul,
+)
 
 # status codes returned by compute_kernel
 OK = 0
@@ -35,77 +56,180 @@ NONFINITE_RESULT = 2
 SINGULAR_DISTRIBUTION = 3
 ZERO_QUATERNION = 4
 
+#: ints "mode": 0 W Alg. 5 (statics), 1 W's printed Alg. 5, 2 stop after Alg. 4 (the QP distributes)
+STOP_AFTER_ALG4 = 2
 
-def layout(n: int) -> dict[str, tuple[int, tuple[int, ...]]]:
-    """Offsets and shapes of the model, work and output buffers for ``n`` links."""
-    def pack(fields):
-        out, off = {}, 0
+# ----------------------------------------------------------------------------- buffers
+# The controller's four flat buffers, field by field: (name, shape), "n" = number of links
+# (link 0 = W's link 1, the central body), "n-1" = number of joints. ``layout`` turns this table
+# into offsets; ``unpack`` (compiled, used by the kernel and by WorkspaceController's debugging
+# methods alike) cuts the buffers into these named views, in this order.
+_FIELDS = {
+    "ints": (  # int64: the tree (biped.model.TreeModel) and options
+        ("n", (1,)), ("feet", (2,)), ("mode", (1,)),  # links; left/right foot links; Alg. 5 mode
+        ("parent", ("n",)), ("qadr", ("n",)), ("dadr", ("n",)),  # inboard link; qpos and qvel addresses
+        ("leg", ("n",)), ("beyond", ("n",))),  # 0 left, 1 right, -1 neither; 1 outboard of a foot
+    "model": (  # float64, constant
+        ("H", ("n", 6)), ("G0", ("n", 4, 4)),  # joint twists H_k; g_{k.i,k.o}(theta = qref)
+        ("mass", ("n",)), ("inertia", ("n", 3)), ("qref", ("n",)),  # m_k; diag I_k; MJCF qpos0
+        ("gravity", (3,)), ("root_qbi", (4,)), ("big_base", (1,))),  # world; body->COM frame; Alg. 3
+    "work": (  # float64, overwritten by every call
+        ("g", ("n", 4, 4)), ("gl", ("n", 4, 4)),  # g_{0,k}; g_{k.i,k.o}(theta_k) (Alg. 2)
+        ("V", ("n", 6)), ("a", ("n", 6)), ("b", ("n", 6)),  # V_k^b, a_k, b_k (Alg. 1-2)
+        ("P", ("n", 6, 6)), ("z", ("n", 6)), ("F", ("n", 6)),  # P_k, z_k (Alg. 3); F_k (Alg. 6)
+        ("q_root", (4,)), ("q01", (4,)),  # root joint quaternion; q_{0,1} of the COM frame (Alg. 1)
+        ("E", (4, 4)),  # exp(H_k^ theta_k) (Alg. 2)
+        ("PH", (6,)), ("c", (6,)), ("c_in", (6,)),  # P H; projected P a + z; it in frame k.i (Alg. 3)
+        ("Pa", (6, 6)), ("Q", (6, 6)), ("S", (3, 3)),  # projected P; congruence scratch (Alg. 3)
+        ("qd_conj", (4,)), ("Re", (3, 3)),  # conj(q_{0,d}); R(q_e) (Alg. 4)
+        ("dist_vecs", (3, 6)), ("dist_mats", (2, 6, 6)), ("R_foot", (2, 3, 3))),  # Alg. 5 scratch
+    "out": (  # float64, the results (ControllerOutput)
+        ("tau", ("n-1",)), ("P1", (6, 6)), ("z1", (6,)), ("Fd", (6,)), ("Fl_tilde", (6,)),
+        ("Fr_tilde", (6,)), ("Fl", (6,)), ("Fr", (6,)), ("X", (6,)), ("qe", (4,))),
+}
+
+Ints = namedtuple("Ints", [name for name, _ in _FIELDS["ints"]])
+Model = namedtuple("Model", [name for name, _ in _FIELDS["model"]])
+Work = namedtuple("Work", [name for name, _ in _FIELDS["work"]])
+Out = namedtuple("Out", [name for name, _ in _FIELDS["out"]])
+
+
+def layout(n: int) -> dict[str, dict[str, tuple[int, tuple[int, ...]]]]:
+    """Offsets and shapes ``{buffer: {field: (offset, shape)}}`` of the ints, model, work and out
+    buffers for ``n`` links; ``{buffer: {"_size": (size, ())}}`` is each buffer's length."""
+    dims = {"n": n, "n-1": n - 1}
+    result = {}
+    for buf, fields in _FIELDS.items():
+        spans, off = {}, 0
         for name, shape in fields:
-            out[name] = (off, shape)
+            shape = tuple(dims.get(d, d) for d in shape)
+            spans[name] = (off, shape)
             off += int(np.prod(shape))
-        out["_size"] = (off, ())
-        return out
+        spans["_size"] = (off, ())
+        result[buf] = spans
+    return result
 
-    return {
-        "model": pack([("H", (n, 6)), ("G0", (n, 4, 4)), ("mass", (n,)), ("inertia", (n, 3)),
-                       ("qref", (n,)), ("gravity", (3,)), ("root_qbi", (4,)), ("big_base", (1,))]),
-        "work": pack([("g", (n, 4, 4)), ("gl", (n, 4, 4)), ("V", (n, 6)), ("a", (n, 6)),
-                      ("b", (n, 6)), ("P", (n, 6, 6)), ("z", (n, 6)), ("F", (n, 6)),
-                      ("tmp6", (4, 6)), ("tmp66", (3, 6, 6)), ("quat", (3, 4)), ("R3", (2, 3, 3))]),
-        "out": pack([("tau", (n - 1,)), ("P1", (6, 6)), ("z1", (6,)), ("Fd", (6,)), ("Fl_tilde", (6,)),
-                     ("Fr_tilde", (6,)), ("Fl", (6,)), ("Fr", (6,)), ("X", (6,)), ("qe", (4,))]),
-    }
+
+@njit(cache=True, inline="always")
+def _take1(buf, o, d0):
+    return buf[o:o + d0], o + d0
+
+
+@njit(cache=True, inline="always")
+def _take2(buf, o, d0, d1):
+    return buf[o:o + d0 * d1].reshape((d0, d1)), o + d0 * d1
+
+
+@njit(cache=True, inline="always")
+def _take3(buf, o, d0, d1, d2):
+    return buf[o:o + d0 * d1 * d2].reshape((d0, d1, d2)), o + d0 * d1 * d2
+
+
+@njit(cache=True, inline="always")
+def unpack(mi, mf, work, out):
+    """Named views ``(Ints, Model, Work, Out)`` of the four flat buffers, field by field as
+    :data:`_FIELDS` lists them (``tests/test_control_layout.py`` checks it against :func:`layout`).
+    Allocates nothing; callable from Python, where the views share the buffers' memory."""
+    n = mi[0]
+    o = 0
+    v_n, o = _take1(mi, o, 1)
+    feet, o = _take1(mi, o, 2)
+    mode, o = _take1(mi, o, 1)
+    parent, o = _take1(mi, o, n)
+    qadr, o = _take1(mi, o, n)
+    dadr, o = _take1(mi, o, n)
+    leg, o = _take1(mi, o, n)
+    beyond, o = _take1(mi, o, n)
+    ints = Ints(v_n, feet, mode, parent, qadr, dadr, leg, beyond)
+    o = 0
+    H, o = _take2(mf, o, n, 6)
+    G0, o = _take3(mf, o, n, 4, 4)
+    mass, o = _take1(mf, o, n)
+    inertia, o = _take2(mf, o, n, 3)
+    qref, o = _take1(mf, o, n)
+    gravity, o = _take1(mf, o, 3)
+    root_qbi, o = _take1(mf, o, 4)
+    big_base, o = _take1(mf, o, 1)
+    model = Model(H, G0, mass, inertia, qref, gravity, root_qbi, big_base)
+    o = 0
+    g, o = _take3(work, o, n, 4, 4)
+    gl, o = _take3(work, o, n, 4, 4)
+    V, o = _take2(work, o, n, 6)
+    a, o = _take2(work, o, n, 6)
+    b, o = _take2(work, o, n, 6)
+    P, o = _take3(work, o, n, 6, 6)
+    z, o = _take2(work, o, n, 6)
+    F, o = _take2(work, o, n, 6)
+    q_root, o = _take1(work, o, 4)
+    q01, o = _take1(work, o, 4)
+    E, o = _take2(work, o, 4, 4)
+    PH, o = _take1(work, o, 6)
+    c, o = _take1(work, o, 6)
+    c_in, o = _take1(work, o, 6)
+    Pa, o = _take2(work, o, 6, 6)
+    Q, o = _take2(work, o, 6, 6)
+    S, o = _take2(work, o, 3, 3)
+    qd_conj, o = _take1(work, o, 4)
+    Re, o = _take2(work, o, 3, 3)
+    dist_vecs, o = _take2(work, o, 3, 6)
+    dist_mats, o = _take3(work, o, 2, 6, 6)
+    R_foot, o = _take3(work, o, 2, 3, 3)
+    wk = Work(g, gl, V, a, b, P, z, F, q_root, q01, E, PH, c, c_in, Pa, Q, S, qd_conj, Re, dist_vecs,
+              dist_mats, R_foot)
+    o = 0
+    tau, o = _take1(out, o, n - 1)
+    P1, o = _take2(out, o, 6, 6)
+    z1, o = _take1(out, o, 6)
+    Fd, o = _take1(out, o, 6)
+    Fl_tilde, o = _take1(out, o, 6)
+    Fr_tilde, o = _take1(out, o, 6)
+    Fl, o = _take1(out, o, 6)
+    Fr, o = _take1(out, o, 6)
+    X, o = _take1(out, o, 6)
+    qe, o = _take1(out, o, 4)
+    res = Out(tau, P1, z1, Fd, Fl_tilde, Fr_tilde, Fl, Fr, X, qe)
+    return ints, model, wk, res
 
 
 # ----------------------------------------------------------------------------- small helpers
 
 
 @njit(cache=True, inline="always")
-def _ad_mul(R, p, x, out):
-    """out = Ad_(R,p) x = [R xv + p x (R xw); R xw]."""
-    w0 = R[0, 0] * x[3] + R[0, 1] * x[4] + R[0, 2] * x[5]
-    w1 = R[1, 0] * x[3] + R[1, 1] * x[4] + R[1, 2] * x[5]
-    w2 = R[2, 0] * x[3] + R[2, 1] * x[4] + R[2, 2] * x[5]
-    v0 = R[0, 0] * x[0] + R[0, 1] * x[1] + R[0, 2] * x[2]
-    v1 = R[1, 0] * x[0] + R[1, 1] * x[1] + R[1, 2] * x[2]
-    v2 = R[2, 0] * x[0] + R[2, 1] * x[1] + R[2, 2] * x[2]
-    out[0] = v0 + p[1] * w2 - p[2] * w1
-    out[1] = v1 + p[2] * w0 - p[0] * w2
-    out[2] = v2 + p[0] * w1 - p[1] * w0
-    out[3] = w0
-    out[4] = w1
-    out[5] = w2
-
-
-@njit(cache=True, inline="always")
-def _adT_mul(R, p, F, out):
-    """out = Ad_(R,p)^T F = [R^T f; R^T (tau - p x f)] (W eq. 3.8)."""
-    t0 = F[3] - (p[1] * F[2] - p[2] * F[1])
-    t1 = F[4] - (p[2] * F[0] - p[0] * F[2])
-    t2 = F[5] - (p[0] * F[1] - p[1] * F[0])
-    f0, f1, f2 = F[0], F[1], F[2]
-    out[0] = R[0, 0] * f0 + R[1, 0] * f1 + R[2, 0] * f2
-    out[1] = R[0, 1] * f0 + R[1, 1] * f1 + R[2, 1] * f2
-    out[2] = R[0, 2] * f0 + R[1, 2] * f1 + R[2, 2] * f2
-    out[3] = R[0, 0] * t0 + R[1, 0] * t1 + R[2, 0] * t2
-    out[4] = R[0, 1] * t0 + R[1, 1] * t1 + R[2, 1] * t2
-    out[5] = R[0, 2] * t0 + R[1, 2] * t1 + R[2, 2] * t2
+def _body_inertia(scale, m, inertia, P):
+    """P = scale M_k = scale blockdiag(m I3, diag(inertia)) (W eq. 3.9)."""
+    for i in range(6):
+        for j in range(6):
+            P[i, j] = 0.0
+    for i in range(3):
+        P[i, i] = scale * m
+        P[3 + i, 3 + i] = scale * inertia[i]
 
 
 @njit(cache=True)
 def _bias(m, I, R0k, gvec, V, b):
     """b = -F^be + Omega M V: gravity and gyroscopic wrench of one link (W Alg. 1, eq. 3.9)."""
-    v0, v1, v2, w0, w1, w2 = V[0], V[1], V[2], V[3], V[4], V[5]
+    w = V[3:]
     # gravity in the link frame: R^T g m
     for i in range(3):
         b[i] = -m * (R0k[0, i] * gvec[0] + R0k[1, i] * gvec[1] + R0k[2, i] * gvec[2])
-    b[0] += m * (w1 * v2 - w2 * v1)
-    b[1] += m * (w2 * v0 - w0 * v2)
-    b[2] += m * (w0 * v1 - w1 * v0)
-    h0, h1, h2 = I[0] * w0, I[1] * w1, I[2] * w2
-    b[3] = w1 * h2 - w2 * h1
-    b[4] = w2 * h0 - w0 * h2
-    b[5] = w0 * h1 - w1 * h0
+    wv = cross(w, V[:3])
+    b[0] += m * wv[0]
+    b[1] += m * wv[1]
+    b[2] += m * wv[2]
+    b[3], b[4], b[5] = cross(w, (I[0] * w[0], I[1] * w[1], I[2] * w[2]))
+
+
+@njit(cache=True, inline="always")
+def _velocity_product(V, H, thd, a):
+    """a = ad_V H thetadot = [w x hv + v x hw; w x hw] thetadot (W Alg. 2, see the module notes)."""
+    v0, v1, v2, w0, w1, w2 = V[0], V[1], V[2], V[3], V[4], V[5]
+    h0, h1, h2, u0, u1, u2 = H[0], H[1], H[2], H[3], H[4], H[5]
+    a[0] = (w1 * h2 - w2 * h1 + v1 * u2 - v2 * u1) * thd
+    a[1] = (w2 * h0 - w0 * h2 + v2 * u0 - v0 * u2) * thd
+    a[2] = (w0 * h1 - w1 * h0 + v0 * u1 - v1 * u0) * thd
+    a[3] = (w1 * u2 - w2 * u1) * thd
+    a[4] = (w2 * u0 - w0 * u2) * thd
+    a[5] = (w0 * u1 - w1 * u0) * thd
 
 
 @njit(cache=True)
@@ -160,31 +284,29 @@ def _mat4_mul(A, B, C):
 
 @njit(cache=True)
 def alg1_initialize(qpos, qvel, root_qadr, root_dadr, G0root, root_qbi, mass, inertia, gravity,
-                    g, V, a, b, quat):
+                    g, V, a, b, q_root, q01):
     """W Alg. 1 (controller initialization): pose ``g_{0,1}``, body velocity ``V_1^b``,
     ``a_1 = 0`` and ``b_1 = -F_1^be + Omega_1 M_1 V_1`` of the central body.
 
     MuJoCo's free joint gives the body-frame origin's position and world linear velocity and the
     body-frame angular velocity; they are moved to the central body's COM principal frame. The
-    root quaternion is normalized (as MuJoCo does); the caller rejects a zero one.
+    root quaternion is normalized into ``q_root`` (as MuJoCo does; the caller rejects a zero one);
+    ``q01`` receives ``q_{0,1}``, the orientation of the COM principal frame.
     """
-    q = quat[0]
     nrm = 0.0
     for i in range(4):
-        q[i] = qpos[root_qadr + 3 + i]
-        nrm += q[i] * q[i]
+        q_root[i] = qpos[root_qadr + 3 + i]
+        nrm += q_root[i] * q_root[i]
     nrm = np.sqrt(nrm)  # MuJoCo normalizes qpos quaternions; so does the controller
     for i in range(4):
-        q[i] /= nrm
-    quat_mul_into(q, root_qbi, quat[1])  # orientation of the inertial frame
+        q_root[i] /= nrm
+    quat_mul_into(q_root, root_qbi, q01)  # orientation of the inertial frame
     Rb = g[0, :3, :3]
-    quat_to_rot_into(q, Rb)  # body-frame rotation, temporarily
+    quat_to_rot_into(q_root, Rb)  # body-frame rotation, temporarily
     # world velocity of the COM: v_origin + R_b (w_b x ipos)
     ip0, ip1, ip2 = G0root[0, 3], G0root[1, 3], G0root[2, 3]
     wb0, wb1, wb2 = qvel[root_dadr + 3], qvel[root_dadr + 4], qvel[root_dadr + 5]
-    c0 = wb1 * ip2 - wb2 * ip1
-    c1 = wb2 * ip0 - wb0 * ip2
-    c2 = wb0 * ip1 - wb1 * ip0
+    c0, c1, c2 = cross((wb0, wb1, wb2), (ip0, ip1, ip2))
     vs0 = qvel[root_dadr + 0] + Rb[0, 0] * c0 + Rb[0, 1] * c1 + Rb[0, 2] * c2
     vs1 = qvel[root_dadr + 1] + Rb[1, 0] * c0 + Rb[1, 1] * c1 + Rb[1, 2] * c2
     vs2 = qvel[root_dadr + 2] + Rb[2, 0] * c0 + Rb[2, 1] * c1 + Rb[2, 2] * c2
@@ -192,7 +314,7 @@ def alg1_initialize(qpos, qvel, root_qadr, root_dadr, G0root, root_qbi, mass, in
     py = qpos[root_qadr + 1] + Rb[1, 0] * ip0 + Rb[1, 1] * ip1 + Rb[1, 2] * ip2
     pz = qpos[root_qadr + 2] + Rb[2, 0] * ip0 + Rb[2, 1] * ip1 + Rb[2, 2] * ip2
     Ri = g[0, :3, :3]
-    quat_to_rot_into(quat[1], Ri)
+    quat_to_rot_into(q01, Ri)
     g[0, 0, 3] = px
     g[0, 1, 3] = py
     g[0, 2, 3] = pz
@@ -200,245 +322,121 @@ def alg1_initialize(qpos, qvel, root_qadr, root_dadr, G0root, root_qbi, mass, in
     g[0, 3, 1] = 0.0
     g[0, 3, 2] = 0.0
     g[0, 3, 3] = 1.0
-    # angular velocity in the inertial frame: R_bi^T w_b
-    Rbi = G0root[:3, :3]
-    for i in range(3):
-        V[0, 3 + i] = Rbi[0, i] * wb0 + Rbi[1, i] * wb1 + Rbi[2, i] * wb2
-        V[0, i] = Ri[0, i] * vs0 + Ri[1, i] * vs1 + Ri[2, i] * vs2
+    # angular velocity in the inertial frame: R_bi^T w_b; COM velocity R_i^T v^s
+    V[0, 3], V[0, 4], V[0, 5] = rot_T_mul(G0root[:3, :3], (wb0, wb1, wb2))
+    V[0, 0], V[0, 1], V[0, 2] = rot_T_mul(Ri, (vs0, vs1, vs2))
+    for i in range(6):
         a[0, i] = 0.0
-        a[0, 3 + i] = 0.0
     _bias(mass[0], inertia[0], Ri, gravity, V[0], b[0])
 
 
 @njit(cache=True)
 def alg2_velocity_propagation(qpos, qvel, parent, qadr, dadr, H, G0, qref, mass, inertia,
-                              gravity, g, gl, V, a, b, tmp44):
+                              gravity, g, gl, V, a, b, E):
     """W Alg. 2 (forward kinematics, outboard): for each joint k = link k's joint,
     ``g_{k.o,0}``, ``A = Ad_{g_{k.o,k.i}}``, ``V_{k.o} = A V_{k.i} + H_k thetadot_k``,
     ``a_k = ad_{V_{k.o}} H_k thetadot_k``, ``b_{k.o} = -F^be + Omega M V``.
 
     ``g[k]`` holds ``g_{0,k}`` (world pose of link k's frame) and ``gl[k]`` the joint transform
     ``g_{k.i,k.o}(theta_k)``, from which Alg. 3 and Alg. 6 apply ``A = Ad_{gl[k]}^-1`` without
-    forming the 6x6 matrix.
+    forming the 6x6 matrix. Scratch ``E`` (4, 4).
     """
-    n = parent.shape[0]
-    for k in range(1, n):
-        p = parent[k]
-        theta = qpos[qadr[k]] - qref[k]
+    for k in range(1, parent.shape[0]):
+        i = parent[k]
+        _revolute_exp(H[k], qpos[qadr[k]] - qref[k], E)  # exp(H_k^ theta_k)
+        _mat4_mul(G0[k], E, gl[k])  # g_{k.i,k.o}(theta_k)
+        _mat4_mul(g[i], gl[k], g[k])  # g_{0,k.o} = g_{0,k.i} g_{k.i,k.o}
         thd = qvel[dadr[k]]
-        E = tmp44[0]
-        gpk = gl[k]
-        _revolute_exp(H[k], theta, E)
-        _mat4_mul(G0[k], E, gpk)  # g_{p,k}(theta)
-        _mat4_mul(g[p], gpk, g[k])  # g_{0,k}
-        # g_{k,p} = inverse(g_{p,k}): R^T, -R^T p
-        Rkp = tmp44[2, :3, :3]
-        pkp = tmp44[2, :3, 3]
-        for i in range(3):
-            for j in range(3):
-                Rkp[i, j] = gpk[j, i]
-        for i in range(3):
-            pkp[i] = -(gpk[0, i] * gpk[0, 3] + gpk[1, i] * gpk[1, 3] + gpk[2, i] * gpk[2, 3])
-        _ad_mul(Rkp, pkp, V[p], V[k])
-        for i in range(6):
-            V[k, i] += H[k, i] * thd
-        # a_k = ad_{V_k} H_k thd = [w x hv + v x hw; w x hw] thd
-        v0, v1, v2, w0, w1, w2 = V[k, 0], V[k, 1], V[k, 2], V[k, 3], V[k, 4], V[k, 5]
-        h0, h1, h2, u0, u1, u2 = H[k, 0], H[k, 1], H[k, 2], H[k, 3], H[k, 4], H[k, 5]
-        a[k, 0] = (w1 * h2 - w2 * h1 + v1 * u2 - v2 * u1) * thd
-        a[k, 1] = (w2 * h0 - w0 * h2 + v2 * u0 - v0 * u2) * thd
-        a[k, 2] = (w0 * h1 - w1 * h0 + v0 * u1 - v1 * u0) * thd
-        a[k, 3] = (w1 * u2 - w2 * u1) * thd
-        a[k, 4] = (w2 * u0 - w0 * u2) * thd
-        a[k, 5] = (w0 * u1 - w1 * u0) * thd
-        _bias(mass[k], inertia[k], g[k, :3, :3], gravity, V[k], b[k])
+        adjoint_inv_mul(gl[k, :3, :3], gl[k, :3, 3], V[i], V[k])  # A V_{k.i}
+        for j in range(6):
+            V[k, j] += H[k, j] * thd  # V_{k.o} = A V_{k.i} + H_k thetadot_k
+        _velocity_product(V[k], H[k], thd, a[k])  # a_k
+        _bias(mass[k], inertia[k], g[k, :3, :3], gravity, V[k], b[k])  # b_{k.o} (eq. 3.9)
 
 
 @njit(cache=True)
 def alg3_workspace_dynamics(parent, H, mass, inertia, feet, contact, beyond, big_base, gl, a, b, P, z,
-                            tmp6, tmp66):
+                            PH, c, c_in, Pa, Q, S):
     """W Alg. 3 (workspace dynamics, inboard): articulated-body inertias ``P_k`` and biases
     ``z_k`` from the feet to the central body with the big-base approximation
     ``P_foot = big_base * M_1``, ``z_foot = 0``. Result: ``P[0] = P_1``, ``z[0] = z_1`` with
     ``F_1 = P_1 Vdot_1^b + z_1`` for a wrench ``F_1`` on the central body (feet fixed).
 
-    Per joint: ``D = H^T P H``, ``K = H D^-1 H^T``, ``L = (I - K P) A``,
-    ``P_{k.i} += L^T P L = A^T (P - P H H^T P / D) A``, ``z_{k.i} += L^T (P a + z)``
-    (accumulated: link 1 receives both legs). Only the feet with ``contact[f] != 0`` are big bases
-    (W: both, always); a foot off the ground keeps its own inertia and bias, so its leg enters
-    ``P_1``, ``z_1`` as a passive articulated branch. With ``A = Ad_{g_{k.o,k.i}}`` and
-    ``gl[k] = g_{k.i,k.o} = (R, p)``, ``A^T = [[I, 0], [p^, I]] blockdiag(R, R)``: the 6x6 products
-    are a block rotation followed by a shift, W eq. 3.7 written out.
+    Per joint: ``D = H^T P H``, ``K = H D^-1 H^T``, ``L = (I - K P) A``, so
+    ``L^T P L = A^T (P - P H D^-1 H^T P) A`` and ``L^T (P a + z) = A^T (I - P H D^-1 H^T)(P a + z)``;
+    the inboard quantities accumulate (link 1 receives both legs). Only the feet with
+    ``contact[f] != 0`` are big bases (W: both, always); a foot off the ground keeps its own
+    inertia and bias, so its leg enters ``P_1``, ``z_1`` as a passive articulated branch.
+    ``A = Ad_{g_{k.o,k.i}} = Ad^-1_{gl[k]}`` is applied without forming it (biped.spatial).
+    Scratch: ``PH``, ``c``, ``c_in`` (6,), ``Pa``, ``Q`` (6, 6), ``S`` (3, 3).
     """
-    n = parent.shape[0]
-    for k in range(n):
-        for i in range(6):
-            z[k, i] = b[k, i]
-            for j in range(6):
-                P[k, i, j] = 0.0
-        for i in range(3):
-            P[k, i, i] = mass[k]
-            P[k, 3 + i, 3 + i] = inertia[k, i]
-    for f in range(feet.shape[0]):
-        if contact[f] == 0:
-            continue
-        k = feet[f]
-        for i in range(6):
-            z[k, i] = 0.0
-        for i in range(3):
-            P[k, i, i] = big_base * mass[0]
-            P[k, 3 + i, 3 + i] = big_base * inertia[0, i]
-    PH = tmp6[0]
-    c = tmp6[1]
-    Pa = tmp66[0]
-    Q = tmp66[1]
-    W = tmp66[2]  # 3x3 scratch in the corner
-    for k in range(n - 1, 0, -1):
+    for k in range(parent.shape[0]):
+        _body_inertia(1.0, mass[k], inertia[k], P[k])  # P_k = M_k^b (eq. 3.9)
+        z[k, :] = b[k]  # z_k = b_k^b
+    for f in range(feet.shape[0]):  # fixed-base approximation: P_7 = P_13 = 10^6 M_1^b, z = 0
+        if contact[f] != 0:
+            _body_inertia(big_base, mass[0], inertia[0], P[feet[f]])
+            z[feet[f], :] = 0.0
+    for k in range(parent.shape[0] - 1, 0, -1):  # k = 13 to 2
         if beyond[k]:
             continue
-        p = parent[k]
-        Pk = P[k]
-        Hk = H[k]
-        for i in range(6):
-            s = 0.0
-            for j in range(6):
-                s += Pk[i, j] * Hk[j]
-            PH[i] = s
-        D = 0.0
-        for i in range(6):
-            D += Hk[i] * PH[i]
-        Dinv = 1.0 / D
-        # c = P a + z ; c <- c - PH (H.c) / D ; Pa = P - PH PH^T / D
-        hc = 0.0
-        for i in range(6):
-            s = z[k, i]
-            for j in range(6):
-                s += Pk[i, j] * a[k, j]
-            c[i] = s
-        for i in range(6):
-            hc += Hk[i] * c[i]
-        for i in range(6):
+        R, p = gl[k, :3, :3], gl[k, :3, 3]  # A_{k.i}^{k.o} = Ad^-1_{(R, p)}
+        mat6_mul_vec(P[k], H[k], PH)  # P_{k.o} H_k
+        Dinv = 1.0 / dot6(H[k], PH)  # D_k^-1 = (H_k^T P_{k.o} H_k)^-1
+        mat6_mul_vec_add(P[k], a[k], z[k], c)  # c = P_{k.o} a_k + z_{k.o}
+        hc = dot6(H[k], c)
+        for i in range(6):  # c <- (I - P K) c ; Pa = P - P K P = (I - P K) P
             u = PH[i] * Dinv
             c[i] -= u * hc
             for j in range(6):
-                Pa[i, j] = Pk[i, j] - u * PH[j]
-        gm = gl[k]
-        px, py, pz = gm[0, 3], gm[1, 3], gm[2, 3]
-        r00, r01, r02 = gm[0, 0], gm[0, 1], gm[0, 2]
-        r10, r11, r12 = gm[1, 0], gm[1, 1], gm[1, 2]
-        r20, r21, r22 = gm[2, 0], gm[2, 1], gm[2, 2]
-        # z_p += A^T c: f' = R f, tau' = R tau + p x f'
-        f0 = r00 * c[0] + r01 * c[1] + r02 * c[2]
-        f1 = r10 * c[0] + r11 * c[1] + r12 * c[2]
-        f2 = r20 * c[0] + r21 * c[1] + r22 * c[2]
-        z[p, 0] += f0
-        z[p, 1] += f1
-        z[p, 2] += f2
-        z[p, 3] += r00 * c[3] + r01 * c[4] + r02 * c[5] + py * f2 - pz * f1
-        z[p, 4] += r10 * c[3] + r11 * c[4] + r12 * c[5] + pz * f0 - px * f2
-        z[p, 5] += r20 * c[3] + r21 * c[4] + r22 * c[5] + px * f1 - py * f0
-        # Q = blockdiag(R, R) Pa blockdiag(R, R)^T, blocks 11, 12, 22: W = Pa_blk R^T, Q = R W
-        for blk in range(3):
-            bi = 0 if blk < 2 else 3
-            bj = 0 if blk == 0 else 3
-            for i in range(3):
-                m0, m1, m2 = Pa[bi + i, bj], Pa[bi + i, bj + 1], Pa[bi + i, bj + 2]
-                W[i, 0] = m0 * r00 + m1 * r01 + m2 * r02
-                W[i, 1] = m0 * r10 + m1 * r11 + m2 * r12
-                W[i, 2] = m0 * r20 + m1 * r21 + m2 * r22
-            for j in range(3):
-                w0, w1, w2 = W[0, j], W[1, j], W[2, j]
-                Q[bi, bj + j] = r00 * w0 + r01 * w1 + r02 * w2
-                Q[bi + 1, bj + j] = r10 * w0 + r11 * w1 + r12 * w2
-                Q[bi + 2, bj + j] = r20 * w0 + r21 * w1 + r22 * w2
-        # S = B12 = Q12 - Q11 p^ (into W)
-        for i in range(3):
-            W[i, 0] = Q[i, 3] - (Q[i, 1] * pz - Q[i, 2] * py)
-            W[i, 1] = Q[i, 4] - (Q[i, 2] * px - Q[i, 0] * pz)
-            W[i, 2] = Q[i, 5] - (Q[i, 0] * py - Q[i, 1] * px)
-        # B22 = Q22 + p^ Q12 - S^T p^
-        for j in range(3):
-            h0 = py * Q[2, 3 + j] - pz * Q[1, 3 + j]
-            h1 = pz * Q[0, 3 + j] - px * Q[2, 3 + j]
-            h2 = px * Q[1, 3 + j] - py * Q[0, 3 + j]
-            if j == 0:
-                s0, s1, s2 = W[1, 0] * pz - W[2, 0] * py, W[1, 1] * pz - W[2, 1] * py, W[1, 2] * pz - W[2, 2] * py
-            elif j == 1:
-                s0, s1, s2 = W[2, 0] * px - W[0, 0] * pz, W[2, 1] * px - W[0, 1] * pz, W[2, 2] * px - W[0, 2] * pz
-            else:
-                s0, s1, s2 = W[0, 0] * py - W[1, 0] * px, W[0, 1] * py - W[1, 1] * px, W[0, 2] * py - W[1, 2] * px
-            P[p, 3, 3 + j] += Q[3, 3 + j] + h0 - s0
-            P[p, 4, 3 + j] += Q[4, 3 + j] + h1 - s1
-            P[p, 5, 3 + j] += Q[5, 3 + j] + h2 - s2
-        for i in range(3):
-            for j in range(3):
-                P[p, i, j] += Q[i, j]
-                P[p, i, 3 + j] += W[i, j]
-                P[p, 3 + j, i] += W[i, j]
+                Pa[i, j] = P[k, i, j] - u * PH[j]
+        adjoint_inv_T_mul(R, p, c, c_in)  # L_k^T (P_{k.o} a_k + z_{k.o}) = A^T c
+        for i in range(6):
+            z[parent[k], i] += c_in[i]  # z_{k.i} += L^T (P a + z)
+        adjoint_inv_congruence_add(R, p, Pa, P[parent[k]], Q, S)  # P_{k.i} += L^T P L = A^T Pa A
 
 
 @njit(cache=True)
-def alg4_desired_wrench(g, V, P, z, target, gains, quat, R3, X, qe, Fd):
+def alg4_desired_wrench(g, V, P, z, target, gains, q01, qd_conj, Re, X, qe, Fd):
     """W Alg. 4 (desired wrench): PD on the central body's COM position (space frame) and on the
     unit-quaternion orientation error ``q_et = q_{0,1} * conj(q_{0,d})`` with the sign chosen so that
-    its scalar part is >= 0; ``F_1^bd = P_1 X^b + z_1``.
+    its scalar part is >= 0; ``F_1^bd = P_1 X^b + z_1`` (W eq. 3.10).
 
     ``target`` (19,) = [p_d (3), pdot_d (3), pddot_d (3), q_d (4, w x y z), w_d^s (3), wdot_d^s (3)];
-    ``gains`` (12,) = diagonals of [K_c^p, K_c^v, K_R^p, K_R^v].
+    ``gains`` (12,) = diagonals of [K_c^p, K_c^v, K_R^p, K_R^v]. ``q01`` is ``q_{0,1}`` from Alg. 1;
+    scratch ``qd_conj`` (4,), ``Re`` (3, 3).
     """
     R = g[0, :3, :3]
-    # world COM velocity and angular velocity
-    pd0 = R[0, 0] * V[0, 0] + R[0, 1] * V[0, 1] + R[0, 2] * V[0, 2]
-    pd1 = R[1, 0] * V[0, 0] + R[1, 1] * V[0, 1] + R[1, 2] * V[0, 2]
-    pd2 = R[2, 0] * V[0, 0] + R[2, 1] * V[0, 1] + R[2, 2] * V[0, 2]
-    ws0 = R[0, 0] * V[0, 3] + R[0, 1] * V[0, 4] + R[0, 2] * V[0, 5]
-    ws1 = R[1, 0] * V[0, 3] + R[1, 1] * V[0, 4] + R[1, 2] * V[0, 5]
-    ws2 = R[2, 0] * V[0, 3] + R[2, 1] * V[0, 4] + R[2, 2] * V[0, 5]
-    pdot = (pd0, pd1, pd2)
-    ws = (ws0, ws1, ws2)
+    pd0, pd1, pd2 = pdot = rot_mul(R, V[0, :3])  # world COM velocity
+    ws = rot_mul(R, V[0, 3:])  # world angular velocity
     Xc0 = target[6] - gains[3] * (pd0 - target[3]) - gains[0] * (g[0, 0, 3] - target[0])
     Xc1 = target[7] - gains[4] * (pd1 - target[4]) - gains[1] * (g[0, 1, 3] - target[1])
     Xc2 = target[8] - gains[5] * (pd2 - target[5]) - gains[2] * (g[0, 2, 3] - target[2])
-    # subtract w^s x pdot^s
-    Xc0 -= ws1 * pdot[2] - ws2 * pdot[1]
-    Xc1 -= ws2 * pdot[0] - ws0 * pdot[2]
-    Xc2 -= ws0 * pdot[1] - ws1 * pdot[0]
-    for i in range(3):
-        X[i] = R[0, i] * Xc0 + R[1, i] * Xc1 + R[2, i] * Xc2
+    wp = cross(ws, pdot)  # X_c^b = R^T (X_c^s - w^s x pdot^s)
+    X[0], X[1], X[2] = rot_T_mul(R, (Xc0 - wp[0], Xc1 - wp[1], Xc2 - wp[2]))
     # quaternion error q_et = q_{0,1} * conj(q_d)
-    qd = quat[2]
-    qd[0] = target[9]
-    qd[1] = -target[10]
-    qd[2] = -target[11]
-    qd[3] = -target[12]
-    quat_mul_into(quat[1], qd, qe)
+    qd_conj[0] = target[9]
+    qd_conj[1] = -target[10]
+    qd_conj[2] = -target[11]
+    qd_conj[3] = -target[12]
+    quat_mul_into(q01, qd_conj, qe)
     if qe[0] < 0.0:
         for i in range(4):
             qe[i] = -qe[i]
-    Re = R3[0]
     quat_to_rot_into(qe, Re)
-    # R_e w_d and R_e wdot_d
-    rw0 = Re[0, 0] * target[13] + Re[0, 1] * target[14] + Re[0, 2] * target[15]
-    rw1 = Re[1, 0] * target[13] + Re[1, 1] * target[14] + Re[1, 2] * target[15]
-    rw2 = Re[2, 0] * target[13] + Re[2, 1] * target[14] + Re[2, 2] * target[15]
-    ra0 = Re[0, 0] * target[16] + Re[0, 1] * target[17] + Re[0, 2] * target[18]
-    ra1 = Re[1, 0] * target[16] + Re[1, 1] * target[17] + Re[1, 2] * target[18]
-    ra2 = Re[2, 0] * target[16] + Re[2, 1] * target[17] + Re[2, 2] * target[18]
-    we0, we1, we2 = ws[0] - rw0, ws[1] - rw1, ws[2] - rw2
-    XR0 = ra0 + (ws1 * rw2 - ws2 * rw1) - gains[9] * we0 - gains[6] * qe[1]
-    XR1 = ra1 + (ws2 * rw0 - ws0 * rw2) - gains[10] * we1 - gains[7] * qe[2]
-    XR2 = ra2 + (ws0 * rw1 - ws1 * rw0) - gains[11] * we2 - gains[8] * qe[3]
-    for i in range(3):
-        X[3 + i] = R[0, i] * XR0 + R[1, i] * XR1 + R[2, i] * XR2
-    for i in range(6):
-        s = z[0, i]
-        for j in range(6):
-            s += P[0, i, j] * X[j]
-        Fd[i] = s
+    rw = rot_mul(Re, target[13:16])  # R_e w_d
+    ra0, ra1, ra2 = rot_mul(Re, target[16:19])  # R_e wdot_d
+    we0, we1, we2 = ws[0] - rw[0], ws[1] - rw[1], ws[2] - rw[2]
+    wr = cross(ws, rw)
+    XR0 = ra0 + wr[0] - gains[9] * we0 - gains[6] * qe[1]
+    XR1 = ra1 + wr[1] - gains[10] * we1 - gains[7] * qe[2]
+    XR2 = ra2 + wr[2] - gains[11] * we2 - gains[8] * qe[3]
+    X[3], X[4], X[5] = rot_T_mul(R, (XR0, XR1, XR2))
+    mat6_mul_vec_add(P[0], X, z[0], Fd)  # F_1^bd = P_1 X^b + z_1 (eq. 3.10)
 
 
 @njit(cache=True)
-def alg5_wrench_distribution(g, feet, contact, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_tilde, Fr_tilde,
+def alg5_wrench_distribution(g, feet, contact, Fd, vecs, mats, R_foot, Fl, Fr, Fl_tilde, Fr_tilde,
                              printed=False):
     """W Alg. 5 (desired wrench distribution, eq. 3.11-3.14): ``F_1^bd = G [F_l; F_r]`` with
     ``G = [Ad^T_{g_{7,1}}  Ad^T_{g_{13,1}}]`` (each foot's wrench moved to the central body),
@@ -455,14 +453,16 @@ def alg5_wrench_distribution(g, feet, contact, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_t
     ``printed=True`` uses W's print literally (``g_{1,7}``, ``g_{1,13}`` in place of ``g_{7,1}``,
     ``g_{13,1}``): the shares still sum to ``F_1^bd`` but are not the feet's wrenches moved by statics.
 
+    Scratch: ``vecs`` (>= 3, 6) holds ``y = (G G^T)^-1 F_1^bd`` and the two feet's ``p``;
+    ``mats`` (>= 2, 6, 6) holds ``G G^T`` and one foot's ``Ad``; ``R_foot`` (2, 3, 3) the feet's ``R``
+    (``(R_foot[f], p_foot[f]) = g_{foot,1}``, or ``g_{1,foot}`` printed).
+
     Returns False when ``G G^T`` (a sum of two positive-definite matrices) is not positive
     definite to working precision: non-finite poses or feet absurdly far from the body.
     """
-    GG = tmp66[0]
-    Afoot = tmp66[1]
-    for i in range(6):
-        for j in range(6):
-            GG[i, j] = 0.0
+    y, p_foot = vecs[0], vecs[1:3, :3]
+    GG, Afoot = mats[0], mats[1]
+    GG[:, :] = 0.0
     R0 = g[0, :3, :3]
     if contact[0] == 0 and contact[1] == 0:
         for i in range(6):
@@ -473,8 +473,7 @@ def alg5_wrench_distribution(g, feet, contact, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_t
         return True
     for f in range(2):
         k = feet[f]
-        R = R3[f]
-        pp = tmp6[2 + f]
+        R, pp = R_foot[f], p_foot[f]
         if printed:  # W's print: g_{1,foot} = g_{0,1}^-1 g_{0,foot}
             for i in range(3):
                 for j in range(3):
@@ -489,7 +488,7 @@ def alg5_wrench_distribution(g, feet, contact, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_t
                          + g[k, 2, i] * (g[0, 2, 3] - g[k, 2, 3]))
         if contact[f] == 0:
             continue
-        adjoint_into(R, pp[:3], Afoot)
+        adjoint_into(R, pp, Afoot)  # G G^T += Ad^T Ad, this foot's block of G (eq. 3.11)
         for i in range(6):
             for j in range(i, 6):
                 s = 0.0
@@ -498,36 +497,13 @@ def alg5_wrench_distribution(g, feet, contact, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_t
                 GG[i, j] += s
                 if j != i:
                     GG[j, i] += s
-    # Cholesky of GG (in place, lower), then y = GG^-1 Fd into tmp6[0]
-    L = GG
-    for j in range(6):
-        s = L[j, j]
-        for m in range(j):
-            s -= L[j, m] * L[j, m]
-        if not (s > 1e-12 * (1.0 + abs(GG[j, j]))):
-            return False
-        L[j, j] = np.sqrt(s)
-        for i in range(j + 1, 6):
-            s = L[i, j]
-            for m in range(j):
-                s -= L[i, m] * L[j, m]
-            L[i, j] = s / L[j, j]
-    y = tmp6[0]
-    for i in range(6):
-        s = Fd[i]
-        for m in range(i):
-            s -= L[i, m] * y[m]
-        y[i] = s / L[i, i]
-    for i in range(5, -1, -1):
-        s = y[i]
-        for m in range(i + 1, 6):
-            s -= L[m, i] * y[m]
-        y[i] = s / L[i, i]
-    # F_foot = Ad_{g_{foot,1}} y ; F~ = Ad^T_{g_{foot,1}} F_foot
-    _ad_mul(R3[0], tmp6[2, :3], y, Fl)
-    _adT_mul(R3[0], tmp6[2, :3], Fl, Fl_tilde)
-    _ad_mul(R3[1], tmp6[3, :3], y, Fr)
-    _adT_mul(R3[1], tmp6[3, :3], Fr, Fr_tilde)
+    if not cholesky6_solve(GG, Fd, y):  # y = (G G^T)^-1 F_1^bd (eq. 3.12)
+        return False
+    # F_foot = Ad_{g_{foot,1}} y (the foot's rows of G^T y); F~ = Ad^T_{g_{foot,1}} F_foot (eq. 3.13)
+    adjoint_mul(R_foot[0], p_foot[0], y, Fl)
+    adjoint_T_mul(R_foot[0], p_foot[0], Fl, Fl_tilde)
+    adjoint_mul(R_foot[1], p_foot[1], y, Fr)
+    adjoint_T_mul(R_foot[1], p_foot[1], Fr, Fr_tilde)
     for i in range(6):
         if contact[0] == 0:
             Fl[i] = 0.0
@@ -559,8 +535,7 @@ def alg6_torques(parent, H, leg, beyond, gl, Fl_tilde, Fr_tilde, F, tau):
             Ft = F[p]
         sign = 1.0 if p == 0 else -1.0  # F~_k = -F_{k.i} inside a leg
         # F_k = -Ad^T_{g_{p,k}} F~_k  (Ad^{-T}_{g_{k,p}} = Ad^T_{g_{p,k}})
-        gpk = gl[k]
-        _adT_mul(gpk[:3, :3], gpk[:3, 3], Ft, F[k])
+        adjoint_T_mul(gl[k, :3, :3], gl[k, :3, 3], Ft, F[k])
         s = 0.0
         for i in range(6):
             F[k, i] *= -sign
@@ -570,76 +545,35 @@ def alg6_torques(parent, H, leg, beyond, gl, Fl_tilde, Fr_tilde, F, tau):
 
 @njit(cache=True)
 def compute_kernel(qpos, qvel, target, gains, contact, mi, mf, work, out):
-    """One controller call: W Alg. 1-6 on flat buffers (see :func:`layout`); ``contact`` (2,) int
-    flags the (left, right) feet taken as fixed to the ground (W: both). Returns a status code
-    (0 ok, 1 non-finite state, 2 non-finite result, 3 singular wrench distribution, 4 zero root
-    quaternion)."""
+    """One controller call: W Alg. 1-6 on flat buffers (see :func:`layout` and :func:`unpack`);
+    ``contact`` (2,) int flags the (left, right) feet taken as fixed to the ground (W: both).
+    Returns a status code (0 ok, 1 non-finite state, 2 non-finite result, 3 singular wrench
+    distribution, 4 zero root quaternion)."""
     for i in range(qpos.shape[0]):
         if not np.isfinite(qpos[i]):
             return NONFINITE_STATE
     for i in range(qvel.shape[0]):
         if not np.isfinite(qvel[i]):
             return NONFINITE_STATE
-    r = mi[4 + mi[0]]  # qpos address of the root's free joint
+    t, m, w, o = unpack(mi, mf, work, out)
+    r = t.qadr[0]  # qpos address of the root's free joint
     if qpos[r + 3] ** 2 + qpos[r + 4] ** 2 + qpos[r + 5] ** 2 + qpos[r + 6] ** 2 < 1e-20:
         return ZERO_QUATERNION
-    n = mi[0]
-    parent = mi[4:4 + n]
-    qadr = mi[4 + n:4 + 2 * n]
-    dadr = mi[4 + 2 * n:4 + 3 * n]
-    leg = mi[4 + 3 * n:4 + 4 * n]
-    beyond = mi[4 + 4 * n:4 + 5 * n]
-    feet = mi[1:3]
-    o = 0
-    H = mf[o:o + 6 * n].reshape((n, 6)); o += 6 * n
-    G0 = mf[o:o + 16 * n].reshape((n, 4, 4)); o += 16 * n
-    mass = mf[o:o + n]; o += n
-    inertia = mf[o:o + 3 * n].reshape((n, 3)); o += 3 * n
-    qref = mf[o:o + n]; o += n
-    gravity = mf[o:o + 3]; o += 3
-    root_qbi = mf[o:o + 4]; o += 4
-    big_base = mf[o]
-    o = 0
-    g = work[o:o + 16 * n].reshape((n, 4, 4)); o += 16 * n
-    gl = work[o:o + 16 * n].reshape((n, 4, 4)); o += 16 * n
-    V = work[o:o + 6 * n].reshape((n, 6)); o += 6 * n
-    a = work[o:o + 6 * n].reshape((n, 6)); o += 6 * n
-    b = work[o:o + 6 * n].reshape((n, 6)); o += 6 * n
-    P = work[o:o + 36 * n].reshape((n, 6, 6)); o += 36 * n
-    z = work[o:o + 6 * n].reshape((n, 6)); o += 6 * n
-    F = work[o:o + 6 * n].reshape((n, 6)); o += 6 * n
-    tmp6 = work[o:o + 24].reshape((4, 6)); o += 24
-    tmp66 = work[o:o + 108].reshape((3, 6, 6)); o += 108
-    quat = work[o:o + 12].reshape((3, 4)); o += 12
-    R3 = work[o:o + 18].reshape((2, 3, 3)); o += 18
-    o = 0
-    tau = out[o:o + n - 1]; o += n - 1
-    P1 = out[o:o + 36].reshape((6, 6)); o += 36
-    z1 = out[o:o + 6]; o += 6
-    Fd = out[o:o + 6]; o += 6
-    Fl_tilde = out[o:o + 6]; o += 6
-    Fr_tilde = out[o:o + 6]; o += 6
-    Fl = out[o:o + 6]; o += 6
-    Fr = out[o:o + 6]; o += 6
-    X = out[o:o + 6]; o += 6
-    qe = out[o:o + 4]; o += 4
-    tmp44 = tmp66.reshape((108,))[:48].reshape((3, 4, 4))
 
-    alg1_initialize(qpos, qvel, qadr[0], dadr[0], G0[0], root_qbi, mass, inertia, gravity, g, V, a,
-                    b, quat)
-    alg2_velocity_propagation(qpos, qvel, parent, qadr, dadr, H, G0, qref, mass, inertia, gravity,
-                              g, gl, V, a, b, tmp44)
-    alg3_workspace_dynamics(parent, H, mass, inertia, feet, contact, beyond, big_base, gl, a, b, P, z,
-                            tmp6, tmp66)
-    for i in range(6):
-        z1[i] = z[0, i]
-        for j in range(6):
-            P1[i, j] = P[0, i, j]
-    alg4_desired_wrench(g, V, P, z, target, gains, quat, R3, X, qe, Fd)
-    if not alg5_wrench_distribution(g, feet, contact, Fd, tmp6, tmp66, R3, Fl, Fr, Fl_tilde,
-                                    Fr_tilde, mi[3] == 1):
-        return SINGULAR_DISTRIBUTION
-    alg6_torques(parent, H, leg, beyond, gl, Fl_tilde, Fr_tilde, F, tau)
+    alg1_initialize(qpos, qvel, t.qadr[0], t.dadr[0], m.G0[0], m.root_qbi, m.mass, m.inertia,
+                    m.gravity, w.g, w.V, w.a, w.b, w.q_root, w.q01)
+    alg2_velocity_propagation(qpos, qvel, t.parent, t.qadr, t.dadr, m.H, m.G0, m.qref, m.mass,
+                              m.inertia, m.gravity, w.g, w.gl, w.V, w.a, w.b, w.E)
+    alg3_workspace_dynamics(t.parent, m.H, m.mass, m.inertia, t.feet, contact, t.beyond, m.big_base[0],
+                            w.gl, w.a, w.b, w.P, w.z, w.PH, w.c, w.c_in, w.Pa, w.Q, w.S)
+    o.z1[:] = w.z[0]
+    o.P1[:, :] = w.P[0]
+    alg4_desired_wrench(w.g, w.V, w.P, w.z, target, gains, w.q01, w.qd_conj, w.Re, o.X, o.qe, o.Fd)
+    if t.mode[0] != STOP_AFTER_ALG4:  # else the caller distributes F_1^bd (biped.control.distribution)
+        if not alg5_wrench_distribution(w.g, t.feet, contact, o.Fd, w.dist_vecs, w.dist_mats,
+                                        w.R_foot, o.Fl, o.Fr, o.Fl_tilde, o.Fr_tilde, t.mode[0] == 1):
+            return SINGULAR_DISTRIBUTION
+        alg6_torques(t.parent, m.H, t.leg, t.beyond, w.gl, o.Fl_tilde, o.Fr_tilde, w.F, o.tau)
     for i in range(out.shape[0]):
         if not np.isfinite(out[i]):
             return NONFINITE_RESULT

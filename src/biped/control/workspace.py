@@ -16,25 +16,37 @@ from biped.control.recursions import (
     NONFINITE_RESULT,
     NONFINITE_STATE,
     SINGULAR_DISTRIBUTION,
+    STOP_AFTER_ALG4,
     ZERO_QUATERNION,
     alg1_initialize,
     alg2_velocity_propagation,
     alg6_torques,
     compute_kernel,
     layout,
+    unpack,
 )
-from biped.errors import ScenarioError, SingularityError, StateError
-from biped.model import DEFAULT_FEET, TreeModel
+from biped.errors import BipedError, ModelError, ScenarioError, SingularityError, StateError
+from biped.model import DEFAULT_FEET, TreeModel, sole_rectangles
 from biped.spatial import axis_angle_quat, rot_to_quat
 
-__all__ = ["DISTRIBUTIONS", "ControllerOutput", "Gains", "Target", "WorkspaceController"]
+__all__ = ["DISTRIBUTIONS", "TARGET_AXES", "W_TARGET_AXIS", "W_TARGET_COM_M", "W_TARGET_TILT_DEG",
+           "ControllerOutput", "Gains", "Target", "WorkspaceController"]
 
 _AXES = {"-y": (0.0, -1.0, 0.0), "-x": (-1.0, 0.0, 0.0)}
+#: Axes of the desired tilt: "-y" is W's text, "-x" the quaternion W prints (docs/controller.md).
+TARGET_AXES = tuple(_AXES)
+#: W section 4's set point: central-body COM [m], tilt [deg] about W_TARGET_AXIS.
+W_TARGET_COM_M = (-0.01, 0.0, 1.14)
+W_TARGET_TILT_DEG = 15.0
+W_TARGET_AXIS = "-y"
 
 #: W Alg. 5 readings: "statics" (default) moves each foot's wrench to the central body with
 #: Ad^T_{g_{foot,1}}, as power balance and W's eq. 3.6 require; "printed" uses W's print
-#: Ad^T_{g_{1,foot}} literally (same sum F_1^bd, a different and unphysical split).
-DISTRIBUTIONS = ("statics", "printed")
+#: Ad^T_{g_{1,foot}} literally (same sum F_1^bd, a different and unphysical split). Beyond W:
+#: "qp" splits F_1^bd by a QP inside the soles' contact wrench cones and the torque limits
+#: (:mod:`biped.control.distribution`).
+DISTRIBUTIONS = ("statics", "printed", "qp")
+_MODE = {"statics": 0, "printed": 1, "qp": STOP_AFTER_ALG4}
 
 
 def _vec(name: str, value, n: int) -> np.ndarray:
@@ -55,10 +67,10 @@ class Target:
     ang_vel, ang_acc: (3,) desired angular velocity / acceleration in the space frame.
     """
 
-    com: tuple = (-0.01, 0.0, 1.14)
+    com: tuple = W_TARGET_COM_M
     com_vel: tuple = (0.0, 0.0, 0.0)
     com_acc: tuple = (0.0, 0.0, 0.0)
-    quat: tuple = tuple(axis_angle_quat(_AXES["-y"], np.radians(15.0)))
+    quat: tuple = tuple(axis_angle_quat(_AXES[W_TARGET_AXIS], np.radians(W_TARGET_TILT_DEG)))
     ang_vel: tuple = (0.0, 0.0, 0.0)
     ang_acc: tuple = (0.0, 0.0, 0.0)
     array: np.ndarray = field(init=False, repr=False, compare=False)
@@ -74,7 +86,8 @@ class Target:
         object.__setattr__(self, "array", arr)
 
     @classmethod
-    def wendlandt(cls, com=(-0.01, 0.0, 1.14), tilt_deg: float = 15.0, axis: str = "-y") -> Target:
+    def wendlandt(cls, com=W_TARGET_COM_M, tilt_deg: float = W_TARGET_TILT_DEG,
+                  axis: str = W_TARGET_AXIS) -> Target:
         """W's set point: COM (-1, 0, 114) cm, 15 deg about -y (text) or -x (the printed quaternion
         (0.99144486, -0.13052619, 0, 0)); see docs/controller.md."""
         if axis not in _AXES:
@@ -142,17 +155,24 @@ class WorkspaceController:
     W Alg. 1-6; set ``NUMBA_DISABLE_JIT=1`` to step through it in Python.
 
     Options: ``big_base`` is W Alg. 3's factor (feet get ``big_base * M_1``; W: 1e6);
-    ``distribution`` selects the reading of W Alg. 5 (:data:`DISTRIBUTIONS`: "statics", the
-    default, or W's "printed" subscripts); ``target`` and ``gains`` are the defaults of
-    :meth:`compute`.
+    ``distribution`` selects W Alg. 5 (:data:`DISTRIBUTIONS`: "statics", the default, W's
+    "printed" subscripts, or "qp", the contact-feasible QP of :mod:`biped.control.distribution`);
+    ``target`` and ``gains`` are the defaults of :meth:`compute`. For "qp" only:
+    ``qp_weights`` (:class:`~biped.control.distribution.QPWeights`), ``torque_limits`` (a
+    :class:`~biped.control.limits.TorqueLimits` in any joint order, or None: unlimited) put
+    into the QP, ``soles`` (left, right) :class:`~biped.model.SoleRectangle` (default: read from
+    the tree's MJCF file) and ``qp_solver`` ("quadprog" or "daqp"). ``self.qp`` is then the
+    :class:`~biped.control.distribution.ContactQP` (its ``status`` and ``fallbacks``).
     """
 
     def __init__(self, tree: TreeModel, *, big_base: float = 1e6, target: Target | None = None,
-                 gains: Gains | None = None, distribution: str = "statics"):
+                 gains: Gains | None = None, distribution: str = "statics", qp_weights=None,
+                 torque_limits=None, soles=None, qp_solver: str = "quadprog"):
         if not (np.isfinite(big_base) and big_base > 0):
             raise ScenarioError(f"big_base must be a positive finite factor, got {big_base}")
         if distribution not in DISTRIBUTIONS:
             raise ScenarioError(f"unknown wrench distribution {distribution!r}; valid: {DISTRIBUTIONS}")
+        _check_feet(tree)
         self.distribution = distribution
         self.tree = tree
         self.big_base = float(big_base)
@@ -161,35 +181,54 @@ class WorkspaceController:
         n = tree.n_links
         lay = layout(n)
         self._layout = lay
-        mi = np.zeros(4 + 5 * n, dtype=np.int64)
-        mi[0] = n
-        mi[1:3] = tree.feet
-        mi[3] = 1 if distribution == "printed" else 0
-        for j, arr in enumerate((tree.parent, tree.qpos_adr, tree.dof_adr, tree.leg,
-                                 tree.beyond_foot.astype(np.int64))):
-            mi[4 + j * n:4 + (j + 1) * n] = arr
-        mf = np.zeros(lay["model"]["_size"][0])
-        g_bi = tree.G0[0]
-
-        values = {"H": tree.H, "G0": tree.G0, "mass": tree.mass, "inertia": tree.inertia,
-                  "qref": tree.qpos_ref, "gravity": tree.gravity,
-                  "root_qbi": rot_to_quat(np.ascontiguousarray(g_bi[:3, :3])), "big_base": [self.big_base]}
-        for name, (off, shape) in lay["model"].items():
-            if name != "_size":
-                mf[off:off + int(np.prod(shape))] = np.asarray(values[name], dtype=float).reshape(-1)
-        self._mi, self._mf = mi, mf
+        values = {
+            "n": [n], "feet": tree.feet, "mode": [_MODE[distribution]],
+            "parent": tree.parent, "qadr": tree.qpos_adr, "dadr": tree.dof_adr, "leg": tree.leg,
+            "beyond": tree.beyond_foot,
+            "H": tree.H, "G0": tree.G0, "mass": tree.mass, "inertia": tree.inertia,
+            "qref": tree.qpos_ref, "gravity": tree.gravity,
+            "root_qbi": rot_to_quat(np.ascontiguousarray(tree.G0[0][:3, :3])), "big_base": [self.big_base],
+        }
+        self._mi = np.zeros(lay["ints"]["_size"][0], dtype=np.int64)
+        self._mf = np.zeros(lay["model"]["_size"][0])
+        for buf, name in ((self._mi, "ints"), (self._mf, "model")):
+            for key, (off, shape) in lay[name].items():
+                if key != "_size":
+                    buf[off:off + int(np.prod(shape))] = np.asarray(values[key]).reshape(-1)
         self._both = np.ones(2, dtype=np.int64)
         self._contact_buf = np.ones(2, dtype=np.int64)
         self._work = np.zeros(lay["work"]["_size"][0])
         self._out = np.zeros(lay["out"]["_size"][0])
-        # named views of the flat buffers, for the debugging methods below (not the hot path)
-        self._m = {k: mf[o:o + int(np.prod(sh))].reshape(sh)
-                   for k, (o, sh) in lay["model"].items() if k != "_size"}
-        self._w = {k: self._work[o:o + int(np.prod(sh))].reshape(sh)
-                   for k, (o, sh) in lay["work"].items() if k != "_size"}
+        # named views of the buffers, the kernel's own unpack, for the debugging methods below
+        # (not the hot path)
+        _, self._m, self._w, _ = unpack(self._mi, self._mf, self._work, self._out)
         # (slice, shape or None for 1-d) of each output field, in ControllerOutput's order
         self._fields = tuple((slice(o, o + int(np.prod(sh))), sh if len(sh) > 1 else None) for o, sh in (
             lay["out"][k] for k in ("tau", "P1", "z1", "X", "Fd", "Fl_tilde", "Fr_tilde", "Fl", "Fr", "qe")))
+        self.qp = None
+        if distribution == "qp":
+            self._init_qp(qp_weights, torque_limits, soles, qp_solver)
+
+    def _init_qp(self, weights, limits, soles, solver):
+        from biped.control.distribution import ContactQP
+
+        tree = self.tree
+        if soles is None:
+            try:
+                soles = sole_rectangles(tree.source, tuple(tree.body_names[f] for f in tree.feet))
+            except BipedError:
+                raise ScenarioError(
+                    f"distribution 'qp' needs the soles: the tree's source {tree.source!r} is not "
+                    f"a model file; pass soles=biped.model.sole_rectangles(model)") from None
+        lower = upper = None
+        if limits is not None and not limits.unlimited:
+            lim = limits.reorder(tree.joint_names)
+            lower, upper = lim.lower, lim.upper
+        self.qp = ContactQP(tree, soles, weights, lower, upper, solver)
+        out, lay = self._out, self._layout
+        v = {k: out[o:o + int(np.prod(sh))].reshape(sh) for k, (o, sh) in lay["out"].items() if k != "_size"}
+        self._qp_views = (self._w.g, self._w.gl, v["Fd"], v["tau"], v["Fl_tilde"],
+                          v["Fr_tilde"], v["Fl"], v["Fr"])
 
     @classmethod
     def from_mjcf(cls, source: str | PathLike, feet: tuple[str, str] = DEFAULT_FEET, **kwargs
@@ -227,20 +266,47 @@ class WorkspaceController:
         if bad:
             raise StateError(f"non-finite state entries: {', '.join(bad)}; qpos and qvel must be finite")
         a = self.tree.qpos_adr[0] + 3
-        if np.dot(qpos[a:a + 4], qpos[a:a + 4]) < 1e-20:
+        if not np.any(qpos[a:a + 4]):
             raise StateError(f"the root quaternion qpos[{a}:{a + 4}] is zero; it must be a "
                              f"(w, x, y, z) quaternion of nonzero norm (it is normalized)")
+
+    def _unit_quaternion(self, qpos):
+        """A copy of qpos with its root quaternion normalized without overflow or underflow (the
+        kernel normalizes by sqrt(q.q), which fails beyond ~1e154 or below ~1e-154), or None if the
+        quaternion is zero or non-finite, or already of unit norm."""
+        a = self.tree.qpos_adr[0] + 3
+        q = qpos[a:a + 4]
+        m = float(np.max(np.abs(q))) if q.size == 4 else 0.0
+        if not np.isfinite(m) or m == 0.0:
+            return None
+        u = q / m
+        u = u / np.sqrt(u @ u)
+        if np.allclose(u, q, rtol=0.0, atol=1e-12):
+            return None
+        out = qpos.copy()
+        out[a:a + 4] = u
+        return out
 
     def _run(self, qpos, qvel, target, gains, feet_in_contact=None):
         if qpos.shape != (self.tree.nq,) or qvel.shape != (self.tree.nv,):
             self._check_state(qpos, qvel)
         t = (target or self.target).array
         k = (gains or self.gains).array
-        status = compute_kernel(qpos, qvel, t, k, self._contact(feet_in_contact), self._mi, self._mf,
-                                self._work, self._out)
+        try:
+            status = compute_kernel(qpos, qvel, t, k, self._contact(feet_in_contact), self._mi,
+                                    self._mf, self._work, self._out)
+        except ZeroDivisionError:  # numba's float division: a quaternion of overflowing norm
+            status = NONFINITE_RESULT
+        if status in (ZERO_QUATERNION, NONFINITE_RESULT):
+            unit = self._unit_quaternion(qpos)  # a badly scaled quaternion: normalize safely
+            if unit is not None:
+                return self._run(unit, qvel, target, gains, feet_in_contact)
         if status:
             if status in (NONFINITE_STATE, ZERO_QUATERNION):
                 self._check_state(qpos, qvel)
+                a = self.tree.qpos_adr[0] + 3
+                raise StateError(f"the root quaternion qpos[{a}:{a + 4}] = {qpos[a:a + 4].tolist()} "
+                                 f"cannot be normalized in double precision")
             if status == SINGULAR_DISTRIBUTION:
                 raise SingularityError(
                     "wrench distribution: G G^T is singular to working precision (W Alg. 5); it is the "
@@ -250,6 +316,15 @@ class WorkspaceController:
                 raise SingularityError(
                     "the controller produced non-finite values at this state: velocities too large for "
                     "double precision, or a joint axis with zero articulated inertia (W Alg. 3)")
+        if self.qp is not None:
+            g, gl, Fd, tau, Flt, Frt, Fl, Fr = self._qp_views
+            c = self._contact(feet_in_contact)
+            self.qp.build(g, gl, c, Fd)
+            if c[0] == 0 and c[1] == 0:
+                self.qp.x[:] = 0.0
+            else:
+                self.qp.solve()
+            self.qp.finish(c, tau, Flt, Frt, Fl, Fr)
 
     def compute(self, qpos, qvel, target: Target | None = None, gains: Gains | None = None,
                 feet_in_contact: tuple[bool, bool] | None = None) -> ControllerOutput:
@@ -281,24 +356,23 @@ class WorkspaceController:
         qpos = np.ascontiguousarray(qpos, dtype=float)
         qvel = np.zeros(self.tree.nv) if qvel is None else np.ascontiguousarray(qvel, dtype=float)
         self._check_state(qpos, qvel)
-        return qpos, qvel
+        unit = self._unit_quaternion(qpos)
+        return (qpos if unit is None else unit), qvel
 
     def _kinematics(self, qpos, qvel):
         """W Alg. 1 and Alg. 2 alone (the kernel's own functions) into the work buffer."""
         t, m, w = self.tree, self._m, self._w
-        tmp44 = w["tmp66"].reshape(-1)[:48].reshape(3, 4, 4)
-        alg1_initialize(qpos, qvel, t.qpos_adr[0], t.dof_adr[0], m["G0"][0], m["root_qbi"], m["mass"],
-                        m["inertia"], m["gravity"], w["g"], w["V"], w["a"], w["b"], w["quat"])
-        alg2_velocity_propagation(qpos, qvel, t.parent, t.qpos_adr, t.dof_adr, m["H"], m["G0"],
-                                  m["qref"], m["mass"], m["inertia"], m["gravity"], w["g"], w["gl"],
-                                  w["V"], w["a"], w["b"], tmp44)
+        alg1_initialize(qpos, qvel, t.qpos_adr[0], t.dof_adr[0], m.G0[0], m.root_qbi, m.mass, m.inertia,
+                        m.gravity, w.g, w.V, w.a, w.b, w.q_root, w.q01)
+        alg2_velocity_propagation(qpos, qvel, t.parent, t.qpos_adr, t.dof_adr, m.H, m.G0, m.qref, m.mass,
+                                  m.inertia, m.gravity, w.g, w.gl, w.V, w.a, w.b, w.E)
 
     def link_poses(self, qpos) -> np.ndarray:
         """(n_links, 4, 4) world poses ``g_{0,k}`` of every link's COM principal frame (MuJoCo's
         ``xipos``/``ximat``), W Alg. 1-2. For checking and debugging; allocates."""
         qpos, qvel = self._state(qpos, None)
         self._kinematics(qpos, qvel)
-        return self._w["g"].copy()
+        return self._w.g.copy()
 
     def link_velocities(self, qpos, qvel) -> np.ndarray:
         """(n_links, 6) body velocities ``V_k^b = [v; w]`` of every link (W Alg. 1-2): velocity of
@@ -306,7 +380,7 @@ class WorkspaceController:
         principal frame [m/s, rad/s]. For checking and debugging; allocates."""
         qpos, qvel = self._state(qpos, qvel)
         self._kinematics(qpos, qvel)
-        return self._w["V"].copy()
+        return self._w.V.copy()
 
     def leg_torques(self, qpos, wrench_left, wrench_right) -> np.ndarray:
         """W Alg. 6 alone: joint torques (n_joints,) [N m] with which the legs exert the wrenches
@@ -320,15 +394,30 @@ class WorkspaceController:
         self._kinematics(qpos, qvel)  # the joint transforms g_{k.i,k.o}
         F = np.zeros((t.n_links, 6))
         tau = np.zeros(t.n_links - 1)
-        alg6_torques(t.parent, self._m["H"], t.leg, t.beyond_foot.astype(np.int64), self._w["gl"],
-                     fl, fr, F, tau)
+        alg6_torques(t.parent, self._m.H, t.leg, t.beyond_foot.astype(np.int64), self._w.gl, fl, fr, F,
+                     tau)
         return tau
 
     def torques(self, qpos: np.ndarray, qvel: np.ndarray, target: Target | None = None,
                 gains: Gains | None = None, feet_in_contact: tuple[bool, bool] | None = None
                 ) -> np.ndarray:
-        """Hot path: joint torques only, as a view into the controller's buffer (overwritten by the
-        next call; copy it to keep it). qpos/qvel must be contiguous float64 arrays.
-        ``feet_in_contact`` as in :meth:`compute`."""
+        """Joint torques (n_joints,) [N m] as a VIEW OF THE CONTROLLER'S REUSED OUTPUT BUFFER: the
+        next :meth:`torques` or :meth:`compute` call overwrites it; copy it to keep it.
+
+        The hot path: W Alg. 1-6 with no allocation. qpos/qvel must be contiguous float64
+        arrays; ``target``, ``gains`` and ``feet_in_contact`` as in :meth:`compute`, which
+        returns fresh arrays instead."""
         self._run(qpos, qvel, target, gains, feet_in_contact)
         return self._out[: self.tree.n_links - 1]
+
+
+def _check_feet(tree: TreeModel) -> None:
+    """The feet must be two different links below the root, each ending its own leg (W Alg. 3, 5
+    and 6 fix them to the ground and push the central body through the legs above them)."""
+    feet = [int(f) for f in np.asarray(tree.feet).reshape(-1)]
+    if len(feet) != 2 or feet[0] == feet[1] or not all(0 <= f < tree.n_links for f in feet):
+        raise ModelError(f"the tree must name two different feet, got link indices {feet}")
+    for f in feet:
+        if f == 0:
+            raise ModelError(f"foot {tree.body_names[0]!r} is the floating root (the central body); "
+                             f"the feet must be bodies below it, one at the end of each leg")

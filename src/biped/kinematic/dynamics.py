@@ -42,13 +42,14 @@ _RZ_PI = np.diag([-1.0, -1.0, 1.0])
 
 
 def load_biped(name: str = "wendlandt"):
-    """The biped MJCF as a ``mujoco.MjModel`` with contacts disabled (the feet's wrenches are
-    solved for, not simulated)."""
+    """The biped MJCF (a shipped model's name or a checked MJCF path, see
+    :func:`biped.models.subject.resolve`) as a ``mujoco.MjModel`` with contacts disabled (the
+    feet's wrenches are solved for, not simulated)."""
     import mujoco
 
-    from biped import models
+    from biped.models.subject import resolve
 
-    m = mujoco.MjModel.from_xml_path(str(models.path(name)))
+    m = mujoco.MjModel.from_xml_path(str(resolve(name)))
     m.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
     return m
 
@@ -106,7 +107,8 @@ def _check_dims(model, names: _Names, dims) -> None:
     for k, (b, f) in pairs.items():
         if abs(b - f) > 1e-4:
             raise ModelError(f"figure {k} = {f:.6g} m differs from the biped's {b:.6g} m; build the figure "
-                             f"with FigureDims.from_anthropometry() to run it on the biped")
+                             f"with FigureDims.from_anthropometry() (FigureDims.from_mjcf(path) for another "
+                             f"model) to run it on the biped")
 
 
 def biped_qpos(model, motion_or_arrays, names: _Names | None = None) -> np.ndarray:
@@ -150,6 +152,7 @@ class InverseDynamics:
         residual: (T, 6) root force [N] (world) and torque [N m] (central-body frame) that no foot
             supplies (nonzero only in flight).
         mass: total mass of the biped [kg].
+        gravity: the biped model's gravitational acceleration (along -z) [m/s^2].
         qpos, qvel, qacc: the biped trajectory used, (T, nq), (T, nv), (T, nv).
         sole_half: half length and half width of a sole [m].
     """
@@ -164,6 +167,7 @@ class InverseDynamics:
     stance: np.ndarray
     residual: np.ndarray
     mass: float
+    gravity: float
     qpos: np.ndarray
     qvel: np.ndarray
     qacc: np.ndarray
@@ -180,7 +184,7 @@ class InverseDynamics:
         """Peaks and physical-plausibility counts (SI units)."""
         st = self.stance
         fz = self.grf[..., 2]
-        mg = self.mass * 9.81
+        mg = self.mass * self.gravity
         half_x, half_y = self.sole_half
         with np.errstate(invalid="ignore"):
             fr = self.friction_ratio()
@@ -308,4 +312,5 @@ def inverse_dynamics(motion: Motion, model=None, h: float = 1e-3) -> InverseDyna
         residual[t] = qf[r0:r0 + 6]
         torques[t] = qf[vidx]
     return InverseDynamics(times, tuple(names.hinges), torques, grf, grm, cop, centres, stance, residual,
-                           float(np.sum(model.body_mass)), qpos, qvel, qacc, names.sole_half)
+                           float(np.sum(model.body_mass)), -float(model.opt.gravity[2]), qpos, qvel,
+                           qacc, names.sole_half)

@@ -38,7 +38,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from biped.errors import ModelError, StateError, unknown_name
-from biped.spatial import rot_to_quat
 
 __all__ = [
     "JOINT_NAMES",
@@ -49,7 +48,6 @@ __all__ = [
     "landmarks",
     "part_geoms",
     "part_poses",
-    "replay_geoms",
 ]
 
 #: The 12 joint angles that drive the hierarchy, in the column order of every angle array.
@@ -136,6 +134,33 @@ class FigureDims:
             lumbar=0.15 * d["trunk"], trunk=d["trunk"], head=d["head"],
             shoulder_height=d["shoulder_z"], shoulder_half_width=d["shoulder_y"],
             upper_arm=d["upper_arm"], forearm=d["forearm"], hand=d["hand"], scale=s)
+
+    @classmethod
+    def from_mjcf(cls, model) -> FigureDims:
+        """The figure of another biped model (a shipped name or an MJCF path with W's structure,
+        e.g. written by ``biped model``): legs and feet exactly as in the file (hip spacing, thigh,
+        shank, ankle height and the heel/toe sole boxes); the upper body, which the figure shows
+        but the inverse dynamics does not use, is the default figure's scaled by the ratio of leg
+        lengths."""
+        import mujoco
+
+        from biped.models.subject import resolve
+
+        m = mujoco.MjModel.from_xml_path(str(resolve(model)))
+        heel, toe = m.geom("left_heel"), m.geom("left_toe")
+        xb = float(heel.pos[0] + heel.size[0])  # back of the heel, ankle at x = 0
+        xf = float(toe.pos[0] - toe.size[0])  # toe tip (the biped faces -x)
+        thigh = -float(m.body("left_shank").pos[2])
+        shank = -float(m.body("left_ankle_1").pos[2])
+        d = cls.from_anthropometry()
+        k = (thigh + shank) / d.leg
+        return cls(
+            thigh=thigh, shank=shank, foot=xb - xf, heel_back=xb,
+            ankle_height=-float(heel.pos[2] - heel.size[2]), foot_width=2.0 * float(heel.size[1]),
+            hip_half_width=-float(m.body("left_hip_1").pos[1]),
+            lumbar=d.lumbar * k, trunk=d.trunk * k, head=d.head * k,
+            shoulder_height=d.shoulder_height * k, shoulder_half_width=d.shoulder_half_width * k,
+            upper_arm=d.upper_arm * k, forearm=d.forearm * k, hand=d.hand * k, scale=d.scale * k)
 
 
 @dataclass(frozen=True)
@@ -293,25 +318,6 @@ def landmarks(dims: FigureDims, poses: FigurePoses) -> dict:
         out[f"{side}_toe"] = p + np.einsum("tij,j->ti", R, [dims.toe_front, 0.0, -dims.ankle_height])
         out[f"{side}_hip"] = poses.part(f"{side}_thigh")[0]
     return out
-
-
-def replay_geoms(dims: FigureDims, poses: FigurePoses):
-    """The figure as :class:`biped.viz.replay.ReplayGeom` shapes with world poses.
-
-    Returns ``(geoms (15,), pos (T, 15, 3), quat (T, 15, 4))``, quaternions (w, x, y, z).
-    """
-    from biped.viz.replay import ReplayGeom
-
-    shapes = part_geoms(dims)
-    geoms, pos = [], np.empty_like(poses.pos)
-    quat = np.empty(poses.pos.shape[:2] + (4,))
-    for i, p in enumerate(PARTS):
-        kind, size, centre = shapes[p.name]
-        geoms.append(ReplayGeom(p.name, kind, size, p.rgba))
-        pos[:, i] = poses.pos[:, i] + np.einsum("tij,j->ti", poses.rot[:, i], centre)
-        for t in range(poses.pos.shape[0]):
-            quat[t, i] = rot_to_quat(np.ascontiguousarray(poses.rot[t, i]))
-    return tuple(geoms), pos, quat
 
 
 def _f(v) -> str:

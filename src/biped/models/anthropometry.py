@@ -5,10 +5,16 @@ documents how its numbers were made and regenerates it (``python -m biped.models
 A test checks that the shipped file equals what this module writes.
 
 Source of the segment parameters: P. de Leva, "Adjustments to Zatsiorsky-Seluyanov's segment
-inertia parameters", J. Biomechanics 29(9):1223-1230, 1996, Table 4 (males; sample stature
-1.741 m). Lengths, centre-of-mass positions (fraction of segment length from the proximal end)
-and radii of gyration (fraction of segment length) are de Leva's. Assumptions that de Leva's
-table does not cover are stated below (ASSUMPTIONS) and in docs/model.md.
+inertia parameters", J. Biomechanics 29(9):1223-1230, 1996, Table 4 (males: sample stature
+1.741 m, mass 73.0 kg; females: 1.735 m, 61.9 kg). Lengths, centre-of-mass positions (fraction of
+segment length from the proximal end) and radii of gyration (fraction of segment length) are de
+Leva's. Assumptions that de Leva's table does not cover are stated below (ASSUMPTIONS) and in
+docs/model.md.
+
+The same code path writes W's shipped biped (:data:`W_SUBJECT`) and any subject's
+(:class:`Subject`, ``biped model --stature M --mass KG --sex male|female``): lengths scale with
+stature / de Leva's sample stature of that sex, masses with the body mass, and the central-body
+COM height of W's initial posture is the one that puts the soles 5 mm above the floor.
 
 The biped faces -x: W's initial body tilt is "5 deg about -y" and the joint angles
 40 - 77.4595 + 42.4595 = 5 deg cancel it, so the sagittal joints turn about +y; with human
@@ -23,6 +29,8 @@ from pathlib import Path
 
 import numpy as np
 
+from biped.models import LEG_JOINTS, W_INITIAL_ANGLES_DEG, W_INITIAL_COM_M, W_INITIAL_TILT_DEG
+
 #: de Leva (1996) Table 4, males: (length at 1.741 m [m], mass fraction, CM from proximal end,
 #: r_sagittal, r_transverse, r_longitudinal) with r as fractions of the segment length.
 DE_LEVA_MALE = {
@@ -36,6 +44,38 @@ DE_LEVA_MALE = {
     "foot": (0.2581, 0.0137, 0.4415, 0.257, 0.245, 0.124),  # HEEL-TTIP
 }
 DE_LEVA_STATURE = 1.741
+
+#: de Leva (1996) Table 4, females, same columns and segment definitions as :data:`DE_LEVA_MALE`.
+#: The printed mass fractions sum to 0.9999 (rounding); :func:`mass_fractions` rescales them to 1.
+#: Cross-checked against two independent transcriptions of Table 4; they differ only in the head's
+#: longitudinal radius (26.1 % and 26.3 %), 26.1 % is used (as for males).
+DE_LEVA_FEMALE = {
+    "head": (0.2437, 0.0668, 0.4841, 0.271, 0.295, 0.261),  # VERT-CERV
+    "trunk": (0.6148, 0.4257, 0.4964, 0.307, 0.292, 0.147),  # CERV-MIDH
+    "upper_arm": (0.2751, 0.0255, 0.5754, 0.278, 0.260, 0.148),  # SJC-EJC
+    "forearm": (0.2643, 0.0138, 0.4559, 0.261, 0.257, 0.094),  # EJC-WJC
+    "hand": (0.0780, 0.0056, 0.7474, 0.531, 0.454, 0.335),  # WJC-MET3
+    "thigh": (0.3685, 0.1478, 0.3612, 0.369, 0.364, 0.162),  # HJC-KJC
+    "shank": (0.4323, 0.0481, 0.4416, 0.271, 0.267, 0.093),  # KJC-LMAL
+    "foot": (0.2283, 0.0129, 0.4014, 0.299, 0.279, 0.139),  # HEEL-TTIP
+}
+DE_LEVA = {"male": DE_LEVA_MALE, "female": DE_LEVA_FEMALE}
+#: de Leva's sample means (stature [m], body mass [kg]) per sex.
+DE_LEVA_SAMPLE = {"male": (1.741, 73.0), "female": (1.735, 61.9)}
+SEXES = ("male", "female")
+#: Segments of the whole body: each arm and leg segment counts twice.
+_COUNT = {"head": 1, "trunk": 1, "upper_arm": 2, "forearm": 2, "hand": 2, "thigh": 2, "shank": 2,
+          "foot": 2}
+
+
+def mass_fractions(sex: str = "male") -> dict[str, float]:
+    """de Leva's segment mass fractions for ``sex``, rescaled so that the whole body sums to 1
+    (males: printed sum 1.0000, unchanged; females: printed sum 0.9999)."""
+    table = DE_LEVA[sex]
+    total = sum(_COUNT[k] * v[1] for k, v in table.items())
+    if sex == "male":
+        return {k: v[1] for k, v in table.items()}  # sums to 1.0 exactly in floating point
+    return {k: v[1] / total for k, v in table.items()}
 
 ASSUMPTIONS = {
     "body_mass_kg": 73.0,  # de Leva's male sample mean
@@ -55,21 +95,24 @@ ASSUMPTIONS = {
     "joint_damping_Nms_per_rad": 1.0,
 }
 
-#: W's initial state (section 4).
-INITIAL_COM = (0.0, 0.0, 1.035)
-INITIAL_TILT_DEG = 5.0  # about -y
-INITIAL_ANGLES_DEG = (0.0, 40.0, 0.0, -77.4595, 0.0, 42.4595)
+#: W's initial state (section 4), defined in biped.models; the legs start alike.
+INITIAL_COM = W_INITIAL_COM_M
+INITIAL_TILT_DEG = W_INITIAL_TILT_DEG  # about -y
+INITIAL_ANGLES_DEG = W_INITIAL_ANGLES_DEG[:6]
+assert W_INITIAL_ANGLES_DEG[6:] == INITIAL_ANGLES_DEG
 
 #: Per leg, in W's joint order (left 2..7, right 8..13): (name, axis for the left leg).
 #: The right leg mirrors the frontal-plane axes (abduction, rotation, inversion).
-JOINTS = (
-    ("hip_abduction", (-1.0, 0.0, 0.0)),
-    ("hip_flexion", (0.0, 1.0, 0.0)),
-    ("hip_rotation", (0.0, 0.0, -1.0)),  # internal rotation positive
-    ("knee", (0.0, 1.0, 0.0)),  # positive = extension; W's -77.5 deg is flexion
-    ("ankle_inversion", (1.0, 0.0, 0.0)),
-    ("ankle_dorsiflexion", (0.0, 1.0, 0.0)),
-)
+_LEFT_AXES = {
+    "hip_abduction": (-1.0, 0.0, 0.0),
+    "hip_flexion": (0.0, 1.0, 0.0),
+    "hip_rotation": (0.0, 0.0, -1.0),  # internal rotation positive
+    "knee": (0.0, 1.0, 0.0),  # positive = extension; W's -77.5 deg is flexion
+    "ankle_inversion": (1.0, 0.0, 0.0),
+    "ankle_dorsiflexion": (0.0, 1.0, 0.0),
+}
+JOINTS = tuple((name, _LEFT_AXES[name]) for name in LEG_JOINTS)
+
 MIRRORED = {"hip_abduction", "hip_rotation", "ankle_inversion"}
 
 
@@ -80,11 +123,12 @@ class Segment:
     inertia: np.ndarray  # principal moments about x, y, z at the COM [kg m^2]
 
 
-def _seg(name: str, scale: float, mass_total: float, axis: int, sign: float = -1.0):
+def _seg(name: str, scale: float, mass_total: float, axis: int, sign: float = -1.0,
+         sex: str = "male"):
     """A de Leva segment along body axis ``axis`` (pointing ``sign``) from its proximal end."""
-    L0, mf, cm, r_sag, r_tr, r_long = DE_LEVA_MALE[name]
+    L0, _, cm, r_sag, r_tr, r_long = DE_LEVA[sex][name]
     L = L0 * scale
-    m = mf * mass_total
+    m = mass_fractions(sex)[name] * mass_total
     com = np.zeros(3)
     com[axis] = sign * cm * L
     # axes: x anteroposterior (sagittal axis), y mediolateral (transverse axis), z vertical
@@ -104,15 +148,15 @@ def _combine(parts):
     return m, c, inertia
 
 
-def central_body(scale: float, mass_total: float):
+def central_body(scale: float, mass_total: float, sex: str = "male"):
     """Head, arms and trunk (HAT) as one rigid body; returns (mass, COM above MIDH, inertia, dims)."""
     A = ASSUMPTIONS
-    H = DE_LEVA_STATURE * scale
-    L_tr, trunk = _seg("trunk", scale, mass_total, 2, -1.0)
-    L_hd, head = _seg("head", scale, mass_total, 2, -1.0)
-    L_ua, uarm = _seg("upper_arm", scale, mass_total, 2, -1.0)
-    L_fa, farm = _seg("forearm", scale, mass_total, 2, -1.0)
-    L_ha, hand = _seg("hand", scale, mass_total, 2, -1.0)
+    H = DE_LEVA_SAMPLE[sex][0] * scale
+    L_tr, trunk = _seg("trunk", scale, mass_total, 2, -1.0, sex)
+    L_hd, head = _seg("head", scale, mass_total, 2, -1.0, sex)
+    L_ua, uarm = _seg("upper_arm", scale, mass_total, 2, -1.0, sex)
+    L_fa, farm = _seg("forearm", scale, mass_total, 2, -1.0, sex)
+    L_ha, hand = _seg("hand", scale, mass_total, 2, -1.0, sex)
     cerv = np.array([0.0, 0.0, L_tr])  # MIDH at the origin
     vert = cerv + [0, 0, L_hd]
     parts = [(trunk, cerv), (head, vert)]
@@ -122,8 +166,8 @@ def central_body(scale: float, mass_total: float):
         sjc = np.array([0.0, side * sj_y, sj_z])
         parts += [(uarm, sjc), (farm, sjc - [0, 0, L_ua]), (hand, sjc - [0, 0, L_ua + L_fa])]
     m, c, inertia = _combine(parts)
-    dims = dict(trunk=L_tr, head=L_hd, upper_arm=L_ua, forearm=L_fa, hand=L_ha,
-                shoulder_z=sj_z, shoulder_y=sj_y)
+    dims = {"trunk": L_tr, "head": L_hd, "upper_arm": L_ua, "forearm": L_fa, "hand": L_ha,
+            "shoulder_z": sj_z, "shoulder_y": sj_y}
     return m, c, inertia, dims
 
 
@@ -162,24 +206,101 @@ def _f(x) -> str:
     return " ".join(f"{v:.6g}" for v in np.atleast_1d(x))
 
 
-def build_xml() -> str:
-    """The MJCF text of W's biped (see the module docstring)."""
+#: Adult ranges accepted for a subject (de Leva's regressions come from young adults; outside
+#: these the scaled segment parameters are an extrapolation the project does not offer).
+STATURE_RANGE_M = (1.40, 2.10)
+MASS_RANGE_KG = (35.0, 150.0)
+BMI_RANGE = (15.0, 45.0)
+N_INTERMEDIATE = 6  # W's light hip (2 per leg) and ankle (1 per leg) bodies
+
+
+@dataclass(frozen=True)
+class Subject:
+    """A subject for :func:`build_xml`: stature [m], total body mass [kg] and sex.
+
+    The model's total mass is ``mass_kg``: de Leva's fractions apply to ``mass_kg`` minus the six
+    intermediate hip and ankle bodies (0.01 kg each). Out-of-range values raise ModelError.
+    """
+
+    stature_m: float
+    mass_kg: float
+    sex: str = "male"
+
+    def __post_init__(self):
+        from biped.errors import ModelError
+
+        if self.sex not in SEXES:
+            raise ModelError(f"sex must be one of {', '.join(map(repr, SEXES))} (de Leva 1996 "
+                             f"Table 4); got {self.sex!r}")
+        for name, v, (lo, hi), unit in (("stature", self.stature_m, STATURE_RANGE_M, "m"),
+                                        ("mass", self.mass_kg, MASS_RANGE_KG, "kg")):
+            if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v) \
+                    or not lo <= v <= hi:
+                raise ModelError(f"{name} must be in [{lo:g}, {hi:g}] {unit} (adult humans, the "
+                                 f"range de Leva's parameters are scaled over); got {v!r}")
+        bmi = self.mass_kg / self.stature_m ** 2
+        if not BMI_RANGE[0] <= bmi <= BMI_RANGE[1]:
+            raise ModelError(f"mass / stature^2 = {bmi:.1f} kg/m^2 is outside [{BMI_RANGE[0]:g}, "
+                             f"{BMI_RANGE[1]:g}] kg/m^2 (adult body mass index range accepted)")
+
+    @property
+    def scale(self) -> float:
+        """Stature / de Leva's sample stature of the same sex (all lengths scale with it)."""
+        return self.stature_m / DE_LEVA_SAMPLE[self.sex][0]
+
+    @property
+    def segment_mass_kg(self) -> float:
+        """The mass de Leva's fractions are applied to [kg]."""
+        return self.mass_kg - N_INTERMEDIATE * ASSUMPTIONS["intermediate_body_mass_kg"]
+
+
+def w_subject() -> Subject:
+    """The subject of W's shipped biped: male, stature solved so that W's initial posture puts the
+    soles 5 mm above the floor with the central-body COM at W's 1.035 m (:func:`solve_scale`),
+    de Leva's 73.0 kg male mean plus the six 0.01 kg intermediate bodies."""
     A = ASSUMPTIONS
-    s = solve_scale()
-    H = DE_LEVA_STATURE * s
-    M = A["body_mass_kg"]
-    m1, c1, I1, dims = central_body(s, M)
+    return Subject(DE_LEVA_STATURE * solve_scale(),
+                   A["body_mass_kg"] + N_INTERMEDIATE * A["intermediate_body_mass_kg"], "male")
+
+
+def initial_com_height(subject: Subject) -> float:
+    """Central-body COM height [m] of W's initial posture (5 deg tilt, W's joint angles, feet
+    flat) with the soles ``sole_clearance_m`` above the floor (the sagittal chain in closed form)."""
+    A = ASSUMPTIONS
+    s, sex = subject.scale, subject.sex
+    _, c, _, _ = central_body(s, subject.segment_mass_kg, sex)
+    tilt = math.radians(INITIAL_TILT_DEG)
+    th = [math.radians(a) for a in INITIAL_ANGLES_DEG]
+    L1 = DE_LEVA[sex]["thigh"][0] * s
+    L2 = DE_LEVA[sex]["shank"][0] * s
+    h_a = A["ankle_height_fraction_of_stature"] * subject.stature_m
+    return (A["sole_clearance_m"] + h_a + L2 * math.cos(-tilt + th[1] + th[3])
+            + L1 * math.cos(-tilt + th[1]) + c[2] * math.cos(tilt))
+
+
+def build_xml(subject: Subject | None = None) -> str:
+    """The MJCF text of W's biped for ``subject`` (W's shipped biped if None; see the module
+    docstring). Same bodies, joints, axes, actuators and keyframe for every subject."""
+    A = ASSUMPTIONS
+    subject = subject or w_subject()
+    sex = subject.sex
+    s = subject.scale
+    H = subject.stature_m
+    M = subject.segment_mass_kg
+    table = DE_LEVA[sex]
+    com0 = (0.0, 0.0, initial_com_height(subject))
+    m1, c1, I1, dims = central_body(s, M, sex)
     evals, evecs = np.linalg.eigh(I1)
     assert np.allclose(evecs @ np.diag(evals) @ evecs.T, I1)
     # the HAT inertia is diagonal in the body axes by symmetry (the arms hang in the frontal plane)
     assert np.allclose(I1, np.diag(np.diag(I1)), atol=1e-9)
-    L1, thigh = _seg("thigh", s, M, 2, -1.0)
-    L2, shank = _seg("shank", s, M, 2, -1.0)
-    Lf, foot = _seg("foot", s, M, 0, -1.0)
+    L1, thigh = _seg("thigh", s, M, 2, -1.0, sex)
+    L2, shank = _seg("shank", s, M, 2, -1.0, sex)
+    Lf, foot = _seg("foot", s, M, 0, -1.0, sex)
     h_a = A["ankle_height_fraction_of_stature"] * H
     heel_x = A["heel_to_ankle_fraction_of_foot"] * Lf  # heel behind (+x of) the ankle
     toe_x = heel_x - Lf
-    foot_com = np.array([heel_x - DE_LEVA_MALE["foot"][2] * Lf, 0.0, -0.5 * h_a])
+    foot_com = np.array([heel_x - table["foot"][2] * Lf, 0.0, -0.5 * h_a])
     hip_y = A["hip_half_width_fraction_of_stature"] * H
     mi, Ii = A["intermediate_body_mass_kg"], A["intermediate_body_inertia_kgm2"]
     sole_t = 0.02
@@ -238,10 +359,10 @@ def build_xml() -> str:
         f'    <motor name="{side}_{n}" joint="{side}_{n}"/>' for side in ("left", "right") for n, _ in JOINTS)
     return f"""<!--
   Wendlandt (1997) biped: 13 rigid bodies, 18 DOF. Generated by biped.models.anthropometry; do not edit.
-  Segment parameters: P. de Leva, J. Biomech. 29(9):1223-1230, 1996, Table 4 (males), scaled to a
-  stature of {H:.4f} m (scale {s:.5f} of de Leva's 1.741 m) and a body mass of {M} kg, so that W's
+  Segment parameters: P. de Leva, J. Biomech. 29(9):1223-1230, 1996, Table 4 ({sex}s), scaled to a
+  stature of {H:.4f} m (scale {s:.5f} of de Leva's {DE_LEVA_SAMPLE[sex][0]} m) and a body mass of {round(M, 9)} kg, so that W's
   initial posture (joint angles {angles} deg, central body tilted {INITIAL_TILT_DEG} deg about -y,
-  its COM at {INITIAL_COM[2]} m) puts both soles flat and {A['sole_clearance_m']} m above the floor.
+  its COM at {com0[2]:.6g} m) puts both soles flat and {A['sole_clearance_m']} m above the floor.
   Central body (link 1) = head + arms + trunk of de Leva. Intermediate hip/ankle bodies: {mi} kg.
   Other assumptions: ankle height {A['ankle_height_fraction_of_stature']} H and foot breadth 0.055 H
   (Winter 2009); the ankle {A['heel_to_ankle_fraction_of_foot']} of the foot length from the heel;
@@ -261,7 +382,7 @@ def build_xml() -> str:
     </default>
   </default>
   <worldbody>
-    <body name="central_body" pos="{_f(INITIAL_COM)}" quat="{_f(q0)}">
+    <body name="central_body" pos="{_f(com0)}" quat="{_f(q0)}">
       <freejoint name="root"/>
       <inertial pos="0 0 0" mass="{m1:.6g}" diaginertia="{_f(np.diag(I1))}"/>
       <geom name="trunk" type="box" pos="0 0 {z0 + tr / 2:.6g}" size="{0.1 * s:.4g} {0.17 * s:.4g} {tr / 2:.6g}" rgba="0.8 0.35 0.3 1"/>
@@ -274,15 +395,16 @@ def build_xml() -> str:
 {actuators}
   </actuator>
   <keyframe>
-    <key name="wendlandt_initial" qpos="{_f(INITIAL_COM)} {_f(q0)} {angles_rad}"/>
+    <key name="wendlandt_initial" qpos="{_f(com0)} {_f(q0)} {angles_rad}"/>
   </keyframe>
 </mujoco>
 """
 
 
-def write(path: Path | None = None) -> Path:
+def write(path: Path | None = None, subject: Subject | None = None) -> Path:
+    """Write :func:`build_xml` of ``subject`` to ``path`` (default: the shipped ``wendlandt.xml``)."""
     path = path or Path(__file__).with_name("wendlandt.xml")
-    path.write_text(build_xml())
+    path.write_text(build_xml(subject))
     return path
 
 

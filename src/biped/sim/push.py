@@ -1,44 +1,58 @@
 """W section 4 closed loop on MuJoCo: the biped rises to its set point while the block hits it.
 
->>> from biped.sim import Scenario, simulate, write_outputs
+>>> from biped.sim import Scenario, simulate
 >>> result = simulate(Scenario())          # W's defaults, 3 s
 >>> result.recovered, result.final_com_error_m
+>>> from biped.outputs.push import write_outputs
 >>> write_outputs(result, "runs/mine")      # summary.json, trajectory.csv, figures, video, replay
 
 Loop (one control period ``1 / control_rate_hz``): read the biped's qpos/qvel (its own layout,
-picked out of the scene by name), compute the torques, hold them for ``control_substeps``
+picked out of the scene by name), ask the policy for torques, hold them for ``control_substeps``
 physics steps (zero-order hold), record. Row k of the trajectory is the state at ``t_k = k / rate``
 and the torques computed from it (applied on [t_k, t_k+1)). A fall ends the run early; it is a
 result (``fell = True``), not an exception.
+
+A policy is any callable ``policy(t, qpos_biped (19,), qvel_biped (18,), feet (left, right))
+-> torques (12,)`` [N m] in ``scene.joint_names`` order: :func:`controller_policy` (W's controller
+or the joint-PD baseline, from :func:`biped.control.policy.make_policy`) or
+:class:`RecordedTorques` (an open-loop replay). :func:`run_closed_loop` runs any of them.
 """
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import mujoco
 import numpy as np
 
-from biped.errors import BipedError
+from biped.control.distribution import QPWeights
+from biped.control.limits import TorqueLimits
+from biped.control.policy import PolicyConfig, make_policy, symmetric_limits
+from biped.control.workspace import Gains, Target
+from biped.errors import BipedError, ScenarioError
+from biped.models import subject
 from biped.sim.contact import SOLE_GEOMS, ContactMonitor
 from biped.sim.scenario import Scenario
 from biped.sim.scene import Scene, build_scene, initial_state, tilt_quat
 
 _BADQACC = int(mujoco.mjtWarning.mjWARN_BADQACC)
 
+#: The foot bodies whose poses a result records, (left, right).
+FOOT_BODIES = ("left_foot", "right_foot")
+
 __all__ = [
+    "FOOT_BODIES",
     "PushResult",
-    "make_controller",
+    "RecordedTorques",
+    "controller_policy",
+    "orientation_error_deg",
+    "policy_config",
     "replay_torques",
+    "run_closed_loop",
     "simulate",
-    "summary_dict",
-    "write_outputs",
-    "write_trajectory_csv",
 ]
 
 
@@ -46,11 +60,14 @@ __all__ = [
 class PushResult:
     """One push run, sampled at the control rate (n rows; world frame, SI units).
 
-    times (n,) [s]; qpos (n, nq_scene) the scene's qpos (biped + block, for replays);
-    com (n, 3) central-body COM [m]; quat (n, 4) its orientation (w, x, y, z);
+    times (n,) [s]; qpos (n, nq_scene) / qvel (n, nv_scene) the scene's state (biped + block);
+    com (n, 3) central-body COM [m] (MuJoCo's ``xipos`` as left by the last physics step, i.e.
+    at t_k - physics_timestep_s for k > 0); quat (n, 4) the central body's orientation (w, x, y, z);
     joint_angles (n, 12) [rad] and torques (n, 12) [N m] in ``joint_names`` order (row k's torques
-    are those held on [t_k, t_k+1)); block (n, 3) block centre [m]; contacts (n, 4) bool sole-part
-    contacts in :data:`biped.sim.contact.SOLE_GEOMS` order.
+    are those held on [t_k, t_k+1)); block (n, 3) block centre [m]; block_velocity (n, 3) [m/s];
+    contacts (n, 4) bool sole-part contacts in :data:`biped.sim.contact.SOLE_GEOMS` order;
+    feet_pos (n, 2, 3) [m] and feet_quat (n, 2, 4) the poses of the :data:`FOOT_BODIES` frames
+    (MuJoCo kinematics of ``qpos``).
     """
 
     scenario: Scenario
@@ -80,6 +97,10 @@ class PushResult:
     realtime_factor: float
     controller_error: str | None = None
     diverged: str | None = None
+    qvel: np.ndarray | None = None
+    block_velocity: np.ndarray | None = None
+    feet_pos: np.ndarray | None = None
+    feet_quat: np.ndarray | None = None
     extra: dict = field(default_factory=dict)
 
     @property
@@ -98,57 +119,119 @@ def orientation_error_deg(quat, target_quat) -> float:
     return math.degrees(2.0 * math.acos(min(1.0, c)))
 
 
-def workspace_policy(scenario: Scenario, tree=None):
-    """W's controller for ``scenario``'s set point, gains and support, and its policy
-    ``raw(qpos_biped, qvel_biped, feet) -> torques`` in ``ctrl.joint_names`` order (a view into the
-    controller's buffer). The feet flags are used when ``scenario.support`` is "sensed"; with
-    "fixed" both feet are taken as fixed (W). ``tree`` defaults to the shipped biped's."""
-    import biped.models
-    from biped.control import Gains, Target, WorkspaceController
-    from biped.model import TreeModel
+# ---------------------------------------------------------------------------------------------
+# policies
 
+
+def scenario_limits(scenario: Scenario) -> TorqueLimits | None:
+    """The scenario's ``torque_limits`` (``"none"``, one number or 12) as bounds, or None."""
+    if scenario.torque_limits == "none":
+        return None
+    return symmetric_limits(scenario.torque_limits)
+
+
+def policy_config(scenario: Scenario, *, gain_scale: float = 1.0,
+                  torque_limits: TorqueLimits | None = None) -> PolicyConfig:
+    """The :class:`~biped.control.policy.PolicyConfig` of ``scenario``: its controller, W's set
+    point and gains as the scenario gives them, its support mode, the joint-PD holding the initial
+    joint angles, its control period, and ``torque_limits`` (default: the scenario's own)."""
     target = Target.wendlandt(com=scenario.target_com_m, tilt_deg=scenario.target_tilt_deg,
                               axis=scenario.target_axis)
     gains = Gains(kp_com=scenario.kp_com, kv_com=scenario.kv_com, kp_rot=scenario.kp_rot,
                   kv_rot=scenario.kv_rot)
-    tree = tree or TreeModel.from_mjcf(biped.models.path("wendlandt"))
-    ctrl = WorkspaceController(tree, target=target, gains=gains)
-    if scenario.support == "sensed":
-        return ctrl, lambda q, v, feet: ctrl.torques(q, v, feet_in_contact=feet)
-    return ctrl, lambda q, v, feet: ctrl.torques(q, v)
+    if torque_limits is None:
+        torque_limits = scenario_limits(scenario)
+    elif scenario.torque_limits != "none":
+        raise ScenarioError("give torque limits once: the scenario's torque_limits or the "
+                            "torque_limits argument, not both")
+    qp_weights = None
+    if scenario.distribution == "qp":
+        qp_weights = QPWeights(moment=scenario.qp_moment_weight, friction=scenario.friction,
+                               min_normal_n=scenario.qp_min_normal_n,
+                               cop_scale=scenario.qp_cop_scale)
+    model_path = None if scenario.model == subject.DEFAULT else subject.resolve(scenario.model)
+    return PolicyConfig(controller=scenario.controller, target=target, gains=gains,
+                        support=scenario.support, q_ref_deg=tuple(scenario.initial_joint_angles_deg),
+                        control_period_s=1.0 / scenario.control_rate_hz, gain_scale=gain_scale,
+                        torque_limits=torque_limits, distribution=scenario.distribution,
+                        qp_weights=qp_weights, model_path=model_path)
 
 
-def make_controller(scenario: Scenario, scene: Scene) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-    """``policy(qpos_biped (19,), qvel_biped (18,), feet (left, right) on the floor) -> torques
-    (12,)`` in ``scene.joint_names`` order, for ``scenario.controller`` with the scenario's set
-    point and gains (see :func:`workspace_policy` for the feet flags)."""
-    if scenario.controller == "workspace":
-        ctrl, raw = workspace_policy(scenario)
-    else:  # the project's joint-space PD baseline (the same as ``biped sweep``'s)
-        import biped.models
-        from biped.control.joint_pd import JointPDController
+class ControllerPolicy:
+    """A :class:`biped.control.policy.Policy` as a loop policy (the time is not used).
+    ``policy`` is the control-level policy, ``policy.controller`` the controller object."""
 
-        ctrl = JointPDController.from_mjcf(biped.models.path("wendlandt"),
-                                           q_ref_deg=scenario.initial_joint_angles_deg,
-                                           control_period_s=1.0 / scenario.control_rate_hz)
-        raw = lambda q, v, feet: ctrl.compute(q, v).torques
-    names = tuple(ctrl.joint_names)
-    if sorted(names) != sorted(scene.joint_names):
-        raise BipedError(f"controller joints {names} differ from the scene's {scene.joint_names}")
-    order = np.array([names.index(n) for n in scene.joint_names])
-    return lambda q, v, feet: raw(q, v, feet)[order]
+    __slots__ = ("joint_names", "policy")
+
+    def __init__(self, policy):
+        self.policy = policy
+        self.joint_names = policy.joint_names
+
+    def __call__(self, t: float, qpos: np.ndarray, qvel: np.ndarray, feet) -> np.ndarray:
+        return self.policy(qpos, qvel, feet)
 
 
-def _limits(scenario: Scenario) -> np.ndarray | None:
-    tl = scenario.torque_limits
-    if tl == "none":
-        return None
-    return np.broadcast_to(np.asarray(tl, dtype=float), (12,)).copy()
+def controller_policy(scenario: Scenario, scene: Scene, *, gain_scale: float = 1.0,
+                      torque_limits: TorqueLimits | None = None, tree=None) -> ControllerPolicy:
+    """The loop policy of ``scenario``'s controller (:func:`policy_config`), torques in
+    ``scene.joint_names`` order. ``tree``: a cached :class:`~biped.model.TreeModel` of the biped."""
+    return ControllerPolicy(make_policy(policy_config(scenario, gain_scale=gain_scale,
+                                                      torque_limits=torque_limits),
+                                        scene.joint_names, tree=tree))
 
 
-def _run(scenario: Scenario, scene: Scene, policy, *, progress=None, on_step=None) -> PushResult:
-    """The loop shared by :func:`simulate` (policy = a controller) and :func:`replay_torques`
-    (policy = a row index into recorded torques)."""
+class RecordedTorques:
+    """Open-loop policy: row ``round(t * rate_hz)`` of ``torques`` (n, 12) [N m] whatever the
+    state (zeros past the last row)."""
+
+    def __init__(self, torques: np.ndarray, rate_hz: float):
+        self.torques = np.ascontiguousarray(torques, dtype=float)
+        self.rate_hz = float(rate_hz)
+        self._zero = np.zeros(self.torques.shape[1])
+
+    def __call__(self, t: float, qpos: np.ndarray, qvel: np.ndarray, feet) -> np.ndarray:
+        k = round(t * self.rate_hz)
+        return self.torques[k] if k < len(self.torques) else self._zero
+
+
+# ---------------------------------------------------------------------------------------------
+# the loop
+
+
+def _as_slice(index: np.ndarray):
+    """``index`` as a slice when it is a contiguous range (a view, no copy), else itself."""
+    if len(index) and np.array_equal(index, np.arange(index[0], index[0] + len(index))):
+        return slice(int(index[0]), int(index[0]) + len(index))
+    return index
+
+
+def _feet_poses(scene: Scene, qpos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(n, 2, 3) positions and (n, 2, 4) quaternions of :data:`FOOT_BODIES` (mj_kinematics)."""
+    m = scene.model
+    d = mujoco.MjData(m)
+    feet = [m.body(f).id for f in FOOT_BODIES]
+    n = len(qpos)
+    pos = np.zeros((n, 2, 3))
+    quat = np.zeros((n, 2, 4))
+    for k in range(n):
+        d.qpos[:] = qpos[k]
+        mujoco.mj_kinematics(m, d)
+        pos[k] = d.xpos[feet]
+        quat[k] = d.xquat[feet]
+    return pos, quat
+
+
+def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
+                    progress: Callable[[float], None] | None = None, on_step=None) -> PushResult:
+    """Run ``policy`` (see the module docstring) on ``scene`` from ``scenario``'s initial state
+    for ``scenario.duration_s`` and return the :class:`PushResult`.
+
+    ``progress(t_sim)`` is called every 50 ms of simulated time; ``on_step(model, data)`` after
+    every control period. Ctrl-C stops the run and returns what was simulated so far
+    (``interrupted = True``); a :class:`~biped.errors.BipedError` from the policy ends it with
+    ``controller_error`` set. The scenario's ``torque_limits`` are the policy's business
+    (:func:`controller_policy` applies them).
+    """
     m = scene.model
     d = mujoco.MjData(m)
     qpos0, qvel0 = initial_state(scene, scenario)
@@ -162,32 +245,29 @@ def _run(scenario: Scenario, scene: Scene, policy, *, progress=None, on_step=Non
     sub = scenario.control_substeps
     period = 1.0 / scenario.control_rate_hz
     n = n_ctrl + 1
-    times = np.zeros(n)
     qpos = np.zeros((n, m.nq))
+    qvel = np.zeros((n, m.nv))
     com = np.zeros((n, 3))
-    quat = np.zeros((n, 4))
-    angles = np.zeros((n, 12))
     torques = np.zeros((n, 12))
-    block = np.zeros((n, 3))
     contacts = np.zeros((n, len(SOLE_GEOMS)), dtype=bool)
-    limits = _limits(scenario)
-    iq, iv = scene.biped_qpos_index, scene.biped_qvel_index
+    iq, iv = _as_slice(scene.biped_qpos_index), _as_slice(scene.biped_qvel_index)
     act = scene.actuator_index
     bq = scene.block_qpos_index
+    bv = scene.block_qvel_index[:3]
     cb = scene.central_body
     jq = scene.joint_qpos_index
     mass_block = m.body_mass[scene.block_body]
-    p_before = mass_block * d.qvel[scene.block_qvel_index[:3]].copy()
+    p_before = mass_block * d.qvel[bv].copy()
     progress_every = max(1, round(0.05 * scenario.control_rate_hz))
     interrupted = False
     controller_error = None
     diverged = None
     rows = 0
-    if not isinstance(policy, np.ndarray):  # compile/warm the controller outside the timer
-        try:
-            policy(d.qpos[iq], d.qvel[iv], (True, True))
-        except BipedError:
-            pass
+    warnings = d.warning.number  # a live view: MuJoCo counts its warnings there
+    try:  # compile/warm the controller outside the timer
+        policy(0.0, d.qpos[iq], d.qvel[iv], (True, True))
+    except BipedError:
+        pass
     t0 = time.perf_counter()
     try:
         for k in range(n):
@@ -195,29 +275,23 @@ def _run(scenario: Scenario, scene: Scene, policy, *, progress=None, on_step=Non
             q = d.qpos[iq]
             v = d.qvel[iv]
             fell = monitor.update(t, d)
-            flags = monitor.flags  # (left heel, left toe, right heel, right toe) on the floor
-            feet = (bool(flags[0] or flags[1]), bool(flags[2] or flags[3]))
+            feet = monitor.feet  # (left, right) on the floor
             try:
-                tau = policy(q, v, feet) if not isinstance(policy, np.ndarray) else policy[k]
+                tau = policy(t, q, v, feet)
             except BipedError as exc:  # a singular state is a result, like a fall
                 controller_error = f"t = {t:.3f} s: {exc}"
                 tau = np.zeros(12)
-            if limits is not None:
-                tau = np.clip(tau, -limits, limits)
-            times[k] = t
-            qpos[k] = d.qpos
+            qpos[k] = d.qpos  # quat, joint angles and block are read from it after the loop
+            qvel[k] = d.qvel
             com[k] = d.xipos[cb]
-            quat[k] = d.qpos[iq[3:7]]
-            angles[k] = d.qpos[jq]
             torques[k] = tau
-            block[k] = d.qpos[bq[:3]]
-            contacts[k] = flags
+            contacts[k] = monitor.flags  # (left heel, left toe, right heel, right toe)
             rows = k + 1
             if fell or controller_error or k == n_ctrl:
                 break
             d.ctrl[act] = tau
             mujoco.mj_step(m, d, sub)
-            if d.warning[_BADQACC].number:  # MuJoCo reset the state: the integration diverged
+            if warnings[_BADQACC]:  # MuJoCo reset the state: the integration diverged
                 diverged = (f"MuJoCo's integration diverged (non-finite accelerations) between "
                             f"t = {t:.4f} s and {t + period:.4f} s")
                 break
@@ -231,6 +305,11 @@ def _run(scenario: Scenario, scene: Scene, policy, *, progress=None, on_step=Non
     if progress is not None:
         progress(max(rows - 1, 0) * period)
     sl = slice(0, rows)
+    times = np.arange(n) * period
+    quat = qpos[:, scene.biped_qpos_index[3:7]]
+    angles = qpos[:, jq]
+    block = qpos[:, bq[:3]]
+    block_vel = qvel[:, bv]
     target_com = np.array(scenario.target_com_m)
     target_quat = tilt_quat(scenario.target_axis, scenario.target_tilt_deg)
     if rows:
@@ -243,192 +322,37 @@ def _run(scenario: Scenario, scene: Scene, policy, *, progress=None, on_step=Non
     recovered = bool(complete and not fell and com_err < scenario.recovery_com_tol_m
                      and ori_err < scenario.recovery_orientation_tol_deg)
     sim_time = max(rows - 1, 0) * period
+    feet_pos, feet_quat = _feet_poses(scene, qpos[sl])
     return PushResult(
         scenario=scenario, joint_names=scene.joint_names, times=times[sl], qpos=qpos[sl],
         com=com[sl], quat=quat[sl], joint_angles=angles[sl], torques=torques[sl],
         block=block[sl], contacts=contacts[sl], events=tuple(monitor.events),
         block_contact_time_s=monitor.block_contact_time_s,
         block_momentum_before=p_before,
-        block_momentum_after=mass_block * d.qvel[scene.block_qvel_index[:3]].copy(),
+        block_momentum_after=mass_block * d.qvel[bv].copy(),
         fell=fell, fall_time_s=monitor.fall_time_s, fall_reason=monitor.fall_reason,
         interrupted=interrupted, target_com=target_com, target_quat=target_quat,
         final_com_error_m=com_err, final_orientation_error_deg=ori_err, recovered=recovered,
         wall_time_s=wall, realtime_factor=sim_time / wall if wall > 0 else float("inf"),
-        controller_error=controller_error, diverged=diverged,
+        controller_error=controller_error, diverged=diverged, qvel=qvel[sl],
+        block_velocity=block_vel[sl], feet_pos=feet_pos, feet_quat=feet_quat,
     )
 
 
 def simulate(scenario: Scenario | None = None, *, progress: Callable[[float], None] | None = None,
              scene: Scene | None = None, on_step=None) -> PushResult:
-    """Run ``scenario`` (W's defaults if None) closed loop and return its :class:`PushResult`.
-
-    ``progress(t_sim)`` is called every 50 ms of simulated time; ``on_step(model, data)`` after
-    every control period (e.g. a live viewer's sync). Ctrl-C stops the run and returns what was
-    simulated so far (``interrupted = True``).
-    """
+    """Run ``scenario`` (W's defaults if None) closed loop with its controller
+    (:func:`controller_policy`) and return its :class:`PushResult`; see :func:`run_closed_loop`."""
     scenario = scenario or Scenario()
     scene = scene or build_scene(scenario)
-    policy = make_controller(scenario, scene)
-    return _run(scenario, scene, policy, progress=progress, on_step=on_step)
+    return run_closed_loop(scenario, scene, controller_policy(scenario, scene),
+                           progress=progress, on_step=on_step)
 
 
 def replay_torques(result: PushResult, *, scene: Scene | None = None) -> PushResult:
     """Open-loop replay: the same scene and initial state driven by ``result.torques``
-    (no controller). Used by ``benchmarks/push.py`` to measure the controller's share of the cost."""
+    (:class:`RecordedTorques`, no controller). Used by ``benchmarks/push.py`` to measure the
+    controller's share of the cost."""
     scene = scene or build_scene(result.scenario)
-    torques = np.ascontiguousarray(result.torques)
-    if len(torques) < result.scenario.control_steps + 1:
-        torques = np.vstack([torques, np.zeros((result.scenario.control_steps + 1 - len(torques), 12))])
-    return _run(result.scenario, scene, torques)
-
-
-# ---------------------------------------------------------------------------------------------
-# outputs
-
-
-def _fmt(x: float) -> str:
-    return repr(float(x))
-
-
-def trajectory_columns(joint_names) -> list[str]:
-    cols = ["time", "com_x", "com_y", "com_z", "quat_w", "quat_x", "quat_y", "quat_z"]
-    cols += [f"q_{n}" for n in joint_names] + [f"tau_{n}" for n in joint_names]
-    cols += ["block_x", "block_y", "block_z", "left_contact", "right_contact"]
-    cols += [f"{foot}_{part}_contact" for foot, part in SOLE_GEOMS]
-    return cols
-
-
-def write_trajectory_csv(result: PushResult, path: str | Path) -> Path:
-    """``trajectory.csv``: one row per control period (columns: :func:`trajectory_columns`;
-    angles [rad], torques [N m], positions [m]). Floats are written with ``repr`` (shortest
-    round-trip form), so equal runs give byte-identical files."""
-    path = Path(path)
-    lines = [",".join(trajectory_columns(result.joint_names))]
-    lc, rc = result.left_contact, result.right_contact
-    for k in range(len(result.times)):
-        vals = [_fmt(result.times[k]), *map(_fmt, result.com[k]), *map(_fmt, result.quat[k]),
-                *map(_fmt, result.joint_angles[k]), *map(_fmt, result.torques[k]),
-                *map(_fmt, result.block[k]), str(int(lc[k])), str(int(rc[k])),
-                *(str(int(c)) for c in result.contacts[k])]
-        lines.append(",".join(vals))
-    tmp = path.with_suffix(".csv.part")
-    tmp.write_text("\n".join(lines) + "\n")
-    tmp.replace(path)
-    return path
-
-
-def _num(x):
-    if x is None:
-        return None
-    x = float(x)
-    return x if math.isfinite(x) else None
-
-
-def summary_dict(result: PushResult) -> dict:
-    """The content of ``summary.json``."""
-    s = result.scenario
-    return {
-        "recovered": result.recovered,
-        "fell": result.fell,
-        "fall_time_s": _num(result.fall_time_s),
-        "fall_reason": result.fall_reason,
-        "interrupted": result.interrupted,
-        "controller_error": result.controller_error,
-        "diverged": result.diverged,
-        "simulated_time_s": _num(result.times[-1]) if len(result.times) else 0.0,
-        "final_com_error_m": _num(result.final_com_error_m),
-        "final_orientation_error_deg": _num(result.final_orientation_error_deg),
-        "final_com_m": result.com[-1].tolist() if len(result.com) else None,
-        "final_quat": result.quat[-1].tolist() if len(result.quat) else None,
-        "target_com_m": result.target_com.tolist(),
-        "target_quat": result.target_quat.tolist(),
-        "block_contact_time_s": _num(result.block_contact_time_s),
-        "block_momentum_before_kg_m_s": result.block_momentum_before.tolist(),
-        "block_momentum_after_kg_m_s": result.block_momentum_after.tolist(),
-        "events": [e.to_dict() for e in result.events],
-        "wall_time_s": result.wall_time_s,
-        "realtime_factor": _num(result.realtime_factor),
-        "control_rate_hz": s.control_rate_hz,
-        "physics_timestep_s": s.physics_timestep_s,
-        "scenario": s.to_dict(),
-    }
-
-
-def write_summary(result: PushResult, path: str | Path, extra: dict | None = None) -> Path:
-    path = Path(path)
-    data = summary_dict(result)
-    if extra:
-        data.update(extra)
-    tmp = path.with_suffix(".json.part")
-    tmp.write_text(json.dumps(data, indent=2) + "\n")
-    tmp.replace(path)
-    return path
-
-
-def _markers(result: PushResult) -> list[dict]:
-    out = []
-    if result.block_contact_time_s is not None:
-        out.append({"time_s": result.block_contact_time_s, "label": "block hits the body"})
-    for e in result.events:
-        out.append({"time_s": e.time_s, "label": f"{e.foot} {e.part} {e.kind.replace('_', ' ')}"})
-    if result.fall_time_s is not None:
-        out.append({"time_s": result.fall_time_s, "label": f"fall: {result.fall_reason}"})
-    return out
-
-
-def write_outputs(result: PushResult, out_dir: str | Path, *, figures: bool = True,
-                  video: bool = True, replay: bool = True, scene: Scene | None = None,
-                  log: Callable[[str], None] = print) -> dict:
-    """Write every output of a run into ``out_dir`` (created if needed); returns ``{name: path}``.
-
-    Order: ``trajectory.csv`` and ``summary.json`` first (atomic writes), then ``scenario.toml``,
-    ``figures/``, ``video.mp4``, ``replay.html``. A failing optional output (no OpenGL, viz module
-    missing...) is reported through ``log`` in one line and never removes what was written.
-    """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    written = {"trajectory": write_trajectory_csv(result, out / "trajectory.csv"),
-               "summary": write_summary(result, out / "summary.json")}
-    (out / "scenario.toml").write_text(result.scenario.to_toml())
-    written["scenario"] = out / "scenario.toml"
-    if figures:
-        try:
-            from biped.viz.push_figures import plot_push
-
-            written["figures"] = plot_push(result, out / "figures")
-        except Exception as exc:  # noqa: BLE001 - an optional output must not lose the run
-            log(f"figures: not written ({type(exc).__name__}: {exc})")
-    if video or replay:
-        scene = scene or build_scene(result.scenario)
-    if video:
-        try:
-            from biped.viz.video import render_video
-        except ImportError as exc:
-            log(f"video: skipped, the video module is not available ({exc})")
-        else:
-            try:
-                res = render_video(scene.model, result.times, result.qpos, out / "video.mp4",
-                                   fps=30, track_body="central_body", distance=3.0)
-                if getattr(res, "path", None):
-                    written["video"] = Path(res.path)
-                else:
-                    log(f"video: not written ({getattr(res, 'reason', 'no reason given')})")
-            except Exception as exc:  # noqa: BLE001
-                log(f"video: not written ({type(exc).__name__}: {exc})")
-    if replay:
-        try:
-            from biped.viz.replay import replay_from_mujoco, write_replay
-        except ImportError as exc:
-            log(f"replay: skipped, the replay module is not available ({exc})")
-        else:
-            try:
-                info = {"recovered": result.recovered, "fell": result.fell,
-                        "final COM error [m]": round(result.final_com_error_m, 4),
-                        "final orientation error [deg]": round(result.final_orientation_error_deg, 3)}
-                rp = replay_from_mujoco(scene.model, result.times, result.qpos,
-                                        title="W section 4: push recovery", info=info,
-                                        markers=_markers(result), follow="trunk")
-                written["replay"] = write_replay(rp, out / "replay.html") or out / "replay.html"
-            except Exception as exc:  # noqa: BLE001
-                log(f"replay: not written ({type(exc).__name__}: {exc})")
-    return written
+    policy = RecordedTorques(result.torques, result.scenario.control_rate_hz)
+    return run_closed_loop(result.scenario, scene, policy)

@@ -19,22 +19,38 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from biped.control import Gains, Target
+from biped.control.workspace import TARGET_AXES, W_TARGET_AXIS, W_TARGET_TILT_DEG
 from biped.errors import ScenarioError
+from biped.models import (
+    JOINT_NAMES,
+    LEG_JOINTS,
+    W_INITIAL_ANGLES_DEG,
+    W_INITIAL_COM_M,
+    W_INITIAL_TILT_DEG,
+)
 
-#: W's joint order theta_2..theta_13: left leg then right leg, each hip abduction, hip flexion,
-#: hip rotation, knee, ankle inversion, ankle dorsiflexion (MJCF hinge names of the shipped model).
-LEG_JOINTS = ("hip_abduction", "hip_flexion", "hip_rotation", "knee", "ankle_inversion",
-              "ankle_dorsiflexion")
-JOINT_NAMES = tuple(f"{side}_{j}" for side in ("left", "right") for j in LEG_JOINTS)
-
-#: W section 4: theta_2..theta_13 [deg].
-W_JOINT_ANGLES_DEG = (0.0, 40.0, 0.0, -77.4595, 0.0, 42.4595) * 2
+#: W's initial joint angles theta_2..theta_13 [deg] (:data:`biped.models.W_INITIAL_ANGLES_DEG`).
+W_JOINT_ANGLES_DEG = W_INITIAL_ANGLES_DEG
 
 CONTROLLERS = ("workspace", "joint-pd")
-TARGET_AXES = ("-y", "-x")
 #: Which feet the workspace controller takes as fixed: "fixed" = both, always (W); "sensed" = the
 #: feet whose soles touch the floor at each control step (see WorkspaceController.compute).
 SUPPORTS = ("fixed", "sensed")
+#: The workspace controller's wrench distribution (W Alg. 5): W's min-norm split ("statics", its
+#: print's subscripts "printed") or the contact-feasible QP ("qp", biped.control.distribution).
+DISTRIBUTIONS = ("statics", "printed", "qp")
+
+#: Physics presets (key ``physics``): the values they give ``physics_timestep_s`` and
+#: ``contact_timeconst_s`` when those keys are not set, and whether MuJoCo's sleep flag is on.
+#: "faithful" is the reference (0.5 ms step, 5 ms contact time constant); "fast" halves the cost
+#: of a step and is checked against it in docs/sweep.md ("Physics presets").
+PHYSICS_PRESETS = {
+    "faithful": {"physics_timestep_s": 0.0005, "contact_timeconst_s": 0.005, "sleep": False},
+    "fast": {"physics_timestep_s": 0.001, "contact_timeconst_s": 0.0075, "sleep": True},
+}
+PHYSICS = tuple(PHYSICS_PRESETS)
+_PRESET_KEYS = ("physics_timestep_s", "contact_timeconst_s")
 
 
 @dataclass(frozen=True)
@@ -46,38 +62,58 @@ class Scenario:
     ``torque_limits`` is ``"none"``, one positive number [N m] for every joint, or 12 of them in
     :data:`JOINT_NAMES` order. ``joint_noise_deg`` adds N(0, sigma^2) to the initial joint angles,
     drawn from ``numpy.random.default_rng(seed)`` (0 = W's exact state).
+    ``physics`` names a preset of :data:`PHYSICS_PRESETS`; ``physics_timestep_s`` and
+    ``contact_timeconst_s`` left unset (None) take the preset's value, so after construction they
+    are always numbers (an explicit value wins over the preset).
     """
 
     duration_s: float = 3.0
-    physics_timestep_s: float = 0.0005
+    physics: str = "faithful"  # not in W: "fast" = 1 ms step, 7.5 ms contacts, MuJoCo's sleep
+    physics_timestep_s: float = None  # type: ignore[assignment]  # None: from the preset
     control_rate_hz: float = 500.0
     block_mass_kg: float = 1.8
     block_position_m: tuple = (0.5, 0.1, 1.2)
     block_velocity_m_s: tuple = (-4.5, 0.0, 0.2)
     block_size_m: tuple = (0.1, 0.1, 0.1)  # not in W: a 10 cm cube (1.8 kg: a brick's density)
-    initial_com_m: tuple = (0.0, 0.0, 1.035)
-    initial_tilt_deg: float = 5.0  # about -y
-    initial_joint_angles_deg: tuple = W_JOINT_ANGLES_DEG
+    initial_com_m: tuple = W_INITIAL_COM_M
+    initial_tilt_deg: float = W_INITIAL_TILT_DEG  # about -y
+    initial_joint_angles_deg: tuple = W_INITIAL_ANGLES_DEG
     joint_noise_deg: float = 0.0
-    target_com_m: tuple = (-0.01, 0.0, 1.14)
-    target_tilt_deg: float = 15.0
-    target_axis: str = "-y"
-    kp_com: tuple = (50.0, 50.0, 200.0)
-    kv_com: tuple = (7.07, 7.07, 14.142)
-    kp_rot: tuple = (50.0, 50.0, 50.0)
-    kv_rot: tuple = (7.07, 7.07, 7.07)
+    target_com_m: tuple = Target().com
+    target_tilt_deg: float = W_TARGET_TILT_DEG
+    target_axis: str = W_TARGET_AXIS
+    kp_com: tuple = Gains().kp_com
+    kv_com: tuple = Gains().kv_com
+    kp_rot: tuple = Gains().kp_rot
+    kv_rot: tuple = Gains().kv_rot
     controller: str = "workspace"
     support: str = "fixed"  # not in W: "sensed" drops a foot off the floor from Alg. 3 and 5
+    distribution: str = "statics"  # W's Alg. 5; "qp": not in W (docs/controller.md)
+    qp_moment_weight: float = 1.0  # "qp": weight of the moment rows [1/(N m)^2] (force rows: 1 /N^2)
+    qp_min_normal_n: float = 10.0  # "qp": minimum normal force of a foot in contact [N]
+    qp_cop_scale: float = 1.0  # "qp": the CoP stays in the sole shrunk by this factor
     torque_limits: Any = "none"
     friction: float = 0.3
     restitution: float = 0.2
-    contact_timeconst_s: float = 0.005  # not in W (Impulse is rigid); MuJoCo's contact stiffness
+    # not in W (Impulse is rigid): MuJoCo's contact stiffness [s]; None: from the preset
+    contact_timeconst_s: float = None  # type: ignore[assignment]
+    # passive damping of every hinge [N m s/rad]; 1.0 as in the shipped models (W: none)
+    joint_damping_n_m_s: float = 1.0
     fall_height_m: float = 0.6  # central-body COM below this height = fall
     recovery_com_tol_m: float = 0.02
     recovery_orientation_tol_deg: float = 2.0
     seed: int = 0
+    # not in W: the biped, a shipped model's name or an MJCF path (see Scenario.for_model)
+    model: str = "wendlandt"
 
     def __post_init__(self):
+        preset = PHYSICS_PRESETS.get(self.physics)
+        if preset is None:
+            raise ScenarioError(f"physics must be one of {', '.join(map(repr, PHYSICS))}; "
+                                f"got {self.physics!r}")
+        for key in _PRESET_KEYS:
+            if getattr(self, key) is None:
+                object.__setattr__(self, key, preset[key])
         validate(self)
 
     # ------------------------------------------------------------------ construction
@@ -90,26 +126,51 @@ class Scenario:
     @classmethod
     def from_toml(cls, path: str | Path) -> Scenario:
         """A scenario from a TOML file of top-level ``key = value`` lines (others keep W's)."""
-        path = Path(path)
-        try:
-            text = path.read_text()
-        except OSError as exc:
-            raise ScenarioError(f"cannot read scenario file {str(path)!r}: {exc.strerror}") from None
-        try:
-            values = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise ScenarioError(f"scenario file {str(path)!r} is not valid TOML: {exc}") from None
-        for k, v in values.items():
-            if isinstance(v, dict):
-                raise ScenarioError(
-                    f"scenario file {str(path)!r}: tables such as [{k}] are not used; write "
-                    f"top-level 'key = value' lines with keys from: {', '.join(keys())}")
-        return cls.from_dict(values)
+        return cls.from_dict(toml_values(path))
+
+    @classmethod
+    def for_model(cls, model: str | Path, **values) -> Scenario:
+        """W's scenario on another biped (a shipped name or an MJCF path, checked first), then
+        ``values`` (any keys, taken as given). For a model other than W's shipped biped, the keys
+        W's numbers fix for W's body are moved onto the subject by
+        :func:`biped.models.subject.subject_state`: ``initial_com_m`` (W's crouch and tilt, soles
+        5 mm up), ``target_com_m`` (W's set point as joint angles, same angles on the subject),
+        the block's start height ``block_position_m[2]`` and ``fall_height_m`` times the ratio of
+        initial COM heights, and ``block_mass_kg`` times the ratio of total body masses (W's push
+        as momentum per kilogram of body; pass ``block_mass_kg=1.8`` for W's block itself).
+        ``model`` is recorded as an absolute path."""
+        from biped.models import subject
+
+        path = subject.resolve(str(model) if isinstance(model, Path) else model)
+        if isinstance(model, str) and model == subject.DEFAULT:
+            return cls.from_dict({**values, "model": model})
+        w = cls()
+        st = subject.subject_state(
+            path, initial_tilt_deg=w.initial_tilt_deg, joint_angles_deg=w.initial_joint_angles_deg,
+            target_com_m=w.target_com_m, target_tilt_deg=w.target_tilt_deg,
+            reference_com_m=w.initial_com_m)
+        bx, by, bz = w.block_position_m
+        scaled = {"initial_com_m": st.initial_com_m, "target_com_m": st.target_com_m,
+                  "block_position_m": (bx, by, bz * st.height_ratio),
+                  "block_mass_kg": w.block_mass_kg * st.mass_ratio,
+                  "fall_height_m": w.fall_height_m * st.height_ratio}
+        return cls.from_dict({**scaled, **values, "model": str(path.resolve())})
 
     def with_overrides(self, **values) -> Scenario:
-        """A copy with some keys changed (validated like every other route)."""
+        """A copy with some keys changed (validated like every other route). Changing ``physics``
+        also resets ``physics_timestep_s`` and ``contact_timeconst_s`` to the new preset's values
+        unless they are given in the same call."""
         _check_keys(values)
-        return dataclasses.replace(self, **{k: _coerce(k, v) for k, v in values.items()})
+        changes = {k: _coerce(k, v) for k, v in values.items()}
+        if "physics" in changes:
+            for key in _PRESET_KEYS:
+                changes.setdefault(key, None)
+        return dataclasses.replace(self, **changes)
+
+    @property
+    def sleep(self) -> bool:
+        """MuJoCo's sleep flag (bodies at rest stop being simulated): on for ``physics="fast"``."""
+        return bool(PHYSICS_PRESETS[self.physics]["sleep"])
 
     # ------------------------------------------------------------------ export
     def to_dict(self) -> dict:
@@ -139,6 +200,31 @@ class Scenario:
         return round(self.duration_s * self.control_rate_hz)
 
 
+def toml_values(path: str | Path) -> dict:
+    """The ``{key: value}`` of a scenario TOML file (top-level ``key = value`` lines; keys
+    checked, values not yet)."""
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ScenarioError(f"cannot read scenario file {str(path)!r}: {exc.strerror}") from None
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(f"scenario file {str(path)!r} is not UTF-8 text (byte {exc.start}: "
+                            f"{exc.object[exc.start:exc.start + 1]!r}); TOML files are UTF-8"
+                            ) from None
+    try:
+        values = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"scenario file {str(path)!r} is not valid TOML: {exc}") from None
+    for k, v in values.items():
+        if isinstance(v, dict):
+            raise ScenarioError(
+                f"scenario file {str(path)!r}: tables such as [{k}] are not used; write "
+                f"top-level 'key = value' lines with keys from: {', '.join(keys())}")
+    _check_keys(values)
+    return values
+
+
 # ---------------------------------------------------------------------------------------------
 # validation
 
@@ -154,8 +240,38 @@ _VECTORS = {
     "kp_rot": (3, "diagonal gains (x, y, z) [1/s^2]"),
     "kv_rot": (3, "diagonal gains (x, y, z) [1/s]"),
 }
-_STRINGS = {"target_axis": TARGET_AXES, "controller": CONTROLLERS, "support": SUPPORTS}
+_STRINGS = {"target_axis": TARGET_AXES, "controller": CONTROLLERS, "support": SUPPORTS,
+            "physics": PHYSICS, "distribution": DISTRIBUTIONS}
 _INTS = {"seed"}
+
+#: Physical ranges [lo, hi] of the numbers (docs/push.md, "Valid ranges"). They keep a run's work
+#: bounded (duration, physics step) and its physics meaningful (a thrown block, a standing biped).
+RANGES = {
+    "duration_s": (0.0, 60.0, "simulated time in s; a push recovery is over in seconds"),
+    "physics_timestep_s": (1e-5, 0.001, "physics step in s"),
+    "control_rate_hz": (1.0, 100_000.0, "controller calls per second"),
+    "block_mass_kg": (0.0, 100.0, "block mass in kg"),
+    "block_speed_m_s": (0.0, 100.0, "block speed |block_velocity_m_s| in m/s at its start: a "
+                                    "thrown, swung or launched object (a sweep's slow hits from "
+                                    "metres away start fast)"),
+    "block_size_m": (0.0, 1.0, "edge length in m"),
+    "position_m": (-10.0, 10.0, "world coordinate in m, the scene is a few metres wide"),
+    "gain": (0.0, 1e6, "PD gain"),
+    "tilt_deg": (-90.0, 90.0, "deg"),
+    "joint_angle_deg": (-180.0, 180.0, "deg"),
+    "joint_noise_deg": (0.0, 30.0, "standard deviation in deg"),
+    "friction": (0.0, 10.0, "Coulomb coefficient"),
+    "contact_timeconst_s": (0.0, 1.0, "MuJoCo solref time constant in s"),
+    "fall_height_m": (0.0, 10.0, "central-body COM height in m"),
+}
+MAX_SEED = 2**63 - 1
+
+
+def _in_range(key: str, v: float, kind: str | None = None, *, lo_open: bool = False) -> None:
+    lo, hi, what = RANGES[kind or key]
+    if v < lo or (lo_open and v == lo) or v > hi:
+        left = "(" if lo_open else "["
+        raise ScenarioError(f"{key} must be in {left}{lo:g}, {hi:g}] ({what}); got {v!r}")
 
 
 def keys() -> tuple[str, ...]:
@@ -187,6 +303,8 @@ def _coerce(key: str, v):
         return float(v) if _is_number(v) else v
     if key in _STRINGS or key in _INTS:
         return v
+    if key == "model":
+        return str(v) if isinstance(v, Path) else v
     return float(v) if _is_number(v) else v
 
 
@@ -219,23 +337,48 @@ def validate(s: Scenario) -> None:
     for key in ("block_size_m",):
         if min(getattr(s, key)) <= 0:
             raise ScenarioError(f"{key} must be 3 positive edge lengths in m; got {getattr(s, key)}")
+        for i, x in enumerate(getattr(s, key)):
+            _in_range(f"{key}[{i}]", x, "block_size_m", lo_open=True)
     for key in ("kp_com", "kv_com", "kp_rot", "kv_rot"):
         if min(getattr(s, key)) < 0:
             raise ScenarioError(f"{key} must be >= 0 (PD gains); got {getattr(s, key)}")
-    _positive(s, "duration_s", "simulated time in s")
+        for i, x in enumerate(getattr(s, key)):
+            _in_range(f"{key}[{i}]", x, "gain")
+    for key in ("block_position_m", "initial_com_m", "target_com_m"):
+        for i, x in enumerate(getattr(s, key)):
+            _in_range(f"{key}[{i}]", x, "position_m")
+    for i, x in enumerate(s.initial_joint_angles_deg):
+        _in_range(f"initial_joint_angles_deg[{i}]", x, "joint_angle_deg")
+    _in_range("duration_s", _positive(s, "duration_s", "simulated time in s"), lo_open=True)
     dt = _positive(s, "physics_timestep_s", "physics step in s, at most 0.001")
     if dt > 0.001:
-        raise ScenarioError(f"physics_timestep_s must be <= 0.001 s (the issue's bound); got {dt}")
+        raise ScenarioError(f"physics_timestep_s must be <= 0.001 s (this project's bound, "
+                            f"docs/push.md); got {dt}")
+    _in_range("physics_timestep_s", dt)
     rate = _positive(s, "control_rate_hz", "controller calls per second")
+    _in_range("control_rate_hz", rate)
     ratio = 1.0 / (rate * dt)
     if ratio < 1 - 1e-9 or abs(ratio - round(ratio)) > 1e-6:
         raise ScenarioError(
             f"control_rate_hz must make the control period a whole number of physics steps "
             f"(physics_timestep_s = {dt} s); got {rate} Hz, i.e. {ratio:.6g} steps")
-    _positive(s, "block_mass_kg", "block mass in kg")
-    _positive(s, "joint_noise_deg", "standard deviation in deg", zero_ok=True)
-    _finite("initial_tilt_deg", s.initial_tilt_deg, "deg about -y")
-    _finite("target_tilt_deg", s.target_tilt_deg, "deg about target_axis")
+    _in_range("block_mass_kg", _positive(s, "block_mass_kg", "block mass in kg"), lo_open=True)
+    speed = math.sqrt(sum(x * x for x in s.block_velocity_m_s))
+    if not speed <= RANGES["block_speed_m_s"][1]:
+        raise ScenarioError(f"block_velocity_m_s: the block's speed must be at most "
+                            f"{RANGES['block_speed_m_s'][1]:g} m/s ({RANGES['block_speed_m_s'][2]}); "
+                            f"got {speed:g} m/s")
+    if speed * dt > min(s.block_size_m) / 2:
+        raise ScenarioError(
+            f"block_velocity_m_s: at {speed:g} m/s the block moves {speed * dt * 1e3:.3g} mm per "
+            f"physics step, more than half its smallest edge ({min(s.block_size_m) * 500:g} mm), so it "
+            f"could pass through the body unseen; use a smaller physics_timestep_s or speed")
+    _in_range("joint_noise_deg", _positive(s, "joint_noise_deg", "standard deviation in deg",
+                                           zero_ok=True))
+    _in_range("initial_tilt_deg", _finite("initial_tilt_deg", s.initial_tilt_deg, "deg about -y"),
+              "tilt_deg")
+    _in_range("target_tilt_deg", _finite("target_tilt_deg", s.target_tilt_deg,
+                                         "deg about target_axis"), "tilt_deg")
     for key, valid in _STRINGS.items():
         v = getattr(s, key)
         if v not in valid:
@@ -251,19 +394,29 @@ def validate(s: Scenario) -> None:
     elif tl != "none" and (not _is_number(tl) or not math.isfinite(tl) or tl <= 0):
         raise ScenarioError(f"torque_limits must be 'none', one positive number or 12 of "
                             f"them in N m; got {tl!r}")
-    _positive(s, "friction", "Coulomb coefficient", zero_ok=True)
+    _in_range("friction", _positive(s, "friction", "Coulomb coefficient", zero_ok=True))
     e = _finite("restitution", s.restitution, "coefficient of restitution")
     if not 0.0 <= e <= 0.8:
         raise ScenarioError(f"restitution must be in [0, 0.8] (the calibrated range); got {e!r}")
     tc = _positive(s, "contact_timeconst_s", "MuJoCo solref time constant in s")
+    _in_range("contact_timeconst_s", tc)
     if tc < 2 * dt:
         raise ScenarioError(f"contact_timeconst_s must be >= 2 physics_timestep_s = {2 * dt} s "
                             f"(MuJoCo's stability rule); got {tc}")
-    _positive(s, "fall_height_m", "central-body COM height in m")
+    _in_range("fall_height_m", _positive(s, "fall_height_m", "central-body COM height in m"))
+    _positive(s, "joint_damping_n_m_s", "passive hinge damping in N m s/rad", zero_ok=True)
+    _positive(s, "qp_moment_weight", "weight of the QP's moment rows, force rows 1")
+    _positive(s, "qp_min_normal_n", "N", zero_ok=True)
+    c = _positive(s, "qp_cop_scale", "fraction of the sole the CoP may use, in (0, 1]")
+    if c > 1:
+        raise ScenarioError(f"qp_cop_scale must be in (0, 1] (fraction of the sole); got {c!r}")
     _positive(s, "recovery_com_tol_m", "m")
     _positive(s, "recovery_orientation_tol_deg", "deg")
-    if not isinstance(s.seed, int) or isinstance(s.seed, bool) or s.seed < 0:
-        raise ScenarioError(f"seed must be an integer >= 0; got {s.seed!r}")
+    if not isinstance(s.seed, int) or isinstance(s.seed, bool) or not 0 <= s.seed <= MAX_SEED:
+        raise ScenarioError(f"seed must be an integer >= 0 and < 2^63; got {s.seed!r}")
+    if not isinstance(s.model, str) or not s.model.strip():
+        raise ScenarioError(f"model must be a shipped model's name ('wendlandt') or the path of an "
+                            f"MJCF file; got {s.model!r}")
 
 
 def _toml_value(v) -> str:
@@ -295,12 +448,16 @@ def parse_assignment(text: str) -> tuple[str, Any]:
 
 __all__ = [
     "CONTROLLERS",
+    "DISTRIBUTIONS",
     "JOINT_NAMES",
     "LEG_JOINTS",
+    "PHYSICS",
+    "PHYSICS_PRESETS",
     "TARGET_AXES",
     "W_JOINT_ANGLES_DEG",
     "Scenario",
     "keys",
     "parse_assignment",
+    "toml_values",
     "validate",
 ]

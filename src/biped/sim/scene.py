@@ -1,4 +1,4 @@
-"""The push scene: W's biped (the shipped MJCF, untouched) + a floor + the thrown block.
+"""The push scene: W's biped (the scenario's ``model`` MJCF, untouched) + a floor + the thrown block.
 
 Built with :class:`mujoco.MjSpec` from the shipped model file, to which the floor and the block are
 added; no copy of the biped's XML exists anywhere. Every qpos/qvel/actuator index the simulation
@@ -18,10 +18,10 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
-import biped.models
 from biped.errors import ModelError, unknown_name
+from biped.models import JOINT_NAMES
 from biped.sim.contact import CONTACT_SOLIMP, SOLE_GEOMS, contact_solref
-from biped.sim.scenario import JOINT_NAMES, Scenario
+from biped.sim.scenario import Scenario
 from biped.spatial import axis_angle_quat
 
 BIPED_MODEL = "wendlandt"
@@ -63,22 +63,30 @@ class Scene:
     solref: tuple = field(default=(0.02, 1.0))
 
 
-def biped_spec() -> mujoco.MjSpec:
-    """The shipped biped MJCF as an editable spec."""
-    return mujoco.MjSpec.from_file(str(biped.models.path(BIPED_MODEL)))
+def biped_spec(model: str = BIPED_MODEL) -> mujoco.MjSpec:
+    """The biped MJCF (a shipped model's name or a checked MJCF path, the scenario's ``model``)
+    as an editable spec."""
+    from biped.models.subject import resolve
+
+    return mujoco.MjSpec.from_file(str(resolve(model)))
 
 
 def scene_spec(scenario: Scenario) -> mujoco.MjSpec:
     """Spec of the scene: the biped + floor (z = 0 plane) + block at ``block_position_m``.
 
-    Physics: gravity 9.81 m/s^2 along -z, ``physics_timestep_s``, elliptic friction cones,
-    friction ``scenario.friction`` and the restitution-calibrated solref on every geom.
+    Physics: the biped model's own gravity (9.81 m/s^2 along -z), ``physics_timestep_s``,
+    elliptic friction cones, friction ``scenario.friction`` and the restitution-calibrated solref
+    on every geom, passive damping ``scenario.joint_damping_n_m_s`` on every hinge (replacing the
+    MJCF's); MuJoCo's sleep flag when ``scenario.sleep`` (``physics = "fast"``): a tree at rest
+    stops being simulated until something touches it. Only the block can sleep: MuJoCo never lets
+    an actuated tree (the biped) sleep.
     """
-    spec = biped_spec()
+    spec = biped_spec(scenario.model)
     spec.modelname = "push_scene"
     spec.option.timestep = scenario.physics_timestep_s
-    spec.option.gravity = [0.0, 0.0, -9.81]
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+    if scenario.sleep:
+        spec.option.enableflags |= int(mujoco.mjtEnableBit.mjENBL_SLEEP)
     solref = contact_solref(scenario.restitution, scenario.contact_timeconst_s,
                             scenario.physics_timestep_s)
 
@@ -95,6 +103,9 @@ def scene_spec(scenario: Scenario) -> mujoco.MjSpec:
     block.add_geom(name=BLOCK, type=mujoco.mjtGeom.mjGEOM_BOX,
                    size=[s / 2 for s in scenario.block_size_m], mass=scenario.block_mass_kg,
                    rgba=[0.9, 0.6, 0.1, 1.0], contype=1, conaffinity=1)
+    for j in spec.joints:  # the plant's passive damping (the controller does not model it)
+        if j.type == mujoco.mjtJoint.mjJNT_HINGE:
+            j.damping = [scenario.joint_damping_n_m_s, *list(j.damping)[1:]]
     for g in spec.geoms:
         g.friction = [scenario.friction, g.friction[1], g.friction[2]]
         g.solref = list(solref)
@@ -115,7 +126,7 @@ def build_scene(scenario: Scenario) -> Scene:
     """Compile :func:`scene_spec` and resolve every index by name (see :class:`Scene`)."""
     spec = scene_spec(scenario)
     model = spec.compile()
-    bm = biped_spec().compile()
+    bm = biped_spec(scenario.model).compile()
     qpos_index = np.full(bm.nq, -1, dtype=np.int64)
     qvel_index = np.full(bm.nv, -1, dtype=np.int64)
     for j in range(bm.njnt):

@@ -1,5 +1,5 @@
 """Polar maps of push-recovery envelopes (plotting only; the numbers come from
-:mod:`biped.sim.sweep`).
+:mod:`biped.analysis`).
 
 >>> from biped.viz.envelope import plot_envelope, plot_comparison
 >>> fig = plot_envelope("runs/sweep-workspace-none.parquet", by="impulse_n_s")
@@ -9,57 +9,99 @@
 Each trial is a dot at (direction the block travels, speed or impulse): filled green if the biped
 survived, red cross if not. The line is the envelope (per direction, the largest value below
 which every trial survived) and the dashed line Hof's feet-in-place bound J_max = m omega_0 d
-(:class:`biped.sim.sweep.FeetInPlaceBound`), converted to block speed with the head-on impact
-law ``v = J / ((1 + e) m_block)`` when the radius is the speed. Angles: 0 deg = +x (the biped's
-back: it faces -x), counter-clockwise toward +y (its right side).
+(:class:`biped.analysis.FeetInPlaceBound`), converted to block speed with the head-on impact
+law ``v = J / ((1 + e) m_block)`` when the radius is the speed. The radial scale reaches all of
+the bound when that does not squash the trials (a factor 2.5 at most), else its nearest point,
+so the bound is always drawn; its legend entry gives its range. Angles: 0 deg = +x,
+counter-clockwise toward +y. The biped faces -x (180 deg), its left side toward -y: a block
+travelling at 180 deg (W's throw) hits its back.
 """
 
 from __future__ import annotations
 
 import os
+import textwrap
 from pathlib import Path
+from typing import Any
 
+import matplotlib
 import numpy as np
 
+from biped.analysis import envelope, feet_in_place_bound, survived, sweep_data
 from biped.errors import ScenarioError
 
 LABELS = {"speed_m_s": "block speed [m/s]", "impulse_n_s": "impulse to the body [N s]",
           "impulse_horizontal_n_s": "horizontal impulse [N s]"}
+#: Where the radial tick labels sit [deg]: between the 0 and 45 deg spokes, clear of every
+#: angle label.
+RLABEL_DEG = 22.5
+FACING_NOTE = ("angle: direction the block travels (0 deg = +x). The biped faces -x (180 deg), "
+               "left side toward -y: 180 deg is W's push, from behind.")
 
 
-def _data(source):
-    from biped.sim.sweep import SweepData, load
-
-    if isinstance(source, SweepData):
-        return source
-    return load(source)
-
-
-def _closed(theta, r):
+def _closed(theta: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.append(theta, theta[:1]), np.append(r, r[:1])
 
 
-def plot_envelope(source, ax=None, *, by: str = "speed_m_s", criterion: str = "survived",
-                  bound: bool = True, title: str | None = None, rmax: float | None = None,
-                  bin_deg: float | None = None):
+def _columns(data: Any) -> dict[str, list]:
+    return {n: data.table.column(n).to_pylist() for n in data.table.column_names}
+
+
+def _bound_radius(data: Any, cols: dict, by: str, dirs: np.ndarray) -> np.ndarray:
+    b = feet_in_place_bound(dirs, data.scenario)
+    if by == "speed_m_s":
+        mass = float(np.median(np.array(cols["block_mass_kg"], dtype=float)))
+        return b.speed_equivalent(mass, data.scenario.restitution)
+    return b.j_max_n_s
+
+
+def _values(cols: dict, by: str) -> np.ndarray:
+    return np.array([np.nan if v is None else v for v in cols[by]], dtype=float)
+
+
+def _scale(data: Any, by: str, bound: bool) -> float:
+    """A radial limit that shows every trial and Hof's bound: all of it when that costs at most
+    a factor 2.5 on the trials' scale, else at least its nearest point."""
+    cols = _columns(data)
+    r = _values(cols, by)
+    top = float(np.nanmax(r)) if np.isfinite(r).any() else 1.0
+    if bound:
+        radius = _bound_radius(data, cols, by, np.arange(0.0, 360.0, 2.0))
+        far, near = float(radius.max()), float(radius.min())
+        top = max(top, far if far <= 2.5 * top else near)
+    return 1.08 * max(top, 1e-9)
+
+
+def _facing_arrow(ax: Any, rmax: float) -> None:
+    """An arrow from the centre toward 180 deg: the way the biped faces."""
+    ax.annotate("", xy=(np.pi, 0.3 * rmax), xytext=(np.pi, 0.0),
+                arrowprops={"arrowstyle": "-|>", "color": "0.35", "lw": 1.2}, zorder=4)
+    ax.text(np.pi, 0.36 * rmax, "faces", color="0.35", fontsize=7, ha="center", va="bottom",
+            zorder=4)
+
+
+def plot_envelope(source: Any, ax: Any = None, *, by: str = "speed_m_s",
+                  criterion: str = "survived", bound: bool = True, title: str | None = None,
+                  rmax: float | None = None, bin_deg: float | None = None) -> Any:
     """Draw one sweep's envelope on a polar axes (created if None); returns the axes.
 
     ``by``: ``"speed_m_s"`` or ``"impulse_n_s"``; ``criterion``: ``"survived"`` or
-    ``"recovered"`` (:func:`biped.sim.sweep.survived`).
+    ``"recovered"`` (:func:`biped.analysis.survived`). ``rmax`` defaults to a scale that shows
+    every trial and Hof's bound (at least its nearest point).
     """
     import matplotlib.pyplot as plt
 
-    from biped.sim.sweep import envelope, feet_in_place_bound, survived
-
     if by not in LABELS:
         raise ScenarioError(f"by must be one of {', '.join(LABELS)}; got {by!r}")
-    data = _data(source)
+    data = sweep_data(source)
     if ax is None:
-        _, ax = plt.subplots(subplot_kw={"projection": "polar"}, figsize=(5.5, 5.5))
-    cols = {n: data.table.column(n).to_pylist() for n in data.table.column_names}
+        _, ax = plt.subplots(subplot_kw={"projection": "polar"}, figsize=(5.5, 5.8))
+    cols = _columns(data)
+    if rmax is None:
+        rmax = _scale(data, by, bound)
     ok = survived(cols, criterion)
     theta = np.radians(np.array(cols["direction_deg"], dtype=float))
-    r = np.array([np.nan if v is None else v for v in cols[by]], dtype=float)
+    r = _values(cols, by)
     ax.scatter(theta[ok], r[ok], s=14, c="tab:green", marker="o", label=criterion, zorder=3)
     ax.scatter(theta[~ok], r[~ok], s=18, c="tab:red", marker="x", label=f"not {criterion}",
                zorder=3)
@@ -69,71 +111,70 @@ def plot_envelope(source, ax=None, *, by: str = "speed_m_s", criterion: str = "s
         ax.plot(t, v, color="tab:green", lw=2, label="envelope")
     if bound:
         dirs = np.arange(0.0, 360.0, 2.0)
-        b = feet_in_place_bound(dirs, data.scenario)
-        radius = b.j_max_n_s
-        if by == "speed_m_s":
-            mass = np.median(np.array(cols["block_mass_kg"], dtype=float))
-            radius = b.speed_equivalent(mass, data.scenario.restitution)
+        radius = _bound_radius(data, cols, by, dirs)
         t, v = _closed(np.radians(dirs), radius)
-        ax.plot(t, v, "k--", lw=1.2, label="feet-in-place bound (Hof)")
-    if rmax is None:
-        finite = r[np.isfinite(r)]
-        rmax = 1.08 * max(finite.max() if finite.size else 1.0, 1e-9)
+        unit = LABELS[by].split("[")[-1].rstrip("]")
+        ax.plot(t, v, color="black", ls="--", lw=1.6, zorder=5,
+                label=f"feet-in-place bound (Hof): {radius.min():.3g}-{radius.max():.3g} {unit}")
     ax.set_ylim(0, rmax)
     ax.set_theta_zero_location("E")
     ax.set_theta_direction(1)
+    ax.set_rlabel_position(RLABEL_DEG)
+    _facing_arrow(ax, rmax)
     ctrl = cols["controller"][0] if cols["controller"] else "?"
     lim = cols["torque_limits"][0] if cols["torque_limits"] else "?"
-    ax.set_title(title or f"{ctrl}, torque limits: {lim}", pad=14)
-    ax.text(np.radians(225), rmax * 1.18, LABELS[by], fontsize=8, ha="center")
+    ax.set_title(f"{title or f'{ctrl}, torque limits: {lim}'}\nradius: {LABELS[by]}", pad=14,
+                 fontsize=10)
     return ax
 
 
-def plot_comparison(sources, *, labels=None, by: str = "speed_m_s", criterion: str = "survived",
-                    out: str | os.PathLike | None = None, bin_deg: float | None = None):
-    """Side-by-side polar envelopes of several sweeps (same radial scale) plus an overlay of their
-    envelope lines; saved (PNG, SVG, PDF by suffix) if ``out`` is given. Returns the figure."""
-    import matplotlib
-
+def plot_comparison(sources: Any, *, labels: Any = None, by: str = "speed_m_s",
+                    criterion: str = "survived", out: str | os.PathLike | None = None,
+                    bin_deg: float | None = None) -> Any:
+    """Polar envelopes of one or more sweeps side by side (same radial scale) and, for two or
+    more, an overlay of their envelope lines; a note says which way the biped faces. Saved (PNG,
+    SVG, PDF by suffix) if ``out`` is given. Returns the figure."""
     if out is not None:
         matplotlib.use("Agg", force=False)
     import matplotlib.pyplot as plt
 
-    from biped.sim.sweep import envelope
-
-    datas = [_data(s) for s in sources]
+    datas = [sweep_data(s) for s in sources]
     if not datas:
         raise ScenarioError("plot_comparison needs at least one sweep file")
     labels = labels or [None] * len(datas)
-    rmax = 0.0
-    for d in datas:
-        v = np.array([np.nan if x is None else x for x in d.table.column(by).to_pylist()], float)
-        if np.isfinite(v).any():
-            rmax = max(rmax, float(np.nanmax(v)))
-    rmax = 1.08 * (rmax or 1.0)
+    rmax = max(_scale(d, by, True) for d in datas)
     n = len(datas)
-    fig, axes = plt.subplots(1, n + 1, subplot_kw={"projection": "polar"},
-                             figsize=(4.6 * (n + 1), 4.9))
-    for ax, d, lab in zip(axes, datas, labels):
+    panels = n + 1 if n > 1 else 1
+    fig, axes = plt.subplots(1, panels, subplot_kw={"projection": "polar"},
+                             figsize=(4.6 * panels + 0.6, 6.0), squeeze=False)
+    axes = axes[0]
+    for ax, d, lab in zip(axes, datas, labels, strict=False):
         plot_envelope(d, ax, by=by, criterion=criterion, title=lab, rmax=rmax, bin_deg=bin_deg)
-    ax = axes[-1]
-    colors = ["tab:blue", "tab:orange", "tab:purple", "tab:brown"]
-    for k, (d, lab) in enumerate(zip(datas, labels)):
-        env = envelope(d.table, by=by, criterion=criterion, bin_deg=bin_deg)
-        if len(env.directions_deg) < 3:
-            continue
-        t, v = _closed(np.radians(env.directions_deg), np.nan_to_num(env.survived_max, nan=0.0))
-        name = lab or d.table.column("controller")[0].as_py()
-        ax.plot(t, v, color=colors[k % len(colors)], lw=2, label=name)
-        ax.fill(t, v, color=colors[k % len(colors)], alpha=0.12)
-    ax.set_ylim(0, rmax)
-    ax.set_theta_zero_location("E")
-    ax.set_title("envelopes overlaid", pad=14)
     handles, labs = axes[0].get_legend_handles_labels()
-    h2, l2 = ax.get_legend_handles_labels()
-    fig.legend(handles + h2, labs + l2, loc="lower center", ncol=min(6, len(labs + l2)),
-               fontsize=8, frameon=False)
-    fig.tight_layout(rect=(0, 0.07, 1, 0.94))
+    if n > 1:
+        ax = axes[-1]
+        colors = ["tab:blue", "tab:orange", "tab:purple", "tab:brown"]
+        for k, (d, lab) in enumerate(zip(datas, labels, strict=True)):
+            env = envelope(d.table, by=by, criterion=criterion, bin_deg=bin_deg)
+            if len(env.directions_deg) < 3:
+                continue
+            t, v = _closed(np.radians(env.directions_deg),
+                           np.nan_to_num(env.survived_max, nan=0.0))
+            name = lab or d.table.column("controller")[0].as_py()
+            ax.plot(t, v, color=colors[k % len(colors)], lw=2, label=name)
+            ax.fill(t, v, color=colors[k % len(colors)], alpha=0.12)
+        ax.set_ylim(0, rmax)
+        ax.set_theta_zero_location("E")
+        ax.set_rlabel_position(RLABEL_DEG)
+        _facing_arrow(ax, rmax)
+        ax.set_title(f"envelopes overlaid\nradius: {LABELS[by]}", pad=14, fontsize=10)
+        h2, l2 = ax.get_legend_handles_labels()
+        handles, labs = handles + h2, labs + l2
+    fig.legend(handles, labs, loc="lower center", ncol=min(2 * panels, len(labs), 6), fontsize=8,
+               frameon=False, bbox_to_anchor=(0.5, 0.06))
+    note = textwrap.fill(FACING_NOTE, width=int(95 * min(panels, 2) / 2 + 10 * (panels > 1)))
+    fig.text(0.5, 0.01, note, ha="center", va="bottom", fontsize=8)
+    fig.tight_layout(rect=(0, 0.17, 1, 0.93))
     if out is not None:
         out = Path(out)
         out.parent.mkdir(parents=True, exist_ok=True)
@@ -141,4 +182,4 @@ def plot_comparison(sources, *, labels=None, by: str = "speed_m_s", criterion: s
     return fig
 
 
-__all__ = ["plot_comparison", "plot_envelope"]
+__all__ = ["FACING_NOTE", "plot_comparison", "plot_envelope"]

@@ -13,10 +13,9 @@ from pathlib import Path
 
 import numpy as np
 
-_LEG_LABELS = ("hip abduction", "hip flexion", "hip rotation", "knee", "ankle inversion",
-               "ankle dorsiflexion")
-_LEG_JOINTS = ("hip_abduction", "hip_flexion", "hip_rotation", "knee", "ankle_inversion",
-               "ankle_dorsiflexion")
+from biped.models import LEG_JOINTS as _LEG_JOINTS
+
+_LEG_LABELS = tuple(j.replace("_", " ") for j in _LEG_JOINTS)
 _FOOT_COLOURS = {"left": "tab:blue", "right": "tab:red"}
 
 

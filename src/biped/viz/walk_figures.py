@@ -148,7 +148,7 @@ def plot_inverse_dynamics(result, markers, path) -> Path:
         ax.legend(loc="upper right", fontsize=6, ncol=3)
         _markers(ax, markers, labels=ax is axes[0])
     ax = axes[2]
-    mg = result.mass * 9.81
+    mg = result.mass * result.gravity
     for j, sd in enumerate(("left", "right")):
         ax.plot(t, result.grf[:, j, 2], color=_SIDE_COLOURS[sd], lw=1.0, label=f"{sd} vertical")
         ax.plot(t, result.grf[:, j, 0], color=_SIDE_COLOURS[sd], lw=0.8, ls="--", label=f"{sd} forward")

@@ -1,0 +1,403 @@
+"""A contact-feasible replacement for W Alg. 5: the desired wrench split by a small QP.
+
+W's Alg. 5 splits ``F_1^bd`` between the feet by the minimum-norm solution of
+``F_1^bd = G [F_l; F_r]``. Nothing keeps that split inside what a sole can carry: it asks for roll
+moments a 9 cm wide sole cannot give, the feet rock on their edges and, with no torque limit, the
+commanded torques grow without bound. ``distribution="qp"`` solves instead, at every call,
+
+    minimize   (G w - F_1^bd)^T W (G w - F_1^bd) + w^T R w + s (f_z,l - f_z,r)^2
+    over       w = [w_l; w_r], each foot's ground wrench [f; tau] in its SOLE frame at the sole centre
+    subject to per foot in contact: the contact wrench cone of a rectangular sole (Caron, Pham &
+               Nakamura, ICRA 2015: friction pyramid |f_x|, |f_y| <= mu f_z, centre of pressure
+               inside the sole |tau_x| <= Y f_z, |tau_y| <= X f_z, and the eight yaw-moment rows),
+               f_z >= f_min;
+               per foot not in contact: w_foot = 0;
+               with torque limits: lo <= J_leg^T F~_leg <= hi for every leg joint, linear in w
+               because each leg's torques are tau_leg = J_leg^T Ad^T_{g_{sole,1}} w_foot (W Alg. 6);
+
+``W = diag(force, force, force, moment, moment, moment)`` weighs the rows of the central-body
+wrench error (force rows well above moment rows: when ``F_1^bd`` is out of reach, the body's
+orientation gives way before the feet tip), ``R`` and ``s`` are small regularisations
+(:class:`QPWeights`, documented in docs/controller.md). ``X``, ``Y`` (half length and half width)
+and the sole frame come from the MJCF's sole geoms (:func:`biped.model.sole_rectangles`).
+
+Solver: quadprog (Goldfarb-Idnani dual active set) called directly on preallocated matrices that
+a compiled function fills; see docs/controller.md for the measured comparison with daqp.
+
+Failure handling (never an exception in the loop): if the QP is infeasible (the minimum normal
+force together with the torque limits cannot be met), it is solved again with ``f_min = 0``, for
+which ``w = 0`` is feasible; if that fails too (numerically), every foot wrench and torque is zero.
+``ContactQP.status`` tells which happened at the last call and ``ContactQP.fallbacks`` counts them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numba import njit
+
+from biped.control.recursions import alg6_torques
+from biped.errors import ScenarioError
+
+__all__ = ["QPWeights", "ContactQP", "cone_rows", "SOLVED", "RELAXED", "ZEROED"]
+
+#: ContactQP.status values
+SOLVED, RELAXED, ZEROED = 0, 1, 2
+
+_ROWS_PER_FOOT = 18  # min and max normal force + 4 friction + 4 CoP + 8 yaw moment
+
+
+@dataclass(frozen=True)
+class QPWeights:
+    """Weights and contact parameters of the QP distribution (SI units).
+
+    force, moment: weights of the force [1/N^2] and moment [1/(N m)^2] rows of the error between
+        the feet's summed wrench and ``F_1^bd`` at the central body.
+    reg_force, reg_moment: regularisation of each foot's force and moment (sole frame, sole centre).
+    split: regularisation of the difference of the two normal forces (f_z,l - f_z,r)^2.
+    min_normal_n: minimum normal force of a foot in contact [N].
+    max_normal_n: maximum normal force of a foot [N] (default 3 body weights of the 73 kg model):
+        bounds the wrenches, hence the torques, that an exploding F_1^bd (a leg near its
+        stretched-knee singularity, where P_1 grows without bound) can command.
+    friction: Coulomb coefficient of the sole-floor contact (the scenario's ``friction``).
+    friction_scale: the QP's pyramid uses ``friction * friction_scale`` (1/sqrt(2): the pyramid
+        inscribed in the circular cone that the scene's elliptic MuJoCo contact has).
+    cop_scale: the centre of pressure is kept inside the sole rectangle shrunk about its centre
+        by this factor (1: the whole sole; < 1 keeps it off the edges the foot would tip about).
+    """
+
+    force: float = 1.0
+    moment: float = 1.0
+    reg_force: float = 1e-6
+    reg_moment: float = 1e-5
+    split: float = 1e-5
+    min_normal_n: float = 10.0
+    max_normal_n: float = 2150.0
+    friction: float = 0.3
+    friction_scale: float = 1.0 / math.sqrt(2.0)
+    cop_scale: float = 1.0
+    array: np.ndarray = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self):
+        for name in ("force", "moment", "reg_force", "reg_moment", "friction", "friction_scale",
+                     "max_normal_n", "cop_scale"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+                raise ScenarioError(f"QP weight {name} must be a finite number > 0; got {v!r}")
+        for name in ("split", "min_normal_n"):
+            v = getattr(self, name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
+                raise ScenarioError(f"QP weight {name} must be a finite number >= 0; got {v!r}")
+        arr = np.array([self.force, self.moment, self.reg_force, self.reg_moment, self.split,
+                        self.min_normal_n, self.friction * self.friction_scale,
+                        self.max_normal_n], dtype=float)
+        if self.max_normal_n <= self.min_normal_n:
+            raise ScenarioError(f"QP max_normal_n ({self.max_normal_n} N) must exceed min_normal_n "
+                                f"({self.min_normal_n} N)")
+        object.__setattr__(self, "array", arr)
+
+
+# ----------------------------------------------------------------------------- compiled parts
+
+
+@njit(cache=True)
+def _sole_to_body(gf, gfs, g1, A):
+    """A = Ad^T_{g_{sole,1}}: maps a wrench in the sole frame at the sole centre to the same
+    wrench in the central body's frame (gf = g_{0,foot}, gfs = g_{foot,sole}, g1 = g_{0,1})."""
+    Rs = np.empty((3, 3))
+    ps = np.empty(3)
+    for i in range(3):
+        for j in range(3):
+            Rs[i, j] = gf[i, 0] * gfs[0, j] + gf[i, 1] * gfs[1, j] + gf[i, 2] * gfs[2, j]
+        ps[i] = gf[i, 3] + gf[i, 0] * gfs[0, 3] + gf[i, 1] * gfs[1, 3] + gf[i, 2] * gfs[2, 3]
+    # g_{s,1} = (R, p), R = Rs^T R1, p = Rs^T (p1 - ps); A = [[R^T, 0], [-R^T p^, R^T]]
+    d = np.empty(3)
+    for i in range(3):
+        d[i] = g1[i, 3] - ps[i]
+    p = np.empty(3)
+    for i in range(3):
+        p[i] = Rs[0, i] * d[0] + Rs[1, i] * d[1] + Rs[2, i] * d[2]
+    for i in range(3):
+        for j in range(3):
+            rt = g1[0, i] * Rs[0, j] + g1[1, i] * Rs[1, j] + g1[2, i] * Rs[2, j]  # (R^T)_{ij}
+            A[i, j] = rt
+            A[3 + i, 3 + j] = rt
+            A[i, 3 + j] = 0.0
+    for i in range(3):  # -(R^T p^)_{ij}, p^ = [[0,-p2,p1],[p2,0,-p0],[-p1,p0,0]]
+        r0, r1, r2 = A[i, 0], A[i, 1], A[i, 2]
+        A[3 + i, 0] = -(r1 * p[2] - r2 * p[1])
+        A[3 + i, 1] = -(r2 * p[0] - r0 * p[2])
+        A[3 + i, 2] = -(r0 * p[1] - r1 * p[0])
+
+
+@njit(cache=True)
+def cone_rows(X, Y, mu, fmin, fmax, o, Ct, b, m):
+    """Write the 18 rows ``Ct[r] . w >= b[r]`` of one rectangular sole's contact wrench cone
+    (half length X along x, half width Y along y, friction mu, normal force in [fmin, fmax]) for the
+    wrench w = x[o:o+6] = [fx, fy, fz, tx, ty, tz] from row m on; returns the next row."""
+    for r in range(m, m + _ROWS_PER_FOOT):
+        for c in range(Ct.shape[1]):
+            Ct[r, c] = 0.0
+        b[r] = 0.0
+    Ct[m, o + 2] = 1.0
+    b[m] = fmin
+    Ct[m + 1, o + 2] = -1.0
+    b[m + 1] = -fmax
+    r = m + 2
+    for s in (-1.0, 1.0):
+        Ct[r, o + 2] = mu  # mu fz + s fx >= 0
+        Ct[r, o + 0] = s
+        Ct[r + 1, o + 2] = mu  # mu fz + s fy >= 0
+        Ct[r + 1, o + 1] = s
+        Ct[r + 2, o + 2] = Y  # Y fz + s tx >= 0 (CoP_y = tx / fz)
+        Ct[r + 2, o + 3] = s
+        Ct[r + 3, o + 2] = X  # X fz + s ty >= 0 (CoP_x = -ty / fz)
+        Ct[r + 3, o + 4] = s
+        r += 4
+    k = (X + Y) * mu
+    for s1 in (-1.0, 1.0):
+        for s2 in (-1.0, 1.0):
+            # tz >= -k fz + |Y fx - mu tx| + |X fy - mu ty|
+            Ct[r, o + 5] = 1.0
+            Ct[r, o + 2] = k
+            Ct[r, o + 0] = -s1 * Y
+            Ct[r, o + 3] = s1 * mu
+            Ct[r, o + 1] = -s2 * X
+            Ct[r, o + 4] = s2 * mu
+            # tz <= k fz - |Y fx + mu tx| - |X fy + mu ty|
+            Ct[r + 1, o + 5] = -1.0
+            Ct[r + 1, o + 2] = k
+            Ct[r + 1, o + 0] = -s1 * Y
+            Ct[r + 1, o + 3] = -s1 * mu
+            Ct[r + 1, o + 1] = -s2 * X
+            Ct[r + 1, o + 4] = -s2 * mu
+            r += 2
+    return r
+
+
+@njit(cache=True)
+def qp_build(g, gl, parent, H, leg, beyond, feet, contact, Fd, soles, dims, prm, lo, hi, nlim,
+             A, T, F, tau_tmp, col, Gq, av, Ct, b):
+    """Fill the QP (quadprog's form: minimize 1/2 x^T Gq x - av^T x s.t. Ct x >= b, the first
+    ``meq`` rows equalities) from the kernel's poses ``g`` and joint transforms ``gl`` and the
+    desired wrench ``Fd``; also the maps ``A[f] = Ad^T_{g_{sole_f,1}}`` (6, 6) and the torque
+    map ``T`` (n_joints, 12): tau = T x. Returns (meq, rows used, first row of each foot's cone)."""
+    nj = T.shape[0]
+    for f in range(2):
+        _sole_to_body(g[feet[f]], soles[f], g[0], A[f])
+    # torque map: Alg. 6 is linear; both legs at once (they do not interact)
+    for i in range(6):
+        for r in range(6):
+            col[0, r] = A[0, r, i]
+            col[1, r] = A[1, r, i]
+        alg6_torques(parent, H, leg, beyond, gl, col[0], col[1], F, tau_tmp)
+        for j in range(nj):
+            side = leg[j + 1] if beyond[j + 1] == 0 else -1
+            T[j, i] = tau_tmp[j] if side == 0 else 0.0
+            T[j, 6 + i] = tau_tmp[j] if side == 1 else 0.0
+    # cost: sum_r W_r (A_r x - Fd_r)^2 + reg + split
+    for i in range(12):
+        av[i] = 0.0
+        for j in range(12):
+            Gq[i, j] = 0.0
+    for r in range(6):
+        w = prm[0] if r < 3 else prm[1]
+        for i in range(12):
+            ai = A[i // 6, r, i % 6]
+            if ai == 0.0:
+                continue
+            av[i] += w * ai * Fd[r]
+            for j in range(12):
+                Gq[i, j] += w * ai * A[j // 6, r, j % 6]
+    for f in range(2):
+        for c in range(6):
+            Gq[6 * f + c, 6 * f + c] += prm[2] if c < 3 else prm[3]
+    Gq[2, 2] += prm[4]
+    Gq[8, 8] += prm[4]
+    Gq[2, 8] -= prm[4]
+    Gq[8, 2] -= prm[4]
+    # constraints: equalities (feet in the air) first
+    m = 0
+    for f in range(2):
+        if contact[f] == 0:
+            for c in range(6):
+                for i in range(12):
+                    Ct[m, i] = 0.0
+                Ct[m, 6 * f + c] = 1.0
+                b[m] = 0.0
+                m += 1
+    meq = m
+    first = np.full(2, -1)
+    for f in range(2):
+        if contact[f] != 0:
+            first[f] = m
+            m = cone_rows(dims[f, 0], dims[f, 1], prm[6], prm[5], prm[7], 6 * f, Ct, b, m)
+    if nlim:
+        for j in range(nj):
+            side = leg[j + 1] if beyond[j + 1] == 0 else -1
+            if side < 0 or contact[side] == 0:
+                continue
+            for i in range(12):
+                Ct[m, i] = T[j, i]
+                Ct[m + 1, i] = -T[j, i]
+            b[m] = lo[j]
+            b[m + 1] = -hi[j]
+            m += 2
+    used = m
+    for r in range(m, Ct.shape[0]):  # padding: 0 >= -1, never active
+        for i in range(12):
+            Ct[r, i] = 0.0
+        b[r] = -1.0
+    return meq, used, first[0], first[1]
+
+
+@njit(cache=True)
+def qp_finish(x, contact, A, T, soles, tau, Fl_tilde, Fr_tilde, Fl, Fr):
+    """From the foot wrenches x (12,) (sole frames): joint torques tau = T x, the legs' shares
+    F~ = A_f x_f (central-body frame) and the feet's wrenches in their COM frames. A foot not
+    in contact gets exactly zero (the solver's equality holds to rounding only)."""
+    for f in range(2):
+        if contact[f] == 0:
+            for c in range(6):
+                x[6 * f + c] = 0.0
+    for j in range(T.shape[0]):
+        s = 0.0
+        for i in range(12):
+            s += T[j, i] * x[i]
+        tau[j] = s
+    for f in range(2):
+        out = Fl_tilde if f == 0 else Fr_tilde
+        for r in range(6):
+            s = 0.0
+            for c in range(6):
+                s += A[f, r, c] * x[6 * f + c]
+            out[r] = s
+        # foot COM frame: F_foot = Ad^T_{g_{sole,foot}} w, g_{sole,foot} = (R^T, -R^T p) of g_{foot,sole}
+        # = [R f; R tau + p x (R f)] with (R, p) = g_{foot,sole}
+        gfs = soles[f]
+        w = x[6 * f:6 * f + 6]
+        ff = Fl if f == 0 else Fr
+        for i in range(3):
+            ff[i] = gfs[i, 0] * w[0] + gfs[i, 1] * w[1] + gfs[i, 2] * w[2]
+        for i in range(3):
+            ff[3 + i] = gfs[i, 0] * w[3] + gfs[i, 1] * w[4] + gfs[i, 2] * w[5]
+        p0, p1, p2 = gfs[0, 3], gfs[1, 3], gfs[2, 3]
+        f0, f1, f2 = ff[0], ff[1], ff[2]
+        ff[3] += p1 * f2 - p2 * f1
+        ff[4] += p2 * f0 - p0 * f2
+        ff[5] += p0 * f1 - p1 * f0
+
+
+# ----------------------------------------------------------------------------- the object
+
+
+class ContactQP:
+    """Preallocated QP distribution for one :class:`~biped.control.WorkspaceController`.
+
+    ``soles``: (left, right) :class:`~biped.model.SoleRectangle`; ``weights``: :class:`QPWeights`;
+    ``lower``, ``upper``: (n_joints,) torque limits in the controller's joint order [N m] or None;
+    ``solver``: "quadprog" (default) or "daqp" (the same problem; for the comparison).
+    """
+
+    def __init__(self, tree, soles, weights: QPWeights | None = None, lower=None, upper=None,
+                 solver: str = "quadprog"):
+        if solver not in ("quadprog", "daqp"):
+            raise ScenarioError(f"unknown QP solver {solver!r}; valid: 'quadprog', 'daqp'")
+        self.weights = weights or QPWeights()
+        self.solver = solver
+        nj = tree.n_links - 1
+        self._tree = tree
+        self._beyond = tree.beyond_foot.astype(np.int64)
+        self.soles = soles
+        self._soles = np.ascontiguousarray(np.stack([s.g_foot_sole for s in soles]), dtype=float)
+        self._dims = self.weights.cop_scale * np.array([[s.half_length, s.half_width] for s in soles],
+                                                       dtype=float)
+        if (lower is None) != (upper is None):
+            raise ScenarioError("torque limits for the QP need both lower and upper bounds, or neither")
+        self.limited = lower is not None
+        self._lo = np.zeros(nj) if lower is None else np.asarray(lower, dtype=float).copy()
+        self._hi = np.zeros(nj) if upper is None else np.asarray(upper, dtype=float).copy()
+        if self._lo.shape != (nj,) or self._hi.shape != (nj,):
+            raise ScenarioError(f"QP torque limits need {nj} lower and upper bounds; got "
+                                f"{self._lo.shape}, {self._hi.shape}")
+        n_lim = sum(1 for j in range(nj) if tree.leg[j + 1] >= 0 and not tree.beyond_foot[j + 1])
+        rows = 2 * _ROWS_PER_FOOT + (2 * n_lim if self.limited else 0)
+        self.A = np.zeros((2, 6, 6))
+        self.T = np.zeros((nj, 12))
+        self._F = np.zeros((tree.n_links, 6))
+        self._tau = np.zeros(nj)
+        self._col = np.zeros((2, 6))
+        self.Gq = np.zeros((12, 12))
+        self.av = np.zeros(12)
+        self.Ct = np.zeros((rows, 12))
+        self.b = np.zeros(rows)
+        self.x = np.zeros(12)
+        self.meq = 0
+        self.rows = 0
+        self.first = (-1, -1)
+        self.status = SOLVED
+        self.fallbacks = {RELAXED: 0, ZEROED: 0}
+        self._prm = self.weights.array
+        self._inf = np.full(rows, 1e30)
+        self._sense = np.zeros(rows, dtype=np.int32)
+        self._meq_sense = 0
+        self._f = np.zeros(12)
+        import quadprog
+
+        self._quadprog = quadprog.solve_qp
+        if solver == "daqp":
+            import daqp
+
+            self._daqp = daqp.solve
+
+    def build(self, g, gl, contact, Fd):
+        """Fill the QP for one state (the kernel's work buffers ``g``, ``gl`` and ``F_1^bd``)."""
+        t = self._tree
+        meq, used, f0, f1 = qp_build(g, gl, t.parent, t.H, t.leg, self._beyond, t.feet, contact, Fd,
+                                     self._soles, self._dims, self._prm, self._lo, self._hi,
+                                     self.limited, self.A, self.T, self._F, self._tau, self._col,
+                                     self.Gq, self.av, self.Ct, self.b)
+        self.meq, self.rows, self.first = meq, used, (f0, f1)
+
+    def _solve_once(self):
+        if self.solver == "quadprog":
+            return self._quadprog(self.Gq, self.av, self.Ct.T, self.b, self.meq)[0]
+        if self.meq != self._meq_sense:
+            self._sense[:] = 0
+            self._sense[:self.meq] = 5
+            self._meq_sense = self.meq
+        np.negative(self.av, out=self._f)
+        x, _, flag, _ = self._daqp(self.Gq, self._f, self.Ct, self._inf, self.b, self._sense)
+        if flag < 1:
+            raise ValueError(f"daqp exit flag {flag}")
+        return x
+
+    def solve(self) -> np.ndarray:
+        """Solve the built QP into ``self.x`` (with the documented fallbacks); returns ``self.x``."""
+        x = self.x
+        try:
+            x[:] = self._solve_once()
+            self.status = SOLVED
+        except ValueError:
+            first = [f for f in self.first if f >= 0]
+            saved = [self.b[f] for f in first]
+            self.b[first] = 0.0
+            try:
+                x[:] = self._solve_once()
+                self.status = RELAXED
+            except ValueError:
+                x[:] = 0.0
+                self.status = ZEROED
+            self.b[first] = saved
+            self.fallbacks[self.status] += 1
+        if not math.isfinite(x.sum()):
+            x[:] = 0.0
+            self.status = ZEROED
+            self.fallbacks[ZEROED] += 1
+        return x
+
+    def finish(self, contact, tau, Fl_tilde, Fr_tilde, Fl, Fr):
+        """Write the torques and wrenches implied by ``self.x`` into the given buffers."""
+        qp_finish(self.x, contact, self.A, self.T, self._soles, tau, Fl_tilde, Fr_tilde, Fl, Fr)

@@ -1,0 +1,213 @@
+"""Files of a kinematic walk (``biped walk``): trajectory.csv, summary.json, figures/,
+replay.html and video.mp4 of Bediz's figure.
+
+Each of :func:`write_trajectory_csv`, :func:`build_replay`, :func:`figure_model` and
+:func:`figure_qpos` is a function of (motion, ...) and writes or returns one product;
+:func:`write_walk` runs them in turn and writes the summary.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from biped.kinematic.dynamics import inverse_dynamics, load_biped
+from biped.kinematic.figure import (
+    JOINT_NAMES,
+    PARTS,
+    FigureDims,
+    FigurePoses,
+    figure_mjcf,
+    part_geoms,
+)
+from biped.kinematic.gaits import stair_geometry, walk_metrics
+from biped.spatial import rot_to_quat
+from biped.viz.replay import Replay, ReplayGeom, write_replay
+from biped.viz.video import render_video
+from biped.viz.walk_figures import plot_feet, plot_inverse_dynamics, plot_joint_angles
+
+__all__ = ["CSV_COLUMNS", "build_replay", "figure_model", "figure_qpos", "replay_geoms",
+           "write_trajectory_csv", "write_walk"]
+
+_POINTS = ("left_heel", "left_toe", "right_heel", "right_toe")
+#: Columns of trajectory.csv: time [s], the 12 joint angles [rad], the pelvis (mid-hip point) and
+#: the sole points [m, world], and whether each foot bears weight (0/1).
+CSV_COLUMNS = (("time",) + JOINT_NAMES + ("pelvis_x", "pelvis_y", "pelvis_z")
+               + tuple(f"{p}_{a}" for p in _POINTS for a in "xyz") + ("left_stance", "right_stance"))
+
+
+def write_trajectory_csv(motion, landmarks: dict, path) -> Path:
+    """trajectory.csv: one row per sample, columns :data:`CSV_COLUMNS` (SI units, rad)."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    cols = [motion.times[:, None], motion.angles, motion.pelvis_pos]
+    cols += [landmarks[p] for p in _POINTS]
+    cols.append(motion.stance.astype(float))
+    table = np.hstack(cols)
+    with path.open("w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(CSV_COLUMNS)
+        for row in table:
+            w.writerow([f"{v:.9g}" for v in row])
+    return path
+
+
+def replay_geoms(dims: FigureDims, poses: FigurePoses):
+    """The figure as :class:`biped.viz.replay.ReplayGeom` shapes with world poses.
+
+    Returns ``(geoms (15,), pos (T, 15, 3), quat (T, 15, 4))``, quaternions (w, x, y, z).
+    """
+    shapes = part_geoms(dims)
+    geoms, pos = [], np.empty_like(poses.pos)
+    quat = np.empty(poses.pos.shape[:2] + (4,))
+    for i, p in enumerate(PARTS):
+        kind, size, centre = shapes[p.name]
+        geoms.append(ReplayGeom(p.name, kind, size, p.rgba))
+        pos[:, i] = poses.pos[:, i] + np.einsum("tij,j->ti", poses.rot[:, i], centre)
+        for t in range(poses.pos.shape[0]):
+            quat[t, i] = rot_to_quat(np.ascontiguousarray(poses.rot[t, i]))
+    return tuple(geoms), pos, quat
+
+
+def build_replay(motion, title: str, info: dict | None = None, rate: float = 60.0):
+    """The motion as a :class:`biped.viz.replay.Replay`: the 15 parts at their world poses, the
+    floor and the stairs (static), gait changes as markers; at most ``rate`` frames per second."""
+    t = motion.times
+    n = max(2, math.floor((t[-1] - t[0]) * rate) + 1)
+    idx = np.unique(np.clip(np.searchsorted(t, t[0] + np.arange(n) / rate - 1e-9), 0, t.size - 1))
+    if idx[-1] != t.size - 1:
+        idx = np.append(idx, t.size - 1)
+    poses = motion.poses()
+    sub = type(poses)(poses.pos[idx], poses.rot[idx])
+    geoms, pos, quat = replay_geoms(motion.dims, sub)
+    statics = [ReplayGeom("floor", "plane", (0.0, 0.0), (0.85, 0.85, 0.85, 1.0))]
+    spos, squat = [np.zeros(3)], [np.array([1.0, 0.0, 0.0, 0.0])]
+    for k, (c, h) in enumerate(motion.plan.terrain.boxes(width=1.2)):
+        statics.append(ReplayGeom(f"stair{k + 1}", "box", h, (0.62, 0.6, 0.55, 1.0)))
+        spos.append(np.asarray(c))
+        squat.append(np.array([1.0, 0.0, 0.0, 0.0]))
+    T = idx.size
+    pos = np.concatenate([pos, np.broadcast_to(np.array(spos), (T, len(spos), 3))], axis=1)
+    quat = np.concatenate([quat, np.broadcast_to(np.array(squat), (T, len(squat), 4))], axis=1)
+    return Replay(geoms=tuple(geoms) + tuple(statics), times=t[idx], pos=pos, quat=quat, title=title,
+                  info=dict(info or {}), markers=tuple(motion.plan.markers))
+
+
+def figure_model(motion):
+    """``mujoco.MjModel`` of the figure on its terrain (:func:`~biped.kinematic.figure.figure_mjcf`)."""
+    return mujoco.MjModel.from_xml_string(figure_mjcf(motion.dims, motion.plan.terrain.boxes(width=1.2)))
+
+
+def figure_qpos(model, motion) -> np.ndarray:
+    """(T, nq) qpos of :func:`figure_model` for the motion, joints addressed by name."""
+    T = motion.times.size
+    q = np.zeros((T, model.nq))
+    root = model.joint("pelvis").qposadr[0]
+    q[:, root:root + 3] = motion.pelvis_pos
+    prev = None
+    for t in range(T):
+        qt = rot_to_quat(np.ascontiguousarray(motion.pelvis_rot[t]))
+        if prev is not None and float(qt @ prev) < 0:
+            qt = -qt
+        q[t, root + 3:root + 7] = prev = qt
+    for j, name in enumerate(JOINT_NAMES):
+        q[:, model.joint(name).qposadr[0]] = motion.angles[:, j]
+    return q
+
+
+@dataclass(frozen=True)
+class WalkRun:
+    """What :func:`write_walk` computed and wrote: the sampled ``motion``, its ``metrics``
+    (:func:`~biped.kinematic.walk_metrics`), the inverse dynamics ``idyn`` (None if skipped), the
+    ``summary`` dict written to summary.json, and ``notes`` (why an output is missing)."""
+
+    motion: object
+    metrics: object
+    idyn: object
+    summary: dict
+    notes: dict
+
+
+def walk_stages(*, dynamics: bool = True, figures: bool = True, replay: bool = True,
+                video: bool = True) -> list[str]:
+    """The stages :func:`write_walk` runs, in order."""
+    return (["motion", "trajectory.csv"] + (["dynamics"] if dynamics else [])
+            + (["figures"] if figures else []) + (["replay.html"] if replay else [])
+            + (["video.mp4"] if video else []))
+
+
+def write_walk(plan, out: Path, *, gait: str, speed: float, rate: float,
+               stair_rise: float | None = None, stair_run: float | None = None,
+               dynamics: bool = True, figures: bool = True, replay: bool = True,
+               video: bool = True, on_stage: Callable[[str], None] | None = None,
+               model: str | Path | None = None) -> WalkRun:
+    """Sample ``plan`` at ``rate`` [Hz] and write the walk's files into ``out`` (created):
+    trajectory.csv, then (unless switched off) the inverse dynamics, figures/, replay.html,
+    video.mp4, and summary.json last. ``on_stage(name)`` is called before each of
+    :func:`walk_stages`; ``gait``, ``speed``, ``stair_rise`` / ``stair_run`` are recorded in the
+    summary (the stairs' geometry for the upstairs and demo gaits). ``model``: the MJCF biped
+    whose inertias the inverse dynamics use (None: W's shipped biped), recorded in the summary."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    paths, notes = {}, {}
+    idyn = None
+    for stage in walk_stages(dynamics=dynamics, figures=figures, replay=replay, video=video):
+        if on_stage is not None:
+            on_stage(stage)
+        if stage == "motion":
+            motion = plan.sample(rate)
+            lm = motion.landmarks()
+            metrics = walk_metrics(motion, lm)
+        elif stage == "trajectory.csv":
+            paths["trajectory"] = str(write_trajectory_csv(motion, lm, out / "trajectory.csv"))
+        elif stage == "dynamics":
+            idyn = inverse_dynamics(motion, load_biped(model) if model else None)
+        elif stage == "figures":
+            figs = [plot_joint_angles(motion, out / "figures" / "joint_angles.png"),
+                    plot_feet(motion, lm, out / "figures" / "feet.png")]
+            if idyn is not None:
+                figs.append(plot_inverse_dynamics(idyn, plan.markers, out / "figures" / "inverse_dynamics.png"))
+            paths["figures"] = [str(f) for f in figs]
+        elif stage == "replay.html":
+            info = {"gait": gait, "distance_m": metrics.distance_m,
+                    "height_climbed_m": metrics.height_climbed_m,
+                    "max_stance_slip_m": metrics.max_stance_slip_m,
+                    "min_swing_clearance_m": metrics.min_swing_clearance_m}
+            rep = build_replay(motion, f"biped walk --gait {gait} (Bediz's kinematic figure)", info)
+            paths["replay"] = str(write_replay(rep, out / "replay.html"))
+        elif stage == "video.mp4":
+            model = figure_model(motion)
+            res = render_video(model, motion.times, figure_qpos(model, motion), out / "video.mp4",
+                               track_body="pelvis", distance=4.0, azimuth=-125.0, elevation=-15.0,
+                               fps=25, width=480, height=360)
+            if res.path is None:
+                notes["video"] = res.reason
+            else:
+                paths["video"] = str(res.path)
+    summary = {
+        "gait": gait,
+        "speed_m_s": speed,
+        "rate_hz": rate,
+        "somersault": plan.params.somersault,
+        **metrics.as_dict(),
+        "step_length_m": plan.dims.leg * math.sin(2 * math.radians(plan.params.alpha)),
+        "markers": list(plan.markers),
+    }
+    if gait in ("upstairs", "demo"):
+        rise, run_, a_up = stair_geometry(plan.dims, plan.params, stair_rise, stair_run)
+        summary["stairs"] = {"rise_m": rise, "run_m": run_, "alpha_up_deg": math.degrees(a_up),
+                             "alpha_down_deg": plan.params.alpha_down}
+    if idyn is not None:
+        summary["inverse_dynamics"] = idyn.summary()
+    summary["model"] = str(Path(model).resolve()) if model else "wendlandt"
+    summary["outputs"] = paths
+    summary["notes"] = notes
+    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    return WalkRun(motion, metrics, idyn, summary, notes)

@@ -1,0 +1,97 @@
+"""First-run cost of the compiled kernels: know when numba's cache is cold, compile ahead, say so.
+
+W's controller is one numba kernel (:func:`biped.control.recursions.compute_kernel`); the contact
+monitor's classification is another (:func:`biped.sim.contact._contact_bits`). numba compiles
+them on first use (~15 s for the controller on a 2-core x86_64 machine) and keeps the machine
+code on disk (see :mod:`biped._numba_cache` for where), so every later process loads it in well
+under a second. :func:`cold_kernels` tells, before anything compiles, which kernels have no
+cached code for this machine and these sources; :func:`warm_up` compiles them, telling the user
+first. ``biped push`` and ``biped sweep`` call it before they start (the sweep before its worker
+processes start, so that they all load the cache instead of each compiling).
+
+    >>> from biped.sim.jit import cold_kernels, warm_up
+    >>> cold_kernels()            # [] once compiled on this machine
+    >>> warm_up(log=print)        # prints "compiling ..." only when something is cold
+"""
+
+from __future__ import annotations
+
+import hashlib
+import time
+from collections.abc import Callable
+
+#: Kernel names for :func:`cold_kernels` / :func:`warm_up` and what they are, for the message.
+KERNELS = {"controller": "W's controller (numba, ~15 s)",
+           "contact": "the contact monitor (numba, ~1 s)"}
+
+
+def _dispatcher(name: str):
+    if name == "controller":
+        from biped.control.recursions import compute_kernel
+
+        return compute_kernel
+    if name == "contact":
+        from biped.sim.contact import _contact_bits
+
+        return _contact_bits
+    raise ValueError(f"unknown kernel {name!r}; valid: {', '.join(KERNELS)}")
+
+
+def is_cached(dispatcher) -> bool | None:
+    """True if numba's on-disk cache holds machine code of ``dispatcher`` for this CPU and this
+    version of its source (what numba itself checks before it loads an entry: the source stamp
+    in the index, then the code hash and the CPU in the entry's key); None if that cannot be told
+    (caching off, or a numba whose cache layout differs)."""
+    if getattr(dispatcher, "overloads", None):
+        return True  # compiled in this process already
+    cache = getattr(dispatcher, "_cache", None)
+    try:
+        index = cache._cache_file._load_index()
+        from numba.core.registry import cpu_target
+
+        magic = cpu_target.target_context.codegen().magic_tuple()
+        code = hashlib.sha256(dispatcher.py_func.__code__.co_code).hexdigest()
+        return any(key[1] == magic and key[2][0] == code for key in index)
+    except Exception:  # noqa: BLE001 - a numba without this layout, or no cache: cannot tell
+        return None
+
+
+def cold_kernels(names=tuple(KERNELS)) -> list[str]:
+    """The kernels of ``names`` that would compile on first use (not cached, or cannot tell)."""
+    return [n for n in names if not is_cached(_dispatcher(n))]
+
+
+def _compile(name: str) -> None:
+    """Run the kernel once on real inputs (what compiles it, and stores it in the cache)."""
+    import numpy as np
+
+    if name == "contact":
+        from biped.sim.contact import _contact_bits
+
+        _contact_bits(np.zeros((0, 2), dtype=np.int32)[:, ::1][:, :], np.zeros((1, 1), np.int64))
+        return
+    import biped.models
+    from biped.control import WorkspaceController
+    from biped.model import TreeModel
+
+    tree = TreeModel.from_mjcf(biped.models.path("wendlandt"))
+    ctrl = WorkspaceController(tree)
+    qpos = np.zeros(tree.nq)
+    qpos[3] = 1.0
+    ctrl.torques(qpos, np.zeros(tree.nv))
+
+
+def warm_up(names=tuple(KERNELS), *, log: Callable[[str], None] | None = print) -> float:
+    """Compile the cold kernels of ``names`` now, after one line through ``log`` saying so
+    (nothing is said when everything is cached). Returns the seconds spent compiling."""
+    cold = cold_kernels(names)
+    if not cold:
+        return 0.0
+    if log is not None:
+        what = " and ".join(KERNELS[n].split(" (")[0] for n in cold)
+        secs = "~15 s" if "controller" in cold else "~1 s"
+        log(f"compiling {what} (first run only, {secs}; cached for later runs)")
+    t0 = time.perf_counter()
+    for n in cold:
+        _compile(n)
+    return time.perf_counter() - t0

@@ -1,0 +1,213 @@
+"""Local worker processes that start once and run trials until told to stop.
+
+Each worker is a fresh interpreter (``sys.executable``, the parent's ``sys.path``), started once
+per sweep; it keeps whatever the trial function caches (compiled scenes, controllers, numba code)
+for every trial it runs. Parent and worker talk over two pipes with length-prefixed pickles: the
+parent sends a chunk of :class:`~biped.sim.sweep.spec.TrialSetup`, the worker answers one row per
+trial as soon as it is done. No ``multiprocessing``: no shared semaphores, no resource tracker.
+
+A worker dies with its parent: ``prctl(PR_SET_PDEATHSIG, SIGKILL)`` on Linux, elsewhere a thread
+that watches ``getppid()``. It ignores SIGINT (Ctrl-C in a terminal reaches the whole process
+group: the parent decides) and writes nothing else on its result pipe (``print`` in a trial goes
+to stderr).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import os
+import pickle
+import selectors
+import signal
+import struct
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable, Sequence
+from typing import Any, BinaryIO
+
+_LEN = struct.Struct("<Q")
+_PR_SET_PDEATHSIG = 1
+_BOOT = ("import sys, pickle, struct; f = sys.stdin.buffer; "
+         "n = struct.unpack('<Q', f.read(8))[0]; sys.path[:] = pickle.loads(f.read(n)); "
+         "from biped.sim.sweep.pool import worker_main; worker_main(int(sys.argv[1]))")
+
+
+def _frame(obj: Any) -> bytes:
+    data = pickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL)
+    return _LEN.pack(len(data)) + data
+
+
+def _write_all(fd: int, data: bytes) -> None:
+    view = memoryview(data)
+    while view:
+        view = view[os.write(fd, view):]
+
+
+def _read_frame(f: BinaryIO) -> Any:
+    head = f.read(_LEN.size)
+    if len(head) < _LEN.size:
+        return None
+    (n,) = _LEN.unpack(head)
+    data = f.read(n)
+    if len(data) < n:
+        return None
+    return pickle.loads(data)
+
+
+def _die_with_parent(parent_pid: int) -> None:
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        ok = libc.prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) == 0
+    except (OSError, AttributeError):  # not Linux
+        ok = False
+    if not ok:
+        def watch() -> None:
+            while os.getppid() == parent_pid:
+                time.sleep(0.5)
+            os._exit(1)
+
+        threading.Thread(target=watch, daemon=True).start()
+    if os.getppid() != parent_pid:  # the parent died before prctl took effect
+        os._exit(1)
+
+
+def worker_main(parent_pid: int) -> None:
+    """The loop of one worker process (started by :class:`LocalPool`)."""
+    from biped.sim.sweep.runner import execute_trial
+
+    _die_with_parent(parent_pid)
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    out = os.dup(1)
+    os.dup2(2, 1)  # stray prints go to stderr, never into the result pipe
+    inp = sys.stdin.buffer
+    trial_fn = _read_frame(inp)
+    while True:
+        setups = _read_frame(inp)
+        if setups is None:  # the parent closed the pipe: done
+            return
+        for setup in setups:
+            _write_all(out, _frame(execute_trial(trial_fn, setup)))
+
+
+class _Worker:
+    def __init__(self, trial_fn: Callable) -> None:
+        self.proc = subprocess.Popen(
+            [sys.executable, "-c", _BOOT, str(os.getpid())], stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE, bufsize=0, close_fds=True)
+        assert self.proc.stdin is not None and self.proc.stdout is not None
+        self.stdin, self.stdout = self.proc.stdin, self.proc.stdout
+        self.fd = self.stdout.fileno()
+        self.buf = b""
+        self.remaining = 0  # rows still due for the chunk it runs
+        self.send(sys.path)
+        self.send(trial_fn)
+
+    def send(self, obj: Any) -> None:
+        _write_all(self.stdin.fileno(), _frame(obj))
+
+    def rows(self, data: bytes) -> list[dict]:
+        """Complete rows in what has arrived so far."""
+        self.buf += data
+        out = []
+        while len(self.buf) >= _LEN.size:
+            (n,) = _LEN.unpack_from(self.buf)
+            if len(self.buf) < _LEN.size + n:
+                break
+            out.append(pickle.loads(self.buf[_LEN.size:_LEN.size + n]))
+            self.buf = self.buf[_LEN.size + n:]
+        return out
+
+    def kill(self) -> list[dict]:
+        """Kill it; return the rows it had finished and written but not yet delivered."""
+        with contextlib.suppress(ProcessLookupError):
+            self.proc.kill()
+        rows = []
+        with contextlib.suppress(OSError, ValueError):
+            while data := os.read(self.fd, 1 << 16):
+                rows += self.rows(data)
+        self.close()
+        return rows
+
+    def close(self) -> None:
+        for f in (self.stdin, self.stdout):
+            with contextlib.suppress(OSError, ValueError):
+                f.close()
+        try:
+            self.proc.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            self.proc.kill()
+            self.proc.wait()
+
+
+class LocalPool:
+    """``workers`` local processes running ``trial_fn`` (importable by name: a module-level
+    function) on chunks of trial setups. :meth:`run` calls ``record(rows)`` as rows arrive and
+    returns the number of trials lost to workers that died (a dead worker is replaced, up to
+    ``4 * workers`` times, for the chunks still to run)."""
+
+    def __init__(self, workers: int, trial_fn: Callable) -> None:
+        self.trial_fn = trial_fn
+        self.workers: list[_Worker] = []
+        self.respawns = 4 * workers
+        self.n = workers
+
+    def run(self, chunks: Sequence[Sequence[Any]], record: Callable[[list[dict]], None]) -> int:
+        todo = list(reversed(chunks))
+        lost = 0
+        sel = selectors.DefaultSelector()
+        try:
+            for _ in range(min(self.n, len(todo))):
+                self._start(sel, todo)
+            while sel.get_map():
+                for key, _ in sel.select():
+                    w: _Worker = key.data
+                    data = os.read(w.fd, 1 << 16)
+                    if data:
+                        rows = w.rows(data)
+                        if rows:
+                            w.remaining -= len(rows)
+                            record(rows)
+                        if w.remaining == 0:
+                            if todo:
+                                self._assign(w, todo.pop())
+                            else:
+                                sel.unregister(w.fd)
+                                self.workers.remove(w)
+                                w.close()
+                        continue
+                    # end of file: the worker died
+                    lost += w.remaining
+                    sel.unregister(w.fd)
+                    self.workers.remove(w)
+                    w.close()
+                    if todo and (self.respawns > 0 or not self.workers):
+                        if self.respawns > 0:
+                            self.respawns -= 1
+                            self._start(sel, todo)
+                        else:
+                            lost += sum(len(c) for c in todo)
+                            todo.clear()
+        finally:
+            # interrupted (Ctrl-C, SIGTERM) or done: stop every worker, keep what they finished
+            for w in self.workers:
+                record(w.kill())
+            self.workers.clear()
+            sel.close()
+        return lost
+
+    def _start(self, sel: selectors.BaseSelector, todo: list) -> None:
+        w = _Worker(self.trial_fn)
+        self.workers.append(w)
+        sel.register(w.fd, selectors.EVENT_READ, w)
+        self._assign(w, todo.pop())
+
+    @staticmethod
+    def _assign(w: _Worker, chunk: Sequence[Any]) -> None:
+        w.remaining = len(chunk)
+        w.send(list(chunk))
+
+
+__all__ = ["LocalPool", "worker_main"]

@@ -1,0 +1,315 @@
+"""Running a sweep: every trial that ``out`` does not hold yet, in this process, on local worker
+processes or on a Dask cluster, each finished trial on disk at once.
+
+The runner knows nothing of MuJoCo or of pushes: it calls ``trial_fn(setup) -> {column: value}``
+(default: :func:`biped.sim.sweep.trial.run_trial`) and stores rows (:mod:`.store`).
+
+Interruptions: Ctrl-C and SIGTERM stop the workers, keep every finished trial (in
+``<out>.parts/``) and raise (:class:`KeyboardInterrupt`, :class:`Terminated`); SIGKILL of the
+parent loses only the trials in flight, and its workers die with it. Run the same command again
+to finish: done trials are skipped.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import socket
+import threading
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+from urllib.parse import urlsplit
+
+from biped.errors import ScenarioError
+from biped.sim.sweep import store
+from biped.sim.sweep.pool import LocalPool
+from biped.sim.sweep.record import MEASURED, Measured
+from biped.sim.sweep.spec import SweepSpec, TrialSetup
+
+#: Seconds to wait for a Dask scheduler before giving up.
+SCHEDULER_TIMEOUT_S = 5.0
+
+
+class Terminated(KeyboardInterrupt):
+    """The sweep's process received SIGTERM; finished trials were kept."""
+
+
+def execute_trial(trial_fn: Callable[[TrialSetup], Any], setup: TrialSetup) -> dict:
+    """Run one trial and return its row. ``trial_fn`` returns a :class:`Measured` or a mapping of
+    some of its columns (:data:`MEASURED`; the others stay empty). An exception of the trial
+    becomes the row's ``error`` (``"ExceptionType: message"``) with the measured columns empty;
+    it is never lost. (KeyboardInterrupt and SystemExit are not trial errors: they propagate.)"""
+    t0 = time.perf_counter()
+    trial = setup.trial
+    row: dict[str, Any] = {"trial_key": trial.key, "index": trial.index, **trial.params(),
+                           "controller": setup.scenario.controller,
+                           "torque_limits": setup.torque_limits}
+    try:
+        result = trial_fn(setup)
+        measured = result.row() if isinstance(result, Measured) else dict(result)
+        unknown = set(measured) - set(MEASURED)
+        if unknown:
+            raise ScenarioError(f"trial function returned unknown columns {sorted(unknown)}; "
+                                f"valid: {', '.join(MEASURED)}")
+        row.update(measured)
+        row["error"] = None
+    except Exception as exc:  # noqa: BLE001 - a crashed trial is a result, recorded with its error
+        row["error"] = f"{type(exc).__name__}: {exc}"
+    row["wall_time_s"] = time.perf_counter() - t0
+    row["worker"] = f"{socket.gethostname()}:{os.getpid()}"
+    return row
+
+
+@dataclass(frozen=True)
+class SweepSummary:
+    """What :func:`run_sweep` did.
+
+    path: the consolidated Parquet file (written only when ``complete``).
+    total: trials in the sweep; skipped: already done before this run; ran: finished in this run;
+    failed: trials of this run that raised (recorded with their error); lost: trials whose
+    worker died (not recorded: rerun the same command to finish them); complete: every trial
+    has a row; wall_time_s: this run's wall time.
+    """
+
+    path: Path
+    total: int
+    skipped: int
+    ran: int
+    failed: int
+    lost: int
+    complete: bool
+    wall_time_s: float
+    backend: str
+
+
+def default_workers() -> int:
+    """Usable local cores (the process's CPU affinity where the OS tells it)."""
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not on Linux
+        return max(1, os.cpu_count() or 1)
+
+
+def check_scheduler(address: str, timeout_s: float = SCHEDULER_TIMEOUT_S) -> None:
+    """Fail fast (:class:`ScenarioError`) if nothing listens at a Dask scheduler's address."""
+    parts = urlsplit(address if "://" in address else f"tcp://{address}")
+    try:
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        host = port = None
+    if parts.scheme not in ("tcp", "tls") or not host or not port:
+        raise ScenarioError(f"--scheduler must be a Dask address such as tcp://10.0.0.5:8786; "
+                            f"got {address!r}")
+    try:
+        socket.create_connection((host, port), timeout=timeout_s).close()
+    except OSError as exc:
+        raise ScenarioError(f"cannot reach the Dask scheduler at {address!r} "
+                            f"({exc.strerror or exc}); is `dask scheduler` running there?"
+                            ) from None
+
+
+def check_run_args(out: str | os.PathLike, *, workers: int | None = None, batch: int = 1,
+                   scheduler: Any = None) -> Path:
+    """The checks :func:`run_sweep` makes before any work (one-line :class:`ScenarioError`s);
+    returns ``out`` as a Path. A scheduler address must answer within
+    :data:`SCHEDULER_TIMEOUT_S`."""
+    out = Path(out)
+    if out.suffix != ".parquet":
+        raise ScenarioError(f"--out must name a .parquet file; got {str(out)!r}")
+    if out.is_dir():
+        raise ScenarioError(f"--out {str(out)!r} is a folder; name a .parquet file")
+    if workers is not None and (not isinstance(workers, int) or isinstance(workers, bool)
+                                or workers < 1):
+        raise ScenarioError(f"workers must be an integer >= 1; got {workers!r}")
+    if not isinstance(batch, int) or isinstance(batch, bool) or batch < 1:
+        raise ScenarioError(f"batch must be an integer >= 1; got {batch!r}")
+    parent = next((p for p in (out.parent, *out.parent.parents) if p.exists()), Path("."))
+    if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
+        raise ScenarioError(f"cannot write --out {str(out)!r}: {str(parent)!r} is not a "
+                            f"writable folder")
+    if isinstance(scheduler, str):
+        check_scheduler(scheduler)
+    return out
+
+
+@contextlib.contextmanager
+def _sigterm_raises() -> Iterator[dict]:
+    """Within: SIGTERM raises :class:`Terminated` in the main thread (so ``finally`` blocks run)."""
+    state = {"terminated": False}
+    if threading.current_thread() is not threading.main_thread():
+        yield state
+        return
+
+    def handler(signum: int, frame: Any) -> None:
+        state["terminated"] = True
+        raise Terminated
+
+    old = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield state
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
+def run_sweep(spec: SweepSpec, out: str | os.PathLike, *, workers: int | None = None,
+              scheduler: Any = None, trial_fn: Callable[[TrialSetup], Any] | None = None,
+              progress: bool = True, retry_failed: bool = False, overwrite: bool = False,
+              batch: int = 1) -> SweepSummary:
+    """Run every trial of ``spec`` that ``out`` does not hold yet; write ONE Parquet file.
+
+    workers: local processes (default: every usable core); 1 runs in this process.
+    scheduler: a Dask scheduler address (``"tcp://host:8786"``) or a ``dask.distributed.Client``;
+        when given, trials run on that cluster instead (every worker needs ``biped`` installed).
+    trial_fn: ``f(setup: TrialSetup) -> Measured | {column: value}`` (columns of
+        :data:`MEASURED`); default :func:`biped.sim.sweep.trial.run_trial` (the push
+        simulation, then its measurements). It must be importable by name (a module-level
+        function) for processes and Dask.
+    retry_failed: rerun trials recorded with an error.
+    overwrite: replace an ``out`` (and its parts) that holds a different sweep; without it a
+        different sweep is refused, naming the difference (a grid that extends it is not
+        different: its new trials are added).
+    batch: trials per task (more amortises the task overhead on a remote cluster).
+
+    A second sweep on the same ``out`` is refused while this one runs. Ctrl-C or SIGTERM keep
+    every finished trial (they raise KeyboardInterrupt / :class:`Terminated`).
+    """
+    t_start = time.perf_counter()
+    out = check_run_args(out, workers=workers, batch=batch, scheduler=scheduler)
+    if trial_fn is None:
+        from biped.sim.sweep.trial import run_trial  # the MuJoCo trial, only when it is used
+
+        trial_fn = run_trial
+    trials = spec.trials()
+    made_parent = not out.parent.exists()
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ScenarioError(f"cannot create the folder of --out {str(out)!r}: "
+                            f"{exc.strerror or exc}") from None
+    try:
+        with store.SweepLock(out), _sigterm_raises() as state:
+            return _run_locked(spec, out, trials, trial_fn, workers, scheduler, progress,
+                               retry_failed, overwrite, batch, state, t_start)
+    except ScenarioError:
+        if made_parent:
+            with contextlib.suppress(OSError):
+                out.parent.rmdir()  # a rejected sweep leaves no empty folder behind
+        raise
+
+
+def _run_locked(spec: SweepSpec, out: Path, trials: tuple, trial_fn: Callable,
+                workers: int | None, scheduler: Any, progress: bool, retry_failed: bool,
+                overwrite: bool, batch: int, state: dict, t_start: float) -> SweepSummary:
+    if overwrite:
+        store.remove_sweep(out)
+    else:
+        store.check_same_sweep(spec, out)
+    table, _ = store.read_rows(out)
+    done = dict(zip(table.column("trial_key").to_pylist(), table.column("error").to_pylist(),
+                    strict=True))
+    wanted = {t.key for t in trials}
+    todo = [t for t in trials if t.key not in done or (retry_failed and done[t.key] is not None)]
+    skipped = len(trials) - len(todo)
+    failed_before = sum(1 for k, e in done.items() if k in wanted and e is not None
+                        and not retry_failed)
+    if todo:
+        store.write_manifest(spec, out)
+    writer = store.PartWriter(store.parts_dir(out))
+    bar = None
+    if progress:
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=len(trials), initial=skipped, unit="trial", desc="sweep", smoothing=0.05)
+        bar.set_postfix(failed=failed_before)
+    counts = {"ran": 0, "failed": 0}
+
+    def record(rows: list[dict]) -> None:
+        if not rows:
+            return
+        writer.write(rows)  # on disk before anything else happens
+        counts["ran"] += len(rows)
+        counts["failed"] += sum(r["error"] is not None for r in rows)
+        if bar is not None:
+            bar.update(len(rows))
+            bar.set_postfix(failed=failed_before + counts["failed"])
+
+    chunks = [todo[i:i + batch] for i in range(0, len(todo), batch)]
+    n_workers = workers or default_workers()
+    lost = 0
+    try:
+        if not chunks:
+            backend = "none"
+        elif scheduler is not None:
+            backend = "dask"
+            lost = _run_dask(scheduler, trial_fn, spec, chunks, record)
+        elif n_workers == 1 or len(todo) == 1:
+            backend = "serial"
+            for t in todo:
+                record([execute_trial(trial_fn, spec.setup(t))])
+        else:
+            n = min(n_workers, len(chunks))
+            backend = f"processes:{n}"
+            lost = LocalPool(n, trial_fn).run([[spec.setup(t) for t in c] for c in chunks],
+                                              record)
+    except KeyboardInterrupt:
+        if state["terminated"]:
+            raise Terminated from None
+        raise
+    finally:
+        writer.close()
+        if bar is not None:
+            bar.close()
+    complete = lost == 0
+    if complete:
+        store.consolidate(spec, out, trials)
+    return SweepSummary(path=out, total=len(trials), skipped=skipped, ran=counts["ran"],
+                        failed=counts["failed"], lost=lost, complete=complete,
+                        wall_time_s=time.perf_counter() - t_start, backend=backend)
+
+
+def _execute_many(trial_fn: Callable, setups: list) -> list[dict]:
+    return [execute_trial(trial_fn, s) for s in setups]
+
+
+def _run_dask(scheduler: Any, trial_fn: Callable, spec: SweepSpec, chunks: list,
+              record: Callable[[list[dict]], None]) -> int:
+    """Dask: one task per chunk. A task whose workers keep dying (dask's KilledWorker) is lost,
+    not recorded; the others go on."""
+    from dask.distributed import Client, as_completed
+
+    if isinstance(scheduler, Client):
+        client, own = scheduler, False
+    else:
+        try:
+            client = Client(scheduler, timeout=f"{SCHEDULER_TIMEOUT_S}s")
+        except OSError as exc:
+            raise ScenarioError(f"cannot connect to the Dask scheduler at {scheduler!r}: "
+                                f"{exc}") from None
+        own = True
+    lost = 0
+    try:
+        futures = {client.submit(_execute_many, trial_fn, [spec.setup(t) for t in c],
+                                 pure=False): len(c) for c in chunks}
+        try:
+            for fut in as_completed(list(futures)):
+                try:
+                    rows = fut.result()
+                except Exception:  # noqa: BLE001 - the worker died (trial errors are rows)
+                    lost += futures[fut]
+                    continue
+                record(rows)
+        except BaseException:
+            client.cancel(list(futures))
+            raise
+    finally:
+        if own:
+            client.close()
+    return lost
+
+
+__all__ = ["SweepSummary", "Terminated", "check_run_args", "check_scheduler", "default_workers",
+           "execute_trial", "run_sweep"]

@@ -1,0 +1,387 @@
+"""The definition of a sweep: its axes, its base scenario, its trials, and how each trial's block is
+aimed. Pure Python (no MuJoCo): a sweep is checked and its trials listed before any work starts.
+
+Conventions: ``direction_deg`` is the direction the block *travels* in the horizontal plane,
+measured from +x toward +y (W's throw travels at 180 deg, along -x: the biped faces -x, so that
+block hits its back and pushes it forward). The block is aimed at the vertical line through the
+central body's initial COM (see :func:`aim_block`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import hashlib
+import itertools
+import json
+import math
+import os
+import tomllib
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from biped import models
+from biped.control.limits import KINDS as TORQUE_LIMIT_KINDS
+from biped.errors import ScenarioError
+from biped.sim.scenario import Scenario
+
+#: The swept quantities: name -> (unit, what it means).
+AXES: dict[str, str] = {
+    "speed_m_s": "horizontal block speed [m/s]",
+    "direction_deg": "direction the block travels, from +x toward +y [deg]",
+    "block_mass_kg": "block mass [kg]",
+    "height_m": "height of the block's aim point above the floor [m]",
+    "gain_scale": "factor s on the stiffness gains (kp * s) and sqrt(s) on the damping gains "
+                  "(kv * sqrt(s)), which keeps every damping ratio",
+}
+
+#: W's throw (section 4) in sweep coordinates: 1.8 kg at 4.5 m/s along -x, 1.2 m high.
+W_THROW = {"speed_m_s": 4.5, "direction_deg": 180.0, "block_mass_kg": 1.8, "height_m": 1.2,
+           "gain_scale": 1.0}
+
+#: The most trials one sweep may hold (a grid's product or ``samples``): a bound on the work and
+#: the memory asked for by a typo such as ``num = 100000000``. Split larger studies into sweeps.
+MAX_TRIALS = 1_000_000
+
+GRAVITY = float(-models.gravity("wendlandt")[2])  # [m/s^2], the biped model's, which the scene keeps
+SCHEMA_VERSION = 1
+
+
+@dataclass(frozen=True)
+class Trial:
+    """One push of a sweep: its place in the sweep, its parameters and a stable key.
+
+    ``key`` is a hash of the parameters and of the sweep's identity (base scenario, model file,
+    launch distance): the same command makes the same keys, which is how a rerun skips what is
+    done.
+    """
+
+    index: int
+    speed_m_s: float
+    direction_deg: float
+    block_mass_kg: float
+    height_m: float
+    gain_scale: float
+    key: str
+
+    def params(self) -> dict[str, float]:
+        return {name: getattr(self, name) for name in AXES}
+
+
+@dataclass(frozen=True)
+class TrialSetup:
+    """Everything a trial function needs: the full scenario (block aimed, workspace gains
+    scaled), the trial, and the sweep's torque-limit set (``"none"`` or ``"human"``, see
+    :mod:`biped.control.limits`) applied to either controller."""
+
+    scenario: Scenario
+    trial: Trial
+    torque_limits: str = "none"
+
+
+def _is_number(v: Any) -> bool:
+    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+
+
+def _axis_values(name: str, value: Any) -> tuple[float, ...]:
+    if name not in AXES:
+        raise ScenarioError(f"unknown sweep axis {name!r}; valid axes: {', '.join(AXES)}")
+    if isinstance(value, Mapping):
+        value = linspace_spec(name, value)
+    if _is_number(value):
+        value = (value,)
+    if isinstance(value, (str, bytes)) or not isinstance(value, Iterable):
+        raise ScenarioError(f"sweep axis {name} ({AXES[name]}) must be a number, a list of numbers "
+                            f"or {{start, stop, num}}; got {value!r}")
+    out = []
+    for v in value:
+        if not _is_number(v) or not math.isfinite(float(v)):
+            raise ScenarioError(f"sweep axis {name} ({AXES[name]}) must hold finite numbers; "
+                                f"got {v!r}")
+        out.append(float(v))
+        if len(out) > MAX_TRIALS:
+            raise ScenarioError(f"sweep axis {name} has more than {MAX_TRIALS} values "
+                                f"(the most a sweep may hold)")
+    if not out:
+        raise ScenarioError(f"sweep axis {name} ({AXES[name]}) is empty; give at least one value")
+    lo = min(out)
+    if name in ("speed_m_s", "block_mass_kg", "height_m", "gain_scale") and lo <= 0:
+        raise ScenarioError(f"sweep axis {name} ({AXES[name]}) must be > 0; got {lo:g}")
+    return tuple(out)
+
+
+def linspace_spec(name: str, value: Mapping) -> tuple[float, ...]:
+    """``{start, stop, num}`` -> ``num`` evenly spaced values from start to stop, both included."""
+    keys = {"start", "stop", "num"}
+    if set(value) != keys:
+        raise ScenarioError(f"sweep axis {name}: a range needs exactly the keys start, stop, num; "
+                            f"got {sorted(map(str, value))}")
+    num = value["num"]
+    if not isinstance(num, (int, np.integer)) or isinstance(num, bool) or num < 1:
+        raise ScenarioError(f"sweep axis {name}: num must be an integer >= 1; got {num!r}")
+    if num > MAX_TRIALS:
+        raise ScenarioError(f"sweep axis {name}: num = {num} is more than {MAX_TRIALS} (the most "
+                            f"trials a sweep may hold)")
+    for k in ("start", "stop"):
+        if not _is_number(value[k]) or not math.isfinite(float(value[k])):
+            raise ScenarioError(f"sweep axis {name}: {k} must be a finite number; "
+                                f"got {value[k]!r}")
+    return tuple(float(x) for x in np.linspace(float(value["start"]), float(value["stop"]),
+                                               int(num)))
+
+
+def parse_axis(name: str, text: str) -> tuple[float, ...]:
+    """Command-line axis syntax: ``4.5``, ``1,2,4`` or ``START:STOP:NUM`` (both ends included)."""
+    text = text.strip()
+    try:
+        if ":" in text:
+            parts = text.split(":")
+            if len(parts) != 3:
+                raise ValueError
+            return _axis_values(name, {"start": float(parts[0]), "stop": float(parts[1]),
+                                       "num": int(parts[2])})
+        return _axis_values(name, [float(p) for p in text.split(",") if p.strip()])
+    except ScenarioError:  # a number that is out of range: say so (it is also a ValueError)
+        raise
+    except ValueError:
+        raise ScenarioError(f"sweep axis {name} ({AXES[name]}): expected a number, a comma list "
+                            f"such as 1,2,4 or START:STOP:NUM such as 0:315:8; got {text!r}") from None
+
+
+def _check_int(name: str, value: Any, lo: int) -> None:
+    if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < lo:
+        raise ScenarioError(f"{name} must be an integer >= {lo}; got {value!r}")
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A sweep: axes (name -> values), a base scenario, grid or random sample.
+
+    axes: any of :data:`AXES`; a missing axis takes W's throw (:data:`W_THROW`), except
+        ``block_mass_kg`` which takes the base scenario's. Values are numbers, lists or
+        ``{start, stop, num}``.
+    base: every scenario key that is not swept (duration, controller, torque limits, ...).
+    samples: ``None`` for the full grid (the Cartesian product, direction varying fastest);
+        an integer N for N trials drawn uniformly between each axis's smallest and largest
+        value, from ``numpy.random.default_rng(seed)``.
+    launch_distance_m: horizontal distance from the aim line at which the block starts (W's
+        block starts 0.51 m from the body's COM line).
+    torque_limits: ``"none"`` (W) or ``"human"`` (:mod:`biped.control.limits`), clipping the
+        torques of either controller (``base.controller``: ``"workspace"`` or ``"joint-pd"``).
+
+    At most :data:`MAX_TRIALS` trials.
+    """
+
+    axes: Any = dataclasses.field(default_factory=dict)
+    base: Scenario = dataclasses.field(default_factory=Scenario)
+    samples: int | None = None
+    seed: int = 0
+    launch_distance_m: float = 0.5
+    model: str = "wendlandt"
+    torque_limits: str = "none"
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.base, Scenario):
+            raise ScenarioError(f"base must be a biped.sim.scenario.Scenario; got {type(self.base)}")
+        if not isinstance(self.axes, (Mapping, Iterable)) or isinstance(self.axes, (str, bytes)):
+            raise ScenarioError(f"axes must be a table of sweep axes ({', '.join(AXES)}); "
+                                f"got {self.axes!r}")
+        given = dict(self.axes.items() if isinstance(self.axes, Mapping) else self.axes)
+        for name, value in given.items():
+            _axis_values(name, value)  # unknown names and bad values raise here
+        defaults = dict(W_THROW, block_mass_kg=self.base.block_mass_kg)
+        axes = tuple((name, _axis_values(name, given[name]) if name in given else
+                      (float(defaults[name]),)) for name in AXES)
+        object.__setattr__(self, "axes", axes)
+        if self.samples is not None:
+            _check_int("samples", self.samples, 1)
+            if self.samples > MAX_TRIALS:
+                raise ScenarioError(f"samples = {self.samples} is more than {MAX_TRIALS} (the most "
+                                    f"trials a sweep may hold)")
+        else:
+            n = math.prod(len(v) for _, v in axes)
+            if n > MAX_TRIALS:
+                raise ScenarioError(f"the grid has {n} trials, more than {MAX_TRIALS} (the most a "
+                                    f"sweep may hold): fewer values per axis, or --samples N")
+        _check_int("seed", self.seed, 0)
+        ld = self.launch_distance_m
+        if not (_is_number(ld) and math.isfinite(float(ld)) and float(ld) > 0.2):
+            raise ScenarioError(f"launch_distance_m must be a number > 0.2 m (outside the body); "
+                                f"got {ld!r}")
+        if not isinstance(self.model, str):
+            raise ScenarioError(f"model must be the name of a shipped model "
+                                f"({', '.join(models.names())}); got {self.model!r}")
+        models.path(self.model)  # unknown model names raise ModelError listing the valid ones
+        if not isinstance(self.torque_limits, str) or self.torque_limits not in TORQUE_LIMIT_KINDS:
+            raise ScenarioError(f"torque_limits must be one of "
+                                f"{', '.join(map(repr, TORQUE_LIMIT_KINDS))}; "
+                                f"got {self.torque_limits!r}")
+        if self.base.torque_limits != "none":
+            raise ScenarioError("set the sweep's torque limits with torque_limits = 'none' | "
+                                "'human' (SweepSpec / --torque-limits), not the scenario's "
+                                f"torque_limits key (got {self.base.torque_limits!r})")
+
+    # ------------------------------------------------------------------ construction
+    @classmethod
+    def from_dict(cls, values: Mapping) -> SweepSpec:
+        """From ``{"grid": {axis: values}, "scenario": {key: value}, "samples": N, "seed": S,
+        "launch_distance_m": L}`` (the TOML layout, see :meth:`from_toml`)."""
+        valid = {"grid", "scenario", "samples", "seed", "launch_distance_m", "model",
+                 "torque_limits"}
+        for k in values:
+            if k not in valid:
+                raise ScenarioError(f"unknown sweep key {k!r}; valid keys: {', '.join(sorted(valid))}")
+        grid = values.get("grid", {})
+        if not isinstance(grid, Mapping):
+            raise ScenarioError(f"[grid] must be a table of axes ({', '.join(AXES)}); got {grid!r}")
+        scen = values.get("scenario", {})
+        if not isinstance(scen, Mapping):
+            raise ScenarioError(f"[scenario] must be a table of scenario keys; got {scen!r}")
+        base = Scenario.from_dict(dict(scen))
+        return cls(axes=dict(grid), base=base, samples=values.get("samples"),
+                   seed=values.get("seed", 0), launch_distance_m=values.get("launch_distance_m", 0.5),
+                   model=values.get("model", "wendlandt"),
+                   torque_limits=values.get("torque_limits", "none"))
+
+    @classmethod
+    def from_toml(cls, path: str | os.PathLike) -> SweepSpec:
+        """A sweep from a TOML file (UTF-8)::
+
+            samples = 200            # optional: a random sample instead of the full grid
+            seed = 0
+            [grid]
+            speed_m_s = {start = 1.0, stop = 8.0, num = 8}
+            direction_deg = [0, 45, 90, 135, 180, 225, 270, 315]
+            block_mass_kg = 1.8
+            [scenario]               # any key of biped.sim.scenario.Scenario
+            duration_s = 3.0
+            controller = "workspace"
+        """
+        path = Path(path)
+        try:
+            values = tomllib.loads(path.read_text(encoding="utf-8"))
+        except OSError as exc:
+            raise ScenarioError(f"cannot read sweep file {str(path)!r}: "
+                                f"{exc.strerror or exc}") from None
+        except UnicodeDecodeError as exc:
+            raise ScenarioError(f"sweep file {str(path)!r} is not UTF-8 text (byte "
+                                f"{exc.object[exc.start]:#04x} at offset {exc.start}); TOML "
+                                f"files must be UTF-8") from None
+        except tomllib.TOMLDecodeError as exc:
+            raise ScenarioError(f"sweep file {str(path)!r} is not valid TOML: {exc}") from None
+        return cls.from_dict(values)
+
+    def with_axes(self, **axes: Any) -> SweepSpec:
+        """A copy with some axes replaced."""
+        return dataclasses.replace(self, axes={**dict(self.axes), **axes})
+
+    # ------------------------------------------------------------------ identity
+    def to_dict(self) -> dict:
+        return {"grid": {k: list(v) for k, v in self.axes}, "scenario": self.base.to_dict(),
+                "samples": self.samples, "seed": self.seed,
+                "launch_distance_m": self.launch_distance_m, "model": self.model,
+                "torque_limits": self.torque_limits}
+
+    @property
+    def model_path(self) -> Path:
+        """The biped's MJCF: the base scenario's ``model`` when it names another subject."""
+        from biped.models.subject import resolve
+
+        return resolve(self.base.model) if self.base.model != "wendlandt" else models.path(self.model)
+
+    @property
+    def model_sha256(self) -> str:
+        return hashlib.sha256(self.model_path.read_bytes()).hexdigest()
+
+    @property
+    def identity(self) -> str:
+        """Hash of what makes two trials with equal parameters the same experiment."""
+        ident = {"scenario": self.base.to_dict(), "launch_distance_m": self.launch_distance_m,
+                 "model_sha256": self.model_sha256, "torque_limits": self.torque_limits,
+                 "schema": SCHEMA_VERSION}
+        return hashlib.sha256(json.dumps(ident, sort_keys=True).encode()).hexdigest()[:16]
+
+    @property
+    def n_trials(self) -> int:
+        """Number of trials, without listing them."""
+        if self.samples is not None:
+            return self.samples
+        return math.prod(len(v) for _, v in self.axes)
+
+    # ------------------------------------------------------------------ trials
+    def trials(self) -> tuple[Trial, ...]:
+        """Every trial of the sweep, in a fixed order (index 0, 1, ...)."""
+        names = list(AXES)
+        values = dict(self.axes)
+        if self.samples is None:
+            # direction fastest, then speed, mass, height, gain: a partial sweep covers the polar map
+            order = ["gain_scale", "height_m", "block_mass_kg", "speed_m_s", "direction_deg"]
+            points = [dict(zip(order, combo, strict=True))
+                      for combo in itertools.product(*(values[n] for n in order))]
+        else:
+            rng = np.random.default_rng(self.seed)
+            draws = {n: rng.uniform(min(values[n]), max(values[n]), self.samples) for n in names}
+            points = [{n: float(draws[n][i]) for n in names} for i in range(self.samples)]
+        ident = self.identity
+        out = []
+        for i, p in enumerate(points):
+            p = {n: float(p[n]) for n in names}
+            key = hashlib.sha256(json.dumps([ident, [repr(p[n]) for n in names]]).encode()
+                                 ).hexdigest()[:20]
+            out.append(Trial(index=i, key=key, **p))
+        return tuple(out)
+
+    def scenario(self, trial: Trial) -> Scenario:
+        """The full scenario of one trial: the base with the block aimed and the gains scaled."""
+        return trial_scenario(self.base, trial, launch_distance_m=self.launch_distance_m)
+
+    def setup(self, trial: Trial) -> TrialSetup:
+        return TrialSetup(self.scenario(trial), trial, self.torque_limits)
+
+
+def hold_scenario(base: Scenario | None = None) -> Scenario:
+    """``base`` (W's scenario by default) with the set point moved to the initial state: COM at
+    ``initial_com_m``, ``initial_tilt_deg`` about -y. The task of ``biped sweep``'s default
+    ``--task hold``: the same job for W's controller and for the joint-space PD baseline (which
+    holds the initial joint angles), so their envelopes compare like with like."""
+    base = base or Scenario()
+    return base.with_overrides(target_com_m=base.initial_com_m,
+                               target_tilt_deg=base.initial_tilt_deg, target_axis="-y")
+
+
+def aim_block(target_xy: Any, speed_m_s: float, direction_deg: float, height_m: float,
+              launch_distance_m: float = 0.5, gravity: float = GRAVITY
+              ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+    """Start position [m] and velocity [m/s] (world frame) of a block aimed at a vertical line.
+
+    The block travels in direction ``u = (cos a, sin a, 0)`` (a = direction_deg) at horizontal
+    speed v. It starts ``L = launch_distance_m`` before the aim line, ``p0 = (target_xy - L u,
+    height_m)``, with the vertical velocity ``v_z = g T / 2``, ``T = L / v``, that brings it back
+    to ``height_m`` on the aim line at ``T`` under gravity (a flat ballistic arc; the body's
+    surface is reached a little earlier and a little higher).
+    """
+    a = math.radians(direction_deg)
+    ux, uy = math.cos(a), math.sin(a)
+    T = launch_distance_m / speed_m_s
+    p0 = (float(target_xy[0] - launch_distance_m * ux), float(target_xy[1] - launch_distance_m * uy),
+          float(height_m))
+    v0 = (float(speed_m_s * ux), float(speed_m_s * uy), float(0.5 * gravity * T))
+    return p0, v0
+
+
+def trial_scenario(base: Scenario, trial: Trial, *, launch_distance_m: float = 0.5) -> Scenario:
+    """``base`` with the block of ``trial`` aimed at the initial COM line and the gains scaled."""
+    p0, v0 = aim_block(base.initial_com_m[:2], trial.speed_m_s, trial.direction_deg,
+                       trial.height_m, launch_distance_m)
+    s, r = trial.gain_scale, math.sqrt(trial.gain_scale)
+    return base.with_overrides(
+        block_mass_kg=trial.block_mass_kg, block_position_m=p0, block_velocity_m_s=v0,
+        kp_com=tuple(k * s for k in base.kp_com), kv_com=tuple(k * r for k in base.kv_com),
+        kp_rot=tuple(k * s for k in base.kp_rot), kv_rot=tuple(k * r for k in base.kv_rot))
+
+
+__all__ = ["AXES", "MAX_TRIALS", "W_THROW", "SweepSpec", "Trial", "TrialSetup", "aim_block",
+           "hold_scenario", "linspace_spec", "parse_axis", "trial_scenario"]

@@ -1,0 +1,286 @@
+"""The QP wrench distribution (distribution="qp", beyond W): contact-feasible foot wrenches.
+
+Oracles the project did not compute: the contact wrench cone against its definition (the
+nonnegative span of the sole corners' friction-pyramid edges, by scipy's NNLS); foot and body
+poses from MuJoCo; a second QP solver (daqp) and a solver-free KKT certificate on the same problems; the
+optimality bound of a regularised least-squares problem; MuJoCo's compiled joint damping.
+"""
+
+from __future__ import annotations
+
+import itertools
+
+import mujoco
+import numpy as np
+import pytest
+from scipy.optimize import nnls
+
+from biped.control import WorkspaceController
+from biped.control.distribution import RELAXED, SOLVED, QPWeights, cone_rows
+from biped.control.limits import clip_torques, torque_limits
+from biped.errors import ScenarioError
+from biped.model import sole_rectangles
+from biped.spatial import adjoint, inverse, transform
+
+HUMAN = torque_limits("human")
+
+
+def _generators(X, Y, mu):
+    """(6, 16) wrenches at the sole centre of the friction-pyramid edges at the sole's corners."""
+    cols = []
+    for sx, sy, ex, ey in itertools.product((-1, 1), repeat=4):
+        p = np.array([sx * X, sy * Y, 0.0])
+        u = np.array([ex * mu, ey * mu, 1.0])
+        cols.append(np.concatenate([u, np.cross(p, u)]))
+    return np.array(cols).T
+
+
+def _in_cone(w, X, Y, mu, tol=1e-7):
+    """Residual of the best nonnegative combination of the generators, relative to |w|."""
+    _, res = nnls(_generators(X, Y, mu), w)
+    return res <= tol * max(1.0, np.linalg.norm(w))
+
+
+def _rows(X, Y, mu, fmin=0.0, fmax=1e12):
+    Ct, b = np.zeros((18, 6)), np.zeros(18)
+    assert cone_rows(X, Y, mu, fmin, fmax, 0, Ct, b, 0) == 18
+    return Ct, b
+
+
+def test_cone_rows_are_the_span_of_the_corner_forces():
+    """Caron et al.'s closed form (rows) equals the definition (NNLS on corner generators), on
+    random wrenches either side of the boundary."""
+    rng = np.random.default_rng(0)
+    inside = outside = 0
+    for _ in range(400):
+        X, Y, mu = rng.uniform(0.03, 0.15), rng.uniform(0.02, 0.08), rng.uniform(0.1, 0.9)
+        Ct, b = _rows(X, Y, mu)
+        w = np.array([rng.uniform(-1.2, 1.2) * mu, rng.uniform(-1.2, 1.2) * mu, 1.0,
+                      rng.uniform(-1.2, 1.2) * Y, rng.uniform(-1.2, 1.2) * X,
+                      rng.uniform(-1.2, 1.2) * (X + Y) * mu]) * rng.uniform(1, 500)
+        slack = Ct @ w - b
+        if np.min(np.abs(slack)) < 1e-6 * np.linalg.norm(w):
+            continue
+        rows_say = bool(np.all(slack >= 0))
+        assert rows_say == _in_cone(w, X, Y, mu), (X, Y, mu, w, slack)
+        inside += rows_say
+        outside += not rows_say
+    assert inside > 40 and outside > 40  # both sides were exercised
+
+
+@pytest.fixture(scope="module")
+def soles(wendlandt_path):
+    return sole_rectangles(wendlandt_path)
+
+
+def test_sole_rectangle_is_the_bottom_of_the_sole_boxes(wendlandt_mj, soles):
+    """At W's initial state the soles are flat, 5 mm above the floor (the model's construction):
+    the sole frame from the MJCF geoms sits on the lowest corners MuJoCo places, at their centre."""
+    m = wendlandt_mj
+    d = mujoco.MjData(m)
+    mujoco.mj_resetDataKeyframe(m, d, m.key("wendlandt_initial").id)
+    mujoco.mj_forward(m, d)
+    for foot, sole in zip(("left", "right"), soles):
+        corners = []
+        for part in ("heel", "toe"):
+            g = m.geom(f"{foot}_{part}").id
+            R = d.geom_xmat[g].reshape(3, 3)
+            for s in itertools.product((-1, 1), repeat=3):
+                corners.append(d.geom_xpos[g] + R @ (np.array(s) * m.geom_size[g]))
+        corners = np.array(corners)
+        bottom = corners[corners[:, 2] < corners[:, 2].min() + 1e-6]
+        b = m.body(f"{foot}_foot").id
+        g0s = transform(d.ximat[b].reshape(3, 3), d.xipos[b]) @ sole.g_foot_sole
+        np.testing.assert_allclose(g0s[:3, 3], (bottom.min(0) + bottom.max(0)) / 2, atol=1e-9)
+        np.testing.assert_allclose(g0s[2, 3], 0.005, atol=2e-4)
+        np.testing.assert_allclose(g0s[:3, 2], [0, 0, 1], atol=2e-3)
+        np.testing.assert_allclose(sole.half_length, np.ptp(bottom[:, 0]) / 2, atol=2e-3)
+        np.testing.assert_allclose(sole.half_width, np.ptp(bottom[:, 1]) / 2, atol=2e-3)
+
+
+def _states(m, n, seed, spread=0.25, vel=1.0):
+    rng = np.random.default_rng(seed)
+    for _ in range(n):
+        d = mujoco.MjData(m)
+        d.qpos[:] = m.key_qpos[m.key("wendlandt_initial").id]
+        d.qpos[7:] += rng.uniform(-spread, spread, m.nq - 7)
+        d.qvel[:] = rng.normal(0.0, vel, m.nv)
+        mujoco.mj_forward(m, d)
+        yield d
+
+
+def _sole_wrenches(m, d, out, soles):
+    """The foot wrenches of ``out`` moved to the sole frames (numpy, MuJoCo's poses), and the
+    same wrenches moved to the central body by MuJoCo's poses."""
+    cb = m.body("central_body").id
+    g01 = transform(d.ximat[cb].reshape(3, 3), d.xipos[cb])
+    sole_w, body_w = [], []
+    for foot, F, sole in zip(("left", "right"), (out.foot_wrench_left, out.foot_wrench_right), soles):
+        gfs = sole.g_foot_sole
+        w = adjoint(gfs[:3, :3], gfs[:3, 3]).T @ F  # F_s = Ad^T_{g_{f,s}} F_f
+        b = m.body(f"{foot}_foot").id
+        g0s = transform(d.ximat[b].reshape(3, 3), d.xipos[b]) @ gfs
+        gs1 = inverse(g0s) @ g01
+        sole_w.append(w)
+        body_w.append(adjoint(gs1[:3, :3], gs1[:3, 3]).T @ w)
+    return sole_w, body_w
+
+
+@pytest.fixture(scope="module")
+def ctrls(wendlandt_path):
+    return {"statics": WorkspaceController.from_mjcf(wendlandt_path),
+            "qp": WorkspaceController.from_mjcf(wendlandt_path, distribution="qp"),
+            "qp_human": WorkspaceController.from_mjcf(wendlandt_path, distribution="qp",
+                                                      torque_limits=HUMAN),
+            "qp_daqp": WorkspaceController.from_mjcf(wendlandt_path, distribution="qp",
+                                                     torque_limits=HUMAN, qp_solver="daqp")}
+
+
+def test_qp_wrenches_satisfy_every_cone_cop_and_torque_row(ctrls, wendlandt_mj, soles):
+    m, ctrl = wendlandt_mj, ctrls["qp_human"]
+    wts = ctrl.qp.weights
+    mu = wts.friction * wts.friction_scale
+    lim = HUMAN.reorder(ctrl.joint_names)
+    active = 0
+    for d in _states(m, 40, 1, vel=2.0):
+        out = ctrl.compute(d.qpos, d.qvel)
+        assert ctrl.qp.status == SOLVED
+        sole_w, body_w = _sole_wrenches(m, d, out, soles)
+        for w, sole, share, bw in zip(sole_w, soles, (out.wrench_left, out.wrench_right), body_w):
+            scale = max(1.0, np.linalg.norm(w))
+            assert wts.min_normal_n - 1e-6 * scale <= w[2] <= wts.max_normal_n + 1e-6 * scale
+            assert _in_cone(w, sole.half_length, sole.half_width, mu, tol=1e-6)
+            np.testing.assert_allclose(share, bw, atol=1e-8 * scale)  # MuJoCo's poses
+        assert np.all(out.torques >= lim.lower - 1e-6) and np.all(out.torques <= lim.upper + 1e-6)
+        # torques are W Alg. 6 of the legs' shares (the QP's torque map is that linear map)
+        np.testing.assert_allclose(out.torques, ctrl.leg_torques(d.qpos, out.wrench_left,
+                                                                 out.wrench_right), atol=1e-7)
+        active += np.any(np.isclose(out.torques, lim.lower, atol=1e-6)
+                         | np.isclose(out.torques, lim.upper, atol=1e-6))
+    assert active > 0  # some states needed a torque row
+
+
+def test_clipping_after_the_qp_is_a_no_op(ctrls, wendlandt_mj):
+    """With the limits inside the QP, clipping afterwards changes nothing, at states where the
+    min-norm split's torques are clipped heavily."""
+    m = wendlandt_mj
+    lim = HUMAN.reorder(ctrls["qp_human"].joint_names)
+    clipped_statics = 0.0
+    for d in _states(m, 30, 2, vel=3.0):
+        tau = ctrls["qp_human"].compute(d.qpos, d.qvel).torques
+        np.testing.assert_allclose(clip_torques(tau, lim), tau, atol=1e-6)
+        ts = ctrls["statics"].compute(d.qpos, d.qvel).torques
+        clipped_statics = max(clipped_statics, np.max(np.abs(clip_torques(ts, lim) - ts)))
+    assert clipped_statics > 10.0  # the states do push the torques past the limits
+
+
+def test_qp_reproduces_a_feasible_min_norm_split(ctrls, wendlandt_mj, soles):
+    """Where W's min-norm split already lies in the cones, the QP's weighted error is at most the
+    regularisation cost of that split (it is a feasible point of the QP): the desired wrench is
+    reproduced up to the regularisation."""
+    m = wendlandt_mj
+    wts = ctrls["qp"].qp.weights
+    mu = wts.friction * wts.friction_scale
+    W = np.array([wts.force] * 3 + [wts.moment] * 3)
+    reg = np.array([wts.reg_force] * 3 + [wts.reg_moment] * 3)
+    checked = 0
+    for d in _states(m, 60, 3, spread=0.1, vel=0.3):
+        mn = ctrls["statics"].compute(d.qpos, d.qvel)
+        sole_mn, _ = _sole_wrenches(m, d, mn, soles)
+        if not all(_in_cone(w, s.half_length, s.half_width, mu) and
+                   wts.min_normal_n <= w[2] <= wts.max_normal_n for w, s in zip(sole_mn, soles)):
+            continue
+        out = ctrls["qp"].compute(d.qpos, d.qvel)
+        err = out.wrench_left + out.wrench_right - out.wrench_desired
+        bound = sum(reg @ w**2 for w in sole_mn) + wts.split * (sole_mn[0][2] - sole_mn[1][2]) ** 2
+        assert W @ err**2 <= bound * (1 + 1e-6) + 1e-9
+        np.testing.assert_allclose(out.wrench_left + out.wrench_right, mn.wrench_desired,
+                                   atol=1e-2 * (1 + np.abs(mn.wrench_desired)).max() * 0.05)
+        checked += 1
+    assert checked >= 10
+
+
+def test_quadprog_matches_daqp_and_the_kkt_conditions(ctrls, wendlandt_mj):
+    m = wendlandt_mj
+    a, b = ctrls["qp_human"], ctrls["qp_daqp"]
+    for i, d in enumerate(_states(m, 30, 4, vel=2.0)):
+        ta = a.compute(d.qpos, d.qvel).torques
+        tb = b.compute(d.qpos, d.qvel).torques
+        xa, xb = a.qp.x.copy(), b.qp.x.copy()
+        np.testing.assert_allclose(xa, xb, atol=1e-4 * (1 + np.abs(xa).max()))
+        np.testing.assert_allclose(ta, tb, atol=1e-4 * (1 + np.abs(ta).max()))
+        # solver-free certificate (KKT): x feasible and the cost gradient a nonnegative
+        # combination of the active rows' normals (NNLS), so x is the convex QP's minimizer
+        qp = a.qp
+        G, av, C, lo = qp.Gq, qp.av, qp.Ct[:qp.rows], qp.b[:qp.rows]
+        scale = 1 + np.abs(xa).max()
+        slack = C @ xa - lo
+        assert np.all(slack >= -1e-6 * scale)
+        act = slack <= 1e-6 * scale
+        grad = G @ xa - av
+        if act.any():
+            lam, res = nnls(C[act].T, grad)
+        else:
+            res = np.linalg.norm(grad)
+        assert res <= 1e-6 * (1 + np.linalg.norm(av)), (i, res)
+
+
+def test_a_foot_in_the_air_carries_nothing(ctrls, wendlandt_mj):
+    ctrl = ctrls["qp_human"]
+    right = [i for i, n in enumerate(ctrl.joint_names) if n.startswith("right")]
+    for d in _states(wendlandt_mj, 5, 5):
+        out = ctrl.compute(d.qpos, d.qvel, feet_in_contact=(True, False))
+        assert np.all(out.foot_wrench_right == 0) and np.all(out.wrench_right == 0)
+        assert np.all(out.torques[right] == 0)
+        assert out.foot_wrench_left[2] != 0
+        out = ctrl.compute(d.qpos, d.qvel, feet_in_contact=(False, False))
+        assert np.all(out.torques == 0)
+
+
+def test_infeasible_qp_falls_back_without_an_exception(wendlandt_path, wendlandt_mj):
+    """Limits too small for the minimum normal force: the QP is solved without it (documented)."""
+    from biped.control.limits import TorqueLimits
+
+    tiny = TorqueLimits("tiny", HUMAN.joint_names, -0.01 * np.ones(12), 0.01 * np.ones(12))
+    ctrl = WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", torque_limits=tiny)
+    d = next(_states(wendlandt_mj, 1, 6))
+    tau = ctrl.compute(d.qpos, d.qvel).torques
+    assert ctrl.qp.status == RELAXED and ctrl.qp.fallbacks[RELAXED] == 1
+    assert np.all(np.abs(tau) <= 0.01 + 1e-9)
+
+
+def test_bad_qp_settings_are_one_line_errors(wendlandt_path):
+    with pytest.raises(ScenarioError, match="moment"):
+        QPWeights(moment=-1.0)
+    with pytest.raises(ScenarioError, match="max_normal_n"):
+        QPWeights(min_normal_n=100.0, max_normal_n=50.0)
+    with pytest.raises(ScenarioError, match="distribution"):
+        WorkspaceController.from_mjcf(wendlandt_path, distribution="lp")
+
+
+def test_joint_damping_key_reaches_the_plant():
+    from biped.sim.scenario import Scenario
+    from biped.sim.scene import build_scene
+
+    for value in (0.0, 0.7):
+        scene = build_scene(Scenario(joint_damping_n_m_s=value))
+        hinge = scene.model.jnt_dofadr[[scene.model.joint(n).id for n in scene.joint_names]]
+        np.testing.assert_array_equal(scene.model.dof_damping[hinge], value)
+    with pytest.raises(ScenarioError, match="joint_damping_n_m_s"):
+        Scenario(joint_damping_n_m_s=-1.0)
+    with pytest.raises(ScenarioError, match="distribution"):
+        Scenario(distribution="lp")
+
+
+@pytest.mark.slow
+def test_w_default_push_recovers_with_the_qp():
+    from biped.sim.push import simulate
+    from biped.sim.scenario import Scenario
+
+    result = simulate(Scenario(distribution="qp"))
+    assert result.recovered and not result.fell and result.diverged is None
+    # W's timeline: both heels rise after the block hits and come back down
+    hit = result.block_contact_time_s
+    for foot in ("left", "right"):
+        kinds = [e.kind for e in result.events if e.foot == foot and e.time_s >= hit]
+        assert "lift_off" in kinds and kinds[-1] == "touch_down"
