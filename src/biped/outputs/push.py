@@ -17,8 +17,8 @@ from biped.sim.contact import SOLE_GEOMS
 from biped.sim.push import PushResult
 from biped.sim.scene import Scene, build_scene
 from biped.viz.push_figures import plot_push
+from biped.viz.push_video import render_push_video
 from biped.viz.replay import replay_from_mujoco, write_replay
-from biped.viz.video import render_video
 
 __all__ = [
     "summary_dict",
@@ -119,6 +119,19 @@ def _markers(result: PushResult) -> list[dict]:
     return out
 
 
+def _frame_log(log: Callable[[str], None], step: float = 0.25):
+    """``progress(n, N)`` of the video renderer that says ``rendering video n/N frames``
+    through ``log`` at the start and at every ``step`` of the way."""
+    said = [-1.0]
+
+    def progress(n: int, total: int) -> None:
+        frac = n / total if total else 1.0
+        if n == 0 or n == total or frac >= said[0] + step:
+            said[0] = frac
+            log(f"video.mp4: rendering {n}/{total} frames")
+    return progress
+
+
 def write_outputs(result: PushResult, out_dir: str | Path, *, figures: bool = True,
                   video: bool = True, replay: bool = True, scene: Scene | None = None,
                   log: Callable[[str], None] = print) -> dict:
@@ -143,8 +156,8 @@ def write_outputs(result: PushResult, out_dir: str | Path, *, figures: bool = Tr
         scene = scene or build_scene(result.scenario)
     if video:
         try:
-            res = render_video(scene.model, result.times, result.qpos, out / "video.mp4",
-                               fps=30, track_body="central_body", distance=3.0)
+            res = render_push_video(scene.model, result, out / "video.mp4",
+                                    progress=_frame_log(log))
             if res.path:
                 written["video"] = Path(res.path)
             else:
@@ -154,7 +167,7 @@ def write_outputs(result: PushResult, out_dir: str | Path, *, figures: bool = Tr
     if replay:
         try:
             info = {"recovered": result.recovered, "fell": result.fell,
-                    "final COM error [m]": round(result.final_com_error_m, 4),
+                    "final COM error [mm]": 1000 * result.final_com_error_m,   # 4 significant digits
                     "final orientation error [deg]": round(result.final_orientation_error_deg, 3)}
             rp = replay_from_mujoco(scene.model, result.times, result.qpos,
                                     title="W section 4: push recovery", info=info,

@@ -1,0 +1,148 @@
+"""What the figures show, read back from the matplotlib axes and the rendered pixels.
+
+Oracles: orientations composed with MuJoCo's own quaternion functions (``mju_axisAngle2Quat``,
+``mju_mulQuat``) from known roll, pitch and yaw angles, and scipy's Euler decomposition; the
+event times of the run; the body-leg model's characteristic polynomial roots (``numpy.roots``,
+not the eigenvalues the map is made of); the friction ratio recomputed from the ground forces;
+the colours of each curve found in the rendered image.
+"""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import matplotlib
+import mujoco
+import numpy as np
+import pytest
+
+matplotlib.use("Agg")
+
+from biped.viz.push_figures import (  # noqa: E402
+    ZOOM_S,
+    fig3_joint_angles,
+    fig5_body_position,
+    fig6_orientation,
+    orientation_error_rpy_deg,
+)
+
+
+def _axis_angle(axis, deg):
+    q = np.empty(4)
+    mujoco.mju_axisAngle2Quat(q, np.asarray(axis, dtype=float), math.radians(deg))
+    return q
+
+
+def _mul(a, b):
+    q = np.empty(4)
+    mujoco.mju_mulQuat(q, a, b)
+    return q
+
+
+def _target():
+    return _axis_angle([0, -1, 0], 7.5)          # W's set point leans about -y
+
+
+def _compose(target, roll, pitch, yaw):
+    """target * Rz(yaw) * Ry(pitch) * Rx(roll), with MuJoCo's quaternion product."""
+    q = _mul(target, _axis_angle([0, 0, 1], yaw))
+    q = _mul(q, _axis_angle([0, 1, 0], pitch))
+    return _mul(q, _axis_angle([1, 0, 0], roll))
+
+
+def _fake_run(T=301, dt=0.01):
+    """A push-run-shaped record whose body turns by known roll, pitch and yaw about the set point."""
+    t = np.arange(T) * dt
+    roll = 3.0 * np.sin(2 * t)
+    pitch = 10.0 * np.exp(-2 * t)
+    yaw = -5.0 * t * np.exp(-t)
+    target = _target()
+    quat = np.array([_compose(target, r, p, y) for r, p, y in zip(roll, pitch, yaw)])
+    quat[::7] *= -1                                    # the sign of a quaternion is free
+    joints = [f"{s}_{j}" for s in ("left", "right") for j in
+              ("hip_abduction", "hip_flexion", "hip_rotation", "knee", "ankle_inversion",
+               "ankle_dorsiflexion")]
+    ev = SimpleNamespace
+    events = (ev(time_s=0.086, foot="left", part="heel", kind="lift_off"),
+              ev(time_s=0.274, foot="left", part="heel", kind="touch_down"),
+              ev(time_s=1.2, foot="right", part="toe", kind="lift_off"))
+    rng = np.random.default_rng(0)
+    return SimpleNamespace(
+        times=t, quat=quat, target_quat=target, joint_names=tuple(joints),
+        joint_angles=rng.normal(size=(T, 12)).cumsum(0) * 0.01, torques=rng.normal(size=(T, 12)),
+        com=np.column_stack([0.01 * np.sin(t), 0 * t, 1.1 + 0 * t]),
+        target_com=np.array([0.0, 0.0, 1.1]), events=events, block_contact_time_s=0.082,
+        fall_time_s=None), np.column_stack([roll, pitch, yaw])
+
+
+def test_orientation_error_is_roll_pitch_yaw_about_the_set_point():
+    from scipy.spatial.transform import Rotation
+
+    run, rpy = _fake_run()
+    got = orientation_error_rpy_deg(run.quat, run.target_quat)
+    np.testing.assert_allclose(got, rpy, atol=1e-9)
+    # scipy's intrinsic z-y-x angles of R_target^T R agree (scipy takes (x, y, z, w))
+    rel = Rotation.from_quat(run.target_quat[[1, 2, 3, 0]]).inv() * Rotation.from_quat(
+        run.quat[:, [1, 2, 3, 0]])
+    np.testing.assert_allclose(got[:, ::-1], rel.as_euler("ZYX", degrees=True), atol=1e-9)
+    # a pure lean about the set point's y axis is all pitch
+    q = _mul(run.target_quat, _axis_angle([0, 1, 0], 4.0))
+    np.testing.assert_allclose(orientation_error_rpy_deg(q[None], run.target_quat), [[0, 4, 0]],
+                               atol=1e-12)
+
+
+def _vertical_lines(ax):
+    return sorted({float(ln.get_xdata()[0]) for ln in ax.get_lines()
+                   if len(ln.get_xdata()) == 2 and ln.get_xdata()[0] == ln.get_xdata()[1]})
+
+
+def test_fig6_plots_the_error_in_degrees_beside_the_quaternion_and_zooms_on_the_hit():
+    run, rpy = _fake_run()
+    fig = fig6_orientation(run)
+    try:
+        by_title = {ax.get_title(): ax for ax in fig.axes}
+        full = by_title["orientation error, z-y-x angles"]
+        zoom = by_title[f"the same, first {ZOOM_S:g} s"]
+        for ax in (full, zoom):
+            curves = {ln.get_label(): ln for ln in ax.get_lines() if len(ln.get_xdata()) > 2}
+            for k, name in enumerate(("roll (x)", "pitch (y)", "yaw (z)")):
+                np.testing.assert_allclose(curves[name].get_ydata(), rpy[:, k], atol=1e-9)
+            assert "deg" in ax.get_ylabel()
+        assert zoom.get_xlim() == pytest.approx((0.0, ZOOM_S))
+        want = sorted([run.block_contact_time_s] + [e.time_s for e in run.events])
+        assert _vertical_lines(full) == pytest.approx(want)
+        # the zoom panel names the events inside it: the hit and the heel's lift-off share a
+        # label (4 ms apart), the touch-down has its own; the event at 1.2 s is not named
+        texts = [t.get_text() for t in zoom.texts]
+        assert texts == ["0.082 block\n0.086 L heel up", "0.274 L heel down"], texts
+        # the quaternion panels are still there, one per component
+        assert sum(ax.get_ylabel() in ("q_w", "q_x", "q_y", "q_z") for ax in fig.axes) == 4
+    finally:
+        matplotlib.pyplot.close(fig)
+
+
+@pytest.mark.parametrize("make", [fig3_joint_angles, fig5_body_position])
+def test_each_panel_has_a_zoom_of_the_first_half_second_with_the_same_data(make):
+    run, _ = _fake_run()
+    fig = make(run)
+    try:
+        axes = [ax for ax in fig.axes if ax.get_lines()]
+        zooms = [ax for ax in axes if ax.get_xlim() == pytest.approx((0.0, ZOOM_S))]
+        fulls = [ax for ax in axes if ax not in zooms]
+        assert len(zooms) == len(fulls) >= 2
+        for f, z in zip(fulls, zooms):
+            fc = [ln.get_ydata() for ln in f.get_lines() if len(ln.get_xdata()) == run.times.size]
+            zc = [ln.get_ydata() for ln in z.get_lines() if len(ln.get_xdata()) == run.times.size]
+            assert len(fc) == len(zc) >= 1
+            for a, b in zip(fc, zc):
+                np.testing.assert_array_equal(a, b)
+            assert z.get_ylim() == f.get_ylim()
+            evs = [t for t in _vertical_lines(z) if t <= ZOOM_S]
+            assert evs == pytest.approx([0.082, 0.086, 0.274])
+        if make is fig3_joint_angles:
+            col = list(run.joint_names).index("left_knee")
+            knee = [ln for ln in fulls[0].get_lines() if ln.get_label() == "knee"][0]
+            np.testing.assert_allclose(knee.get_ydata(), np.degrees(run.joint_angles[:, col]))
+    finally:
+        matplotlib.pyplot.close(fig)
