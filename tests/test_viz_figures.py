@@ -18,8 +18,9 @@ import numpy as np
 import pytest
 
 matplotlib.use("Agg")
+import matplotlib.pyplot as plt
 
-from biped.viz.push_figures import (  # noqa: E402
+from biped.viz.push_figures import (
     ZOOM_S,
     fig3_joint_angles,
     fig5_body_position,
@@ -119,7 +120,7 @@ def test_fig6_plots_the_error_in_degrees_beside_the_quaternion_and_zooms_on_the_
         # the quaternion panels are still there, one per component
         assert sum(ax.get_ylabel() in ("q_w", "q_x", "q_y", "q_z") for ax in fig.axes) == 4
     finally:
-        matplotlib.pyplot.close(fig)
+        plt.close(fig)
 
 
 @pytest.mark.parametrize("make", [fig3_joint_angles, fig5_body_position])
@@ -142,7 +143,71 @@ def test_each_panel_has_a_zoom_of_the_first_half_second_with_the_same_data(make)
             assert evs == pytest.approx([0.082, 0.086, 0.274])
         if make is fig3_joint_angles:
             col = list(run.joint_names).index("left_knee")
-            knee = [ln for ln in fulls[0].get_lines() if ln.get_label() == "knee"][0]
+            knee = next(ln for ln in fulls[0].get_lines() if ln.get_label() == "knee")
             np.testing.assert_allclose(knee.get_ydata(), np.degrees(run.joint_angles[:, col]))
     finally:
-        matplotlib.pyplot.close(fig)
+        plt.close(fig)
+
+
+def _pixels_of(fig, colour, tol=40):
+    """How many pixels of the drawn figure are within ``tol`` of ``colour`` (RGB 0..255)."""
+    fig.canvas.draw()
+    img = np.asarray(fig.canvas.buffer_rgba())[..., :3].astype(int)
+    return int((np.abs(img - np.asarray(colour)).max(axis=-1) < tol).sum())
+
+
+def test_comparison_shows_every_run_in_the_legend_even_when_two_coincide():
+    from matplotlib.colors import to_rgb
+
+    from biped.planar import runs
+    from biped.viz.posture import comparison_figure
+
+    trajs = {m: runs.simulate_body_leg(method=m, gains=runs.BODY_LEG_GAINS, duration=2.0)
+             for m in ("lagrange-linear", "lagrange", "newton-euler")}
+    # the case of the issue: two forms give the same curve to rounding
+    assert np.abs(trajs["lagrange"].states - trajs["newton-euler"].states).max() < 1e-9
+    fig = comparison_figure(trajs)
+    try:
+        assert fig._suptitle is not None and fig._suptitle.get_text()
+        ax = fig.axes[0]
+        entries = [t.get_text() for t in ax.get_legend().get_texts()]
+        assert len(entries) == 3 and [e.split()[0] for e in entries] == list(trajs)
+        diff = float(entries[2].split("from lagrange: ")[1].split()[0])   # says it coincides
+        assert diff < 1e-9
+        # every legend entry's colour is seen in the drawn figure, outside the legend too
+        ax.get_legend().set_visible(False)
+        for line in ax.get_lines():
+            rgb = 255 * np.array(to_rgb(line.get_color()))
+            if line.get_alpha() is not None:     # a pale line on white
+                rgb = 255 - line.get_alpha() * (255 - rgb)
+            assert _pixels_of(fig, rgb) > 200, line.get_label()
+    finally:
+        plt.close(fig)
+
+
+def test_stability_map_marks_the_best_gains_on_it_and_found():
+    from biped.planar import analysis
+    from biped.planar.body_leg import BodyLegParams
+    from biped.viz.posture import stability_map_figure
+
+    p = BodyLegParams()
+    k1, k2 = np.linspace(0, 50000, 21), np.linspace(0, 50000, 17)
+    smap = analysis.stability_map(p, k1, k2, 2500.0, 400.0)
+    # oracle: roots of the characteristic polynomial (eq. 3.80), not the map's eigenvalues
+    margin = np.array([[-np.roots(analysis.characteristic_polynomial(p, (a, 2500.0, b, 400.0))).real
+                        .max() for a in k1] for b in k2])
+    i, j = np.unravel_index(np.argmax(margin), margin.shape)
+    best = SimpleNamespace(gains=np.array([15776.0, 4999.9, 4776.0, 717.5]), margin=3.83)
+    fig = stability_map_figure(smap, {"B": (25000.0, 40000.0)}, best=best)
+    try:
+        ax = fig.axes[0]
+        star = next(ln for ln in ax.get_lines() if ln.get_marker() == "*")
+        assert (star.get_xdata()[0], star.get_ydata()[0]) == (k1[j], k2[i])
+        assert f"{margin[i, j]:.3g}" in star.get_label()
+        diamond = next(ln for ln in ax.get_lines() if ln.get_marker() == "D")
+        assert (diamond.get_xdata()[0], diamond.get_ydata()[0]) == (15776.0, 4776.0)
+        legend = [t.get_text() for t in ax.get_legend().get_texts()]
+        assert any("best on this map" in t for t in legend)
+        assert any("best found" in t and "K_theta1dot = 5000" in t for t in legend), legend
+    finally:
+        plt.close(fig)

@@ -202,7 +202,7 @@ def test_push_video_is_1280x720_slowed_around_the_hit_and_shows_the_block(push_s
     # the documented window: 0.05 s before the hit until 0.1 s after the last foot event, at
     # least 0.3 s after the hit (clipped to the run's end)
     a, b = hit - 0.05, min(max(hit + 0.3, hit + 0.06 + 0.1), fake.times[-1])
-    n, dur = _expected_frames(0.0, fake.times[-1], fps, [(a, b, 0.25)])
+    n, _ = _expected_frames(0.0, fake.times[-1], fps, [(a, b, 0.25)])
     frames = iio.imread(res.path, plugin="FFMPEG")
     assert frames.shape == (n, 720, 1280, 3) and res.frames == n
     meta = iio.immeta(res.path, plugin="FFMPEG")
@@ -257,7 +257,7 @@ def test_walk_video_has_no_shadow_streaks_near_the_horizon(gl, tmp_path):
     motion = demo().sample(50.0)
     model = mujoco.MjModel.from_xml_string(
         figure_mjcf(motion.dims, motion.plan.terrain.boxes(width=1.2)))
-    k = int(round(14.0 * 50))           # 14 s in, 12 m from the light: streaks on the far floor
+    k = round(14.0 * 50)           # 14 s in, 12 m from the light: streaks on the far floor
     # two frames, 0.04 s apart, as in the video: MuJoCo draws the first frame after its context
     # is made without the streaks; every later frame of a video shows them
     ks = (k - 2, k)
@@ -269,8 +269,8 @@ def test_walk_video_has_no_shadow_streaks_near_the_horizon(gl, tmp_path):
         for j, name in enumerate(JOINT_NAMES):
             q[i, model.joint(name).qposadr[0]] = motion.angles[kk, j]
     t = [13.96, 14.0]
-    kw = dict(track_body="pelvis", distance=4.0, azimuth=-125.0, elevation=-15.0, fps=25,
-              width=480, height=360, overlay=False)
+    kw = {"track_body": "pelvis", "distance": 4.0, "azimuth": -125.0, "elevation": -15.0,
+          "fps": 25, "width": 480, "height": 360, "overlay": False}
     fixed = render_video(model, t, q, tmp_path / "fixed.mp4", shadows="fixed", **kw)
     follow = render_video(model, t, q, tmp_path / "follow.mp4", **kw)
     a = iio.imread(fixed.path, plugin="FFMPEG")[-1]

@@ -134,7 +134,7 @@ def _event_list(events: Iterable[Mapping]) -> list[tuple[float, str]]:
 
 
 def overlay_text(frame_times: Sequence[float], fps: float, *, events: Iterable[Mapping] = (),
-                 slow_motion=None, hold_s: float = 1.5, max_events: int = 4,
+                 slow_motion=None, hold_s: float = 1.5, max_events: int = 6,
                  t1: float | None = None) -> list[dict]:
     """The caption of each frame: ``[{"time": str, "speed": str, "events": [str, ...]}, ...]``.
 
