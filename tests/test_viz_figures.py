@@ -211,3 +211,41 @@ def test_stability_map_marks_the_best_gains_on_it_and_found():
         assert any("best found" in t and "K_theta1dot = 5000" in t for t in legend), legend
     finally:
         plt.close(fig)
+
+
+def test_walk_friction_panel_reaches_the_peak_the_summary_reports():
+    from biped.kinematic.dynamics import InverseDynamics
+    from biped.viz.walk_figures import inverse_dynamics_figure
+
+    T = 400
+    t = np.arange(T) / 100.0
+    grf = np.zeros((T, 2, 3))
+    grf[:, :, 2] = 350.0 + 50 * np.sin(t)[:, None]
+    grf[:, :, 0] = 40.0 * np.cos(3 * t)[:, None]
+    grf[123, 0] = [31.4, 0.0, 2.0]                    # a foot nearly unloaded: 15.7 needed
+    stance = np.ones((T, 2), bool)
+    stance[200:220, 1] = False
+    idyn = SimpleNamespace(times=t, joint_names=tuple(f"left_{j}" for j in (
+        "hip_flexion", "knee", "ankle_dorsiflexion", "hip_abduction", "hip_rotation",
+        "ankle_inversion")) + tuple(f"right_{j}" for j in (
+            "hip_flexion", "knee", "ankle_dorsiflexion", "hip_abduction", "hip_rotation",
+            "ankle_inversion")), torques=np.zeros((T, 12)), grf=grf, stance=stance,
+        mass=75.0, gravity=9.81, residual=np.zeros((T, 6)))
+    idyn.friction_ratio = lambda: InverseDynamics.friction_ratio(idyn)
+    # the peak recomputed here from the forces, row by row
+    peak = max(math.hypot(*grf[k, j, :2]) / grf[k, j, 2] for k in range(T) for j in range(2)
+               if stance[k, j] and grf[k, j, 2] > 0)
+    assert peak == pytest.approx(15.7)
+    fig = inverse_dynamics_figure(idyn, [{"time_s": 1.0, "label": "step"}])
+    try:
+        ax = next(a for a in fig.axes if "needed" in a.get_ylabel())
+        lo, hi = ax.get_ylim()
+        assert hi > peak and lo > 0 and ax.get_yscale() == "log"
+        left = next(ln for ln in ax.get_lines() if ln.get_label() == "left")
+        assert np.nanmax(left.get_ydata()) == pytest.approx(peak)
+        assert any("peak 15.7" in tx.get_text() and "t = 1.23 s" in tx.get_text()
+                   for tx in ax.texts)
+        # W's friction 0.3 is still drawn inside the axis
+        assert lo < 0.3 < hi
+    finally:
+        plt.close(fig)
