@@ -175,7 +175,7 @@ def inverse_dynamics_figure(result, markers):
         peak = float(finite.max())
         k, j = np.unravel_index(np.nanargmax(np.where(np.isfinite(fr), fr, -np.inf)), fr.shape)
         ax.set_yscale("log")
-        ax.set_ylim(max(min(float(np.percentile(finite, 1)), 0.1) / 2, 1e-4), 2.0 * max(peak, 0.3))
+        ax.set_ylim(max(min(float(np.percentile(finite, 1)), 0.1) / 2, 1e-3), 2.0 * max(peak, 0.3))
         ax.plot([t[k]], [peak], "v", color="k", ms=5)
         ax.annotate(f"peak {peak:.3g} (t = {t[k]:.2f} s, {('left', 'right')[j]})", (t[k], peak),
                     textcoords="offset points", xytext=(4, 2), fontsize=7)
