@@ -281,3 +281,26 @@ def test_walk_video_has_no_shadow_streaks_near_the_horizon(gl, tmp_path):
     off = iio.imread(render_video(model, t, q, tmp_path / "off.mp4", shadows="off",
                                   **kw).path, plugin="FFMPEG")[-1]
     assert np.abs(b.astype(int) - off).mean() > 0.5
+
+
+@pytest.mark.slow
+def test_biped_push_outputs_write_the_slow_motion_video_and_say_its_progress(gl, tmp_path):
+    """write_outputs (what `biped push` calls) of a short closed-loop run: the video is 1280 x 720
+    with the slow-motion frame count of the run's own hit time, and the log says n/N frames."""
+    import imageio.v3 as iio
+
+    from biped.outputs.push import write_outputs
+    from biped.sim import Scenario, simulate
+
+    r = simulate(Scenario(duration_s=0.12))    # the hit at ~0.08 s, few frames: shared CPU
+    hit = r.block_contact_time_s
+    assert hit is not None and 0.05 < hit < 0.12
+    lines = []
+    paths = write_outputs(r, tmp_path, figures=False, replay=False, log=lines.append)
+    a, b = hit - 0.05, float(r.times[-1])        # the window is cut at the run's end
+    n, _ = _expected_frames(0.0, b, 30, [(a, b, 0.25)])
+    frames = iio.imread(paths["video"], plugin="FFMPEG")
+    assert frames.shape == (n, 720, 1280, 3)
+    said = [ln for ln in lines if ln.startswith("video.mp4: rendering")]
+    assert said[0] == f"video.mp4: rendering 0/{n} frames"
+    assert said[-1] == f"video.mp4: rendering {n}/{n} frames" and 3 <= len(said) <= 6, said
