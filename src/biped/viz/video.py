@@ -26,6 +26,7 @@ import subprocess
 import sys
 import tempfile
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -234,7 +235,8 @@ def render_video(model, times, qpos, path, *, fps=30, width=640, height=480,
         raise ScenarioError(f"shadow_radius_m must be a positive number of m, got "
                             f"{shadow_radius_m!r}")
     ft = playback_times(times[0], times[-1], fps, slow_motion)     # validates slow_motion
-    captions = overlay_text(ft, fps, events=events, slow_motion=slow_motion, t1=times[-1])
+    captions = overlay_text(ft.tolist(), fps, events=events, slow_motion=slow_motion,
+                            t1=times[-1])
     path = pathlib.Path(path)
     ok, backend = gl_available()
     if not ok:
@@ -243,8 +245,8 @@ def render_video(model, times, qpos, path, *, fps=30, width=640, height=480,
 
     path.parent.mkdir(parents=True, exist_ok=True)
     idx = frame_indices(times, fps, slow_motion)
-    with tempfile.TemporaryDirectory(prefix="biped-video-") as tmp:
-        tmp = pathlib.Path(tmp)
+    with tempfile.TemporaryDirectory(prefix="biped-video-") as tmp_name:
+        tmp = pathlib.Path(tmp_name)
         mujoco.mj_saveModel(model, str(tmp / "model.mjb"), None)
         np.save(tmp / "qpos.npy", qpos[idx])
         extent = float(model.stat.extent) if model.stat.extent > 0 else 1.0
@@ -301,6 +303,7 @@ def _run_child(tmp: pathlib.Path, backend: str, n_frames: int, progress) -> tupl
         try:
             if progress is not None:
                 progress(0, n_frames)
+            assert proc.stdout is not None          # stdout=PIPE
             for line in proc.stdout:
                 parts = line.split()
                 if progress is not None and len(parts) == 2 and parts[0] == "frame":
@@ -312,7 +315,8 @@ def _run_child(tmp: pathlib.Path, backend: str, n_frames: int, progress) -> tupl
             raise
         finally:
             timer.cancel()
-            proc.stdout.close()
+            if proc.stdout is not None:
+                proc.stdout.close()
     if killed.is_set():
         raise subprocess.TimeoutExpired(_CHILD, timeout)
     return code, err_path.read_text(errors="replace")
@@ -371,6 +375,8 @@ class _Caption:
 
         size = max(10, round(height / 26))
         self.small = max(9, round(size * 0.8))
+        self.font: Any
+        self.font_small: Any
         if font_file:
             self.font = ImageFont.truetype(font_file, size)
             self.font_small = ImageFont.truetype(font_file, self.small)
