@@ -332,3 +332,22 @@ def test_chromium_screenshot_shows_the_biped(biped_replay, tmp_path):
     assert legs.sum() > 1000, f"only {legs.sum()} leg-coloured pixels"
     ys_trunk, ys_legs = np.nonzero(trunk)[0], np.nonzero(legs)[0]
     assert ys_trunk.mean() < ys_legs.mean() - 50, "the trunk should be drawn above the legs"
+
+
+@pytest.mark.browser
+def test_chromium_lists_events_in_time_order(biped_replay, tmp_path):
+    """Events given out of order (as a push run lists them: block hit, then each foot's events)
+    appear in the page's event list sorted by time, read back from the DOM Chromium built."""
+    given = [{"time_s": 0.05, "label": "block hits the body"},
+             {"time_s": 0.048, "label": "right toe lift off"},
+             {"time_s": 0.01, "label": "left heel lift off"},
+             {"time_s": 0.05, "label": "left heel touch down"}]   # same time: given order kept
+    rep = dataclasses.replace(biped_replay, markers=tuple(given))
+    f = write_replay(rep, tmp_path / "events.html")
+    dom = _run_chromium(tmp_path, "--dump-dom", url=f"{f.as_uri()}#probe=1")
+    assert 'data-ready="1"' in dom, dom[-3000:]
+    box = dom[dom.index('id="events"'):]
+    box = box[:box.index("</div></div>") + 6]            # the list: rows of plain text divs
+    rows = [html.unescape(r) for r in re.findall(r"<div[^>]*>([^<]*)</div>", box)]
+    assert rows == ["0.010 s  left heel lift off", "0.048 s  right toe lift off",
+                    "0.050 s  block hits the body", "0.050 s  left heel touch down"], rows

@@ -182,6 +182,6 @@ def run_gains(params, *, out: Path, grid: int, k1_max: float, k2_max: float, rat
     result["stability_map"] = {"file": "stability_map.npz", "rate_gains": list(rate_gains),
                                "stable_fraction": float(np.mean(smap.margin > 0))}  # fmt: skip
     marks = {"K2 = 4000 (eq. 3.83)": (25000.0, 4000.0), "K2 = 40000 (eq. 5.7)": (25000.0, 40000.0)}
-    viz.stability_map_figure(smap, marks).savefig(out / "stability_map.png")
+    viz.stability_map_figure(smap, marks, best=best).savefig(out / "stability_map.png")
     _write_json(out / "gains.json", result)
     return result, best

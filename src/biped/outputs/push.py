@@ -8,7 +8,6 @@ video.mp4 and replay.html.
 
 from __future__ import annotations
 
-import inspect
 import math
 from collections.abc import Callable
 from pathlib import Path
@@ -21,8 +20,8 @@ from biped.sim.measure import FEET, RowMeasurements, block_separation, foot_drif
 from biped.sim.push import PushResult, orientation_error_deg
 from biped.sim.scene import Scene, build_scene, tilt_quat
 from biped.viz.push_figures import plot_push
+from biped.viz.push_video import render_push_video
 from biped.viz.replay import replay_from_mujoco, write_replay
-from biped.viz.video import render_video
 
 __all__ = [
     "column_dictionary",
@@ -219,13 +218,22 @@ def _markers(result: PushResult) -> list[dict]:
 
 
 def _render_video(scene: Scene, result: PushResult, path: Path, on_frame):
-    """:func:`render_video` of the run, reporting frames through ``on_frame(done, total)`` when
-    the renderer takes a progress callback."""
-    kwargs = {}
-    if on_frame is not None and "progress" in inspect.signature(render_video).parameters:
-        kwargs["progress"] = on_frame
-    return render_video(scene.model, result.times, result.qpos, path, fps=30,
-                        track_body="central_body", distance=3.0, **kwargs)
+    """:func:`render_push_video` of the run (slow motion around the hit), reporting frames through
+    ``on_frame(done, total)``."""
+    return render_push_video(scene.model, result, path, progress=on_frame)
+
+
+def _frame_log(log: Callable[[str], None], step: float = 0.25):
+    """``progress(n, N)`` of the video renderer that says ``rendering video n/N frames``
+    through ``log`` at the start and at every ``step`` of the way."""
+    said = [-1.0]
+
+    def progress(n: int, total: int) -> None:
+        frac = n / total if total else 1.0
+        if n == 0 or n == total or frac >= said[0] + step:
+            said[0] = frac
+            log(f"video.mp4: rendering {n}/{total} frames")
+    return progress
 
 
 def write_outputs(result: PushResult, out_dir: str | Path, *, figures: bool = True,
@@ -265,7 +273,8 @@ def write_outputs(result: PushResult, out_dir: str | Path, *, figures: bool = Tr
     if video:
         stage("video.mp4")
         try:
-            res = _render_video(scene, result, out / "video.mp4", on_frame)
+            res = _render_video(scene, result, out / "video.mp4",
+                                on_frame if on_frame is not None else _frame_log(log))
             if res.path:
                 written["video"] = Path(res.path)
             else:
@@ -276,7 +285,7 @@ def write_outputs(result: PushResult, out_dir: str | Path, *, figures: bool = Tr
         stage("replay.html")
         try:
             info = {"recovered": judged_set_point(result)["recovered"], "fell": result.fell,
-                    "final COM error [m]": round(result.final_com_error_m, 4),
+                    "final COM error [mm]": 1000 * result.final_com_error_m,   # 4 significant digits
                     "final orientation error [deg]": round(result.final_orientation_error_deg, 3)}
             rp = replay_from_mujoco(scene.model, result.times, result.qpos,
                                     title="W section 4: push recovery", info=info,

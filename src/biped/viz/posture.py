@@ -60,26 +60,59 @@ def body_leg_figure(traj, which: str) -> Figure:
     return fig
 
 
-def comparison_figure(trajs: dict) -> Figure:
-    """Overlay of several body-leg runs (name -> Trajectory): theta_1 and theta_2 against time."""
-    fig = _figure(7.0, 5.0)
+#: Line styles of :func:`comparison_figure`, drawn in this order: a wide pale line first and
+#: narrower, dashed ones over it, so that forms whose curves coincide all stay visible.
+_COMPARE_STYLES = ({"lw": 5.0, "alpha": 0.45, "ls": "-"}, {"lw": 2.2, "ls": "-"},
+                   {"lw": 1.4, "ls": (0, (5, 3))}, {"lw": 1.0, "ls": (0, (1, 2))})
+
+
+def comparison_figure(trajs: dict, reference: str | None = None) -> Figure:
+    """Overlay of several body-leg runs (name -> Trajectory): theta_2 (body) and theta_1 (leg)
+    against time. Each run has its own colour and a line style from :data:`_COMPARE_STYLES`
+    (wide to narrow, solid to dotted), so that runs that coincide are all seen; the legend says
+    each run's largest angle difference from ``reference`` (default: ``"lagrange"`` if present,
+    else the first run)."""
+    fig = _figure(7.0, 5.2)
     ax1, ax2 = fig.subplots(2, 1, sharex=True)
-    for name, tr in trajs.items():
-        ax1.plot(tr.time, tr.states[:, 2], lw=1.2, label=name)
-        ax2.plot(tr.time, tr.states[:, 0], lw=1.2, label=name)
+    names = list(trajs)
+    if reference is None:
+        reference = "lagrange" if "lagrange" in trajs else (names[0] if names else None)
+    ref = trajs.get(reference)
+    for k, name in enumerate(names):
+        tr = trajs[name]
+        style = _COMPARE_STYLES[k % len(_COMPARE_STYLES)]
+        label = name
+        if name != reference and ref is not None and tr.states.shape == ref.states.shape:
+            d = float(np.max(np.abs(tr.states[:, [0, 2]] - ref.states[:, [0, 2]])))
+            label = f"{name} (max |diff| from {reference}: {d:.1e} rad)"
+        colour = f"C{k}"
+        ax1.plot(tr.time, tr.states[:, 2], color=colour, label=label, zorder=2 + k, **style)
+        ax2.plot(tr.time, tr.states[:, 0], color=colour, zorder=2 + k, **style)
     ax1.set_ylabel("theta_2 (body) [rad]")
     ax2.set_ylabel("theta_1 (leg) [rad]")
     ax2.set_xlabel("time [s]")
-    ax1.legend(fontsize=8)
+    ax1.legend(fontsize=7)
     for ax in (ax1, ax2):
         ax.grid(alpha=0.3)
+    fig.suptitle("Body-leg model: B's equations of motion compared, same start and gains",
+                 fontsize=10)
     fig.tight_layout()
     return fig
 
 
-def stability_map_figure(smap, marks: dict | None = None) -> Figure:
+def best_on_map(smap) -> tuple[float, float, float]:
+    """(K_theta1, K_theta2, margin) of the grid point with the largest stability margin."""
+    i, j = np.unravel_index(np.nanargmax(smap.margin), smap.margin.shape)
+    return float(smap.k_theta1[j]), float(smap.k_theta2[i]), float(smap.margin[i, j])
+
+
+def stability_map_figure(smap, marks: dict | None = None, best=None) -> Figure:
     """Stability margin -max Re(lambda) over (K_theta1, K_theta2) with the rate gains fixed;
-    ``marks``: label -> (K_theta1, K_theta2) drawn as points (B's gain sets)."""
+    ``marks``: label -> (K_theta1, K_theta2) drawn as points (B's gain sets). The best grid point
+    of the map (:func:`best_on_map`) is marked with a star; ``best``: the best local gains found
+    by a search over all four gains (``(K1, K1D, K2, K2D)`` and its margin, e.g. a
+    :class:`biped.planar.analysis.LocalGainSearch`), drawn as a diamond (its rate gains differ
+    from the map's, which the label says)."""
     fig = _figure(6.5, 5.0)
     ax = fig.add_subplot()
     v = float(min(5.0, np.nanmax(np.abs(smap.margin))))
@@ -91,6 +124,17 @@ def stability_map_figure(smap, marks: dict | None = None) -> Figure:
     for label, (k1, k2) in (marks or {}).items():
         ax.plot([k1], [k2], "o", ms=7, mfc="white", mec="k")
         ax.annotate(label, (k1, k2), textcoords="offset points", xytext=(6, 6), fontsize=8)
+    k1, k2, mg = best_on_map(smap)
+    ax.plot([k1], [k2], "*", ms=14, mfc="gold", mec="k",
+            label=f"best on this map: K_theta1 = {k1:.4g}, K_theta2 = {k2:.4g}, margin {mg:.3g} 1/s")
+    if best is not None:
+        gains = np.asarray(getattr(best, "gains", best), dtype=float)
+        margin = getattr(best, "margin", None)
+        text = (f"best found over all four gains: K_theta1 = {gains[0]:.4g}, K_theta2 = "
+                f"{gains[2]:.4g}\n  (K_theta1dot = {gains[1]:.4g}, K_theta2dot = {gains[3]:.4g}"
+                + (f", margin {margin:.3g} 1/s)" if margin is not None else ")"))
+        ax.plot([gains[0]], [gains[2]], "D", ms=9, mfc="deepskyblue", mec="k", label=text)
+    ax.legend(fontsize=6.5, loc="upper left", framealpha=0.85)
     ax.set_xlabel("K_theta1 [lb ft^2/s^2/rad]")
     ax.set_ylabel("K_theta2 [lb ft^2/s^2/rad]")
     ax.set_title(

@@ -95,7 +95,7 @@ class Replay:
         quat: (T, G, 4) world orientation of each geom, unit quaternions (w, x, y, z).
         title: page title.
         info: name -> value pairs shown in an overlay (numbers, strings, booleans).
-        markers: timeline events, each ``{"time_s": float, "label": str}``.
+        markers: timeline events, each ``{"time_s": float, "label": str}``; kept in time order.
         follow: name of the geom the page's camera follows; ``None`` picks the largest solid
             (by volume), e.g. the trunk.
     """
@@ -175,7 +175,8 @@ def _volume(g: ReplayGeom) -> float:
 
 
 def _check_markers(markers) -> tuple:
-    """Validate timeline events: each a mapping with a finite ``time_s`` and a str ``label``.
+    """Validate timeline events: each a mapping with a finite ``time_s`` and a str ``label``;
+    returned in time order (events given at the same time keep their order).
 
     A mapping without ``label`` (e.g. a ``{time_s, foot, part, kind}`` contact event of
     ``biped push``) gets one made of its other values, in order (``"left heel lift_off"``).
@@ -199,7 +200,7 @@ def _check_markers(markers) -> tuple:
         else:
             label = " ".join(str(v) for key, v in mk.items() if key != "time_s")
         out.append({"time_s": t, "label": label})
-    return tuple(out)
+    return tuple(sorted(out, key=lambda m: m["time_s"]))   # stable: equal times keep their order
 
 
 # --------------------------------------------------------------------------------------------

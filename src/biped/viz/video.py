@@ -26,12 +26,14 @@ import subprocess
 import sys
 import tempfile
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from biped.errors import ModelError, ScenarioError, StateError, unknown_name
+from biped.viz.timeline import frame_indices
 
-__all__ = ["VideoResult", "gl_available", "render_video"]
+__all__ = ["VideoResult", "frame_indices", "gl_available", "render_video"]
 
 _PROBE_TIMEOUT_S = 60.0
 _BACKENDS = ("egl", "osmesa")
@@ -159,27 +161,38 @@ def _check_inputs(model, times, qpos, fps, width, height, track_body):
     return times, qpos, body_id
 
 
-def frame_indices(times: np.ndarray, fps: float) -> np.ndarray:
-    """Indices into ``times`` (T,) s of the samples shown at ``fps`` frames per second.
+def _check_camera(lookat, shadows, progress, title):
+    if lookat is not None:
+        lookat = np.asarray(lookat, dtype=float)
+        if lookat.shape != (3,) or not np.all(np.isfinite(lookat)):
+            raise ScenarioError(f"lookat must be a finite (x, y, z) point in m, got {lookat!r}")
+    if shadows not in _SHADOWS:
+        raise ScenarioError(f"shadows must be one of {', '.join(map(repr, _SHADOWS))}, "
+                            f"got {shadows!r}")
+    if progress is not None and not callable(progress):
+        raise ScenarioError(f"progress must be a function progress(n, N) or None, got {progress!r}")
+    if title is not None and not isinstance(title, str):
+        raise ScenarioError(f"title must be a str or None, got {type(title).__name__}")
+    return lookat
 
-    Frame k shows the last sample at or before ``times[0] + k / fps`` (zero-order hold, so a free
-    joint's quaternion is never interpolated); frames run to ``times[-1]``.
-    """
-    times = np.asarray(times, dtype=float)
-    n = math.floor((times[-1] - times[0]) * fps + 1e-9) + 1
-    ft = times[0] + np.arange(n) / fps
-    return np.clip(np.searchsorted(times, ft + 1e-12, side="right") - 1, 0, times.size - 1)
+
+_SHADOWS = ("follow", "fixed", "off")
+#: Shadow-map size [texels] in ``shadows="follow"`` mode (MuJoCo's default is 4096).
+_SHADOW_TEXELS = 2048
 
 
 def render_video(model, times, qpos, path, *, fps=30, width=640, height=480,
                  track_body="central_body", distance=None, azimuth=60.0,
-                 elevation=-12.0) -> VideoResult:
+                 elevation=-12.0, lookat=None, slow_motion=None, events=(), title=None,
+                 overlay=True, shadows="follow", shadow_radius_m=3.0,
+                 progress=None) -> VideoResult:
     """Render the trajectory ``(times, qpos)`` of ``model`` to an H.264 MP4 file.
 
-    Each frame runs ``mujoco.mj_forward`` on the sample shown (see :func:`frame_indices`) and
-    draws it with ``mujoco.Renderer`` from a tracking camera (``mjCAMERA_TRACKING``) that follows
-    the subtree centre of mass of ``track_body`` at a fixed distance and direction. Rendering
-    runs in a child process with its own ``MUJOCO_GL`` (see the module docstring).
+    Each frame runs ``mujoco.mj_forward`` on the sample shown (see
+    :func:`biped.viz.timeline.frame_indices`) and draws it with ``mujoco.Renderer``, from a
+    tracking camera (``mjCAMERA_TRACKING``) that follows the subtree centre of mass of
+    ``track_body`` at a fixed distance and direction, or from a fixed camera aimed at ``lookat``.
+    Rendering runs in a child process with its own ``MUJOCO_GL`` (see the module docstring).
 
     Args:
         model: ``mujoco.MjModel``; not modified (the child enlarges its own copy's offscreen
@@ -187,19 +200,43 @@ def render_video(model, times, qpos, path, *, fps=30, width=640, height=480,
         times: (T,) s, non-decreasing.
         qpos: (T, nq) generalized positions.
         path: the ``.mp4`` file to write; missing parent folders are created.
-        fps: frames per second of the video (real time).
+        fps: frames per second of the video.
         width, height: pixels, even.
         track_body: body the camera follows; ``None`` for a fixed camera on the model's centre.
         distance: camera distance, m; default 1.5 times the model's extent (``model.stat``).
-        azimuth, elevation: camera direction, deg, MuJoCo's convention (azimuth 60: from the
-            biped's front left when it faces -x; elevation < 0 looks down).
+        azimuth, elevation: camera direction, deg, MuJoCo's convention (the camera looks along
+            ``(cos el cos az, cos el sin az, sin el)``; azimuth 60: from the biped's front left
+            when it faces -x; elevation < 0 looks down).
+        lookat: a fixed point (3,) [m] the camera aims at; overrides ``track_body``.
+        slow_motion: ``None`` (real time) or :class:`~biped.viz.timeline.SlowMotion` windows
+            played slower (see :mod:`biped.viz.timeline` for the frame count and duration).
+        events: ``[{"time_s": s, "label": str}, ...]`` captioned as they happen.
+        title: a line drawn at the top right of every frame.
+        overlay: draw the caption (simulated time, slow-motion speed, events, title).
+        shadows: ``"follow"`` (default): directional lights' shadows are computed in a box of
+            ``shadow_radius_m`` around the point the camera looks at, which moves with it;
+            ``"fixed"``: MuJoCo's own (a box of ``vis.map.shadowclip`` x ``stat.extent`` around
+            the light's position: on a long walk, its far floor shows dark shadow-map streaks
+            near the horizon); ``"off"``: no shadows. Spot lights are left as they are.
+            ``"follow"`` also caps the shadow map at 2048 texels (enough for its small box).
+        progress: ``progress(n, N)`` is called with ``n = 0`` before the first frame and after
+            each of the ``N`` frames is written.
 
     Returns:
         :class:`VideoResult`; ``path=None`` and a one-line ``reason`` if no OpenGL backend works
         or the renderer fails. Bad arguments raise (``StateError``, ``ModelError``,
         ``ScenarioError``) before anything is rendered.
     """
+    from biped.viz.timeline import overlay_text, playback_times
+
     times, qpos, body_id = _check_inputs(model, times, qpos, fps, width, height, track_body)
+    lookat = _check_camera(lookat, shadows, progress, title)
+    if not (isinstance(shadow_radius_m, (int, float)) and shadow_radius_m > 0):
+        raise ScenarioError(f"shadow_radius_m must be a positive number of m, got "
+                            f"{shadow_radius_m!r}")
+    ft = playback_times(times[0], times[-1], fps, slow_motion)     # validates slow_motion
+    captions = overlay_text(ft.tolist(), fps, events=events, slow_motion=slow_motion,
+                            t1=times[-1])
     path = pathlib.Path(path)
     ok, backend = gl_available()
     if not ok:
@@ -207,28 +244,82 @@ def render_video(model, times, qpos, path, *, fps=30, width=640, height=480,
     import mujoco
 
     path.parent.mkdir(parents=True, exist_ok=True)
-    idx = frame_indices(times, fps)
-    with tempfile.TemporaryDirectory(prefix="biped-video-") as tmp:
-        tmp = pathlib.Path(tmp)
+    idx = frame_indices(times, fps, slow_motion)
+    with tempfile.TemporaryDirectory(prefix="biped-video-") as tmp_name:
+        tmp = pathlib.Path(tmp_name)
         mujoco.mj_saveModel(model, str(tmp / "model.mjb"), None)
         np.save(tmp / "qpos.npy", qpos[idx])
         extent = float(model.stat.extent) if model.stat.extent > 0 else 1.0
         cfg = {"out": str(path.resolve()), "fps": float(fps), "width": int(width),
-               "height": int(height), "body_id": int(body_id),
+               "height": int(height), "body_id": -1 if lookat is not None else int(body_id),
+               "lookat": None if lookat is None else lookat.tolist(),
                "distance": float(distance) if distance is not None else 1.5 * extent,
-               "azimuth": float(azimuth), "elevation": float(elevation)}
+               "azimuth": float(azimuth), "elevation": float(elevation),
+               "shadows": shadows, "shadow_radius": float(shadow_radius_m),
+               "captions": captions if overlay else None, "title": title or "",
+               "font": _font_file()}
         (tmp / "job.json").write_text(json.dumps(cfg))
         try:
-            proc = subprocess.run([sys.executable, "-c", _CHILD, str(tmp)],
-                                  env=_child_env(backend), capture_output=True, text=True,
-                                  timeout=120 + 2.0 * len(idx), check=False)
+            code, err = _run_child(tmp, backend, len(idx), progress)
         except subprocess.TimeoutExpired:
             return VideoResult(None, f"no video: rendering with MUJOCO_GL={backend} timed out",
                                backend)
-    if proc.returncode != 0 or not path.is_file():
+    if code != 0 or not path.is_file():
         return VideoResult(None, f"no video: rendering with MUJOCO_GL={backend} failed: "
-                                 f"{_last_line(proc.stderr)}", backend)
+                                 f"{_last_line(err)}", backend)
     return VideoResult(path.resolve(), None, backend, len(idx))
+
+
+def _font_file() -> str | None:
+    """Matplotlib's DejaVu Sans (always installed with matplotlib), for the caption."""
+    try:
+        import matplotlib
+
+        f = pathlib.Path(matplotlib.get_data_path()) / "fonts" / "ttf" / "DejaVuSans.ttf"
+        return str(f) if f.is_file() else None
+    except ImportError:  # pragma: no cover
+        return None
+
+
+def _run_child(tmp: pathlib.Path, backend: str, n_frames: int, progress) -> tuple[int, str]:
+    """Run :func:`_render_job` in a child process; relay its per-frame ``"frame n"`` lines to
+    ``progress(n, N)``. Returns (exit code, stderr). Raises ``subprocess.TimeoutExpired``."""
+    import threading
+
+    timeout = 120 + 2.0 * n_frames
+    err_path = tmp / "stderr.txt"
+    with open(err_path, "w") as err:
+        proc = subprocess.Popen([sys.executable, "-c", _CHILD, str(tmp)],
+                                env=_child_env(backend), stdout=subprocess.PIPE, stderr=err,
+                                text=True, bufsize=1)
+        killed = threading.Event()
+
+        def _kill():
+            killed.set()
+            proc.kill()
+
+        timer = threading.Timer(timeout, _kill)
+        timer.start()
+        try:
+            if progress is not None:
+                progress(0, n_frames)
+            assert proc.stdout is not None          # stdout=PIPE
+            for line in proc.stdout:
+                parts = line.split()
+                if progress is not None and len(parts) == 2 and parts[0] == "frame":
+                    progress(int(parts[1]), n_frames)
+            code = proc.wait()
+        except BaseException:
+            proc.kill()
+            proc.wait()
+            raise
+        finally:
+            timer.cancel()
+            if proc.stdout is not None:
+                proc.stdout.close()
+    if killed.is_set():
+        raise subprocess.TimeoutExpired(_CHILD, timeout)
+    return code, err_path.read_text(errors="replace")
 
 
 _EYE = np.eye(3).ravel()
@@ -262,8 +353,74 @@ def _floor_grid(model, data, qpos, spacing=0.5, margin=4.0, width=0.012):
     return out
 
 
+def _directional_lights(model) -> np.ndarray:
+    """Indices of the model's directional lights that cast shadows (MuJoCo 3.2: light_directional;
+    later: light_type)."""
+    import mujoco
+
+    if hasattr(model, "light_type"):
+        directional = np.asarray(model.light_type) == int(mujoco.mjtLightType.mjLIGHT_DIRECTIONAL)
+    else:  # pragma: no cover - MuJoCo < 3.3
+        directional = np.asarray(model.light_directional).astype(bool)
+    return np.flatnonzero(directional & np.asarray(model.light_castshadow).astype(bool))
+
+
+class _Caption:
+    """Draws a frame's caption (:func:`biped.viz.timeline.overlay_text`) with Pillow: simulated
+    time and playback speed top left, the title top right, events bottom left, each on a dark
+    translucent box so it reads on any background."""
+
+    def __init__(self, width: int, height: int, font_file: str | None):
+        from PIL import ImageFont
+
+        size = max(10, round(height / 26))
+        self.small = max(9, round(size * 0.8))
+        self.font: Any
+        self.font_small: Any
+        if font_file:
+            self.font = ImageFont.truetype(font_file, size)
+            self.font_small = ImageFont.truetype(font_file, self.small)
+        else:  # pragma: no cover - matplotlib always ships DejaVu Sans
+            self.font = ImageFont.load_default()
+            self.font_small = self.font
+        self.pad = max(3, size // 4)
+        self.w, self.h, self.size = width, height, size
+
+    def _block(self, draw, xy, lines, font, anchor_right=False, anchor_bottom=False):
+        lines = [ln for ln in lines if ln]
+        if not lines:
+            return
+        boxes = [draw.textbbox((0, 0), ln, font=font) for ln in lines]
+        lh = max(b[3] - b[1] for b in boxes) + self.pad
+        bw = max(b[2] - b[0] for b in boxes) + 2 * self.pad
+        bh = lh * len(lines) + self.pad
+        x, y = xy
+        if anchor_right:
+            x -= bw
+        if anchor_bottom:
+            y -= bh
+        draw.rectangle([x, y, x + bw, y + bh], fill=(0, 0, 0, 150))
+        for i, ln in enumerate(lines):
+            draw.text((x + self.pad, y + self.pad // 2 + i * lh), ln, font=font,
+                      fill=(255, 255, 255, 255))
+
+    def draw(self, frame: np.ndarray, caption: dict, title: str) -> np.ndarray:
+        from PIL import Image, ImageDraw
+
+        img = Image.fromarray(frame).convert("RGBA")
+        layer = Image.new("RGBA", img.size, (0, 0, 0, 0))
+        draw = ImageDraw.Draw(layer)
+        m = self.pad * 2
+        self._block(draw, (m, m), [caption["time"], caption["speed"]], self.font)
+        if title:
+            self._block(draw, (self.w - m, m), [title], self.font_small, anchor_right=True)
+        self._block(draw, (m, self.h - m), caption["events"], self.font, anchor_bottom=True)
+        return np.asarray(Image.alpha_composite(img, layer).convert("RGB"))
+
+
 def _render_job(workdir: pathlib.Path) -> int:
-    """Child process: render ``workdir/job.json`` (started by :func:`render_video`)."""
+    """Child process: render ``workdir/job.json`` (started by :func:`render_video`); prints
+    ``frame n`` on stdout after each frame."""
     import imageio_ffmpeg
     import mujoco
 
@@ -273,6 +430,15 @@ def _render_job(workdir: pathlib.Path) -> int:
     w, h = cfg["width"], cfg["height"]
     model.vis.global_.offwidth = max(int(model.vis.global_.offwidth), w)
     model.vis.global_.offheight = max(int(model.vis.global_.offheight), h)
+    lights = _directional_lights(model)
+    if cfg["shadows"] == "follow" and lights.size:
+        # a shadow box of shadow_radius around the light, which is moved above the camera target
+        extent = float(model.stat.extent) if model.stat.extent > 0 else 1.0
+        model.vis.map.shadowclip = min(float(model.vis.map.shadowclip),
+                                       cfg["shadow_radius"] / extent)
+        # the small box needs no 4096-texel map (2048 over 6 m: 3 mm a texel); with Mesa's
+        # software renderer a 1280 x 720 frame takes 0.86 as long (benchmarks/video.py)
+        model.vis.quality.shadowsize = min(int(model.vis.quality.shadowsize), _SHADOW_TEXELS)
     data = mujoco.MjData(model)
 
     cam = mujoco.MjvCamera()
@@ -281,7 +447,7 @@ def _render_job(workdir: pathlib.Path) -> int:
         cam.trackbodyid = cfg["body_id"]
     else:
         cam.type = mujoco.mjtCamera.mjCAMERA_FREE
-        cam.lookat[:] = model.stat.center
+        cam.lookat[:] = cfg["lookat"] if cfg.get("lookat") is not None else model.stat.center
     cam.distance, cam.azimuth, cam.elevation = cfg["distance"], cfg["azimuth"], cfg["elevation"]
 
     renderer = mujoco.Renderer(model, h, w)
@@ -289,21 +455,35 @@ def _render_job(workdir: pathlib.Path) -> int:
     if model.nlight == 0:   # only the headlight: make it bright enough to see the floor
         model.vis.headlight.ambient[:] = 0.35
         model.vis.headlight.diffuse[:] = 0.65
+    captions = cfg.get("captions")
+    caption = _Caption(w, h, cfg.get("font")) if captions else None
     writer = imageio_ffmpeg.write_frames(cfg["out"], (w, h), fps=cfg["fps"], codec="libx264",
                                          pix_fmt_out="yuv420p", quality=7, macro_block_size=2,
                                          ffmpeg_log_level="error")
     writer.send(None)
     try:
-        for q in qpos:
+        for k, q in enumerate(qpos):
             data.qpos[:] = q
             data.qvel[:] = 0.0
             mujoco.mj_forward(model, data)
+            if cfg["shadows"] == "follow" and lights.size:
+                if cam.type == mujoco.mjtCamera.mjCAMERA_TRACKING:
+                    target = data.subtree_com[cam.trackbodyid]
+                else:
+                    target = cam.lookat
+                data.light_xpos[lights, :2] = np.asarray(target)[:2]
             renderer.update_scene(data, camera=cam)
             scn = renderer.scene
+            if cfg["shadows"] == "off":
+                scn.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
             for gtype, size, pos, rgba in floor[: scn.maxgeom - scn.ngeom]:
                 mujoco.mjv_initGeom(scn.geoms[scn.ngeom], gtype, size, pos, _EYE, rgba)
                 scn.ngeom += 1
-            writer.send(np.ascontiguousarray(renderer.render()))
+            img = renderer.render()
+            if caption is not None:
+                img = caption.draw(img, captions[k], cfg["title"])
+            writer.send(np.ascontiguousarray(img))
+            print("frame", k + 1, flush=True)
     finally:
         writer.close()
         renderer.close()

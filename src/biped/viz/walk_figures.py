@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["plot_feet", "plot_inverse_dynamics", "plot_joint_angles"]
+__all__ = ["inverse_dynamics_figure", "plot_feet", "plot_inverse_dynamics", "plot_joint_angles"]
 
 _SIDE_COLOURS = {"left": "tab:blue", "right": "tab:red"}
 
@@ -131,8 +131,14 @@ def plot_feet(motion, landmarks: dict, path) -> Path:
 
 
 def plot_inverse_dynamics(result, markers, path) -> Path:
+    """Write :func:`inverse_dynamics_figure` to ``path`` (PNG)."""
+    return _save(inverse_dynamics_figure(result, markers), path)
+
+
+def inverse_dynamics_figure(result, markers):
     """Sagittal and frontal joint torques, vertical and horizontal ground reaction forces (with
-    body weight), the friction ratio against W's 0.3, and the residual root force in flight."""
+    body weight), the friction ratio against W's 0.3 (log scale up to its peak, which is marked),
+    and the residual root force in flight."""
     plt = _pyplot()
     t = result.times
     names = list(result.joint_names)
@@ -163,8 +169,19 @@ def plot_inverse_dynamics(result, markers, path) -> Path:
     for j, sd in enumerate(("left", "right")):
         ax.plot(t, fr[:, j], color=_SIDE_COLOURS[sd], lw=0.9, label=sd)
     ax.axhline(0.3, color="k", lw=0.6, ls="-.", label="W's friction 0.3")
-    ax.set_ylim(0, 1.0)
-    ax.set_ylabel("|F_t| / F_n\nneeded", fontsize=8)
+    # log scale up to the peak: the summary's peak_friction_ratio (e.g. 15.7) is on the axis
+    finite = fr[np.isfinite(fr) & (fr > 0)]
+    if finite.size:
+        peak = float(finite.max())
+        k, j = np.unravel_index(np.nanargmax(np.where(np.isfinite(fr), fr, -np.inf)), fr.shape)
+        ax.set_yscale("log")
+        ax.set_ylim(max(min(float(np.percentile(finite, 1)), 0.1) / 2, 1e-3), 2.0 * max(peak, 0.3))
+        ax.plot([t[k]], [peak], "v", color="k", ms=5)
+        ax.annotate(f"peak {peak:.3g} (t = {t[k]:.2f} s, {('left', 'right')[j]})", (t[k], peak),
+                    textcoords="offset points", xytext=(4, 2), fontsize=7)
+    else:
+        ax.set_ylim(0, 1.0)
+    ax.set_ylabel("|F_t| / F_n\nneeded (log)", fontsize=8)
     ax.legend(loc="upper right", fontsize=7)
     _markers(ax, markers)
     ax = axes[4]
@@ -176,4 +193,4 @@ def plot_inverse_dynamics(result, markers, path) -> Path:
     ax.set_xlabel("time [s]")
     fig.suptitle("What the kinematic gait asks of W's biped (MuJoCo mj_inverse, de Leva masses)", fontsize=10)
     fig.tight_layout()
-    return _save(fig, path)
+    return fig
