@@ -16,7 +16,7 @@ import pytest
 from scipy.optimize import nnls
 
 from biped.control import WorkspaceController
-from biped.control.distribution import RELAXED, SOLVED, QPWeights, cone_rows
+from biped.control.distribution import RELAXED, SOLVED, ZEROED, QPWeights, cone_rows
 from biped.control.limits import clip_torques, torque_limits
 from biped.errors import ScenarioError
 from biped.model import sole_rectangles
@@ -247,6 +247,37 @@ def test_infeasible_qp_falls_back_without_an_exception(wendlandt_path, wendlandt
     tau = ctrl.compute(d.qpos, d.qvel).torques
     assert ctrl.qp.status == RELAXED and ctrl.qp.fallbacks[RELAXED] == 1
     assert np.all(np.abs(tau) <= 0.01 + 1e-9)
+
+
+@pytest.mark.parametrize("solver", ["quadprog", "daqp"])
+def test_a_failed_solve_zeroes_the_wrenches_without_an_exception(wendlandt_path, wendlandt_mj, solver):
+    """The documented last fallback, with the real solvers: a desired wrench that is not finite
+    (or too large for double precision in the cost) leaves no solution; the call returns zero
+    wrenches (status ZEROED, counted) instead of raising, and the next sane state solves again."""
+    ctrl = WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", qp_solver=solver)
+    d = next(_states(wendlandt_mj, 1, 7))
+    good = ctrl.compute(d.qpos, d.qvel).torques
+    qp = ctrl.qp
+    for k, bad in enumerate((np.full(6, 1e300), np.array([np.inf, 0, 0, 0, 0, 0]),
+                             np.array([0, 0, np.nan, 0, 0, 0]))):
+        qp.build(ctrl._w.g, ctrl._w.gl, ctrl._both, bad)
+        x = qp.solve()
+        assert qp.status == ZEROED and qp.fallbacks[ZEROED] == k + 1
+        assert np.all(x == 0)
+    # the same through the controller: the solver itself raising twice ends in zero torques
+    calls = []
+
+    def failing():
+        calls.append(1)
+        raise ValueError("constraints are inconsistent, no solution")
+
+    qp._solve_once = failing
+    out = ctrl.compute(d.qpos, d.qvel)
+    assert len(calls) == 2 and qp.status == ZEROED
+    assert np.all(out.torques == 0) and np.all(out.foot_wrench_left == 0)
+    del qp._solve_once
+    np.testing.assert_allclose(ctrl.compute(d.qpos, d.qvel).torques, good, rtol=1e-9, atol=1e-9)
+    assert qp.status == SOLVED
 
 
 def test_bad_qp_settings_are_one_line_errors(wendlandt_path):
