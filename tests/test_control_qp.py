@@ -2,7 +2,7 @@
 
 Oracles the project did not compute: the contact wrench cone against its definition (the
 nonnegative span of the sole corners' friction-pyramid edges, by scipy's NNLS); foot and body
-poses from MuJoCo; a second QP solver (daqp) and a solver-free KKT certificate on the same problems; the
+poses from MuJoCo; a second QP solver (quadprog beside the default daqp) and a solver-free KKT certificate on the same problems; the
 optimality bound of a regularised least-squares problem; MuJoCo's compiled joint damping.
 """
 
@@ -132,8 +132,8 @@ def ctrls(wendlandt_path):
             "qp": WorkspaceController.from_mjcf(wendlandt_path, distribution="qp"),
             "qp_human": WorkspaceController.from_mjcf(wendlandt_path, distribution="qp",
                                                       torque_limits=HUMAN),
-            "qp_daqp": WorkspaceController.from_mjcf(wendlandt_path, distribution="qp",
-                                                     torque_limits=HUMAN, qp_solver="daqp")}
+            "qp_quadprog": WorkspaceController.from_mjcf(wendlandt_path, distribution="qp",
+                                                         torque_limits=HUMAN, qp_solver="quadprog")}
 
 
 def test_qp_wrenches_satisfy_every_cone_cop_and_torque_row(ctrls, wendlandt_mj, soles):
@@ -202,7 +202,8 @@ def test_qp_reproduces_a_feasible_min_norm_split(ctrls, wendlandt_mj, soles):
 
 def test_quadprog_matches_daqp_and_the_kkt_conditions(ctrls, wendlandt_mj):
     m = wendlandt_mj
-    a, b = ctrls["qp_human"], ctrls["qp_daqp"]
+    a, b = ctrls["qp_human"], ctrls["qp_quadprog"]
+    assert (a.qp.solver, b.qp.solver) == ("daqp", "quadprog")
     for i, d in enumerate(_states(m, 30, 4, vel=2.0)):
         ta = a.compute(d.qpos, d.qvel).torques
         tb = b.compute(d.qpos, d.qvel).torques
@@ -223,6 +224,13 @@ def test_quadprog_matches_daqp_and_the_kkt_conditions(ctrls, wendlandt_mj):
         else:
             res = np.linalg.norm(grad)
         assert res <= 1e-6 * (1 + np.linalg.norm(av)), (i, res)
+        # one foot in the air: its six wrench entries are equality rows (both solvers agree)
+        feet = (True, False) if i % 2 else (False, True)
+        ta = a.compute(d.qpos, d.qvel, feet_in_contact=feet).torques
+        tb = b.compute(d.qpos, d.qvel, feet_in_contact=feet).torques
+        assert a.qp.status == b.qp.status == SOLVED
+        np.testing.assert_allclose(a.qp.x, b.qp.x, atol=1e-4 * (1 + np.abs(b.qp.x).max()))
+        np.testing.assert_allclose(ta, tb, atol=1e-4 * (1 + np.abs(tb).max()))
 
 
 def test_a_foot_in_the_air_carries_nothing(ctrls, wendlandt_mj):
@@ -237,12 +245,14 @@ def test_a_foot_in_the_air_carries_nothing(ctrls, wendlandt_mj):
         assert np.all(out.torques == 0)
 
 
-def test_infeasible_qp_falls_back_without_an_exception(wendlandt_path, wendlandt_mj):
+@pytest.mark.parametrize("solver", ["quadprog", "daqp"])
+def test_infeasible_qp_falls_back_without_an_exception(wendlandt_path, wendlandt_mj, solver):
     """Limits too small for the minimum normal force: the QP is solved without it (documented)."""
     from biped.control.limits import TorqueLimits
 
     tiny = TorqueLimits("tiny", HUMAN.joint_names, -0.01 * np.ones(12), 0.01 * np.ones(12))
-    ctrl = WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", torque_limits=tiny)
+    ctrl = WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", torque_limits=tiny,
+                                         qp_solver=solver)
     d = next(_states(wendlandt_mj, 1, 6))
     tau = ctrl.compute(d.qpos, d.qvel).torques
     assert ctrl.qp.status == RELAXED and ctrl.qp.fallbacks[RELAXED] == 1
