@@ -220,7 +220,7 @@ def test_quadprog_matches_daqp_and_the_kkt_conditions(ctrls, wendlandt_mj):
         act = slack <= 1e-6 * scale
         grad = G @ xa - av
         if act.any():
-            lam, res = nnls(C[act].T, grad)
+            _, res = nnls(C[act].T, grad)
         else:
             res = np.linalg.norm(grad)
         assert res <= 1e-6 * (1 + np.linalg.norm(av)), (i, res)

@@ -43,7 +43,7 @@ from numba import njit
 from biped.control.recursions import alg6_torques
 from biped.errors import ScenarioError
 
-__all__ = ["QPWeights", "ContactQP", "cone_rows", "SOLVED", "RELAXED", "ZEROED"]
+__all__ = ["RELAXED", "SOLVED", "ZEROED", "ContactQP", "QPWeights", "cone_rows"]
 
 #: ContactQP.status values
 SOLVED, RELAXED, ZEROED = 0, 1, 2
