@@ -8,8 +8,8 @@ Prints the median and 99th percentile of the wall time per call [us] of
 - ``pinocchio.aba`` (articulated-body forward dynamics), ``pinocchio.rnea`` (inverse dynamics) and
   ``mujoco.mj_forward`` on the same MJCF file (W's biped, no floor: no contacts),
 each called from Python, with the ratio of medians to ``pin.aba`` measured in the same run, and
-the contact-feasible QP distribution (``distribution="qp"``): ``compute``/``torques`` with quadprog
-and with daqp, the QP solve alone with each solver on the same built problem, and the ratio of the
+the contact-feasible QP distribution (``distribution="qp"``): ``compute``/``torques`` with daqp
+(the default) and ``torques`` with quadprog, the QP solve alone with each solver on the same built problem, and the ratio of the
 qp ``torques`` call to the min-norm (``statics``) one. The calls are interleaved in rounds so that a
 change in machine load affects all alike. With ``--push N``: W's default push (faithful physics,
 3 s) closed loop with statics and with qp, interleaved N times, median wall times and their ratio
@@ -75,9 +75,9 @@ def main(argv=None) -> int:
     fns = {
         "controller.compute": lambda: ctrl.compute(qpos, qvel),
         "controller.torques": lambda: ctrl.torques(qpos, qvel),
-        "qp.compute": lambda: qp["quadprog"].compute(qpos, qvel),
-        "qp.torques": lambda: qp["quadprog"].torques(qpos, qvel),
-        "qp.torques (daqp)": lambda: qp["daqp"].torques(qpos, qvel),
+        "qp.compute": lambda: qp["daqp"].compute(qpos, qvel),
+        "qp.torques": lambda: qp["daqp"].torques(qpos, qvel),
+        "qp.torques (quadprog)": lambda: qp["quadprog"].torques(qpos, qvel),
         "qp solve (quadprog)": qpq._solve_once,
         "qp solve (daqp)": qpd._solve_once,
         "mujoco.mj_forward": lambda: mujoco.mj_forward(m, d),
@@ -144,35 +144,58 @@ def main(argv=None) -> int:
 
 
 def push_ratio(repeat: int) -> None:
-    """W's default push (scenario defaults, faithful physics) closed loop with the min-norm split
-    and with the QP, interleaved ``repeat`` times: median wall times and their ratio."""
+    """W's default push (scenario defaults, faithful physics) closed loop with the min-norm split,
+    with the QP (daqp, the default) and with the QP solved by quadprog, interleaved ``repeat``
+    times: median wall and thread-CPU times, their ratios, and the thread CPU per controller call
+    inside the loop (the QP's active set there is not the one at the initial state)."""
+    from biped.control.distribution import ContactQP
     from biped.sim import Scenario, build_scene
     from biped.sim.push import controller_policy, run_closed_loop
 
-    runs = {}
-    for dist in ("statics", "qp"):
+    runs, per_call = {}, {}
+    for name, dist in (("statics", "statics"), ("qp", "qp"), ("qp (quadprog)", "qp")):
         sc = Scenario(distribution=dist)
         scene = build_scene(sc)
         policy = controller_policy(sc, scene)
+        if name == "qp (quadprog)":
+            ctrl = policy.policy.controller
+            q = ctrl.qp
+            ctrl.qp = ContactQP(ctrl.tree, q.soles, q.weights, q._lo if q.limited else None,
+                                q._hi if q.limited else None, solver="quadprog")
+        acc = per_call[name] = [0.0, 0]
+
+        def timed(t, qpos, qvel, feet, policy=policy, acc=acc):
+            c = time.thread_time()
+            out = policy(t, qpos, qvel, feet)
+            acc[0] += time.thread_time() - c
+            acc[1] += 1
+            return out
+
         run_closed_loop(sc.with_overrides(duration_s=0.02), scene, policy)  # compile, warm caches
-        runs[dist] = (sc, scene, policy)
+        runs[name] = (sc, scene, policy, timed)
     wall = {k: [] for k in runs}
     cpu = {k: [] for k in runs}
-    for _ in range(repeat):
-        for k, (sc, scene, policy) in runs.items():
+    for i in range(repeat + 1):
+        for k, (sc, scene, policy, timed) in runs.items():
+            if i == repeat:  # one more run, timing the controller calls inside the loop
+                res = run_closed_loop(sc, scene, timed)
+                continue
             t0, c0 = time.perf_counter(), time.thread_time()
             res = run_closed_loop(sc, scene, policy)
             wall[k].append(time.perf_counter() - t0)
             cpu[k].append(time.thread_time() - c0)
-            assert res.recovered, f"W's push with distribution {k!r} did not recover"
+            assert res.recovered, f"W's push with {k!r} did not recover"
     med = {k: float(np.median(v)) for k, v in wall.items()}
     medc = {k: float(np.median(v)) for k, v in cpu.items()}
-    print(f"W's push closed loop (3 s, faithful physics), median of {repeat}, interleaved:")
-    print(f"  wall:       statics {med['statics'] * 1e3:6.0f} ms, qp {med['qp'] * 1e3:6.0f} ms, "
-          f"ratio qp / statics {med['qp'] / med['statics']:.2f} (goal <= 1.3)")
-    print(f"  thread CPU: statics {medc['statics'] * 1e3:6.0f} ms, qp {medc['qp'] * 1e3:6.0f} ms, "
-          f"ratio qp / statics {medc['qp'] / medc['statics']:.2f}; load average "
-          f"{os.getloadavg()[0]:.1f} (the machine is shared: wall times move with other work)")
+    print(f"W's push closed loop (3 s, faithful physics), median of {repeat}, interleaved "
+          f"(load average {os.getloadavg()[0]:.1f}: the machine is shared, wall times move with "
+          f"other work; thread CPU is the steadier figure):")
+    print(f"{'':16s} {'wall [ms]':>10s} {'/ statics':>10s} {'CPU [ms]':>10s} {'/ statics':>10s} "
+          f"{'CPU per controller call [us]':>30s}")
+    for k in runs:
+        print(f"{k:16s} {med[k] * 1e3:10.0f} {med[k] / med['statics']:10.2f} {medc[k] * 1e3:10.0f} "
+              f"{medc[k] / medc['statics']:10.2f} {per_call[k][0] / per_call[k][1] * 1e6:30.1f}")
+    print("goal: qp / statics <= 1.3")
 
 
 if __name__ == "__main__":

@@ -97,9 +97,10 @@ class Scenario:
     restitution: float = 0.2
     # not in W (Impulse is rigid): MuJoCo's contact stiffness [s]; None: from the preset
     contact_timeconst_s: float = None  # type: ignore[assignment]
-    # passive damping of every hinge [N m s/rad]; W's 0 (the shipped MJCF files carry 1.0, which
-    # this replaces; measured: W's push and the QP sweeps are the same without it, docs/controller.md)
-    joint_damping_n_m_s: float = 0.0
+    # passive damping of every hinge [N m s/rad], as in the shipped models (W: none). Measured
+    # (docs/controller.md): W's push recovers without it, but a falling biped's limp, undamped
+    # ankles spin up until MuJoCo diverges (2 of 120 QP sweep trials); with 1.0 they are falls
+    joint_damping_n_m_s: float = 1.0
     fall_height_m: float = 0.6  # central-body COM below this height = fall
     recovery_com_tol_m: float = 0.02
     recovery_orientation_tol_deg: float = 2.0
