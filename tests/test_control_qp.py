@@ -325,3 +325,19 @@ def test_w_default_push_recovers_with_the_qp():
     for foot in ("left", "right"):
         kinds = [e.kind for e in result.events if e.foot == foot and e.time_s >= hit]
         assert "lift_off" in kinds and kinds[-1] == "touch_down"
+
+
+def test_the_qp_policy_always_senses_the_feet(wendlandt_mj):
+    """With W's fixed support the QP kept loading feet that had left the floor (sweep trials
+    diverged); the "qp" policy takes the sensed feet whatever ``support`` says."""
+    from biped.control.policy import PolicyConfig, make_policy
+
+    d = next(_states(wendlandt_mj, 1, 8))
+    qp = make_policy(PolicyConfig(distribution="qp", support="fixed"))
+    ws = make_policy(PolicyConfig(distribution="statics", support="fixed"))
+    right = [i for i, n in enumerate(qp.joint_names) if n.startswith("right")]
+    tau = qp(d.qpos, d.qvel, (True, False))
+    assert np.all(tau[right] == 0) and np.any(tau != 0)
+    assert np.any(ws(d.qpos, d.qvel, (True, False))[right] != 0)  # W's fixed feet ignore it
+    both = qp(d.qpos, d.qvel, (True, True)).copy()
+    assert np.any(both[right] != 0)
