@@ -341,3 +341,23 @@ def test_the_qp_policy_always_senses_the_feet(wendlandt_mj):
     assert np.any(ws(d.qpos, d.qvel, (True, False))[right] != 0)  # W's fixed feet ignore it
     both = qp(d.qpos, d.qvel, (True, True)).copy()
     assert np.any(both[right] != 0)
+
+
+def test_unlimited_qp_torques_are_alg6_of_the_shares(ctrls, wendlandt_path, wendlandt_mj):
+    """Without torque limits the QP's torques come from one Alg. 6 pass over the legs' shares
+    instead of the torque map T x; both equal Alg. 6 of the shares (``leg_torques``, checked
+    against MuJoCo in test_control_mujoco) and each other (limits too wide to bind)."""
+    from biped.control.limits import TorqueLimits
+
+    wide = TorqueLimits("wide", HUMAN.joint_names, -1e7 * np.ones(12), 1e7 * np.ones(12))
+    mapped = WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", torque_limits=wide)
+    ctrl = ctrls["qp"]
+    assert not ctrl.qp.limited and mapped.qp.limited
+    for i, d in enumerate(_states(wendlandt_mj, 10, 9, vel=1.0)):
+        feet = ((True, True), (True, False), (False, True))[i % 3]
+        out = ctrl.compute(d.qpos, d.qvel, feet_in_contact=feet)
+        ref = mapped.compute(d.qpos, d.qvel, feet_in_contact=feet)
+        scale = 1 + np.abs(out.torques).max()
+        np.testing.assert_allclose(out.torques, ctrl.leg_torques(d.qpos, out.wrench_left,
+                                                                 out.wrench_right), atol=1e-9 * scale)
+        np.testing.assert_allclose(out.torques, ref.torques, atol=1e-6 * scale)

@@ -189,8 +189,9 @@ def qp_build(g, gl, parent, H, leg, beyond, feet, contact, Fd, soles, dims, prm,
     nj = T.shape[0]
     for f in range(2):
         _sole_to_body(g[feet[f]], soles[f], g[0], A[f])
-    # torque map: Alg. 6 is linear; both legs at once (they do not interact)
-    for i in range(6):
+    # torque map, needed only for the torque-limit rows (qp_finish applies Alg. 6 once
+    # otherwise): Alg. 6 is linear; both legs at once (they do not interact)
+    for i in range(6 if nlim else 0):
         for r in range(6):
             col[0, r] = A[0, r, i]
             col[1, r] = A[1, r, i]
@@ -256,19 +257,16 @@ def qp_build(g, gl, parent, H, leg, beyond, feet, contact, Fd, soles, dims, prm,
 
 
 @njit(cache=True)
-def qp_finish(x, contact, A, T, soles, tau, Fl_tilde, Fr_tilde, Fl, Fr):
-    """From the foot wrenches x (12,) (sole frames): joint torques tau = T x, the legs' shares
-    F~ = A_f x_f (central-body frame) and the feet's wrenches in their COM frames. A foot not
-    in contact gets exactly zero (the solver's equality holds to rounding only)."""
+def qp_finish(x, contact, A, T, soles, tau, Fl_tilde, Fr_tilde, Fl, Fr, parent, H, leg, beyond, gl,
+              F, nlim):
+    """From the foot wrenches x (12,) (sole frames): the legs' shares F~ = A_f x_f (central-body
+    frame), joint torques (tau = T x with the torque map of the limit rows, else W Alg. 6 of the
+    shares: the same linear map) and the feet's wrenches in their COM frames. A foot not in
+    contact gets exactly zero (the solver's equality holds to rounding only)."""
     for f in range(2):
         if contact[f] == 0:
             for c in range(6):
                 x[6 * f + c] = 0.0
-    for j in range(T.shape[0]):
-        s = 0.0
-        for i in range(12):
-            s += T[j, i] * x[i]
-        tau[j] = s
     for f in range(2):
         out = Fl_tilde if f == 0 else Fr_tilde
         for r in range(6):
@@ -276,6 +274,15 @@ def qp_finish(x, contact, A, T, soles, tau, Fl_tilde, Fr_tilde, Fl, Fr):
             for c in range(6):
                 s += A[f, r, c] * x[6 * f + c]
             out[r] = s
+    if nlim:
+        for j in range(T.shape[0]):
+            s = 0.0
+            for i in range(12):
+                s += T[j, i] * x[i]
+            tau[j] = s
+    else:
+        alg6_torques(parent, H, leg, beyond, gl, Fl_tilde, Fr_tilde, F, tau)
+    for f in range(2):
         # foot COM frame: F_foot = Ad^T_{g_{sole,foot}} w, g_{sole,foot} = (R^T, -R^T p) of g_{foot,sole}
         # = [R f; R tau + p x (R f)] with (R, p) = g_{foot,sole}
         gfs = soles[f]
@@ -363,6 +370,7 @@ class ContactQP:
                                      self.limited, self.A, self.T, self._F, self._tau, self._col,
                                      self.Gq, self.av, self.Ct, self.b)
         self.meq, self.rows, self.first = meq, used, (f0, f1)
+        self._gl = gl
 
     def _solve_once(self):
         if self.solver == "quadprog":
@@ -405,4 +413,6 @@ class ContactQP:
 
     def finish(self, contact, tau, Fl_tilde, Fr_tilde, Fl, Fr):
         """Write the torques and wrenches implied by ``self.x`` into the given buffers."""
-        qp_finish(self.x, contact, self.A, self.T, self._soles, tau, Fl_tilde, Fr_tilde, Fl, Fr)
+        t = self._tree
+        qp_finish(self.x, contact, self.A, self.T, self._soles, tau, Fl_tilde, Fr_tilde, Fl, Fr,
+                  t.parent, t.H, t.leg, self._beyond, self._gl, self._F, self.limited)
