@@ -16,8 +16,9 @@ commanded torques grow without bound. ``distribution="qp"`` solves instead, at e
                because each leg's torques are tau_leg = J_leg^T Ad^T_{g_{sole,1}} w_foot (W Alg. 6);
 
 ``W = diag(force, force, force, moment, moment, moment)`` weighs the rows of the central-body
-wrench error (force rows well above moment rows: when ``F_1^bd`` is out of reach, the body's
-orientation gives way before the feet tip), ``R`` and ``s`` are small regularisations
+wrench error (by default moment rows 100 /(N m)^2, force rows 1 /N^2: when ``F_1^bd`` is out of
+reach the COM force gives way before the trunk's moment; chosen by push-recovery envelopes, the
+other way round survived less), ``R`` and ``s`` are small regularisations
 (:class:`QPWeights`, documented in docs/controller.md). ``X``, ``Y`` (half length and half width)
 and the sole frame come from the MJCF's sole geoms (:func:`biped.model.sole_rectangles`).
 
