@@ -1,14 +1,19 @@
 """Speed of W's controller (one call = W Alg. 1-6) next to Pinocchio and MuJoCo on the same model.
 
-    python benchmarks/controller.py [--calls 20000] [--rounds 5]
+    python benchmarks/controller.py [--calls 20000] [--rounds 5] [--push 7]
 
 Prints the median and 99th percentile of the wall time per call [us] of
 - ``WorkspaceController.compute`` (all outputs as fresh arrays in a ControllerOutput),
 - ``WorkspaceController.torques`` (the hot path: torques only, a view of the controller's buffer),
 - ``pinocchio.aba`` (articulated-body forward dynamics), ``pinocchio.rnea`` (inverse dynamics) and
   ``mujoco.mj_forward`` on the same MJCF file (W's biped, no floor: no contacts),
-each called from Python, with the ratio of medians to ``pin.aba`` measured in the same run. The
-calls are interleaved in rounds so that a change in machine load affects all alike. Then checks
+each called from Python, with the ratio of medians to ``pin.aba`` measured in the same run, and
+the contact-feasible QP distribution (``distribution="qp"``): ``compute``/``torques`` with daqp
+(the default) and ``torques`` with quadprog, the QP solve alone with each solver on the same built problem, and the ratio of the
+qp ``torques`` call to the min-norm (``statics``) one. The calls are interleaved in rounds so that a
+change in machine load affects all alike. With ``--push N``: W's default push (faithful physics,
+3 s) closed loop with statics and with qp, interleaved N times, median wall times and their ratio
+(goal <= 1.3x). Then checks
 that the hot path allocates nothing (tracemalloc over 1000 calls) and reports the numba compile
 time of this process (zero when the cache in ``__pycache__`` was warm).
 """
@@ -45,6 +50,8 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--calls", type=int, default=20000, help="timed calls per function (>= 10^4)")
     ap.add_argument("--rounds", type=int, default=5, help="interleaved rounds the calls are split into")
+    ap.add_argument("--push", type=int, default=0, metavar="N",
+                    help="also time W's default push closed loop, statics vs qp, N times each")
     args = ap.parse_args(argv)
 
     path = str(models.path("wendlandt"))
@@ -60,9 +67,19 @@ def main(argv=None) -> int:
     ctrl.compute(qpos, qvel)  # compiles, or loads numba's cache
     t_first = time.perf_counter() - t0
 
+    qp = {name: WorkspaceController.from_mjcf(path, distribution="qp", qp_solver=name)
+          for name in ("quadprog", "daqp")}
+    for c in qp.values():
+        c.compute(qpos, qvel)
+    qpq, qpd = qp["quadprog"].qp, qp["daqp"].qp
     fns = {
         "controller.compute": lambda: ctrl.compute(qpos, qvel),
         "controller.torques": lambda: ctrl.torques(qpos, qvel),
+        "qp.compute": lambda: qp["daqp"].compute(qpos, qvel),
+        "qp.torques": lambda: qp["daqp"].torques(qpos, qvel),
+        "qp.torques (quadprog)": lambda: qp["quadprog"].torques(qpos, qvel),
+        "qp solve (quadprog)": qpq._solve_once,
+        "qp solve (daqp)": qpd._solve_once,
         "mujoco.mj_forward": lambda: mujoco.mj_forward(m, d),
     }
     try:
@@ -96,6 +113,13 @@ def main(argv=None) -> int:
         ratio = f"{np.median(s) / ref:10.2f}" if ref else f"{'-':>10s}"
         print(f"{name:22s} {np.median(s):12.2f} {np.percentile(s, 99):10.2f} {ratio}")
     print("W (1997): 7000 us per control call on a 100 MHz SGI R4000")
+    med = {name: float(np.median(s)) for name, s in stats.items()}
+    print(f"qp / statics (torques): {med['qp.torques'] / med['controller.torques']:.2f}x; the QP adds "
+          f"{med['qp.torques'] - med['controller.torques']:.1f} us (goal: qp call <= 50 us median)")
+    print(f"QP solve alone: quadprog {med['qp solve (quadprog)']:.1f} us, daqp "
+          f"{med['qp solve (daqp)']:.1f} us (daqp / quadprog "
+          f"{med['qp solve (daqp)'] / med['qp solve (quadprog)']:.2f}); same solution: max |dx| = "
+          f"{np.max(np.abs(qpq._solve_once() - qpd._solve_once())):.1e} N or N m")
 
     # no allocation on the hot path: traced memory after 1000 and after 10000 more calls
     fn = fns["controller.torques"]
@@ -114,7 +138,64 @@ def main(argv=None) -> int:
           f"11000 (peak {peak} bytes above the start)")
     print(f"first call (numba compile or cache load): {t_first:.2f} s; import of biped.control: "
           f"{t_import:.2f} s")
+    if args.push:
+        push_ratio(args.push)
     return 0
+
+
+def push_ratio(repeat: int) -> None:
+    """W's default push (scenario defaults, faithful physics) closed loop with the min-norm split,
+    with the QP (daqp, the default) and with the QP solved by quadprog, interleaved ``repeat``
+    times: median wall and thread-CPU times, their ratios, and the thread CPU per controller call
+    inside the loop (the QP's active set there is not the one at the initial state)."""
+    from biped.control.distribution import ContactQP
+    from biped.sim import Scenario, build_scene
+    from biped.sim.push import controller_policy, run_closed_loop
+
+    runs, per_call = {}, {}
+    for name, dist in (("statics", "statics"), ("qp", "qp"), ("qp (quadprog)", "qp")):
+        sc = Scenario(distribution=dist)
+        scene = build_scene(sc)
+        policy = controller_policy(sc, scene)
+        if name == "qp (quadprog)":
+            ctrl = policy.policy.controller
+            q = ctrl.qp
+            ctrl.qp = ContactQP(ctrl.tree, q.soles, q.weights, q._lo if q.limited else None,
+                                q._hi if q.limited else None, solver="quadprog")
+        acc = per_call[name] = [0.0, 0]
+
+        def timed(t, qpos, qvel, feet, policy=policy, acc=acc):
+            c = time.thread_time()
+            out = policy(t, qpos, qvel, feet)
+            acc[0] += time.thread_time() - c
+            acc[1] += 1
+            return out
+
+        run_closed_loop(sc.with_overrides(duration_s=0.02), scene, policy)  # compile, warm caches
+        runs[name] = (sc, scene, policy, timed)
+    wall = {k: [] for k in runs}
+    cpu = {k: [] for k in runs}
+    for i in range(repeat + 1):
+        for k, (sc, scene, policy, timed) in runs.items():
+            if i == repeat:  # one more run, timing the controller calls inside the loop
+                res = run_closed_loop(sc, scene, timed)
+                continue
+            t0, c0 = time.perf_counter(), time.thread_time()
+            res = run_closed_loop(sc, scene, policy)
+            wall[k].append(time.perf_counter() - t0)
+            cpu[k].append(time.thread_time() - c0)
+            assert res.recovered, f"W's push with {k!r} did not recover"
+    med = {k: float(np.median(v)) for k, v in wall.items()}
+    medc = {k: float(np.median(v)) for k, v in cpu.items()}
+    print(f"W's push closed loop (3 s, faithful physics), median of {repeat}, interleaved "
+          f"(load average {os.getloadavg()[0]:.1f}: the machine is shared, wall times move with "
+          f"other work; thread CPU is the steadier figure):")
+    print(f"{'':16s} {'wall [ms]':>10s} {'/ statics':>10s} {'CPU [ms]':>10s} {'/ statics':>10s} "
+          f"{'CPU per controller call [us]':>30s}")
+    for k in runs:
+        print(f"{k:16s} {med[k] * 1e3:10.0f} {med[k] / med['statics']:10.2f} {medc[k] * 1e3:10.0f} "
+              f"{medc[k] / medc['statics']:10.2f} {per_call[k][0] / per_call[k][1] * 1e6:30.1f}")
+    print("goal: qp / statics <= 1.3")
 
 
 if __name__ == "__main__":

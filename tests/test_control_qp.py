@@ -2,7 +2,7 @@
 
 Oracles the project did not compute: the contact wrench cone against its definition (the
 nonnegative span of the sole corners' friction-pyramid edges, by scipy's NNLS); foot and body
-poses from MuJoCo; a second QP solver (daqp) and a solver-free KKT certificate on the same problems; the
+poses from MuJoCo; a second QP solver (quadprog beside the default daqp) and a solver-free KKT certificate on the same problems; the
 optimality bound of a regularised least-squares problem; MuJoCo's compiled joint damping.
 """
 
@@ -16,7 +16,7 @@ import pytest
 from scipy.optimize import nnls
 
 from biped.control import WorkspaceController
-from biped.control.distribution import RELAXED, SOLVED, QPWeights, cone_rows
+from biped.control.distribution import RELAXED, SOLVED, ZEROED, QPWeights, cone_rows
 from biped.control.limits import clip_torques, torque_limits
 from biped.errors import ScenarioError
 from biped.model import sole_rectangles
@@ -132,8 +132,8 @@ def ctrls(wendlandt_path):
             "qp": WorkspaceController.from_mjcf(wendlandt_path, distribution="qp"),
             "qp_human": WorkspaceController.from_mjcf(wendlandt_path, distribution="qp",
                                                       torque_limits=HUMAN),
-            "qp_daqp": WorkspaceController.from_mjcf(wendlandt_path, distribution="qp",
-                                                     torque_limits=HUMAN, qp_solver="daqp")}
+            "qp_quadprog": WorkspaceController.from_mjcf(wendlandt_path, distribution="qp",
+                                                         torque_limits=HUMAN, qp_solver="quadprog")}
 
 
 def test_qp_wrenches_satisfy_every_cone_cop_and_torque_row(ctrls, wendlandt_mj, soles):
@@ -202,7 +202,8 @@ def test_qp_reproduces_a_feasible_min_norm_split(ctrls, wendlandt_mj, soles):
 
 def test_quadprog_matches_daqp_and_the_kkt_conditions(ctrls, wendlandt_mj):
     m = wendlandt_mj
-    a, b = ctrls["qp_human"], ctrls["qp_daqp"]
+    a, b = ctrls["qp_human"], ctrls["qp_quadprog"]
+    assert (a.qp.solver, b.qp.solver) == ("daqp", "quadprog")
     for i, d in enumerate(_states(m, 30, 4, vel=2.0)):
         ta = a.compute(d.qpos, d.qvel).torques
         tb = b.compute(d.qpos, d.qvel).torques
@@ -219,10 +220,17 @@ def test_quadprog_matches_daqp_and_the_kkt_conditions(ctrls, wendlandt_mj):
         act = slack <= 1e-6 * scale
         grad = G @ xa - av
         if act.any():
-            lam, res = nnls(C[act].T, grad)
+            _, res = nnls(C[act].T, grad)
         else:
             res = np.linalg.norm(grad)
         assert res <= 1e-6 * (1 + np.linalg.norm(av)), (i, res)
+        # one foot in the air: its six wrench entries are equality rows (both solvers agree)
+        feet = (True, False) if i % 2 else (False, True)
+        ta = a.compute(d.qpos, d.qvel, feet_in_contact=feet).torques
+        tb = b.compute(d.qpos, d.qvel, feet_in_contact=feet).torques
+        assert a.qp.status == b.qp.status == SOLVED
+        np.testing.assert_allclose(a.qp.x, b.qp.x, atol=1e-4 * (1 + np.abs(b.qp.x).max()))
+        np.testing.assert_allclose(ta, tb, atol=1e-4 * (1 + np.abs(tb).max()))
 
 
 def test_a_foot_in_the_air_carries_nothing(ctrls, wendlandt_mj):
@@ -237,16 +245,49 @@ def test_a_foot_in_the_air_carries_nothing(ctrls, wendlandt_mj):
         assert np.all(out.torques == 0)
 
 
-def test_infeasible_qp_falls_back_without_an_exception(wendlandt_path, wendlandt_mj):
+@pytest.mark.parametrize("solver", ["quadprog", "daqp"])
+def test_infeasible_qp_falls_back_without_an_exception(wendlandt_path, wendlandt_mj, solver):
     """Limits too small for the minimum normal force: the QP is solved without it (documented)."""
     from biped.control.limits import TorqueLimits
 
     tiny = TorqueLimits("tiny", HUMAN.joint_names, -0.01 * np.ones(12), 0.01 * np.ones(12))
-    ctrl = WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", torque_limits=tiny)
+    ctrl = WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", torque_limits=tiny,
+                                         qp_solver=solver)
     d = next(_states(wendlandt_mj, 1, 6))
     tau = ctrl.compute(d.qpos, d.qvel).torques
     assert ctrl.qp.status == RELAXED and ctrl.qp.fallbacks[RELAXED] == 1
     assert np.all(np.abs(tau) <= 0.01 + 1e-9)
+
+
+@pytest.mark.parametrize("solver", ["quadprog", "daqp"])
+def test_a_failed_solve_zeroes_the_wrenches_without_an_exception(wendlandt_path, wendlandt_mj, solver):
+    """The documented last fallback, with the real solvers: a desired wrench that is not finite
+    (or too large for double precision in the cost) leaves no solution; the call returns zero
+    wrenches (status ZEROED, counted) instead of raising, and the next sane state solves again."""
+    ctrl = WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", qp_solver=solver)
+    d = next(_states(wendlandt_mj, 1, 7))
+    good = ctrl.compute(d.qpos, d.qvel).torques
+    qp = ctrl.qp
+    for k, bad in enumerate((np.full(6, 1e300), np.array([np.inf, 0, 0, 0, 0, 0]),
+                             np.array([0, 0, np.nan, 0, 0, 0]))):
+        qp.build(ctrl._w.g, ctrl._w.gl, ctrl._both, bad)
+        x = qp.solve()
+        assert qp.status == ZEROED and qp.fallbacks[ZEROED] == k + 1
+        assert np.all(x == 0)
+    # the same through the controller: the solver itself raising twice ends in zero torques
+    calls = []
+
+    def failing():
+        calls.append(1)
+        raise ValueError("constraints are inconsistent, no solution")
+
+    qp._solve_once = failing
+    out = ctrl.compute(d.qpos, d.qvel)
+    assert len(calls) == 2 and qp.status == ZEROED
+    assert np.all(out.torques == 0) and np.all(out.foot_wrench_left == 0)
+    del qp._solve_once
+    np.testing.assert_allclose(ctrl.compute(d.qpos, d.qvel).torques, good, rtol=1e-9, atol=1e-9)
+    assert qp.status == SOLVED
 
 
 def test_bad_qp_settings_are_one_line_errors(wendlandt_path):
@@ -284,3 +325,39 @@ def test_w_default_push_recovers_with_the_qp():
     for foot in ("left", "right"):
         kinds = [e.kind for e in result.events if e.foot == foot and e.time_s >= hit]
         assert "lift_off" in kinds and kinds[-1] == "touch_down"
+
+
+def test_the_qp_policy_always_senses_the_feet(wendlandt_mj):
+    """With W's fixed support the QP kept loading feet that had left the floor (sweep trials
+    diverged); the "qp" policy takes the sensed feet whatever ``support`` says."""
+    from biped.control.policy import PolicyConfig, make_policy
+
+    d = next(_states(wendlandt_mj, 1, 8))
+    qp = make_policy(PolicyConfig(distribution="qp", support="fixed"))
+    ws = make_policy(PolicyConfig(distribution="statics", support="fixed"))
+    right = [i for i, n in enumerate(qp.joint_names) if n.startswith("right")]
+    tau = qp(d.qpos, d.qvel, (True, False))
+    assert np.all(tau[right] == 0) and np.any(tau != 0)
+    assert np.any(ws(d.qpos, d.qvel, (True, False))[right] != 0)  # W's fixed feet ignore it
+    both = qp(d.qpos, d.qvel, (True, True)).copy()
+    assert np.any(both[right] != 0)
+
+
+def test_unlimited_qp_torques_are_alg6_of_the_shares(ctrls, wendlandt_path, wendlandt_mj):
+    """Without torque limits the QP's torques come from one Alg. 6 pass over the legs' shares
+    instead of the torque map T x; both equal Alg. 6 of the shares (``leg_torques``, checked
+    against MuJoCo in test_control_mujoco) and each other (limits too wide to bind)."""
+    from biped.control.limits import TorqueLimits
+
+    wide = TorqueLimits("wide", HUMAN.joint_names, -1e7 * np.ones(12), 1e7 * np.ones(12))
+    mapped = WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", torque_limits=wide)
+    ctrl = ctrls["qp"]
+    assert not ctrl.qp.limited and mapped.qp.limited
+    for i, d in enumerate(_states(wendlandt_mj, 10, 9, vel=1.0)):
+        feet = ((True, True), (True, False), (False, True))[i % 3]
+        out = ctrl.compute(d.qpos, d.qvel, feet_in_contact=feet)
+        ref = mapped.compute(d.qpos, d.qvel, feet_in_contact=feet)
+        scale = 1 + np.abs(out.torques).max()
+        np.testing.assert_allclose(out.torques, ctrl.leg_torques(d.qpos, out.wrench_left,
+                                                                 out.wrench_right), atol=1e-9 * scale)
+        np.testing.assert_allclose(out.torques, ref.torques, atol=1e-6 * scale)

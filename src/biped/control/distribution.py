@@ -16,13 +16,16 @@ commanded torques grow without bound. ``distribution="qp"`` solves instead, at e
                because each leg's torques are tau_leg = J_leg^T Ad^T_{g_{sole,1}} w_foot (W Alg. 6);
 
 ``W = diag(force, force, force, moment, moment, moment)`` weighs the rows of the central-body
-wrench error (force rows well above moment rows: when ``F_1^bd`` is out of reach, the body's
-orientation gives way before the feet tip), ``R`` and ``s`` are small regularisations
+wrench error (by default moment rows 100 /(N m)^2, force rows 1 /N^2: when ``F_1^bd`` is out of
+reach the COM force gives way before the trunk's moment; chosen by push-recovery envelopes, the
+other way round survived less), ``R`` and ``s`` are small regularisations
 (:class:`QPWeights`, documented in docs/controller.md). ``X``, ``Y`` (half length and half width)
 and the sole frame come from the MJCF's sole geoms (:func:`biped.model.sole_rectangles`).
 
-Solver: quadprog (Goldfarb-Idnani dual active set) called directly on preallocated matrices that
-a compiled function fills; see docs/controller.md for the measured comparison with daqp.
+Solver: daqp (Arnstroem, Bemporad & Axehill, IEEE TAC 2022: a dual active-set method for small
+dense QPs) called directly on preallocated matrices that a compiled function fills; quadprog
+(Goldfarb-Idnani) solves the same problem (``solver="quadprog"``). docs/controller.md has the
+measured comparison (daqp about 2x faster on this problem, same solution).
 
 Failure handling (never an exception in the loop): if the QP is infeasible (the minimum normal
 force together with the torque limits cannot be met), it is solved again with ``f_min = 0``, for
@@ -41,7 +44,7 @@ from numba import njit
 from biped.control.recursions import alg6_torques
 from biped.errors import ScenarioError
 
-__all__ = ["QPWeights", "ContactQP", "cone_rows", "SOLVED", "RELAXED", "ZEROED"]
+__all__ = ["RELAXED", "SOLVED", "ZEROED", "ContactQP", "QPWeights", "cone_rows"]
 
 #: ContactQP.status values
 SOLVED, RELAXED, ZEROED = 0, 1, 2
@@ -69,7 +72,7 @@ class QPWeights:
     """
 
     force: float = 1.0
-    moment: float = 1.0
+    moment: float = 100.0
     reg_force: float = 1e-6
     reg_moment: float = 1e-5
     split: float = 1e-5
@@ -187,8 +190,9 @@ def qp_build(g, gl, parent, H, leg, beyond, feet, contact, Fd, soles, dims, prm,
     nj = T.shape[0]
     for f in range(2):
         _sole_to_body(g[feet[f]], soles[f], g[0], A[f])
-    # torque map: Alg. 6 is linear; both legs at once (they do not interact)
-    for i in range(6):
+    # torque map, needed only for the torque-limit rows (qp_finish applies Alg. 6 once
+    # otherwise): Alg. 6 is linear; both legs at once (they do not interact)
+    for i in range(6 if nlim else 0):
         for r in range(6):
             col[0, r] = A[0, r, i]
             col[1, r] = A[1, r, i]
@@ -254,19 +258,16 @@ def qp_build(g, gl, parent, H, leg, beyond, feet, contact, Fd, soles, dims, prm,
 
 
 @njit(cache=True)
-def qp_finish(x, contact, A, T, soles, tau, Fl_tilde, Fr_tilde, Fl, Fr):
-    """From the foot wrenches x (12,) (sole frames): joint torques tau = T x, the legs' shares
-    F~ = A_f x_f (central-body frame) and the feet's wrenches in their COM frames. A foot not
-    in contact gets exactly zero (the solver's equality holds to rounding only)."""
+def qp_finish(x, contact, A, T, soles, tau, Fl_tilde, Fr_tilde, Fl, Fr, parent, H, leg, beyond, gl,
+              F, nlim):
+    """From the foot wrenches x (12,) (sole frames): the legs' shares F~ = A_f x_f (central-body
+    frame), joint torques (tau = T x with the torque map of the limit rows, else W Alg. 6 of the
+    shares: the same linear map) and the feet's wrenches in their COM frames. A foot not in
+    contact gets exactly zero (the solver's equality holds to rounding only)."""
     for f in range(2):
         if contact[f] == 0:
             for c in range(6):
                 x[6 * f + c] = 0.0
-    for j in range(T.shape[0]):
-        s = 0.0
-        for i in range(12):
-            s += T[j, i] * x[i]
-        tau[j] = s
     for f in range(2):
         out = Fl_tilde if f == 0 else Fr_tilde
         for r in range(6):
@@ -274,6 +275,15 @@ def qp_finish(x, contact, A, T, soles, tau, Fl_tilde, Fr_tilde, Fl, Fr):
             for c in range(6):
                 s += A[f, r, c] * x[6 * f + c]
             out[r] = s
+    if nlim:
+        for j in range(T.shape[0]):
+            s = 0.0
+            for i in range(12):
+                s += T[j, i] * x[i]
+            tau[j] = s
+    else:
+        alg6_torques(parent, H, leg, beyond, gl, Fl_tilde, Fr_tilde, F, tau)
+    for f in range(2):
         # foot COM frame: F_foot = Ad^T_{g_{sole,foot}} w, g_{sole,foot} = (R^T, -R^T p) of g_{foot,sole}
         # = [R f; R tau + p x (R f)] with (R, p) = g_{foot,sole}
         gfs = soles[f]
@@ -298,11 +308,11 @@ class ContactQP:
 
     ``soles``: (left, right) :class:`~biped.model.SoleRectangle`; ``weights``: :class:`QPWeights`;
     ``lower``, ``upper``: (n_joints,) torque limits in the controller's joint order [N m] or None;
-    ``solver``: "quadprog" (default) or "daqp" (the same problem; for the comparison).
+    ``solver``: "daqp" (default) or "quadprog" (the same problem; for the comparison).
     """
 
     def __init__(self, tree, soles, weights: QPWeights | None = None, lower=None, upper=None,
-                 solver: str = "quadprog"):
+                 solver: str = "daqp"):
         if solver not in ("quadprog", "daqp"):
             raise ScenarioError(f"unknown QP solver {solver!r}; valid: 'quadprog', 'daqp'")
         self.weights = weights or QPWeights()
@@ -340,14 +350,15 @@ class ContactQP:
         self.status = SOLVED
         self.fallbacks = {RELAXED: 0, ZEROED: 0}
         self._prm = self.weights.array
-        self._inf = np.full(rows, 1e30)
+        self._upper = np.full(rows, 1e30)  # daqp's upper bounds: none, b itself on equality rows
         self._sense = np.zeros(rows, dtype=np.int32)
         self._meq_sense = 0
         self._f = np.zeros(12)
-        import quadprog
+        if solver == "quadprog":
+            import quadprog
 
-        self._quadprog = quadprog.solve_qp
-        if solver == "daqp":
+            self._quadprog = quadprog.solve_qp
+        else:
             import daqp
 
             self._daqp = daqp.solve
@@ -360,16 +371,19 @@ class ContactQP:
                                      self.limited, self.A, self.T, self._F, self._tau, self._col,
                                      self.Gq, self.av, self.Ct, self.b)
         self.meq, self.rows, self.first = meq, used, (f0, f1)
+        self._gl = gl
 
     def _solve_once(self):
         if self.solver == "quadprog":
             return self._quadprog(self.Gq, self.av, self.Ct.T, self.b, self.meq)[0]
         if self.meq != self._meq_sense:
             self._sense[:] = 0
-            self._sense[:self.meq] = 5
+            self._sense[:self.meq] = 5  # daqp: ACTIVE + IMMUTABLE, an equality row
+            self._upper[:] = 1e30
             self._meq_sense = self.meq
+        self._upper[:self.meq] = self.b[:self.meq]  # an equality row is b <= C x <= b
         np.negative(self.av, out=self._f)
-        x, _, flag, _ = self._daqp(self.Gq, self._f, self.Ct, self._inf, self.b, self._sense)
+        x, _, flag, _ = self._daqp(self.Gq, self._f, self.Ct, self._upper, self.b, self._sense)
         if flag < 1:
             raise ValueError(f"daqp exit flag {flag}")
         return x
@@ -400,4 +414,6 @@ class ContactQP:
 
     def finish(self, contact, tau, Fl_tilde, Fr_tilde, Fl, Fr):
         """Write the torques and wrenches implied by ``self.x`` into the given buffers."""
-        qp_finish(self.x, contact, self.A, self.T, self._soles, tau, Fl_tilde, Fr_tilde, Fl, Fr)
+        t = self._tree
+        qp_finish(self.x, contact, self.A, self.T, self._soles, tau, Fl_tilde, Fr_tilde, Fl, Fr,
+                  t.parent, t.H, t.leg, self._beyond, self._gl, self._F, self.limited)

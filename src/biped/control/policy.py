@@ -8,8 +8,9 @@ baseline, with optional torque limits, as a policy ``(qpos, qvel, feet) -> torqu
 ``biped push`` and ``biped sweep`` both build their controllers here (``biped.sim.push`` turns a
 :class:`~biped.sim.scenario.Scenario` into a :class:`PolicyConfig`); this module knows nothing of
 scenarios or scenes. qpos (19,) / qvel (18,) are MuJoCo's layout of the biped's own model; feet
-``(left, right)`` say which soles touch the floor (used by the workspace controller only when
-``support == "sensed"``; with ``"fixed"`` both feet are taken as fixed, as in W).
+``(left, right)`` say which soles touch the floor (used by the workspace controller when
+``support == "sensed"`` and always with ``distribution == "qp"``; otherwise both feet are taken
+as fixed, as in W).
 """
 
 from __future__ import annotations
@@ -38,7 +39,8 @@ class PolicyConfig:
 
     controller: ``"workspace"`` (W's Alg. 1-6) or ``"joint-pd"`` (:mod:`biped.control.joint_pd`).
     target, gains: the workspace controller's set point and gains (unused by joint-pd).
-    support: ``"fixed"`` (both feet fixed, W) or ``"sensed"`` (the feet on the floor).
+    support: ``"fixed"`` (both feet fixed, W) or ``"sensed"`` (the feet on the floor); the
+        ``"qp"`` distribution always takes the sensed feet.
     q_ref_deg: (12,) the posture the joint-PD holds [deg], the model's joint order (default W's
         initial angles, :data:`biped.control.joint_pd.W_INITIAL_ANGLES_DEG`).
     control_period_s: the zero-order-hold period (caps the joint-PD's gains).
@@ -115,7 +117,10 @@ def make_policy(config: PolicyConfig | None = None, joint_order=None, *,
         ctrl = WorkspaceController(tree or TreeModel.from_mjcf(_model_path(config)),
                                    target=config.target, gains=config.gains,
                                    distribution=config.distribution, **qp)
-        if config.support == "sensed":
+        # the QP distributes over the contacts that exist: with W's fixed support it kept loading
+        # a foot that had left the floor, and 15 of 64 sweep trials diverged (0 with the sensed
+        # contacts; docs/controller.md), so "qp" always takes the sensed feet
+        if config.support == "sensed" or config.distribution == "qp":
             raw = lambda q, v, feet: ctrl.torques(q, v, feet_in_contact=feet)
         else:
             raw = lambda q, v, feet: ctrl.torques(q, v)

@@ -161,13 +161,13 @@ class WorkspaceController:
     ``qp_weights`` (:class:`~biped.control.distribution.QPWeights`), ``torque_limits`` (a
     :class:`~biped.control.limits.TorqueLimits` in any joint order, or None: unlimited) put
     into the QP, ``soles`` (left, right) :class:`~biped.model.SoleRectangle` (default: read from
-    the tree's MJCF file) and ``qp_solver`` ("quadprog" or "daqp"). ``self.qp`` is then the
+    the tree's MJCF file) and ``qp_solver`` ("daqp", default, or "quadprog"). ``self.qp`` is then the
     :class:`~biped.control.distribution.ContactQP` (its ``status`` and ``fallbacks``).
     """
 
     def __init__(self, tree: TreeModel, *, big_base: float = 1e6, target: Target | None = None,
                  gains: Gains | None = None, distribution: str = "statics", qp_weights=None,
-                 torque_limits=None, soles=None, qp_solver: str = "quadprog"):
+                 torque_limits=None, soles=None, qp_solver: str = "daqp"):
         if not (np.isfinite(big_base) and big_base > 0):
             raise ScenarioError(f"big_base must be a positive finite factor, got {big_base}")
         if distribution not in DISTRIBUTIONS:

@@ -89,7 +89,7 @@ class Scenario:
     controller: str = "workspace"
     support: str = "fixed"  # not in W: "sensed" drops a foot off the floor from Alg. 3 and 5
     distribution: str = "statics"  # W's Alg. 5; "qp": not in W (docs/controller.md)
-    qp_moment_weight: float = 1.0  # "qp": weight of the moment rows [1/(N m)^2] (force rows: 1 /N^2)
+    qp_moment_weight: float = 100.0  # "qp": weight of the moment rows [1/(N m)^2] (force rows: 1 /N^2)
     qp_min_normal_n: float = 10.0  # "qp": minimum normal force of a foot in contact [N]
     qp_cop_scale: float = 1.0  # "qp": the CoP stays in the sole shrunk by this factor
     torque_limits: Any = "none"
@@ -97,7 +97,9 @@ class Scenario:
     restitution: float = 0.2
     # not in W (Impulse is rigid): MuJoCo's contact stiffness [s]; None: from the preset
     contact_timeconst_s: float = None  # type: ignore[assignment]
-    # passive damping of every hinge [N m s/rad]; 1.0 as in the shipped models (W: none)
+    # passive damping of every hinge [N m s/rad], as in the shipped models (W: none). Measured
+    # (docs/controller.md): W's push recovers without it, but a falling biped's limp, undamped
+    # ankles spin up until MuJoCo diverges (2 of 120 QP sweep trials); with 1.0 they are falls
     joint_damping_n_m_s: float = 1.0
     fall_height_m: float = 0.6  # central-body COM below this height = fall
     recovery_com_tol_m: float = 0.02
