@@ -38,6 +38,7 @@ def trajectory_columns(joint_names) -> list[str]:
     cols += [f"q_{n}" for n in joint_names] + [f"tau_{n}" for n in joint_names]
     cols += ["block_x", "block_y", "block_z", "left_contact", "right_contact"]
     cols += [f"{foot}_{part}_contact" for foot, part in SOLE_GEOMS]
+    cols += [f"{foot}_foot_{a}" for foot in ("left", "right") for a in "xyz"]
     return cols
 
 
@@ -48,11 +49,17 @@ def write_trajectory_csv(result: PushResult, path: str | Path) -> Path:
     path = Path(path)
     lines = [",".join(trajectory_columns(result.joint_names))]
     lc, rc = result.left_contact, result.right_contact
+
+    def feet(k):  # both feet's frame positions [m] (empty strings if not recorded)
+        if result.feet_pos is None:
+            return [""] * 6
+        return [_fmt(x) for x in result.feet_pos[k].reshape(-1)]
+
     for k in range(len(result.times)):
         vals = [_fmt(result.times[k]), *map(_fmt, result.com[k]), *map(_fmt, result.quat[k]),
                 *map(_fmt, result.joint_angles[k]), *map(_fmt, result.torques[k]),
                 *map(_fmt, result.block[k]), str(int(lc[k])), str(int(rc[k])),
-                *(str(int(c)) for c in result.contacts[k])]
+                *(str(int(c)) for c in result.contacts[k]), *feet(k)]
         lines.append(",".join(vals))
     tmp = path.with_suffix(".csv.part")
     tmp.write_text("\n".join(lines) + "\n")
@@ -89,6 +96,7 @@ def summary_dict(result: PushResult) -> dict:
         "block_momentum_before_kg_m_s": result.block_momentum_before.tolist(),
         "block_momentum_after_kg_m_s": result.block_momentum_after.tolist(),
         "events": [e.to_dict() for e in result.events],
+        "steps": [dict(st) for st in result.extra.get("steps", ())],
         "wall_time_s": result.wall_time_s,
         "realtime_factor": _num(result.realtime_factor),
         "control_rate_hz": s.control_rate_hz,
@@ -114,6 +122,12 @@ def _markers(result: PushResult) -> list[dict]:
         out.append({"time_s": result.block_contact_time_s, "label": "block hits the body"})
     for e in result.events:
         out.append({"time_s": e.time_s, "label": f"{e.foot} {e.part} {e.kind.replace('_', ' ')}"})
+    for st in result.extra.get("steps", ()):
+        out.append({"time_s": st["start_s"], "label": f"step: {st['foot']} foot swings"})
+        if st.get("touch_down_s") is not None:
+            p = st["position_m"]
+            out.append({"time_s": st["touch_down_s"],
+                        "label": f"step: {st['foot']} foot lands at ({p[0]:.2f}, {p[1]:.2f}) m"})
     if result.fall_time_s is not None:
         out.append({"time_s": result.fall_time_s, "label": f"fall: {result.fall_reason}"})
     return out
