@@ -185,9 +185,9 @@ class StepLimits:
     the biped faces -x) a foot may land.
     """
 
-    max_step: float = 0.45
+    max_step: float = 0.50
     min_width: float = 0.13
-    max_width: float = 0.40
+    max_width: float = 0.22
     max_back: float = 0.30
 
 

@@ -11,9 +11,9 @@ Phases (one :class:`SteppingController` call per control period, ``(t, qpos, qve
   polygon of the soles in contact, shrunk by ``margin_m``, for ``hold`` periods
   (:class:`~biped.control.capture.CaptureTrigger`), and fewer than ``max_steps`` steps were
   taken, a step starts.
-- **swing**: swing foot rule: the foot whose sole centre lies nearer to xi across the body (the
-  push side: a push to the biped's right steps with the right foot, no crossover); if only one
-  foot is on the floor, the other one swings. The stance leg carries the body through W's
+- **swing**: swing foot rule: for the first step, the foot off the floor if only one is on it,
+  else the foot whose sole centre lies nearer to xi across the body (the push side: a push to
+  the biped's right steps with the right foot; no crossover); later steps alternate feet. The stance leg carries the body through W's
   recursions with the contact flags (stance, not swing): Alg. 3 with one big base, the QP's
   single-sole cone (or the min-norm split with one foot); the stance controller keeps the
   height and orientation set points and lets the COM run horizontally (kp, kv of x, y zero),
@@ -66,6 +66,15 @@ class SteppingConfig:
     point the sole centre lands. descent_m_s: the ankle's downward speed after T until contact.
     kp_pos, kv_pos, kp_rot, kv_rot: the swing foot's task-space gains [1/s^2, 1/s].
     refractory_s: no new step within this time after a touchdown. limits: landing limits.
+    swing_rot_gain_scale: W's orientation gains times this (kv by its square root) while a foot
+    swings: the stance leg must stop the trunk's pitch from the push before the foot can reach.
+    qp_moment_weight: with distribution "qp", the QP's moment-row weight used by the stepping
+    policy (None: the scenario's qp_moment_weight): 10 keeps the trunk upright in single support
+    and after touchdown, where force-first (1) lets it pitch over.
+    post_step_kp_xy, post_step_kv_xy: after a step, the horizontal COM gains of W's Alg. 4
+    [1/s^2, 1/s]: W's (50, 7.07) ask a decelerating COM for ~10 m/s^2, five times what the LIPM
+    over the new feet can give (omega_0^2 times the COM-to-toe distance); the QP then gives up
+    the trunk's orientation and the trunk pitches over. kv ~ omega_0 asks for what it can give.
     reach_m: the desired ankle is kept within this distance of the hip joint (leg 0.826 m).
     swing_torque_max_n_m: bound of the swing leg's task-space torques.
     swing_height_drop_m, swing_tilt_deg: while a foot swings the stance leg holds the body this
@@ -87,10 +96,15 @@ class SteppingConfig:
     kv_rot: float = 40.0
     refractory_s: float = 0.15
     reach_m: float = 0.78
+    swing_rot_gain_scale: float = 4.0
+    qp_moment_weight: float | None = 10.0
+    post_step_kp_xy: float = 10.0
+    post_step_kv_xy: float = 3.5
     ankle_kp: float = 80.0
     ankle_kv: float = 0.5
     swing_torque_max_n_m: float = 1000.0
     swing_height_drop_m: float = 0.08
+    post_step_height_drop_m: float = 0.08
     swing_tilt_deg: float = 0.0
     limits: cp.StepLimits = field(default_factory=cp.StepLimits)
 
@@ -135,7 +149,13 @@ class SteppingController:
         path = _model_path(config)
         self.model = mujoco.MjModel.from_xml_path(str(path))
         self.data = mujoco.MjData(self.model)
-        self._inner = make_policy(replace(config, torque_limits=None), tree=tree)
+        inner = replace(config, torque_limits=None)
+        if config.distribution == "qp" and self.stepping.qp_moment_weight is not None:
+            from biped.control.distribution import QPWeights
+
+            inner = replace(inner, qp_weights=replace(config.qp_weights or QPWeights(),
+                                                      moment=self.stepping.qp_moment_weight))
+        self._inner = make_policy(inner, tree=tree)
         self.ctrl = self._inner.controller
         names = tuple(self.ctrl.joint_names)
         self.joint_names = tuple(joint_order) if joint_order is not None else names
@@ -168,9 +188,11 @@ class SteppingController:
         self._gravity = float(-m.opt.gravity[2])
         self.base_target: Target = config.target
         self.gains: Gains = config.gains
+        k = self.stepping.swing_rot_gain_scale
         self._swing_gains = Gains(kp_com=(0.0, 0.0, self.gains.kp_com[2]),
                                   kv_com=(0.0, 0.0, self.gains.kv_com[2]),
-                                  kp_rot=self.gains.kp_rot, kv_rot=self.gains.kv_rot)
+                                  kp_rot=tuple(k * x for x in self.gains.kp_rot),
+                                  kv_rot=tuple(math.sqrt(k) * x for x in self.gains.kv_rot))
         self.reset()
 
     # ------------------------------------------------------------------ state
@@ -227,10 +249,9 @@ class SteppingController:
         if self._mid0 is None:
             self._mid0 = 0.5 * (self._sole_pose(0)[0] + self._sole_pose(1)[0])
         left, right = bool(feet[0]), bool(feet[1])
-        if self.phase == "double":
-            poly = self._polygon((left, right))
-            fire = self.trigger.update(poly, xi)
-            if (fire and len(self.steps) < s.max_steps and t - self._last_td >= s.refractory_s):
+        if (self.phase == "double" and len(self.steps) < s.max_steps
+                and t - self._last_td >= s.refractory_s):
+            if self.trigger.update(self._polygon((left, right)), xi):
                 self._start_step(t, xi, (left, right))
         if self.phase == "swing":
             return self._swing_call(t, qpos, qvel, xi, omega, (left, right))
@@ -248,7 +269,9 @@ class SteppingController:
         return out
 
     def _start_step(self, t, xi, feet):
-        if feet[0] != feet[1]:
+        if self.steps:  # later steps alternate feet
+            swing = 1 - FEET.index(self.steps[-1]["foot"])
+        elif feet[0] != feet[1]:
             swing = 0 if not feet[0] else 1
         else:
             dy = [abs(self._sole_pose(i)[0][1] - xi[1]) for i in (0, 1)]
@@ -270,9 +293,15 @@ class SteppingController:
             step["lift_off_s"] = t
         if feet[i] and el > 0.5 * s.swing_time_s:  # touchdown
             return self._touch_down(t, qpos, qvel, feet)
-        stance_c, _ = self._sole_pose(st)
+        stance_c, yaw = self._sole_pose(st)
+        # the stance CoP: the point of the stance sole nearest the COM (the QP pushes it there)
+        c, sn = math.cos(yaw), math.sin(yaw)
+        rel = self.data.subtree_com[0][:2] - stance_c[:2]
+        loc = np.array([c * rel[0] + sn * rel[1], -sn * rel[0] + c * rel[1]])
+        loc = np.clip(loc, [-self._sole[st][1], -self._sole[st][2]], [self._sole[st][1], self._sole[st][2]])
+        cop = stance_c[:2] + np.array([c * loc[0] - sn * loc[1], sn * loc[0] + c * loc[1]])
         side = 1.0 if i == 1 else -1.0
-        land = cp.step_target(xi, stance_c[:2], omega, s.swing_time_s - el, stance_c[:2], side,
+        land = cp.step_target(xi, cop, omega, s.swing_time_s - el, stance_c[:2], side,
                               s.offset_m, s.limits)
         self._landing = land
         step["target_m"] = [float(land[0]), float(land[1]), 0.0]
@@ -300,7 +329,7 @@ class SteppingController:
         # stance: W's recursions with the swing foot off (one big base, single-sole QP)
         flags = (i == 1, i == 0)
         # the COM falls freely over the stance sole: the LIPM's acceleration as feed-forward
-        acc = omega ** 2 * (self.data.subtree_com[0][:2] - stance_c[:2])
+        acc = omega ** 2 * (self.data.subtree_com[0][:2] - cop)
         com = np.array(self.target.com)
         com[2] -= s.swing_height_drop_m
         target = Target.wendlandt(com=tuple(com), tilt_deg=s.swing_tilt_deg)
@@ -362,8 +391,13 @@ class SteppingController:
         mid = 0.5 * (self._sole_pose(0)[0] + self._sole_pose(1)[0])
         com = np.array(self.base_target.com)
         com[:2] += mid[:2] - self._mid0[:2]
-        com[2] -= self.stepping.swing_height_drop_m  # a wider stance: lower hips keep the knees bent
+        com[2] -= self.stepping.post_step_height_drop_m  # wider stance: lower hips, bent knees
         self.target = replace(self.base_target, com=tuple(com))
+        g = self.config.gains
+        sp = self.stepping
+        self.gains = Gains(kp_com=(sp.post_step_kp_xy, sp.post_step_kp_xy, g.kp_com[2]),
+                           kv_com=(sp.post_step_kv_xy, sp.post_step_kv_xy, g.kv_com[2]),
+                           kp_rot=g.kp_rot, kv_rot=g.kv_rot)
         self.phase = "double"
         self.swing = None
         self._last_td = t
