@@ -20,7 +20,7 @@ Phases (one :class:`SteppingController` call per control period, ``(t, qpos, qve
   as the LIPM prediction assumes. The landing point of the swing sole's centre is
   :func:`~biped.control.capture.step_target` (xi when the foot lands, from the stance sole
   centre as CoP, plus ``offset_m``, clamped to :class:`~biped.control.capture.StepLimits`),
-  recomputed every control period. The ankle follows a minimum-jerk path to it in x, y, with a
+  recomputed every control period for the first ``retarget_until`` of the swing. The ankle follows a minimum-jerk path to it in x, y, with a
   bump of height ``apex_m`` in z, flat sole, zero yaw; after ``swing_time_s`` it keeps moving
   down at ``descent_m_s`` until touchdown. Swing-leg torques: task-space computed torque on the
   leg's own 6 joints, ``tau = M_ll J_leg^{-1} (a_d + Kp e + Kd e') + b_l`` (J_leg the (6, 6)
@@ -65,6 +65,8 @@ class SteppingConfig:
     apex_m: swing-foot clearance at mid-swing. offset_m: how far beyond the predicted capture
     point the sole centre lands. descent_m_s: the ankle's downward speed after T until contact.
     kp_pos, kv_pos, kp_rot, kv_rot: the swing foot's task-space gains [1/s^2, 1/s].
+    retarget_until: the landing point is recomputed every period until this fraction of
+    swing_time_s, then frozen (a late change the foot cannot follow would only move the target).
     refractory_s: no new step within this time after a touchdown. limits: landing limits.
     swing_rot_gain_scale: W's orientation gains times this (kv by its square root) while a foot
     swings: the stance leg must stop the trunk's pitch from the push before the foot can reach.
@@ -95,6 +97,7 @@ class SteppingConfig:
     kp_rot: float = 400.0
     kv_rot: float = 40.0
     refractory_s: float = 0.15
+    retarget_until: float = 1.0
     reach_m: float = 0.78
     swing_rot_gain_scale: float = 4.0
     qp_moment_weight: float | None = 10.0
@@ -280,6 +283,7 @@ class SteppingController:
         self.phase = "swing"
         self._t_start = t
         self._p0 = self.data.xpos[self._foot[swing]].copy()
+        self._landing = None
         self.steps.append({"foot": FEET[swing], "start_s": t, "lift_off_s": None,
                            "touch_down_s": None, "position_m": None, "target_m": None})
 
@@ -301,9 +305,10 @@ class SteppingController:
         loc = np.clip(loc, [-self._sole[st][1], -self._sole[st][2]], [self._sole[st][1], self._sole[st][2]])
         cop = stance_c[:2] + np.array([c * loc[0] - sn * loc[1], sn * loc[0] + c * loc[1]])
         side = 1.0 if i == 1 else -1.0
-        land = cp.step_target(xi, cop, omega, s.swing_time_s - el, stance_c[:2], side,
-                              s.offset_m, s.limits)
-        self._landing = land
+        if self._landing is None or el < s.retarget_until * s.swing_time_s:
+            self._landing = cp.step_target(xi, cop, omega, s.swing_time_s - el, stance_c[:2], side,
+                                           s.offset_m, s.limits)
+        land = self._landing
         step["target_m"] = [float(land[0]), float(land[1]), 0.0]
         # ankle path: the sole centre lands on `land`, flat, zero yaw
         sole_off = self._sole[i][0]
