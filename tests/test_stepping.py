@@ -20,7 +20,7 @@ def test_swing_path_pieces_match_finite_differences():
     h = 1e-6
     for f in (_min_jerk, _bump):
         for s in np.linspace(0.05, 0.95, 7):
-            v, d1, d2 = f(s)
+            _, d1, d2 = f(s)
             assert d1 == pytest.approx((f(s + h)[0] - f(s - h)[0]) / (2 * h), abs=1e-5)
             assert d2 == pytest.approx((f(s + h)[1] - f(s - h)[1]) / (2 * h), abs=1e-4)
     assert _min_jerk(0.0)[0] == 0.0 and _min_jerk(1.0)[0] == 1.0
@@ -82,8 +82,8 @@ def test_big_push_steps_foot_above_floor_within_reach():
     m = scene.model
     d = mujoco.MjData(m)
     geoms = [m.geom(f"{st['foot']}_{p}").id for p in ("heel", "toe")]
-    k0 = int(round(st["lift_off_s"] * sc.control_rate_hz))
-    k1 = int(round(st["touch_down_s"] * sc.control_rate_hz))
+    k0 = round(st["lift_off_s"] * sc.control_rate_hz)
+    k1 = round(st["touch_down_s"] * sc.control_rate_hz)
     lowest = np.inf
     for k in range(k0, k1 + 1):
         d.qpos[:] = r.qpos[k]
@@ -110,3 +110,38 @@ def test_summary_has_steps(tmp_path):
     json.dumps(d)
     cols = trajectory_columns(r.joint_names)
     assert cols[-6:] == [f"{f}_foot_{a}" for f in ("left", "right") for a in "xyz"]
+
+
+def test_cli_flags_set_the_key():
+    from biped.cli import build_parser
+    from biped.cli.push import build_scenario
+    from biped.cli.sweep import build_spec
+    from biped.sim.sweep.record import COLUMNS
+
+    p = build_parser()
+    assert build_scenario(p.parse_args(["push", "--stepping"])).stepping is True
+    assert build_scenario(p.parse_args(["push"])).stepping is False
+    spec = build_spec(p.parse_args(["sweep", "--speed", "3", "--direction", "180", "--stepping"]))
+    assert spec.base.stepping is True
+    assert "step_count" in COLUMNS
+
+
+@pytest.mark.slow
+def test_push_beyond_feet_in_place_recovers_with_a_step():
+    """The issue's goal push: 4 kg at 8 m/s from behind (32 N s, above Hof's ~25 N s from behind):
+    feet in place it falls; with stepping it recovers by the stepping rule after >= 1 step, each
+    landing on the floor (sole centre < 7 cm up at first contact) and in time order."""
+    base = {"distribution": "qp", "block_mass_kg": 4.0, "block_velocity_m_s": (-8.0, 0.0, 0.2),
+            "duration_s": 4.0}
+    assert simulate(Scenario(**base)).fell
+    r = simulate(Scenario(**base, stepping=True))
+    steps = r.extra["steps"]
+    assert len(steps) >= 1
+    assert r.recovered, (r.final_com_error_m, r.final_orientation_error_deg, steps)
+    assert r.extra["final_com_speed_m_s"] < 0.05
+    t = 0.0
+    for st in steps:
+        assert st["touch_down_s"] is not None and st["lift_off_s"] >= t
+        assert st["touch_down_s"] > st["lift_off_s"]
+        assert st["position_m"][2] < 0.07
+        t = st["touch_down_s"]

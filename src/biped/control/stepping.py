@@ -253,9 +253,9 @@ class SteppingController:
             self._mid0 = 0.5 * (self._sole_pose(0)[0] + self._sole_pose(1)[0])
         left, right = bool(feet[0]), bool(feet[1])
         if (self.phase == "double" and len(self.steps) < s.max_steps
-                and t - self._last_td >= s.refractory_s):
-            if self.trigger.update(self._polygon((left, right)), xi):
-                self._start_step(t, xi, (left, right))
+                and t - self._last_td >= s.refractory_s
+                and self.trigger.update(self._polygon((left, right)), xi)):
+            self._start_step(t, xi, (left, right))
         if self.phase == "swing":
             return self._swing_call(t, qpos, qvel, xi, omega, (left, right))
         tau = self.ctrl.torques(qpos, qvel, target=self.target, gains=self.gains,
@@ -288,7 +288,7 @@ class SteppingController:
                            "touch_down_s": None, "position_m": None, "target_m": None})
 
     def _swing_call(self, t, qpos, qvel, xi, omega, feet):
-        s, d, m = self.stepping, self.data, self.model
+        s = self.stepping
         i = self.swing
         st = 1 - i
         step = self.steps[-1]
