@@ -206,12 +206,12 @@ class SteppingController:
         self.target = self.base_target
         self.steps: list[dict] = []
         self.swing = None  # index of the swinging foot
-        self._mid0 = None  # the feet's midpoint at the first call
+        self._mid0: np.ndarray | None = None  # the feet's midpoint at the first call
         self._t_start = 0.0
-        self._p0 = None
-        self._landing = None
+        self._p0: np.ndarray | None = None
+        self._landing: np.ndarray | None = None
         self._last_td = -1e9
-        self.last_capture_point = None
+        self.last_capture_point: np.ndarray | None = None
 
     @property
     def set_point_com(self) -> np.ndarray:
