@@ -38,6 +38,9 @@ def register(subparsers) -> None:
     p.add_argument("--distribution", choices=("statics", "printed", "qp"),
                    help="the workspace controller's wrench distribution: W's min-norm split "
                         "(statics, default), W's printed subscripts, or the contact-feasible QP")
+    p.add_argument("--stepping", action="store_true", default=None,
+                   help="take capture-point steps when the feet cannot hold the push (not in W; "
+                        "docs/controller.md, 'Stepping')")
     p.add_argument("--timestep", type=float, metavar="S", help="physics step [s], <= 0.001")
     p.add_argument("--seed", type=int, help="seed of the initial-state noise (joint_noise_deg)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
@@ -65,7 +68,7 @@ def build_scenario(args):
              "block_velocity_m_s": args.block_velocity, "block_mass_kg": args.block_mass,
              "controller": args.controller, "physics": args.physics,
              "physics_timestep_s": args.timestep, "distribution": args.distribution,
-             "seed": args.seed}
+             "seed": args.seed, "stepping": getattr(args, "stepping", None)}
     values.update({k: v for k, v in named.items() if v is not None})
     model = getattr(args, "model", None) or values.pop("model", None)
     values.pop("model", None)
@@ -155,6 +158,10 @@ def _table(result, out: Path, paths: dict, times: dict | None = None) -> str:
                 rows.append((f"{foot} foot rises", f"{rise.time_s:.3f} s ({rise.part})"))
             if rise is not None and downs and downs[-1].time_s > rise.time_s:
                 rows.append((f"{foot} foot back down", f"{downs[-1].time_s:.3f} s ({downs[-1].part})"))
+    for k, st in enumerate(result.extra.get("steps", ()), 1):
+        pos = st.get("position_m")
+        where = "no touchdown" if pos is None else f"lands {st['touch_down_s']:.3f} s at ({pos[0]:.3f}, {pos[1]:.3f}) m"
+        rows.append((f"step {k}", f"{st['foot']} foot, lifts {f(st.get('lift_off_s'), '.3f')} s, {where}"))
     rows.append(("outputs", str(out)))
     if times:
         rows.append(("wall time", (f"{times['total']:.1f} s, the whole command (simulation "

@@ -43,6 +43,8 @@ def register(subparsers) -> None:
     p.add_argument("--distribution", choices=("statics", "printed", "qp"), default=None,
                    help="the workspace controller's wrench distribution: W's min-norm split "
                         "(statics, default) or the contact-feasible QP (docs/controller.md)")
+    p.add_argument("--stepping", action="store_true", default=None,
+                   help="capture-point steps when the feet cannot hold (not in W; docs/controller.md)")
     p.add_argument("--torque-limits", choices=("none", "human"), default=None,
                    help="joint torque limits: none (W) or human-like (docs/sweep.md)")
     p.add_argument("--model", metavar="FILE.xml",
@@ -108,6 +110,8 @@ def build_spec(args):
         overrides["controller"] = args.controller
     if getattr(args, "distribution", None):
         overrides["distribution"] = args.distribution
+    if getattr(args, "stepping", None):
+        overrides["stepping"] = True
     if args.duration is not None:
         overrides["duration_s"] = args.duration
     if args.physics:

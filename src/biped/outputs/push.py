@@ -188,6 +188,7 @@ def summary_dict(result: PushResult, rows: RowMeasurements | None = None) -> dic
         "block_momentum_end_kg_m_s": np.asarray(p_end).tolist(),
         "feet_drift_m": foot_drift(result),
         "events": [e.to_dict() for e in result.events],
+        "steps": [dict(st) for st in result.extra.get("steps", ())],
         "wall_time_s": result.wall_time_s,
         "realtime_factor": _num(result.realtime_factor),
         "control_rate_hz": s.control_rate_hz,
@@ -212,6 +213,12 @@ def _markers(result: PushResult) -> list[dict]:
         out.append({"time_s": result.block_contact_time_s, "label": "block hits the body"})
     for e in result.events:
         out.append({"time_s": e.time_s, "label": f"{e.foot} {e.part} {e.kind.replace('_', ' ')}"})
+    for st in result.extra.get("steps", ()):
+        out.append({"time_s": st["start_s"], "label": f"step: {st['foot']} foot swings"})
+        if st.get("touch_down_s") is not None:
+            p = st["position_m"]
+            out.append({"time_s": st["touch_down_s"],
+                        "label": f"step: {st['foot']} foot lands at ({p[0]:.2f}, {p[1]:.2f}) m"})
     if result.fall_time_s is not None:
         out.append({"time_s": result.fall_time_s, "label": f"fall: {result.fall_reason}"})
     return out

@@ -175,9 +175,13 @@ def controller_policy(scenario: Scenario, scene: Scene, *, gain_scale: float = 1
                       torque_limits: TorqueLimits | None = None, tree=None) -> ControllerPolicy:
     """The loop policy of ``scenario``'s controller (:func:`policy_config`), torques in
     ``scene.joint_names`` order. ``tree``: a cached :class:`~biped.model.TreeModel` of the biped."""
-    return ControllerPolicy(make_policy(policy_config(scenario, gain_scale=gain_scale,
-                                                      torque_limits=torque_limits),
-                                        scene.joint_names, tree=tree))
+    config = policy_config(scenario, gain_scale=gain_scale, torque_limits=torque_limits)
+    if scenario.stepping:  # not in W: capture-point steps around W's controller
+        from biped.control.stepping import SteppingConfig, SteppingController
+
+        return SteppingController(config, SteppingConfig(max_steps=scenario.max_steps),
+                                  scene.joint_names, tree=tree)
+    return ControllerPolicy(make_policy(config, scene.joint_names, tree=tree))
 
 
 class RecordedTorques:
@@ -343,7 +347,7 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
     sim_time = max(rows - 1, 0) * period
     if feet_rows < rows:  # the last row (no step after it) and any row a stop left unread
         feet_pos[feet_rows:rows], feet_quat[feet_rows:rows] = _feet_poses(scene, qpos[feet_rows:rows])
-    return PushResult(
+    result = PushResult(
         scenario=scenario, joint_names=scene.joint_names, times=times[sl], qpos=qpos[sl],
         com=com[sl], quat=quat[sl], joint_angles=angles[sl], torques=torques[sl],
         block=block[sl], contacts=contacts[sl], events=tuple(monitor.events),
@@ -357,6 +361,11 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
         controller_error=controller_error, diverged=diverged, qvel=qvel[sl],
         block_velocity=block_vel[sl], feet_pos=feet_pos[sl], feet_quat=feet_quat[sl],
     )
+    if hasattr(policy, "steps"):  # a stepping policy: its steps and its own recovered rule
+        from biped.sim.stepping import stepping_outcome
+
+        result = stepping_outcome(result, policy, complete=complete)
+    return result
 
 
 def simulate(scenario: Scenario | None = None, *, progress: Callable[[float], None] | None = None,

@@ -107,6 +107,9 @@ class Scenario:
     seed: int = 0
     # not in W: the biped, a shipped model's name or an MJCF path (see Scenario.for_model)
     model: str = "wendlandt"
+    # not in W: capture-point steps when the feet cannot hold (biped.control.stepping)
+    stepping: bool = False
+    max_steps: int = 3  # with stepping: most steps per run
 
     def __post_init__(self):
         preset = PHYSICS_PRESETS.get(self.physics) if isinstance(self.physics, str) else None
@@ -247,7 +250,7 @@ _VECTORS = {
 }
 _STRINGS = {"target_axis": TARGET_AXES, "controller": CONTROLLERS, "support": SUPPORTS,
             "physics": PHYSICS, "distribution": DISTRIBUTIONS}
-_INTS = {"seed"}
+_INTS = {"seed", "max_steps"}
 
 #: Physical ranges [lo, hi] of the numbers (docs/push.md, "Valid ranges"). They keep a run's work
 #: bounded (duration, physics step) and its physics meaningful (a thrown block, a standing biped).
@@ -426,6 +429,13 @@ def validate(s: Scenario) -> None:
     _in_range("recovery_orientation_tol_deg", _positive(s, "recovery_orientation_tol_deg", "deg"))
     if not isinstance(s.seed, int) or isinstance(s.seed, bool) or not 0 <= s.seed <= MAX_SEED:
         raise ScenarioError(f"seed must be an integer >= 0 and < 2^63; got {s.seed!r}")
+    if not isinstance(s.stepping, bool):
+        raise ScenarioError(f"stepping must be true or false; got {s.stepping!r}")
+    if not isinstance(s.max_steps, int) or isinstance(s.max_steps, bool) or not 0 <= s.max_steps <= 20:
+        raise ScenarioError(f"max_steps must be an integer in [0, 20]; got {s.max_steps!r}")
+    if s.stepping and s.controller != "workspace":
+        raise ScenarioError("stepping = true needs controller = 'workspace' (the stepping policy "
+                            "wraps W's controller)")
     if not isinstance(s.model, str) or not s.model.strip():
         raise ScenarioError(f"model must be a shipped model's name ('wendlandt') or the path of an "
                             f"MJCF file; got {s.model!r}")

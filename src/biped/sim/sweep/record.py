@@ -49,6 +49,7 @@ class Measured:
     fall_reason: str | None = None
     controller_error: str | None = None
     diverged: str | None = None
+    step_count: int = 0  # stepping runs (scenario key stepping): steps taken
 
     def row(self) -> dict[str, Any]:
         """``{column: value}`` for the sweep file."""

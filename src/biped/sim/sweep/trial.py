@@ -161,6 +161,7 @@ def measure(result: PushResult, block_velocity: np.ndarray, *, scene: Scene | No
                           and not result.interrupted),
         fall_reason=result.fall_reason, controller_error=result.controller_error,
         diverged=getattr(result, "diverged", None),
+        step_count=len(result.extra.get("steps", ())),
     )
 
 

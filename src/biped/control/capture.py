@@ -1,0 +1,222 @@
+"""Capture-point stepping math on the linear inverted pendulum (LIPM); pure functions, no state
+except the small :class:`CaptureTrigger`.
+
+LIPM (Kajita et al. 2001): a point mass at constant height h above the floor over a centre of
+pressure p obeys ``x'' = omega_0^2 (x - p)``, ``omega_0 = sqrt(g / h)``, whose closed form is
+
+    x(t) = p + (x_0 - p) cosh(omega_0 t) + v_0 / omega_0 sinh(omega_0 t).
+
+The instantaneous capture point (Pratt et al. 2006; Hof's extrapolated COM)
+``xi = x + v / omega_0`` obeys ``xi' = omega_0 (xi - p)``, so with p held for a time T,
+
+    xi(T) = p + (xi_0 - p) e^{omega_0 T}                                   (:func:`predict_capture_point`)
+
+and stepping so that the new CoP can sit at xi(T) brings the pendulum to rest over it (Koolen et
+al. 2012). Frames: world, z up; 2-vectors are (x, y) on the floor [m], velocities [m/s].
+
+Support polygons are convex, counter-clockwise (p, 2) arrays; :func:`support_polygon` builds one
+from sole rectangles (:class:`biped.model.SoleRectangle` numbers) and foot poses;
+:func:`signed_distance` is > 0 outside, < 0 inside (the distance to the nearest edge line).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from biped.errors import ScenarioError
+
+__all__ = [
+    "CaptureTrigger",
+    "StepLimits",
+    "capture_point",
+    "clamp_step",
+    "convex_hull",
+    "lipm_state",
+    "omega0",
+    "predict_capture_point",
+    "shrink_polygon",
+    "signed_distance",
+    "sole_corners",
+    "step_target",
+    "support_polygon",
+]
+
+
+def omega0(com_height_m: float, gravity: float = 9.81) -> float:
+    """``omega_0 = sqrt(g / h)`` [1/s] of the LIPM, h the COM height above the floor [m]."""
+    if not (com_height_m > 0 and gravity > 0):
+        raise ScenarioError(f"the LIPM needs a COM height > 0 and gravity > 0; got h = {com_height_m} m, "
+                            f"g = {gravity} m/s^2")
+    return math.sqrt(gravity / com_height_m)
+
+
+def capture_point(com_xy, com_vel_xy, omega: float) -> np.ndarray:
+    """Instantaneous capture point ``xi = x + v / omega_0`` (2,) [m]."""
+    return np.asarray(com_xy, dtype=float)[:2] + np.asarray(com_vel_xy, dtype=float)[:2] / omega
+
+
+def lipm_state(x0, v0, cop, omega: float, t: float) -> tuple[np.ndarray, np.ndarray]:
+    """The LIPM's closed-form (position, velocity) at time t from (x0, v0) over a fixed CoP."""
+    x0, v0, p = (np.asarray(a, dtype=float) for a in (x0, v0, cop))
+    c, s = math.cosh(omega * t), math.sinh(omega * t)
+    return p + (x0 - p) * c + v0 / omega * s, (x0 - p) * omega * s + v0 * c
+
+
+def predict_capture_point(xi, cop, omega: float, t: float) -> np.ndarray:
+    """``xi(T) = p + (xi - p) e^{omega_0 T}``: the capture point after holding the CoP p for T."""
+    xi, p = np.asarray(xi, dtype=float), np.asarray(cop, dtype=float)
+    return p + (xi - p) * math.exp(omega * t)
+
+
+# ---------------------------------------------------------------------------------------------
+# support polygons
+
+
+def convex_hull(points) -> np.ndarray:
+    """Counter-clockwise convex hull (p, 2) of (n, 2) points (Andrew's monotone chain)."""
+    pts = sorted(set(map(tuple, np.asarray(points, dtype=float).reshape(-1, 2))))
+    if len(pts) < 3:
+        return np.array(pts, dtype=float)
+
+    def cross(o, a, b):
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    lower: list[tuple] = []
+    upper: list[tuple] = []
+    for p in pts:
+        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 0:
+            lower.pop()
+        lower.append(p)
+    for p in reversed(pts):
+        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0:
+            upper.pop()
+        upper.append(p)
+    return np.array(lower[:-1] + upper[:-1], dtype=float)
+
+
+def sole_corners(centre_xy, yaw: float, half_length: float, half_width: float) -> np.ndarray:
+    """(4, 2) corners of a sole rectangle centred at ``centre_xy`` [m], turned by ``yaw`` [rad]."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    R = np.array([[c, -s], [s, c]])
+    local = np.array([[1, 1], [-1, 1], [-1, -1], [1, -1]], dtype=float) * (half_length, half_width)
+    return np.asarray(centre_xy, dtype=float)[:2] + local @ R.T
+
+
+def support_polygon(soles) -> np.ndarray:
+    """Convex hull of the corners of the soles in contact: ``soles`` is a sequence of
+    (centre_xy, yaw, half_length, half_width)."""
+    soles = list(soles)
+    if not soles:
+        raise ScenarioError("a support polygon needs at least one sole in contact")
+    return convex_hull(np.vstack([sole_corners(*s) for s in soles]))
+
+
+def _edges(poly: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Outward unit normals (p, 2) and offsets (p,) of a CCW polygon: inside is ``n . x <= b``."""
+    d = np.roll(poly, -1, axis=0) - poly
+    n = np.stack([d[:, 1], -d[:, 0]], axis=1)
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    return n, np.einsum("ij,ij->i", n, poly)
+
+
+def signed_distance(poly, point) -> float:
+    """max over edges of ``n . x - b``: < 0 inside (minus the distance to the nearest edge), > 0
+    outside (a lower bound of the Euclidean distance, exact off the edges' ends)."""
+    n, b = _edges(np.asarray(poly, dtype=float))
+    return float(np.max(n @ np.asarray(point, dtype=float)[:2] - b))
+
+
+def shrink_polygon(poly, margin: float) -> np.ndarray:
+    """The polygon with every edge moved inward by ``margin`` [m] (vertices of consecutive edge
+    lines' intersections; the polygon must stay non-empty: margin below its inradius)."""
+    poly = np.asarray(poly, dtype=float)
+    n, b = _edges(poly)
+    b = b - margin
+    out = []
+    k = len(poly)
+    for i in range(k):
+        j = (i - 1) % k  # the edges meeting at vertex i: j (into it) and i (out of it)
+        A = np.array([n[j], n[i]])
+        out.append(np.linalg.solve(A, [b[j], b[i]]))
+    return np.array(out)
+
+
+# ---------------------------------------------------------------------------------------------
+# trigger and step target
+
+
+class CaptureTrigger:
+    """Step trigger with hysteresis: fires once the capture point has stayed outside the support
+    polygon shrunk by ``margin_m`` for ``hold`` consecutive calls; re-arms only after it has
+    come back inside the polygon shrunk by ``rearm_margin_m`` (> margin_m)."""
+
+    def __init__(self, margin_m: float = 0.0, rearm_margin_m: float = 0.02, hold: int = 3):
+        if rearm_margin_m < margin_m:
+            raise ScenarioError(f"rearm_margin_m ({rearm_margin_m}) must be >= margin_m ({margin_m})")
+        self.margin_m, self.rearm_margin_m, self.hold = margin_m, rearm_margin_m, int(hold)
+        self.armed = True
+        self._count = 0
+
+    def update(self, poly, xi) -> bool:
+        d = signed_distance(poly, xi)
+        if not self.armed:
+            if d < -self.rearm_margin_m:
+                self.armed = True
+            self._count = 0
+            return False
+        self._count = self._count + 1 if d > -self.margin_m else 0
+        if self._count >= self.hold:
+            self.armed = False
+            self._count = 0
+            return True
+        return False
+
+
+@dataclass(frozen=True)
+class StepLimits:
+    """Where a swing foot may land, relative to the stance foot's sole centre (world axes; the
+    stance foot's side given by ``side`` = +1 left of it... see :func:`clamp_step`) [m].
+
+    max_step: largest distance between the sole centres; min_width / max_width: the lateral
+    (y) separation of the sole centres, swing foot on its own side (no crossover: min_width
+    leaves a gap between the 9.2 cm soles); max_back: how far behind the stance foot (along +x,
+    the biped faces -x) a foot may land.
+    """
+
+    max_step: float = 0.50
+    min_width: float = 0.13
+    max_width: float = 0.22
+    max_back: float = 0.30
+
+
+def clamp_step(target_xy, stance_xy, side: float, limits: StepLimits = StepLimits()) -> np.ndarray:
+    """The landing point nearest ``target_xy`` that the limits allow. ``side`` is the sign of
+    the swing foot's y relative to the stance foot (+1: the swing foot is the right foot, which
+    lies on +y; -1: the left)."""
+    rel = np.asarray(target_xy, dtype=float)[:2] - np.asarray(stance_xy, dtype=float)[:2]
+    lat = min(max(side * rel[1], limits.min_width), limits.max_width)
+    fwd = min(rel[0], limits.max_back)
+    rel = np.array([fwd, side * lat])
+    r = np.linalg.norm(rel)
+    if r > limits.max_step:  # shorten along x first, keep the lateral gap
+        fwd_max = math.sqrt(max(limits.max_step ** 2 - lat ** 2, 0.0))
+        rel[0] = math.copysign(min(abs(rel[0]), fwd_max), rel[0])
+    return np.asarray(stance_xy, dtype=float)[:2] + rel
+
+
+def step_target(xi, cop, omega: float, t_remaining: float, stance_xy, side: float,
+                offset_m: float = 0.03, limits: StepLimits = StepLimits()) -> np.ndarray:
+    """Landing point of the swing sole's centre: ``xi_td = p + (xi - p) e^{omega_0 T}`` (the
+    capture point when the foot lands, T = t_remaining, CoP p held), moved ``offset_m`` further
+    along ``xi_td - p`` so that the capture point lands inside the new support polygon by that
+    much, then :func:`clamp_step`."""
+    p = np.asarray(cop, dtype=float)[:2]
+    xi_td = predict_capture_point(xi, p, omega, max(t_remaining, 0.0))
+    d = xi_td - p
+    r = np.linalg.norm(d)
+    if r > 1e-9:
+        xi_td = xi_td + offset_m * d / r
+    return clamp_step(xi_td, stance_xy, side, limits)

@@ -1,0 +1,413 @@
+"""Stepping recovery around W's controller: when the capture point leaves the feet, take a step.
+Not in W (W keeps the feet where they are); the capture-point rules are Pratt et al. 2006 and
+Koolen et al. 2012, the math :mod:`biped.control.capture`.
+
+Phases (one :class:`SteppingController` call per control period, ``(t, qpos, qvel, feet)``):
+
+- **double support** (as without stepping): W's Alg. 1-6 with the scenario's distribution and
+  set point, contact flags as sensed. Every call the whole-body COM (MuJoCo ``subtree_com`` of
+  the biped's own model) gives the capture point ``xi = x + v / omega_0``, ``omega_0 =
+  sqrt(g / h)``, h the COM height above the floor. When xi has stayed outside the support
+  polygon of the soles in contact, shrunk by ``margin_m``, for ``hold`` periods
+  (:class:`~biped.control.capture.CaptureTrigger`), and fewer than ``max_steps`` steps were
+  taken, a step starts.
+- **swing**: swing foot rule: for the first step, the foot off the floor if only one is on it,
+  else the foot whose sole centre lies nearer to xi across the body (the push side: a push to
+  the biped's right steps with the right foot; no crossover); later steps alternate feet. The stance leg carries the body through W's
+  recursions with the contact flags (stance, not swing): Alg. 3 with one big base, the QP's
+  single-sole cone (or the min-norm split with one foot); the stance controller keeps the
+  height and orientation set points and lets the COM run horizontally (kp, kv of x, y zero),
+  as the LIPM prediction assumes. The landing point of the swing sole's centre is
+  :func:`~biped.control.capture.step_target` (xi when the foot lands, from the stance sole
+  centre as CoP, plus ``offset_m``, clamped to :class:`~biped.control.capture.StepLimits`),
+  recomputed every control period for the first ``retarget_until`` of the swing. The ankle follows a minimum-jerk path to it in x, y, with a
+  bump of height ``apex_m`` in z, flat sole, zero yaw; after ``swing_time_s`` it keeps moving
+  down at ``descent_m_s`` until touchdown. Swing-leg torques: task-space computed torque on the
+  leg's own 6 joints, ``tau = M_ll J_leg^{-1} (a_d + Kp e + Kd e') + b_l`` (J_leg the (6, 6)
+  Jacobian of the foot frame (MuJoCo ``mj_jacBody``), M_ll the leg block of the mass matrix,
+  b_l the leg's bias forces (gravity, Coriolis); the base's acceleration and J' q' are neglected;
+  damped least squares near the knee singularity).
+- **touchdown**: the swing foot's contact flag after half the swing time. Then double support
+  again, the horizontal set point moved by the change of the feet's midpoint (the set point keeps
+  its offset from the feet, now over the new support polygon).
+
+``steps`` records every step: foot, lift_off_s (first period without contact), touch_down_s,
+position_m (the sole centre at touchdown), target_m (the last landing target).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+
+import mujoco
+import numpy as np
+
+from biped.control import capture as cp
+from biped.control.limits import clip_torques
+from biped.control.policy import PolicyConfig, _model_path, make_policy
+from biped.control.workspace import Gains, Target
+from biped.errors import ScenarioError
+from biped.model import TreeModel, sole_rectangles
+
+__all__ = ["SteppingConfig", "SteppingController"]
+
+FEET = ("left", "right")
+FOOT_BODIES = ("left_foot", "right_foot")
+
+
+@dataclass(frozen=True)
+class SteppingConfig:
+    """Parameters of the stepping recovery (SI units; not in W, chosen here, docs/controller.md).
+
+    max_steps: most steps in a run. margin_m, rearm_margin_m, hold: the trigger
+    (:class:`~biped.control.capture.CaptureTrigger`). swing_time_s: planned swing duration T.
+    apex_m: swing-foot clearance at mid-swing. offset_m: how far beyond the predicted capture
+    point the sole centre lands. descent_m_s: the ankle's downward speed after T until contact.
+    kp_pos, kv_pos, kp_rot, kv_rot: the swing foot's task-space gains [1/s^2, 1/s].
+    retarget_until: the landing point is recomputed every period until this fraction of
+    swing_time_s, then frozen (a late change the foot cannot follow would only move the target).
+    refractory_s: no new step within this time after a touchdown. limits: landing limits.
+    swing_rot_gain_scale: W's orientation gains times this (kv by its square root) while a foot
+    swings: the stance leg must stop the trunk's pitch from the push before the foot can reach.
+    qp_moment_weight: with distribution "qp", the QP's moment-row weight used by the stepping
+    policy (None: the scenario's qp_moment_weight): 10 keeps the trunk upright in single support
+    and after touchdown, where force-first (1) lets it pitch over.
+    post_step_kp_xy, post_step_kv_xy: after a step, the horizontal COM gains of W's Alg. 4
+    [1/s^2, 1/s]: W's (50, 7.07) ask a decelerating COM for ~10 m/s^2, five times what the LIPM
+    over the new feet can give (omega_0^2 times the COM-to-toe distance); the QP then gives up
+    the trunk's orientation and the trunk pitches over. kv ~ omega_0 asks for what it can give.
+    reach_m: the desired ankle is kept within this distance of the hip joint (leg 0.826 m).
+    swing_torque_max_n_m: bound of the swing leg's task-space torques.
+    swing_height_drop_m, swing_tilt_deg: while a foot swings the stance leg holds the body this
+    much lower than the set point (reach) and upright but for this tilt about -y (the set point's
+    forward tilt moves the hips back, away from a forward step).
+    """
+
+    max_steps: int = 3
+    margin_m: float = 0.0
+    rearm_margin_m: float = 0.02
+    hold: int = 3
+    swing_time_s: float = 0.25
+    apex_m: float = 0.05
+    offset_m: float = 0.03
+    descent_m_s: float = 0.3
+    kp_pos: float = 400.0
+    kv_pos: float = 40.0
+    kp_rot: float = 400.0
+    kv_rot: float = 40.0
+    refractory_s: float = 0.15
+    retarget_until: float = 1.0
+    reach_m: float = 0.78
+    swing_rot_gain_scale: float = 4.0
+    qp_moment_weight: float | None = 10.0
+    post_step_kp_xy: float = 10.0
+    post_step_kv_xy: float = 3.5
+    ankle_kp: float = 80.0
+    ankle_kv: float = 0.5
+    swing_torque_max_n_m: float = 1000.0
+    swing_height_drop_m: float = 0.08
+    post_step_height_drop_m: float = 0.08
+    swing_tilt_deg: float = 0.0
+    limits: cp.StepLimits = field(default_factory=cp.StepLimits)
+
+    def __post_init__(self):
+        if not (isinstance(self.max_steps, int) and self.max_steps >= 0):
+            raise ScenarioError(f"max_steps must be an integer >= 0; got {self.max_steps!r}")
+        if not self.swing_time_s > 0:
+            raise ScenarioError(f"swing_time_s must be > 0 s; got {self.swing_time_s!r}")
+
+
+def _min_jerk(s: float) -> tuple[float, float, float]:
+    """h(s) = 10 s^3 - 15 s^4 + 6 s^5 and its first two derivatives, s clamped to [0, 1]."""
+    if s <= 0.0:
+        return 0.0, 0.0, 0.0
+    if s >= 1.0:
+        return 1.0, 0.0, 0.0
+    return (s ** 3 * (10 - 15 * s + 6 * s * s), 30 * s * s * (1 - s) ** 2,
+            60 * s * (1 - s) * (1 - 2 * s))
+
+
+def _bump(s: float) -> tuple[float, float, float]:
+    """64 s^3 (1 - s)^3 (peak 1 at s = 1/2, zero value, slope and curvature at both ends) and its
+    first two derivatives."""
+    if s <= 0.0 or s >= 1.0:
+        return 0.0, 0.0, 0.0
+    u = 1 - s
+    return (64 * s ** 3 * u ** 3, 192 * s * s * u * u * (u - s),
+            192 * (2 * s * u ** 3 - 6 * s * s * u * u + 2 * s ** 3 * u))
+
+
+class SteppingController:
+    """W's controller plus capture-point steps, ``(t, qpos (19,), qvel (18,), feet) -> torques
+    (12,)`` in ``joint_order`` (default the model's). ``config`` is the underlying
+    :class:`~biped.control.policy.PolicyConfig` (must be the workspace controller)."""
+
+    def __init__(self, config: PolicyConfig, stepping: SteppingConfig | None = None,
+                 joint_order=None, *, tree: TreeModel | None = None):
+        if config.controller != "workspace":
+            raise ScenarioError("stepping needs the workspace controller (controller = 'workspace')")
+        self.config = config
+        self.stepping = stepping or SteppingConfig()
+        path = _model_path(config)
+        self.model = mujoco.MjModel.from_xml_path(str(path))
+        self.data = mujoco.MjData(self.model)
+        inner = replace(config, torque_limits=None)
+        if config.distribution == "qp" and self.stepping.qp_moment_weight is not None:
+            from biped.control.distribution import QPWeights
+
+            inner = replace(inner, qp_weights=replace(config.qp_weights or QPWeights(),
+                                                      moment=self.stepping.qp_moment_weight))
+        self._inner = make_policy(inner, tree=tree)
+        self.ctrl = self._inner.controller
+        names = tuple(self.ctrl.joint_names)
+        self.joint_names = tuple(joint_order) if joint_order is not None else names
+        if sorted(self.joint_names) != sorted(names):
+            raise ScenarioError(f"controller joints {names} differ from the requested order {self.joint_names}")
+        self._order = np.array([names.index(n) for n in self.joint_names])
+        self.limits = None
+        if config.torque_limits is not None and not config.torque_limits.unlimited:
+            self.limits = config.torque_limits.reorder(self.joint_names)
+        m = self.model
+        self._foot = [m.body(b).id for b in FOOT_BODIES]
+        self._hip = [m.body(f"{side}_thigh").id for side in FEET]
+        self._shank = [m.body(f"{side}_shank").id for side in FEET]
+        self._inv_sign = [float(np.sign(m.jnt_axis[m.joint(f"{side}_ankle_inversion").id][0]))
+                          for side in FEET]
+        soles = sole_rectangles(m, FOOT_BODIES)
+        self._sole = []  # (sole centre in the foot body frame (3,), half length, half width)
+        for b, s in zip(self._foot, soles, strict=True):
+            g_bi = np.eye(4)
+            mujoco.mju_quat2Mat(g_bi[:3, :3].reshape(-1), m.body_iquat[b])
+            g_bi[:3, 3] = m.body_ipos[b]
+            self._sole.append(((g_bi @ s.g_foot_sole)[:3, 3].copy(), s.half_length, s.half_width))
+        # each leg's dofs (qvel index) and torque index (controller order), by joint name prefix
+        self._leg_dofs, self._leg_tau, self._leg_qpos = [], [], []
+        for side in FEET:
+            js = [i for i, n in enumerate(names) if n.startswith(side + "_")]
+            self._leg_tau.append(np.array(js))
+            self._leg_dofs.append(np.array([m.jnt_dofadr[m.joint(names[i]).id] for i in js]))
+            self._leg_qpos.append(np.array([m.jnt_qposadr[m.joint(names[i]).id] for i in js]))
+        self._gravity = float(-m.opt.gravity[2])
+        self.base_target: Target = config.target
+        self.gains: Gains = config.gains
+        k = self.stepping.swing_rot_gain_scale
+        self._swing_gains = Gains(kp_com=(0.0, 0.0, self.gains.kp_com[2]),
+                                  kv_com=(0.0, 0.0, self.gains.kv_com[2]),
+                                  kp_rot=tuple(k * x for x in self.gains.kp_rot),
+                                  kv_rot=tuple(math.sqrt(k) * x for x in self.gains.kv_rot))
+        self.reset()
+
+    # ------------------------------------------------------------------ state
+    def reset(self) -> None:
+        s = self.stepping
+        self.trigger = cp.CaptureTrigger(s.margin_m, s.rearm_margin_m, s.hold)
+        self.phase = "double"
+        self.target = self.base_target
+        self.steps: list[dict] = []
+        self.swing = None  # index of the swinging foot
+        self._mid0: np.ndarray | None = None  # the feet's midpoint at the first call
+        self._t_start = 0.0
+        self._p0: np.ndarray | None = None
+        self._landing: np.ndarray | None = None
+        self._last_td = -1e9
+        self.last_capture_point: np.ndarray | None = None
+
+    @property
+    def set_point_com(self) -> np.ndarray:
+        """The central-body COM set point now (moved with the feet after each step) [m]."""
+        return np.array(self.target.com)
+
+    # ------------------------------------------------------------------ kinematics
+    def _sole_pose(self, i: int) -> tuple[np.ndarray, float]:
+        d = self.data
+        b = self._foot[i]
+        R = d.xmat[b].reshape(3, 3)
+        return d.xpos[b] + R @ self._sole[i][0], math.atan2(R[1, 0], R[0, 0])
+
+    def _polygon(self, feet) -> np.ndarray:
+        soles = []
+        for i in (0, 1):  # a foot counts while it touches or its sole is within 2 cm of the floor
+            if feet[i] or self._sole_pose(i)[0][2] < 0.02:
+                c, yaw = self._sole_pose(i)
+                soles.append((c[:2], yaw, self._sole[i][1], self._sole[i][2]))
+        if not soles:
+            for i in (0, 1):
+                c, yaw = self._sole_pose(i)
+                soles.append((c[:2], yaw, self._sole[i][1], self._sole[i][2]))
+        return cp.support_polygon(soles)
+
+    # ------------------------------------------------------------------ the call
+    def __call__(self, t: float, qpos: np.ndarray, qvel: np.ndarray, feet) -> np.ndarray:
+        m, d, s = self.model, self.data, self.stepping
+        d.qpos[:] = qpos
+        d.qvel[:] = qvel
+        mujoco.mj_forward(m, d)
+        mujoco.mj_subtreeVel(m, d)
+        com = d.subtree_com[0].copy()
+        vcom = d.subtree_linvel[0].copy()
+        omega = cp.omega0(max(com[2], 0.05), self._gravity)  # the floor is z = 0
+        xi = cp.capture_point(com[:2], vcom[:2], omega)
+        self.last_capture_point = xi
+        if self._mid0 is None:
+            self._mid0 = 0.5 * (self._sole_pose(0)[0] + self._sole_pose(1)[0])
+        left, right = bool(feet[0]), bool(feet[1])
+        if (self.phase == "double" and len(self.steps) < s.max_steps
+                and t - self._last_td >= s.refractory_s
+                and self.trigger.update(self._polygon((left, right)), xi)):
+            self._start_step(t, xi, (left, right))
+        if self.phase == "swing":
+            return self._swing_call(t, qpos, qvel, xi, omega, (left, right))
+        tau = self.ctrl.torques(qpos, qvel, target=self.target, gains=self.gains,
+                                feet_in_contact=self._flags(left, right))
+        return self._out(tau)
+
+    def _flags(self, left, right):
+        return (left, right) if self.config.support == "sensed" else None
+
+    def _out(self, tau):
+        out = np.asarray(tau)[self._order]
+        if self.limits is not None:
+            out = clip_torques(out, self.limits)
+        return out
+
+    def _start_step(self, t, xi, feet):
+        if self.steps:  # later steps alternate feet
+            swing = 1 - FEET.index(self.steps[-1]["foot"])
+        elif feet[0] != feet[1]:
+            swing = 0 if not feet[0] else 1
+        else:
+            dy = [abs(self._sole_pose(i)[0][1] - xi[1]) for i in (0, 1)]
+            swing = 0 if dy[0] < dy[1] else 1
+        self.swing = swing
+        self.phase = "swing"
+        self._t_start = t
+        self._p0 = self.data.xpos[self._foot[swing]].copy()
+        self._landing = None
+        self.steps.append({"foot": FEET[swing], "start_s": t, "lift_off_s": None,
+                           "touch_down_s": None, "position_m": None, "target_m": None})
+
+    def _swing_call(self, t, qpos, qvel, xi, omega, feet):
+        s = self.stepping
+        i = self.swing
+        st = 1 - i
+        step = self.steps[-1]
+        el = t - self._t_start
+        if step["lift_off_s"] is None and not feet[i]:
+            step["lift_off_s"] = t
+        if feet[i] and el > 0.5 * s.swing_time_s:  # touchdown
+            return self._touch_down(t, qpos, qvel, feet)
+        stance_c, yaw = self._sole_pose(st)
+        # the stance CoP: the point of the stance sole nearest the COM (the QP pushes it there)
+        c, sn = math.cos(yaw), math.sin(yaw)
+        rel = self.data.subtree_com[0][:2] - stance_c[:2]
+        loc = np.array([c * rel[0] + sn * rel[1], -sn * rel[0] + c * rel[1]])
+        loc = np.clip(loc, [-self._sole[st][1], -self._sole[st][2]], [self._sole[st][1], self._sole[st][2]])
+        cop = stance_c[:2] + np.array([c * loc[0] - sn * loc[1], sn * loc[0] + c * loc[1]])
+        side = 1.0 if i == 1 else -1.0
+        if self._landing is None or el < s.retarget_until * s.swing_time_s:
+            self._landing = cp.step_target(xi, cop, omega, s.swing_time_s - el, stance_c[:2], side,
+                                           s.offset_m, s.limits)
+        land = self._landing
+        step["target_m"] = [float(land[0]), float(land[1]), 0.0]
+        # ankle path: the sole centre lands on `land`, flat, zero yaw
+        sole_off = self._sole[i][0]
+        ankle_land = np.array([land[0] - sole_off[0], land[1] - sole_off[1], -sole_off[2]])
+        T = s.swing_time_s
+        sc = el / T
+        h, hd, hdd = _min_jerk(sc)
+        b, bd, bdd = _bump(sc)
+        p0 = self._p0
+        pd = p0 + (ankle_land - p0) * h
+        vd = (ankle_land - p0) * hd / T
+        ad = (ankle_land - p0) * hdd / T ** 2
+        pd[2] += s.apex_m * b
+        vd[2] += s.apex_m * bd / T
+        ad[2] += s.apex_m * bdd / T ** 2
+        if sc >= 1.0:
+            pd[2] = ankle_land[2] - s.descent_m_s * (el - T)
+            vd[2] = -s.descent_m_s
+        hip = self.data.xpos[self._hip[i]]
+        r = pd - hip
+        if np.linalg.norm(r) > s.reach_m:  # out of reach: the nearest point within it
+            pd = hip + r * (s.reach_m / np.linalg.norm(r))
+        # stance: W's recursions with the swing foot off (one big base, single-sole QP)
+        flags = (i == 1, i == 0)
+        # the COM falls freely over the stance sole: the LIPM's acceleration as feed-forward
+        acc = omega ** 2 * (self.data.subtree_com[0][:2] - cop)
+        com = np.array(self.target.com)
+        com[2] -= s.swing_height_drop_m
+        target = Target.wendlandt(com=tuple(com), tilt_deg=s.swing_tilt_deg)
+        target = replace(target, com_acc=(float(acc[0]), float(acc[1]), 0.0))
+        tau = np.array(self.ctrl.torques(qpos, qvel, target=target, gains=self._swing_gains,
+                                         feet_in_contact=flags))
+        tau[self._leg_tau[i]] = self._swing_torques(i, pd, vd, ad)
+        return self._out(tau)
+
+    def _swing_torques(self, i, pd, vd, ad):
+        """Swing-leg torques: the ankle point follows (pd, vd, ad) by task-space computed torque
+        on hip abduction, hip flexion and knee (3 x 3 Jacobian, MuJoCo mj_jacBody, damped least
+        squares); hip rotation is held at 0 and the two ankle joints at the angles that put the
+        sole flat with zero yaw (from the shank's world orientation), both by joint-space PD;
+        torques ``M_ll qdd + b_l - p_l`` (leg block of MuJoCo's mass matrix, leg bias forces,
+        minus the passive hinge damping, which the foot's small inertia would not overcome)."""
+        m, d, s = self.model, self.data, self.stepping
+        b = self._foot[i]
+        dofs = self._leg_dofs[i]
+        q = d.qpos[self._leg_qpos[i]]
+        qd = d.qvel[dofs]
+        jp = np.zeros((3, m.nv))
+        mujoco.mj_jacBody(m, d, jp, None, b)
+        Jl = jp[:, dofs]
+        # joint-space parts: hip rotation to 0, ankle to the flat-foot angles
+        R = d.xmat[self._shank[i]].reshape(3, 3).T  # desired foot orientation (I) in the shank frame
+        inv = self._inv_sign[i] * math.atan2(R[2, 1], R[1, 1])
+        dors = math.atan2(R[0, 2], R[0, 0])
+        qdd = np.zeros(6)
+        for k, qk in ((2, 0.0), (4, inv), (5, dors)):
+            qdd[k] = s.kp_rot * (qk - q[k]) - s.kv_rot * qd[k]
+        a = ad + s.kp_pos * (pd - d.xpos[b]) + s.kv_pos * (vd - jp[:, dofs] @ qd - jp @ d.qvel
+                                                           + jp[:, dofs] @ qd)
+        a = a - Jl[:, [2, 4, 5]] @ qdd[[2, 4, 5]]
+        J3 = Jl[:, [0, 1, 3]]
+        qdd[[0, 1, 3]] = J3.T @ np.linalg.solve(J3 @ J3.T + 1e-4 * np.eye(3), a)
+        M = np.zeros((m.nv, m.nv))
+        mujoco.mj_fullM(m, d, M)
+        tau = M[np.ix_(dofs, dofs)] @ qdd + d.qfrc_bias[dofs] - d.qfrc_passive[dofs]
+        # the ankle's tiny inertia makes M_ll qdd a few N m that unmodelled coupling (the base's
+        # acceleration) swamps: a stiff joint PD on the ankle instead [N m/rad, N m s/rad]
+        # (damping on the foot's own angular velocity in the world, not the joint rate: the
+        # shank turns fast during the swing and the flat foot must not follow it)
+        jr = np.zeros((3, m.nv))
+        mujoco.mj_jacBody(m, d, None, jr, b)
+        w = jr @ d.qvel
+        for k, qk, wk in ((4, inv, self._inv_sign[i] * w[0]), (5, dors, w[1])):
+            tau[k] = s.ankle_kp * (qk - q[k]) - s.ankle_kv * wk + d.qfrc_bias[dofs[k]]
+        return np.clip(tau, -s.swing_torque_max_n_m, s.swing_torque_max_n_m)
+
+    def _touch_down(self, t, qpos, qvel, feet):
+        i = self.swing
+        step = self.steps[-1]
+        c, _ = self._sole_pose(i)
+        step["touch_down_s"] = t
+        step["position_m"] = [float(x) for x in c]
+        if step["lift_off_s"] is None:
+            step["lift_off_s"] = step["start_s"]
+        mid = 0.5 * (self._sole_pose(0)[0] + self._sole_pose(1)[0])
+        com = np.array(self.base_target.com)
+        com[:2] += mid[:2] - self._mid0[:2]
+        com[2] -= self.stepping.post_step_height_drop_m  # wider stance: lower hips, bent knees
+        self.target = replace(self.base_target, com=tuple(com))
+        g = self.config.gains
+        sp = self.stepping
+        self.gains = Gains(kp_com=(sp.post_step_kp_xy, sp.post_step_kp_xy, g.kp_com[2]),
+                           kv_com=(sp.post_step_kv_xy, sp.post_step_kv_xy, g.kv_com[2]),
+                           kp_rot=g.kp_rot, kv_rot=g.kv_rot)
+        self.phase = "double"
+        self.swing = None
+        self._last_td = t
+        self.trigger = cp.CaptureTrigger(self.stepping.margin_m, self.stepping.rearm_margin_m,
+                                         self.stepping.hold)
+        tau = self.ctrl.torques(qpos, qvel, target=self.target, gains=self.gains,
+                                feet_in_contact=self._flags(*feet))
+        return self._out(tau)
