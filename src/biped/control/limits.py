@@ -19,10 +19,11 @@ direction of each joint limited separately (plantarflexion is ~3.5x dorsiflexion
   participants), https://pmc.ncbi.nlm.nih.gov/articles/PMC8554160 (2021).
 * hip flexion/extension and ankle plantar-/dorsiflexion: rounded isometric peaks of young men
   in the ranges reported by Anderson, Madigan & Nussbaum, J. Biomech. 40(14):3105-3113 (2007)
-  and Hussain & Frey-Law, J. Foot Ankle Res. (2016), rounded (not re-read value by value); hip ab-/adduction and rotation and ankle
-  inversion/eversion: rounded typical hand-held / isokinetic dynamometry values. These are
-  representative magnitudes (about +-25 % between studies, postures and subjects), not a
-  measurement of one person; ``docs/sweep.md`` says so next to every result that uses them.
+  and Hussain & Frey-Law, J. Foot Ankle Res. (2016), rounded (not re-read value by value); hip
+  ab-/adduction and rotation and ankle inversion/eversion: rounded typical hand-held /
+  isokinetic dynamometry values. These are representative magnitudes (about +-25 % between
+  studies, postures and subjects), not a measurement of one person;
+  ``docs/sweep.md`` says so next to every result that uses them.
 
 Limits are applied by clipping the controller's torques, joint by joint (no redistribution).
 """

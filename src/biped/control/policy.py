@@ -19,9 +19,9 @@ from os import PathLike
 
 import numpy as np
 
+from biped.control.distribution import QPWeights
 from biped.control.joint_pd import W_INITIAL_ANGLES_DEG, JointPDController
 from biped.control.limits import JOINT_NAMES, TorqueLimits, clip_torques
-from biped.control.distribution import QPWeights
 from biped.control.workspace import DISTRIBUTIONS, Gains, Target, WorkspaceController
 from biped.errors import ScenarioError, unknown_name
 from biped.model import TreeModel

@@ -347,7 +347,7 @@ class WorkspaceController:
         buf = self._out.copy()  # one fresh buffer; the fields are views of it
         out = object.__new__(ControllerOutput)  # skips the frozen __init__'s 10 setattr calls (3 us)
         out.__dict__.update(zip(_OUTPUT_FIELDS, [buf[sl] if sh is None else buf[sl].reshape(sh)
-                                                 for sl, sh in self._fields]))
+                                                 for sl, sh in self._fields], strict=True))
         return out
 
     # ------------------------------------------------------------------ debugging / checking

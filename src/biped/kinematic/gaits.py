@@ -28,7 +28,8 @@ stance foot slides and sinks, and every gait starts with a jump of the joint ang
   both ends (on stairs it rises before it moves forward, to clear the nosing).
 - **Arms** swing with the opposite leg (B): shoulder ``0.7 theta1 - 10 deg``, elbow
   ``1.5 theta1 + 10 deg`` of the opposite hip angle (B's ``+10`` / ``-10`` in his leg frame, whose
-  y axis must point backward for his ``theta2 = +acos`` to be a human knee; docs/walk.md). **Torso** rolls toward the stance leg,
+  y axis must point backward for his ``theta2 = +acos`` to be a human knee; docs/walk.md).
+  **Torso** rolls toward the stance leg,
   ``11/3 deg sin(pi s)`` (B: z/3 for z up to 11), and leans 7 deg on stairs (B).
 - **Jump** (B's ``jump``): crouch, straight up, along a semicircle (with B's 360 deg somersault
   unless disabled), straight down, absorb, back up to standing.
@@ -732,7 +733,7 @@ def _runs(mask):
     """(start, stop) index pairs of the True runs of a 1-D bool array."""
     m = np.concatenate([[False], mask, [False]]).astype(int)
     d = np.diff(m)
-    return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)))
+    return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1), strict=True))
 
 
 def walk_metrics(motion: Motion, lm: dict | None = None) -> WalkMetrics:

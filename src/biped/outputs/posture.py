@@ -36,7 +36,7 @@ def _write_csv(path: Path, header: list[str], columns: list[np.ndarray]) -> None
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(header)
-        for row in zip(*columns):
+        for row in zip(*columns, strict=True):
             w.writerow([f"{v:.10g}" for v in row])
 
 
@@ -136,7 +136,7 @@ def compare_forms(params, gains, x0, alpha, common: dict, out: Path) -> dict:
     for name, tr in trajs.items():
         if ref is not None and name != "lagrange":
             d = np.abs(tr.states - ref.states).max(axis=0)
-            result["max_abs_difference_vs_lagrange"][name] = dict(zip(tr.state_names, d.tolist()))
+            result["max_abs_difference_vs_lagrange"][name] = dict(zip(tr.state_names, d.tolist(), strict=True))
         result.setdefault("wall_time_s", {})[name] = tr.wall_time
     viz.comparison_figure(trajs).savefig(out / "comparison.png")
     _write_json(out / "comparison.json", result)

@@ -37,7 +37,7 @@ class RigidBodyParams:
         check_positive("mass", self.mass)
         if len(self.inertia) != 3:
             raise ValueError("inertia must be (I_xx, I_yy, I_zz)")
-        for name, v in zip(("I_xx", "I_yy", "I_zz"), self.inertia):
+        for name, v in zip(("I_xx", "I_yy", "I_zz"), self.inertia, strict=True):
             check_positive(name, v)
         check_positive("g", self.g, allow_zero=True)
 

@@ -194,7 +194,7 @@ def simulate_pendulum(
     )
     forces = {}
     if method.startswith("newton-euler"):
-        sol = [fn(params, x[0], x[1], u[0]) for x, u in zip(xs, us)]
+        sol = [fn(params, x[0], x[1], u[0]) for x, u in zip(xs, us, strict=True)]
         forces = {"fx": np.array([s.fx for s in sol]), "fy": np.array([s.fy for s in sol])}
     return Trajectory(
         "pendulum", method, integrator, dt, hold, params, fb,
@@ -239,7 +239,7 @@ def simulate_body_leg(
     )  # fmt: skip
     forces = {}
     if method.startswith("newton-euler"):
-        sol = [fn(params, x, u) for x, u in zip(xs, us)]
+        sol = [fn(params, x, u) for x, u in zip(xs, us, strict=True)]
         forces = {"F": np.array([s.F for s in sol]), "F_r": np.array([s.F_r for s in sol])}
     return Trajectory(
         "body-leg", method, integrator, dt, hold, params, fb,

@@ -57,7 +57,7 @@ def _legs_figure(result, values, ylabel, title):
     plt = _pyplot()
     fig, axes = plt.subplots(2, 1, sharex=True, figsize=(8, 6.5))
     names = list(result.joint_names)
-    for ax, side in zip(axes, ("left", "right")):
+    for ax, side in zip(axes, ("left", "right"), strict=True):
         for j, label in enumerate(_LEG_LABELS):
             col = names.index(f"{side}_{_LEG_JOINTS[j]}")
             ax.plot(result.times, values[:, col], lw=1.2, label=label)
@@ -87,7 +87,7 @@ def fig5_body_position(result):
     """W Fig. 5: central-body COM position [cm] against the set point."""
     plt = _pyplot()
     fig, axes = plt.subplots(3, 1, sharex=True, figsize=(8, 6.5))
-    for i, (ax, c) in enumerate(zip(axes, "xyz")):
+    for i, (ax, c) in enumerate(zip(axes, "xyz", strict=True)):
         ax.plot(result.times, 100 * result.com[:, i], lw=1.4, label=f"COM {c}")
         ax.axhline(100 * result.target_com[i], color="0.3", ls="-.", lw=1.0, label="set point")
         mark_events(ax, result)
@@ -106,7 +106,7 @@ def fig6_orientation(result):
     plt = _pyplot()
     fig, axes = plt.subplots(4, 1, sharex=True, figsize=(8, 7.5))
     q = result.quat * np.sign(result.quat @ result.target_quat)[:, None]  # same hemisphere
-    for i, (ax, c) in enumerate(zip(axes, "wxyz")):
+    for i, (ax, c) in enumerate(zip(axes, "wxyz", strict=True)):
         ax.plot(result.times, q[:, i], lw=1.4, label=f"q_{c}")
         ax.axhline(result.target_quat[i], color="0.3", ls="-.", lw=1.0, label="set point")
         mark_events(ax, result)

@@ -136,7 +136,8 @@ class Replay:
         norms = np.linalg.norm(quat, axis=-1)
         if G and np.max(np.abs(norms - 1.0)) > 1e-3:
             raise StateError(
-                f"quat must hold unit quaternions (w, x, y, z); worst norm {norms.flat[np.argmax(np.abs(norms - 1))]:.6g}")
+                f"quat must hold unit quaternions (w, x, y, z); worst norm "
+                f"{norms.flat[np.argmax(np.abs(norms - 1))]:.6g}")
         if not isinstance(self.title, str):
             raise BipedError(f"title must be a str, got {type(self.title).__name__}")
         if not isinstance(self.info, Mapping):
