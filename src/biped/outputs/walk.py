@@ -14,11 +14,12 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import mujoco
 import numpy as np
 
-from biped.kinematic.dynamics import inverse_dynamics, load_biped
+from biped.kinematic.dynamics import InverseDynamics, inverse_dynamics, load_biped
 from biped.kinematic.figure import (
     JOINT_NAMES,
     PARTS,
@@ -27,7 +28,7 @@ from biped.kinematic.figure import (
     figure_mjcf,
     part_geoms,
 )
-from biped.kinematic.gaits import stair_geometry, walk_metrics
+from biped.kinematic.gaits import Motion, WalkMetrics, stair_geometry, walk_metrics
 from biped.spatial import rot_to_quat
 from biped.viz.replay import Replay, ReplayGeom, write_replay
 from biped.viz.video import render_video
@@ -128,9 +129,9 @@ class WalkRun:
     (:func:`~biped.kinematic.walk_metrics`), the inverse dynamics ``idyn`` (None if skipped), the
     ``summary`` dict written to summary.json, and ``notes`` (why an output is missing)."""
 
-    motion: object
-    metrics: object
-    idyn: object
+    motion: Motion
+    metrics: WalkMetrics
+    idyn: InverseDynamics | None
     summary: dict
     notes: dict
 
@@ -156,7 +157,8 @@ def write_walk(plan, out: Path, *, gait: str, speed: float, rate: float,
     whose inertias the inverse dynamics use (None: W's shipped biped), recorded in the summary."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    paths, notes = {}, {}
+    paths: dict[str, Any] = {}
+    notes: dict[str, str | None] = {}
     idyn = None
     for stage in walk_stages(dynamics=dynamics, figures=figures, replay=replay, video=video):
         if on_stage is not None:
@@ -183,8 +185,8 @@ def write_walk(plan, out: Path, *, gait: str, speed: float, rate: float,
             rep = build_replay(motion, f"biped walk --gait {gait} (Bediz's kinematic figure)", info)
             paths["replay"] = str(write_replay(rep, out / "replay.html"))
         elif stage == "video.mp4":
-            model = figure_model(motion)
-            res = render_video(model, motion.times, figure_qpos(model, motion), out / "video.mp4",
+            fig_model = figure_model(motion)  # not ``model``: that is the caller's biped
+            res = render_video(fig_model, motion.times, figure_qpos(fig_model, motion), out / "video.mp4",
                                track_body="pelvis", distance=4.0, azimuth=-125.0, elevation=-15.0,
                                fps=25, width=480, height=360)
             if res.path is None:
