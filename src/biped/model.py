@@ -100,7 +100,7 @@ class TreeModel:
     def from_mjcf(cls, source, feet: tuple[str, str] = DEFAULT_FEET) -> TreeModel:
         """Build from an MJCF path, an XML string or a compiled ``mujoco.MjModel``."""
         model, label = _load(source)
-        return _build(model, tuple(feet), label)
+        return _build(model, (feet[0], feet[1]), label)
 
 
 def _load(source):

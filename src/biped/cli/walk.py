@@ -86,8 +86,10 @@ def build_plan(args):
     if steps is not None and not 1 <= steps <= MAX_STEPS:
         raise ScenarioError(f"--steps must be in [1, {MAX_STEPS}] (bounds the run), got {steps}")
     if args.gait == "forward":
+        assert steps is not None  # forward and upstairs have a default
         plan = step_forward(dims, steps, args.speed, params)
     elif args.gait == "upstairs":
+        assert steps is not None
         plan = step_upward(dims, steps, args.speed, params, args.stair_rise, args.stair_run)
     elif args.gait == "jump":
         plan = jump(dims, args.speed, params)
@@ -117,7 +119,7 @@ def run(args) -> int:
     bar = tqdm(total=len(walk_stages(**flags)), desc=f"biped walk {args.gait}", disable=args.quiet,
                unit="stage")
 
-    started = []
+    started: list[str] = []
 
     def on_stage(stage):  # the bar counts finished stages and names the running one
         if started:

@@ -93,6 +93,7 @@ class TorqueLimits:
             if n not in self.joint_names:
                 raise ScenarioError(unknown_name("joint", n, self.joint_names))
             idx.append(self.joint_names.index(n))
+        assert self.lower is not None and self.upper is not None  # not unlimited
         return TorqueLimits(self.name, tuple(joint_names), self.lower[idx], self.upper[idx])
 
 
@@ -118,6 +119,7 @@ def clip_torques(tau: np.ndarray, limits: TorqueLimits) -> np.ndarray:
     tau = np.asarray(tau, dtype=float)
     if limits.unlimited:
         return tau.copy()
+    assert limits.lower is not None and limits.upper is not None  # not unlimited
     if tau.shape != limits.lower.shape:
         raise ScenarioError(f"torques must have shape {limits.lower.shape} "
                             f"({', '.join(limits.joint_names)}); got {tau.shape}")

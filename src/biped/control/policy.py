@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from os import PathLike
+from typing import Any
 
 import numpy as np
 
@@ -109,21 +110,23 @@ def make_policy(config: PolicyConfig | None = None, joint_order=None, *,
     """
     config = config or PolicyConfig()
     if config.controller == "workspace":
-        qp = {}
+        qp: dict[str, Any] = {}
         if config.distribution == "qp":
             qp = {"qp_weights": config.qp_weights, "torque_limits": config.torque_limits}
-        ctrl = WorkspaceController(tree or TreeModel.from_mjcf(_model_path(config)),
-                                   target=config.target, gains=config.gains,
-                                   distribution=config.distribution, **qp)
+        ws = WorkspaceController(tree or TreeModel.from_mjcf(_model_path(config)),
+                                 target=config.target, gains=config.gains,
+                                 distribution=config.distribution, **qp)
         if config.support == "sensed":
-            raw = lambda q, v, feet: ctrl.torques(q, v, feet_in_contact=feet)
+            raw = lambda q, v, feet: ws.torques(q, v, feet_in_contact=feet)
         else:
-            raw = lambda q, v, feet: ctrl.torques(q, v)
+            raw = lambda q, v, feet: ws.torques(q, v)
+        ctrl: WorkspaceController | JointPDController = ws
     else:
-        ctrl = JointPDController.from_mjcf(_model_path(config), q_ref_deg=config.q_ref_deg,
-                                           gain_scale=config.gain_scale,
-                                           control_period_s=config.control_period_s)
-        raw = lambda q, v, feet: ctrl.compute(q, v).torques
+        pd = JointPDController.from_mjcf(_model_path(config), q_ref_deg=config.q_ref_deg,
+                                         gain_scale=config.gain_scale,
+                                         control_period_s=config.control_period_s)
+        raw = lambda q, v, feet: pd.compute(q, v).torques
+        ctrl = pd
     names = tuple(ctrl.joint_names)
     order_names = tuple(joint_order) if joint_order is not None else names
     if sorted(order_names) != sorted(names):

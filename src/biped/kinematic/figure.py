@@ -219,7 +219,7 @@ def _offset(dims: FigureDims, name: str) -> np.ndarray:
 def part_geoms(dims: FigureDims) -> dict:
     """Shape of every part: name -> (kind, size (MuJoCo semantics), centre in the part frame) [m]."""
     d, s = dims, dims.scale
-    out = {}
+    out: dict[str, tuple[str, tuple[float, ...], tuple[float, float, float]]] = {}
 
     def capsule(length, r):
         return "capsule", (r, max(length / 2 - r, 1e-3)), (0.0, 0.0, -length / 2)

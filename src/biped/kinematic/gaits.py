@@ -663,7 +663,9 @@ def chain(*plans: Plan, terrain: Terrain | None = None) -> Plan:
     """Plans one after the other (each starts where and as the previous one ends: standing)."""
     if not plans:
         raise ScenarioError("chain needs at least one plan")
-    segs, markers, t = [], [], 0.0
+    segs: list = []
+    markers: list[dict] = []
+    t = 0.0
     for p in plans:
         segs.extend(p.segments)
         markers.extend({"time_s": m["time_s"] + t, "label": m["label"]} for m in p.markers)

@@ -17,6 +17,7 @@ import csv
 import dataclasses
 import json
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -49,7 +50,7 @@ def _jsonable(o):
         return o.tolist()
     if isinstance(o, (np.floating, np.integer)):
         return o.item()
-    if dataclasses.is_dataclass(o):
+    if dataclasses.is_dataclass(o) and not isinstance(o, type):
         return dataclasses.asdict(o)
     raise TypeError(type(o))
 
@@ -97,7 +98,7 @@ def run_model(model: str, params, method: str, gains, x0, alpha, *, out: Path, d
     its figures, animation.gif (unless ``animation`` is False) and, with ``compare``, the
     comparison of B's forms (:func:`compare_forms`) into ``out``. Returns ``(traj, lin)``."""
     out.mkdir(parents=True, exist_ok=True)
-    common = {"dt": dt, "duration": duration, "integrator": integrator,
+    common: dict[str, Any] = {"dt": dt, "duration": duration, "integrator": integrator,
               "hold": hold, "progress": True}  # fmt: skip
     if model == "pendulum":
         traj = runs.simulate_pendulum(params, method, gains, x0, alpha=alpha[0], **common)
@@ -132,7 +133,7 @@ def compare_forms(params, gains, x0, alpha, common: dict, out: Path) -> dict:
         except StateError as exc:
             errors[method] = str(exc)
     ref = trajs.get("lagrange")
-    result = {"diverged": errors, "max_abs_difference_vs_lagrange": {}}
+    result: dict[str, Any] = {"diverged": errors, "max_abs_difference_vs_lagrange": {}}
     for name, tr in trajs.items():
         if ref is not None and name != "lagrange":
             d = np.abs(tr.states - ref.states).max(axis=0)
@@ -152,7 +153,7 @@ def run_gains(params, *, out: Path, grid: int, k1_max: float, k2_max: float, rat
     Returns ``(gains.json content, best local gains)``."""
     out.mkdir(parents=True, exist_ok=True)
     A, B = analysis.ab_matrices(params)
-    result = {"parameters": dataclasses.asdict(params), "units": UNITS, "A": A, "B": B}
+    result: dict[str, Any] = {"parameters": dataclasses.asdict(params), "units": UNITS, "A": A, "B": B}
     b_sets = {"B eq. 3.81-3.84 (K2 = 4000)": runs.BODY_LEG_GAINS_EQ_3_83,
               "B eq. 5.5-5.8 (K2 = 40000)": runs.BODY_LEG_GAINS}  # fmt: skip
     result["bediz_gains"] = {}

@@ -12,6 +12,7 @@ import json
 import math
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 from biped.sim.contact import SOLE_GEOMS
 from biped.sim.push import PushResult
@@ -130,7 +131,7 @@ def write_outputs(result: PushResult, out_dir: str | Path, *, figures: bool = Tr
     """
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    written = {"trajectory": write_trajectory_csv(result, out / "trajectory.csv"),
+    written: dict[str, Any] = {"trajectory": write_trajectory_csv(result, out / "trajectory.csv"),
                "summary": write_summary(result, out / "summary.json")}
     (out / "scenario.toml").write_text(result.scenario.to_toml())
     written["scenario"] = out / "scenario.toml"
@@ -142,6 +143,7 @@ def write_outputs(result: PushResult, out_dir: str | Path, *, figures: bool = Tr
     if video or replay:
         scene = scene or build_scene(result.scenario)
     if video:
+        assert scene is not None
         try:
             res = render_video(scene.model, result.times, result.qpos, out / "video.mp4",
                                fps=30, track_body="central_body", distance=3.0)
@@ -152,6 +154,7 @@ def write_outputs(result: PushResult, out_dir: str | Path, *, figures: bool = Tr
         except Exception as exc:  # noqa: BLE001 - an optional output must not lose the run
             log(f"video: not written ({type(exc).__name__}: {exc})")
     if replay:
+        assert scene is not None
         try:
             info = {"recovered": result.recovered, "fell": result.fell,
                     "final COM error [m]": round(result.final_com_error_m, 4),

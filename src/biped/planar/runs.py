@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import time as _time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -135,10 +136,12 @@ def _run(model, method, acc_fn, nq, torque_fn, x0, dt, duration, integrator, hol
         x = xs[i]
         u = torque_fn(x)
         us[i] = u
+        f: Callable[[float, np.ndarray], np.ndarray]
         if hold:
-            f = lambda t, y, u=u: rhs(t, y, u)
+            f = lambda t, y, u=u: rhs(t, y, u)  # type: ignore[misc]
         else:
             f = lambda t, y: rhs(t, y, torque_fn(y))
+        cause: Exception | None
         try:
             with np.errstate(over="ignore", invalid="ignore"):
                 x_next = step(f, i * dt, x, dt)
@@ -224,10 +227,11 @@ def simulate_body_leg(
     """
     params = params or bl.BodyLegParams()
     fn = bl.BODY_LEG_METHODS[check_choice("body-leg method", method, bl.BODY_LEG_METHODS)]
-    gains = tuple(check_state(gains, 4, "body-leg gains (K1, K1D, K2, K2D)"))
+    k1, k1d, k2, k2d = check_state(gains, 4, "body-leg gains (K1, K1D, K2, K2D)")
+    gains = (k1, k1d, k2, k2d)
     alpha = tuple(check_state(alpha, 2, "set points (alpha_1, alpha_2)"))
     x0 = check_state(x0, 4, "body-leg x0 (theta1, theta1_dot, theta2, theta2_dot)")
-    fb = LocalFeedback(*gains, alpha1=alpha[0], alpha2=alpha[1])
+    fb = LocalFeedback(k1, k1d, k2, k2d, alpha1=alpha[0], alpha2=alpha[1])
     integrators.get(integrator)
 
     def acc(x, u):
@@ -271,8 +275,8 @@ def simulate_pendulum_as_lisp(
         a_prev = a_now
         xs.append(x.copy())
     us.append(fb.pendulum_torque(x))
-    xs = np.array(xs)
+    states = np.array(xs)
     return Trajectory(
         "pendulum", "newton-euler", "lisp-delayed-euler", dt, True, params, fb,
-        np.arange(len(xs)) * dt, xs, np.array(us), {}, 0.0,
+        np.arange(len(states)) * dt, states, np.array(us), {}, 0.0,
     )  # fmt: skip

@@ -116,7 +116,7 @@ class PushResult:
 def orientation_error_deg(quat, target_quat) -> float:
     """Angle [deg] of the rotation between two unit quaternions (w, x, y, z)."""
     c = abs(float(np.dot(quat, target_quat))) / (np.linalg.norm(quat) * np.linalg.norm(target_quat))
-    return math.degrees(2.0 * math.acos(min(1.0, c)))
+    return math.degrees(2.0 * math.acos(min(1.0, float(c))))
 
 
 # ---------------------------------------------------------------------------------------------

@@ -323,15 +323,15 @@ def replay_from_mujoco(model: mujoco.MjModel, times, qpos, *, geom_groups=None,
     pos = np.empty((T, G, 3))
     quat = np.empty((T, G, 4))
     ids_arr = np.asarray(ids)
-    offsets = np.asarray(offsets)
-    has_offset = bool(np.any(offsets))
+    offsets_arr = np.asarray(offsets)
+    has_offset = bool(np.any(offsets_arr))
     for t in range(T):
         data.qpos[:] = qpos[t]
         mujoco.mj_kinematics(model, data)
         xmat = data.geom_xmat[ids_arr].reshape(G, 3, 3)
         pos[t] = data.geom_xpos[ids_arr]
         if has_offset:
-            pos[t] += np.einsum("gij,gj->gi", xmat, offsets)
+            pos[t] += np.einsum("gij,gj->gi", xmat, offsets_arr)
         for g in range(G):
             mujoco.mju_mat2Quat(quat[t, g], data.geom_xmat[ids_arr[g]])
     return Replay(geoms=tuple(geoms), times=times, pos=pos, quat=quat, title=title,

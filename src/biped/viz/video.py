@@ -208,8 +208,8 @@ def render_video(model, times, qpos, path, *, fps=30, width=640, height=480,
 
     path.parent.mkdir(parents=True, exist_ok=True)
     idx = frame_indices(times, fps)
-    with tempfile.TemporaryDirectory(prefix="biped-video-") as tmp:
-        tmp = pathlib.Path(tmp)
+    with tempfile.TemporaryDirectory(prefix="biped-video-") as tmp_name:
+        tmp = pathlib.Path(tmp_name)
         mujoco.mj_saveModel(model, str(tmp / "model.mjb"), None)
         np.save(tmp / "qpos.npy", qpos[idx])
         extent = float(model.stat.extent) if model.stat.extent > 0 else 1.0

@@ -151,10 +151,10 @@ def plot_inverse_dynamics(result, markers, path) -> Path:
         _markers(ax, markers, labels=ax is axes[0])
     ax = axes[2]
     mg = result.mass * result.gravity
-    for j, sd in enumerate(("left", "right")):
-        ax.plot(t, result.grf[:, j, 2], color=_SIDE_COLOURS[sd], lw=1.0, label=f"{sd} vertical")
-        ax.plot(t, result.grf[:, j, 0], color=_SIDE_COLOURS[sd], lw=0.8, ls="--", label=f"{sd} forward")
-        ax.plot(t, result.grf[:, j, 1], color=_SIDE_COLOURS[sd], lw=0.6, ls=":", label=f"{sd} lateral")
+    for k, sd in enumerate(("left", "right")):
+        ax.plot(t, result.grf[:, k, 2], color=_SIDE_COLOURS[sd], lw=1.0, label=f"{sd} vertical")
+        ax.plot(t, result.grf[:, k, 0], color=_SIDE_COLOURS[sd], lw=0.8, ls="--", label=f"{sd} forward")
+        ax.plot(t, result.grf[:, k, 1], color=_SIDE_COLOURS[sd], lw=0.6, ls=":", label=f"{sd} lateral")
     ax.axhline(mg, color="k", lw=0.6, ls="-.", label="body weight")
     ax.axhline(0, color="k", lw=0.4)
     ax.set_ylabel("ground reaction\nforce [N]", fontsize=8)
@@ -162,8 +162,8 @@ def plot_inverse_dynamics(result, markers, path) -> Path:
     _markers(ax, markers)
     ax = axes[3]
     fr = result.friction_ratio()
-    for j, sd in enumerate(("left", "right")):
-        ax.plot(t, fr[:, j], color=_SIDE_COLOURS[sd], lw=0.9, label=sd)
+    for k, sd in enumerate(("left", "right")):
+        ax.plot(t, fr[:, k], color=_SIDE_COLOURS[sd], lw=0.9, label=sd)
     ax.axhline(0.3, color="k", lw=0.6, ls="-.", label="W's friction 0.3")
     ax.set_ylim(0, 1.0)
     ax.set_ylabel("|F_t| / F_n\nneeded", fontsize=8)
