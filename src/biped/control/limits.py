@@ -1,8 +1,11 @@
 """Joint torque limits for the push experiments: none (as in W) or a human-like set.
 
+>>> import numpy as np
 >>> from biped.control.limits import torque_limits, clip_torques
 >>> lim = torque_limits("human", body_mass_kg=73.0)       # TorqueLimits, per joint (lower, upper)
->>> clip_torques(tau, lim)                                 # (12,) clipped [N m]
+>>> tau = clip_torques(np.full(12, 1e4), lim)             # (12,) clipped [N m]
+>>> bool(np.all(tau == lim.upper))
+True
 
 Sign convention (checked against the shipped MJCF's joint axes, see ``docs/sweep.md``): a
 positive torque on ``*_hip_abduction`` abducts, ``*_hip_flexion`` flexes the hip,

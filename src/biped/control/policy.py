@@ -1,9 +1,15 @@
 """One factory for the push experiments' controllers: W's workspace controller or the joint-PD
 baseline, with optional torque limits, as a policy ``(qpos, qvel, feet) -> torques``.
 
+>>> import mujoco, numpy as np
+>>> from biped import models
+>>> m = mujoco.MjModel.from_xml_path(str(models.path("wendlandt")))
+>>> qpos, qvel = m.key_qpos[m.key("wendlandt_initial").id], np.zeros(m.nv)   # W's initial state
 >>> from biped.control.policy import PolicyConfig, make_policy
 >>> policy = make_policy(PolicyConfig())                      # W's controller, set point, gains
->>> tau = policy(qpos, qvel, (True, True))                    # (12,) [N m], policy.joint_names order
+>>> tau = policy(qpos, qvel, (True, True))                    # [N m], policy.joint_names order
+>>> tau.shape
+(12,)
 
 ``biped push`` and ``biped sweep`` both build their controllers here (``biped.sim.push`` turns a
 :class:`~biped.sim.scenario.Scenario` into a :class:`PolicyConfig`); this module knows nothing of

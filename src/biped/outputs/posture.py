@@ -2,13 +2,16 @@
 figures and the animation of one run; comparison.json/.png of B's equation forms; gains.json,
 stability_map.npz/.png of the gain design.
 
+>>> import tempfile
 >>> from pathlib import Path
 >>> from biped.planar import PendulumParams
 >>> from biped.planar.runs import PENDULUM_GAINS
 >>> from biped.outputs.posture import run_model
 >>> traj, lin = run_model("pendulum", PendulumParams(), "newton-euler", PENDULUM_GAINS, (1.0, 0.0),
-...                       (0.0,), out=Path("runs/posture-pendulum"), dt=0.02, duration=20.0,
-...                       integrator="euler")
+...                       (0.0,), out=Path(tempfile.mkdtemp()), dt=0.02, duration=20.0,
+...                       integrator="euler", animation=False)
+>>> lin.stable
+True
 """
 
 from __future__ import annotations

@@ -4,10 +4,12 @@ pressure (W section 4's outputs, and what a biomechanics lab measures with force
 
 >>> from biped.sim import Scenario, simulate, build_scene
 >>> from biped.sim.measure import measure_rows
->>> scenario = Scenario(duration_s=0.5)
+>>> scenario = Scenario(duration_s=0.05)       # before the block hits (0.082 s)
 >>> scene = build_scene(scenario)
 >>> rows = measure_rows(scene, simulate(scenario, scene=scene))
->>> rows.grf[:, 0, 2] + rows.grf[:, 1, 2]      # (n,) total vertical ground force [N]
+>>> rows.grf.shape[1:]                          # per row, per foot (left, right): force [N]
+(2, 3)
+>>> fz = rows.grf[:, 0, 2] + rows.grf[:, 1, 2]  # (n,) total vertical ground force [N]
 
 Each row k is re-evaluated with ``mj_forward`` at the recorded state (qpos_k, qvel_k) with the
 torques of that row (those held on [t_k, t_k+1)) applied, so every quantity is at exactly t_k:

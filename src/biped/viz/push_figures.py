@@ -3,8 +3,10 @@
 Plotting only: every function takes a :class:`biped.sim.push.PushResult` and draws it; events
 (block hit, heel/toe lift-off and touch-down, fall) are marked as vertical lines on every panel.
 
->>> from biped.viz.push_figures import plot_push
->>> plot_push(result, "runs/mine/figures")     # fig3_joint_angles.png/.svg ... fig6_orientation
+Usage, with ``result`` a :class:`~biped.sim.push.PushResult` (not a doctest: it takes a run)::
+
+    from biped.viz.push_figures import plot_push
+    plot_push(result, "runs/mine/figures")     # fig3_joint_angles.png/.svg ... fig6_orientation
 """
 
 from __future__ import annotations
