@@ -33,6 +33,7 @@ Limits are applied by clipping the controller's torques, joint by joint (no redi
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -87,7 +88,7 @@ class TorqueLimits:
     def unlimited(self) -> bool:
         return self.lower is None
 
-    def reorder(self, joint_names) -> TorqueLimits:
+    def reorder(self, joint_names: Iterable[str]) -> TorqueLimits:
         """The same limits in another joint order (names must match)."""
         if self.unlimited:
             return TorqueLimits(self.name, tuple(joint_names), None, None)

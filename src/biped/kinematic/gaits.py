@@ -199,7 +199,7 @@ def _walk(dims, params, footholds, a_trail, a_lead, T, lean, label, bump=True):
 
 
 def stair_geometry(dims: FigureDims, params: GaitParams, rise: float | None = None,
-                   run: float | None = None):
+                   run: float | None = None) -> tuple[float, float, float]:
     """Rise, run and leading-leg angle of B's stair step (B IV-B-3b).
 
     The trailing leg at double support is B's bar at ``alpha_down`` (eq. 4.20): the hip is

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from biped.errors import ReachError, ScenarioError
 from biped.kinematic.figure import JOINT_NAMES, FigureDims, FigurePoses, landmarks, part_poses
@@ -55,7 +56,7 @@ class Plan:
     def duration(self) -> float:
         return float(sum(seg.duration for seg in self.segments))
 
-    def evaluate(self, times) -> Motion:
+    def evaluate(self, times: ArrayLike) -> Motion:
         """The figure's pose at ``times`` (T,) [s]: targets of the segments, then leg IK
         (eq. 4.12-4.19) and B's arm rule. Raises :class:`ReachError` if a foot is out of reach."""
         times = np.asarray(times, dtype=float)

@@ -162,6 +162,7 @@ def run_gains(params, *, out: Path, grid: int, k1_max: float, k2_max: float, rat
     result["bediz_gains"] = {}
     for label, g in b_sets.items():
         lin = analysis.analyze_body_leg(params, g)
+        assert lin.char_poly is not None  # the body-leg analysis has one
         result["bediz_gains"][label] = {
             "gains": list(g), "eigenvalues": lin.eigenvalue_pairs(), "stable": lin.stable,
             "stability_margin": lin.margin, "characteristic_polynomial": lin.char_poly,
