@@ -16,6 +16,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from biped.errors import BipedError, ScenarioError, StateError
 from biped.planar import body_leg as bl
@@ -57,11 +58,11 @@ class LocalFeedback:
     def gains(self) -> tuple[float, float, float, float]:
         return (self.k_theta1, self.k_theta1_dot, self.k_theta2, self.k_theta2_dot)
 
-    def pendulum_torque(self, x) -> np.ndarray:
+    def pendulum_torque(self, x: np.ndarray) -> np.ndarray:
         """(1,) torque M of eq. 4.32 for the pendulum state (theta, theta_dot)."""
         return np.array([-self.k_theta1 * (x[0] - self.alpha1) - self.k_theta1_dot * x[1]])
 
-    def body_leg_torques(self, x) -> np.ndarray:
+    def body_leg_torques(self, x: np.ndarray) -> np.ndarray:
         """(2,) torques (M_1, M_2) of eq. 3.6, 3.7 for the body-leg state (eq. 3.1)."""
         return np.array(
             [
@@ -167,8 +168,8 @@ def _run(model, method, acc_fn, nq, torque_fn, x0, dt, duration, integrator, hol
 def simulate_pendulum(
     params: pd.PendulumParams | None = None,
     method: str = "newton-euler",
-    gains=PENDULUM_GAINS,
-    x0=(1.0, 0.0),
+    gains: ArrayLike = PENDULUM_GAINS,
+    x0: ArrayLike = (1.0, 0.0),
     dt: float = 0.02,
     duration: float = 20.0,
     integrator: str = "euler",
@@ -208,8 +209,8 @@ def simulate_pendulum(
 def simulate_body_leg(
     params: bl.BodyLegParams | None = None,
     method: str = "lagrange-linear",
-    gains=BODY_LEG_GAINS,
-    x0=(0.5, 0.0, 1.0, 0.0),
+    gains: ArrayLike = BODY_LEG_GAINS,
+    x0: ArrayLike = (0.5, 0.0, 1.0, 0.0),
     dt: float = 0.01,
     duration: float = 5.0,
     integrator: str = "heun",
@@ -252,7 +253,7 @@ def simulate_body_leg(
 
 
 def simulate_pendulum_as_lisp(
-    params: pd.PendulumParams | None = None, gains=PENDULUM_GAINS, x0=(1.0, 0.0),
+    params: pd.PendulumParams | None = None, gains: ArrayLike = PENDULUM_GAINS, x0: ArrayLike = (1.0, 0.0),
     dt: float = 0.02, steps: int = 1001,
 ) -> Trajectory:  # fmt: skip
     """B's Fig. 25 run exactly as its Lisp rigid-body class steps it (Appendix A).
