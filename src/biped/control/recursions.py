@@ -151,8 +151,10 @@ def _mat4_mul(A, B, C):
 
 
 @njit(cache=True)
-def alg1_initialize(qpos, qvel, root_qadr, root_dadr, G0root, root_qbi, mass, inertia, gravity,
-                    g, V, a, b, q_root, q01):
+def alg1_initialize(qpos: np.ndarray, qvel: np.ndarray, root_qadr: int, root_dadr: int,
+                    G0root: np.ndarray, root_qbi: np.ndarray, mass: np.ndarray, inertia: np.ndarray,
+                    gravity: np.ndarray, g: np.ndarray, V: np.ndarray, a: np.ndarray, b: np.ndarray,
+                    q_root: np.ndarray, q01: np.ndarray) -> None:
     """W Alg. 1 (controller initialization): pose ``g_{0,1}``, body velocity ``V_1^b``,
     ``a_1 = 0`` and ``b_1 = -F_1^be + Omega_1 M_1 V_1`` of the central body.
 
@@ -199,8 +201,11 @@ def alg1_initialize(qpos, qvel, root_qadr, root_dadr, G0root, root_qbi, mass, in
 
 
 @njit(cache=True)
-def alg2_velocity_propagation(qpos, qvel, parent, qadr, dadr, H, G0, qref, mass, inertia,
-                              gravity, g, gl, V, a, b, E):
+def alg2_velocity_propagation(qpos: np.ndarray, qvel: np.ndarray, parent: np.ndarray, qadr: np.ndarray,
+                              dadr: np.ndarray, H: np.ndarray, G0: np.ndarray, qref: np.ndarray,
+                              mass: np.ndarray, inertia: np.ndarray, gravity: np.ndarray, g: np.ndarray,
+                              gl: np.ndarray, V: np.ndarray, a: np.ndarray, b: np.ndarray,
+                              E: np.ndarray) -> None:
     """W Alg. 2 (forward kinematics, outboard): for each joint k = link k's joint,
     ``g_{k.o,0}``, ``A = Ad_{g_{k.o,k.i}}``, ``V_{k.o} = A V_{k.i} + H_k thetadot_k``,
     ``a_k = ad_{V_{k.o}} H_k thetadot_k``, ``b_{k.o} = -F^be + Omega M V``.
@@ -223,8 +228,11 @@ def alg2_velocity_propagation(qpos, qvel, parent, qadr, dadr, H, G0, qref, mass,
 
 
 @njit(cache=True)
-def alg3_workspace_dynamics(parent, H, mass, inertia, feet, contact, beyond, big_base, gl, a, b, P, z,
-                            PH, c, c_in, Pa, Q, S):
+def alg3_workspace_dynamics(parent: np.ndarray, H: np.ndarray, mass: np.ndarray, inertia: np.ndarray,
+                            feet: np.ndarray, contact: np.ndarray, beyond: np.ndarray, big_base: float,
+                            gl: np.ndarray, a: np.ndarray, b: np.ndarray, P: np.ndarray, z: np.ndarray,
+                            PH: np.ndarray, c: np.ndarray, c_in: np.ndarray, Pa: np.ndarray, Q: np.ndarray,
+                            S: np.ndarray) -> None:
     """W Alg. 3 (workspace dynamics, inboard): articulated-body inertias ``P_k`` and biases
     ``z_k`` from the feet to the central body with the big-base approximation
     ``P_foot = big_base * M_1``, ``z_foot = 0``. Result: ``P[0] = P_1``, ``z[0] = z_1`` with
@@ -265,7 +273,9 @@ def alg3_workspace_dynamics(parent, H, mass, inertia, feet, contact, beyond, big
 
 
 @njit(cache=True)
-def alg4_desired_wrench(g, V, P, z, target, gains, q01, qd_conj, Re, X, qe, Fd):
+def alg4_desired_wrench(g: np.ndarray, V: np.ndarray, P: np.ndarray, z: np.ndarray, target: np.ndarray,
+                        gains: np.ndarray, q01: np.ndarray, qd_conj: np.ndarray, Re: np.ndarray,
+                        X: np.ndarray, qe: np.ndarray, Fd: np.ndarray) -> None:
     """W Alg. 4 (desired wrench): PD on the central body's COM position (space frame) and on the
     unit-quaternion orientation error ``q_et = q_{0,1} * conj(q_{0,d})`` with the sign chosen so that
     its scalar part is >= 0; ``F_1^bd = P_1 X^b + z_1`` (W eq. 3.10).
@@ -304,8 +314,10 @@ def alg4_desired_wrench(g, V, P, z, target, gains, q01, qd_conj, Re, X, qe, Fd):
 
 
 @njit(cache=True)
-def alg5_wrench_distribution(g, feet, contact, Fd, vecs, mats, R_foot, Fl, Fr, Fl_tilde, Fr_tilde,
-                             printed=False):
+def alg5_wrench_distribution(g: np.ndarray, feet: np.ndarray, contact: np.ndarray, Fd: np.ndarray,
+                             vecs: np.ndarray, mats: np.ndarray, R_foot: np.ndarray, Fl: np.ndarray,
+                             Fr: np.ndarray, Fl_tilde: np.ndarray, Fr_tilde: np.ndarray,
+                             printed: bool = False) -> bool:
     """W Alg. 5 (desired wrench distribution, eq. 3.11-3.14): ``F_1^bd = G [F_l; F_r]`` with
     ``G = [Ad^T_{g_{7,1}}  Ad^T_{g_{13,1}}]`` (each foot's wrench moved to the central body),
     ``[F_l; F_r] = G^T (G G^T)^-1 F_1^bd`` (minimum norm), ``F~_2 = Ad^T_{g_{7,1}} F_l``,
@@ -383,7 +395,8 @@ def alg5_wrench_distribution(g, feet, contact, Fd, vecs, mats, R_foot, Fl, Fr, F
 
 
 @njit(cache=True)
-def alg6_torques(parent, H, leg, beyond, gl, Fl_tilde, Fr_tilde, F, tau):
+def alg6_torques(parent: np.ndarray, H: np.ndarray, leg: np.ndarray, beyond: np.ndarray, gl: np.ndarray,
+                 Fl_tilde: np.ndarray, Fr_tilde: np.ndarray, F: np.ndarray, tau: np.ndarray) -> None:
     """W Alg. 6 (torque calculation, outboard): ``F_k = -Ad^{-T}_{g_{k.o,k.i}} F~_k`` (equal and
     opposite wrenches across joint k), ``tau_k = H_k^T F_k``, ``F~_{k+1} = -F_k`` (link k.o in
     equilibrium). Equivalent to ``tau = J^T F~`` with J the leg's body Jacobian, foot fixed.
@@ -412,7 +425,9 @@ def alg6_torques(parent, H, leg, beyond, gl, Fl_tilde, Fr_tilde, F, tau):
 
 
 @njit(cache=True)
-def compute_kernel(qpos, qvel, target, gains, contact, mi, mf, work, out):
+def compute_kernel(qpos: np.ndarray, qvel: np.ndarray, target: np.ndarray, gains: np.ndarray,
+                   contact: np.ndarray, mi: np.ndarray, mf: np.ndarray, work: np.ndarray,
+                   out: np.ndarray) -> int:
     """One controller call: W Alg. 1-6 on flat buffers (see :func:`layout` and :func:`unpack`);
     ``contact`` (2,) int flags the (left, right) feet taken as fixed to the ground (W: both).
     Returns a status code (0 ok, 1 non-finite state, 2 non-finite result, 3 singular wrench
