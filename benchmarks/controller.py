@@ -9,7 +9,8 @@ Prints the median and 99th percentile of the wall time per call [us] of
   ``mujoco.mj_forward`` on the same MJCF file (W's biped, no floor: no contacts),
 each called from Python, with the ratio of medians to ``pin.aba`` measured in the same run, and
 the contact-feasible QP distribution (``distribution="qp"``): ``compute``/``torques`` with daqp
-(the default) and ``torques`` with quadprog, the QP solve alone with each solver on the same built problem, and the ratio of the
+(the default) and ``torques`` with quadprog, the QP solve alone with each solver on the same built
+problem, and the ratio of the
 qp ``torques`` call to the min-norm (``statics``) one. The calls are interleaved in rounds so that a
 change in machine load affects all alike. With ``--push N``: W's default push (faithful physics,
 3 s) closed loop with statics and with qp, interleaved N times, median wall times and their ratio
@@ -30,8 +31,8 @@ import mujoco
 import numpy as np
 
 _t = time.perf_counter()
-from biped import models
-from biped.control import WorkspaceController
+from biped import models  # noqa: E402 (import time is measured)
+from biped.control import WorkspaceController  # noqa: E402
 
 t_import = time.perf_counter() - _t
 

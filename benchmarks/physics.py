@@ -94,7 +94,7 @@ def main() -> None:
         print("| direction [deg] | faithful | fast | difference [steps] |")
         print("|---|---|---|---|")
         worst = 0
-        for d, x, y in zip(a.directions_deg, a.survived_max, b.survived_max):
+        for d, x, y in zip(a.directions_deg, a.survived_max, b.survived_max, strict=True):
             xs = 0.0 if math.isnan(x) else x  # nothing survived: below the grid
             ys = 0.0 if math.isnan(y) else y
             diff = round(abs(xs - ys) / step)

@@ -5,7 +5,8 @@ For every file under either folder it prints one line: ``identical`` (same bytes
 / ``only in B``, or what differs:
 
 * JSON: the key paths whose values differ (a string holding the run folder's own path, e.g.
-  ``outputs.video`` of ``biped walk``, is compared with that folder replaced by ``<run>``). Keys that measure the wall clock (``wall_time_s``,
+  ``outputs.video`` of ``biped walk``, is compared with that folder replaced by ``<run>``). Keys that
+  measure the wall clock (``wall_time_s``,
   ``wall_time``, ``realtime_factor``) differ between any two runs; a file whose only differences
   are such keys is reported as ``same but timing`` and does not count as a difference.
 * CSV: header changes, the row count, and the columns whose values differ (with the first row).
@@ -43,7 +44,7 @@ def _json_diff(a, b, path="") -> list[str]:
         return out
     if isinstance(a, list) and isinstance(b, list) and len(a) == len(b):
         out = []
-        for i, (x, y) in enumerate(zip(a, b)):
+        for i, (x, y) in enumerate(zip(a, b, strict=True)):
             out += _json_diff(x, y, f"{path}[{i}]")
         return out
     return [] if a == b else [path or "<root>"]
@@ -95,7 +96,7 @@ def compare_csv(a: bytes, b: bytes) -> tuple[bool, str]:
     common = [c for c in ha if c in hb]
     ia, ib = {c: i for i, c in enumerate(ha)}, {c: i for i, c in enumerate(hb)}
     differing = {}
-    for k, (x, y) in enumerate(zip(ra[1:], rb[1:]), start=1):
+    for k, (x, y) in enumerate(zip(ra[1:], rb[1:], strict=False), start=1):
         for c in common:
             if c not in differing and x[ia[c]] != y[ib[c]]:
                 differing[c] = k
@@ -121,7 +122,7 @@ def compare_image(a: bytes, b: bytes) -> tuple[bool, str]:
         return False, f"bytes differ ({len(a)} vs {len(b)} bytes); not decodable ({exc})"
     if ia.size != ib.size or len(fa) != len(fb):
         return False, f"bytes differ; size {ia.size} x {len(fa)} frames vs {ib.size} x {len(fb)}"
-    same = sum(x == y for x, y in zip(fa, fb))
+    same = sum(x == y for x, y in zip(fa, fb, strict=True))
     if same == len(fa):
         return False, "bytes differ, pixels identical"
     return False, f"bytes and pixels differ ({len(fa) - same} of {len(fa)} frames)"
@@ -149,8 +150,8 @@ def compare_file(pa: Path, pb: Path, root_a: str = "", root_b: str = "") -> tupl
         return compare_csv(a, b)
     if suffix in (".png", ".gif"):
         return compare_image(a, b)
-    first = next(i for i, (x, y) in enumerate(zip(a, b)) if x != y) if min(len(a), len(b)) and \
-        any(x != y for x, y in zip(a, b)) else min(len(a), len(b))
+    first = next(i for i, (x, y) in enumerate(zip(a, b, strict=False)) if x != y) if min(len(a), len(b)) and \
+        any(x != y for x, y in zip(a, b, strict=False)) else min(len(a), len(b))
     return False, f"bytes differ ({len(a)} vs {len(b)} bytes, first at byte {first})"
 
 

@@ -1,6 +1,10 @@
 #!/usr/bin/env bash
-# Installs what the tests need and runs the whole test suite; exits non-zero if any test fails
-# or if no test ran.
+# Installs what the tests need, then runs, in order and stopping at the first failure:
+#   1. ruff check   (pyflakes, pycodestyle, bugbear, isort, pyupgrade, numpy rules; pyproject.toml)
+#   2. mypy         (src/biped, configured in pyproject.toml)
+#   3. the doctests (every `>>>` example in src/biped)
+#   4. the test suite (pytest -n 2); extra arguments go to this step.
+# Exits non-zero if any step fails or if no test ran.
 # Debian packages: libosmesa6 and libgl1 (offscreen rendering of the videos), chromium (the
 # browser tests open replay.html headless; ~130 packages with its dependencies).
 # Python: the active virtual environment, else the project's own .venv (see scripts/_env.sh).
@@ -10,6 +14,17 @@ cd "$(dirname "$0")/.."
 ensure_env libosmesa6 libgl1 chromium
 echo "installing biped and the test dependencies (first run: a few minutes)"
 "$PY" -m pip install -q -e ".[test]"
+DIRS=(src tests benchmarks scripts)
+echo "== ruff check"
+"$PY" -m ruff check "${DIRS[@]}"
+# enabled once the tree has been formatted (`ruff format src tests benchmarks scripts`):
+# echo "== ruff format --check"
+# "$PY" -m ruff format --check "${DIRS[@]}"
+echo "== mypy"
+"$PY" -m mypy
+echo "== doctests"
+"$PY" -m pytest -q -n 0 -p no:cacheprovider --doctest-modules src/biped
+echo "== test suite"
 rc=0
 "$PY" -m pytest -n 2 -q "$@" || rc=$?
 if [ "$rc" = 5 ]; then

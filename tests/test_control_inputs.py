@@ -138,8 +138,9 @@ _THIRD_LEG = ('<body name="t1" pos="0.1 0 -0.2"><joint name="tj1" axis="0 1 0"/>
 
 def test_a_root_foot_a_third_leg_and_an_empty_source_are_model_errors(tmp_path,
                                                                        wendlandt_path):
-    from biped.errors import ModelError
     from conftest import ASYM_XML
+
+    from biped.errors import ModelError
 
     with pytest.raises(ModelError, match="floating root"):
         WorkspaceController.from_mjcf(wendlandt_path, feet=("central_body", "right_foot"))

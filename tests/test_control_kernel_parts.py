@@ -80,10 +80,10 @@ def test_unpack_follows_layout(n):
             "work": np.arange(float(lay["work"]["_size"][0])),
             "out": np.arange(float(lay["out"]["_size"][0]))}
     views = unpack(bufs["ints"], bufs["model"], bufs["work"], bufs["out"])
-    for name, nt in zip(("ints", "model", "work", "out"), views):
+    for name, nt in zip(("ints", "model", "work", "out"), views, strict=True):
         assert list(nt._fields) == [k for k in lay[name] if k != "_size"], name
         covered = np.zeros(lay[name]["_size"][0], dtype=int)
-        for field, view in zip(nt._fields, nt):
+        for field, view in zip(nt._fields, nt, strict=True):
             off, shape = lay[name][field]
             assert view.shape == shape, (name, field)
             assert np.shares_memory(view, bufs[name]), (name, field)

@@ -62,7 +62,7 @@ def test_alg6_torques_are_jacobian_transpose_per_leg(tree_case):
         Fl, Fr = rng.normal(0, 100, 6), rng.normal(0, 100, 6)
         tau = ctrl.leg_torques(qpos, Fl, Fr)
         expected = np.zeros(m.nv)
-        for foot, F in zip(feet, (Fl, Fr)):
+        for foot, F in zip(feet, (Fl, Fr), strict=True):
             J = leg_jacobian_fd(m, qpos, foot, body)
             expected += J.T @ F  # the other leg's columns are zero in J
         np.testing.assert_allclose(tau, expected[hinge_dofs], rtol=0, atol=1e-8 * np.abs(expected).max())
@@ -107,7 +107,7 @@ def place_central_body(m, qpos, com, quat, feet=FEET, iters=50):
         mujoco.mj_kinematics(m, d)
         mujoco.mj_comPos(m, d)
         err, rows = [], []
-        for b, (p, R) in zip(ids, goal):
+        for b, (p, R) in zip(ids, goal, strict=True):
             Rc = d.xmat[b].reshape(3, 3)
             S = R @ Rc.T
             err += [p - d.xpos[b], 0.5 * np.array([S[2, 1] - S[1, 2], S[0, 2] - S[2, 0], S[1, 0] - S[0, 1]])]
@@ -138,7 +138,8 @@ def welded(m_source_xml: str) -> mujoco.MjModel:
     MuJoCo allows: impedance 0.9999)."""
     eq = "".join(f'<weld name="{f}_weld" body1="{f}" solimp="0.9999 0.9999 0.001" solref="0.004 1"/>'
                  for f in FEET)
-    return mujoco.MjModel.from_xml_string(m_source_xml.replace("<actuator>", f"<equality>{eq}</equality>\n  <actuator>", 1))
+    xml = m_source_xml.replace("<actuator>", f"<equality>{eq}</equality>\n  <actuator>", 1)
+    return mujoco.MjModel.from_xml_string(xml)
 
 
 def weld_in_place(m, d):

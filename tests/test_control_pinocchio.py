@@ -209,7 +209,7 @@ def test_torques_give_the_commanded_acceleration_with_feet_fixed(tree_case):
         out = ctrl.compute(qpos, qvel, target=target)
         _, _, p = exact_workspace_dynamics(pb, body, feet, qpos, qvel)
         tau = np.zeros(pb.model.nv)
-        for name, t in zip(ctrl.joint_names, out.torques):
+        for name, t in zip(ctrl.joint_names, out.torques, strict=True):
             tau[pb.model.joints[pb.model.getJointId(name)].idx_v] = t
         Mi = np.linalg.inv(p["M"])
         Jc = p["Jc"]

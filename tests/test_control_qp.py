@@ -2,7 +2,8 @@
 
 Oracles the project did not compute: the contact wrench cone against its definition (the
 nonnegative span of the sole corners' friction-pyramid edges, by scipy's NNLS); foot and body
-poses from MuJoCo; a second QP solver (quadprog beside the default daqp) and a solver-free KKT certificate on the same problems; the
+poses from MuJoCo; a second QP solver (quadprog beside the default daqp) and a solver-free KKT
+certificate on the same problems; the
 optimality bound of a regularised least-squares problem; MuJoCo's compiled joint damping.
 """
 
@@ -80,7 +81,7 @@ def test_sole_rectangle_is_the_bottom_of_the_sole_boxes(wendlandt_mj, soles):
     d = mujoco.MjData(m)
     mujoco.mj_resetDataKeyframe(m, d, m.key("wendlandt_initial").id)
     mujoco.mj_forward(m, d)
-    for foot, sole in zip(("left", "right"), soles):
+    for foot, sole in zip(("left", "right"), soles, strict=True):
         corners = []
         for part in ("heel", "toe"):
             g = m.geom(f"{foot}_{part}").id
@@ -115,7 +116,7 @@ def _sole_wrenches(m, d, out, soles):
     cb = m.body("central_body").id
     g01 = transform(d.ximat[cb].reshape(3, 3), d.xipos[cb])
     sole_w, body_w = [], []
-    for foot, F, sole in zip(("left", "right"), (out.foot_wrench_left, out.foot_wrench_right), soles):
+    for foot, F, sole in zip(("left", "right"), (out.foot_wrench_left, out.foot_wrench_right), soles, strict=True):
         gfs = sole.g_foot_sole
         w = adjoint(gfs[:3, :3], gfs[:3, 3]).T @ F  # F_s = Ad^T_{g_{f,s}} F_f
         b = m.body(f"{foot}_foot").id
@@ -146,7 +147,7 @@ def test_qp_wrenches_satisfy_every_cone_cop_and_torque_row(ctrls, wendlandt_mj, 
         out = ctrl.compute(d.qpos, d.qvel)
         assert ctrl.qp.status == SOLVED
         sole_w, body_w = _sole_wrenches(m, d, out, soles)
-        for w, sole, share, bw in zip(sole_w, soles, (out.wrench_left, out.wrench_right), body_w):
+        for w, sole, share, bw in zip(sole_w, soles, (out.wrench_left, out.wrench_right), body_w, strict=True):
             scale = max(1.0, np.linalg.norm(w))
             assert wts.min_normal_n - 1e-6 * scale <= w[2] <= wts.max_normal_n + 1e-6 * scale
             assert _in_cone(w, sole.half_length, sole.half_width, mu, tol=1e-6)
@@ -188,7 +189,7 @@ def test_qp_reproduces_a_feasible_min_norm_split(ctrls, wendlandt_mj, soles):
         mn = ctrls["statics"].compute(d.qpos, d.qvel)
         sole_mn, _ = _sole_wrenches(m, d, mn, soles)
         if not all(_in_cone(w, s.half_length, s.half_width, mu) and
-                   wts.min_normal_n <= w[2] <= wts.max_normal_n for w, s in zip(sole_mn, soles)):
+                   wts.min_normal_n <= w[2] <= wts.max_normal_n for w, s in zip(sole_mn, soles, strict=True)):
             continue
         out = ctrls["qp"].compute(d.qpos, d.qvel)
         err = out.wrench_left + out.wrench_right - out.wrench_desired

@@ -145,3 +145,29 @@ def test_video_of_the_figure(tmp_path):
     assert res.path is not None, res.reason
     assert res.frames == math.floor((motion.times[19] - motion.times[0]) * 10 + 1e-9) + 1
     assert res.path.stat().st_size > 1000
+
+
+@pytest.mark.parametrize("model", [None, "wendlandt-file"])
+def test_walk_with_video_writes_its_summary(tmp_path, monkeypatch, model):
+    """The video stage builds the figure's own MjModel; the summary must still name the caller's
+    biped (a merge once let that MjModel shadow ``model`` and the default ``biped walk`` crashed
+    before summary.json). render_video is replaced by a stub: the test is about the summary."""
+    import biped.outputs.walk as ow
+    from biped.kinematic import step_forward
+    from biped.models.subject import resolve
+    from biped.viz.video import VideoResult
+
+    seen = {}
+
+    def fake_video(fig_model, times, qpos, path, **kw):
+        seen["nbody"] = fig_model.nbody
+        return VideoResult(None, "stubbed in the test")
+
+    monkeypatch.setattr(ow, "render_video", fake_video)
+    path = str(resolve("wendlandt")) if model else None
+    run = ow.write_walk(step_forward(steps=1), tmp_path / "w", gait="forward", speed=1.0, rate=50.0,
+                        dynamics=False, figures=False, replay=False, video=True, model=path)
+    s = json.loads((tmp_path / "w" / "summary.json").read_text())
+    assert s["model"] == (str(resolve("wendlandt").resolve()) if model else "wendlandt")
+    assert s["notes"]["video"] == "stubbed in the test" and seen["nbody"] > 10
+    assert run.summary == s

@@ -94,7 +94,7 @@ def test_stance_feet_stand_on_the_ground_and_do_not_slide(run):
     for j in range(2):
         st = np.concatenate([[False], motion.stance[:, j], [False]]).astype(int)
         starts, stops = np.flatnonzero(np.diff(st) == 1), np.flatnonzero(np.diff(st) == -1)
-        for a, b in zip(starts, stops):
+        for a, b in zip(starts, stops, strict=True):
             n_runs += 1
             assert np.max(np.abs(gap[a:b, j])) < 1e-3, f"{name}: stance sole off the ground"
             slip = np.linalg.norm(soles[a:b, j] - soles[a, j], axis=-1).max()

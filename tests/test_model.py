@@ -50,7 +50,7 @@ def w_initial_qpos(m: mujoco.MjModel) -> np.ndarray:
     mujoco.mju_quat2Mat(R, quat)
     qpos[:3] = W_COM - R.reshape(3, 3) @ m.body_ipos[body]
     qpos[3:7] = quat
-    for name, angle in zip(W_JOINTS, W_ANGLES_DEG):
+    for name, angle in zip(W_JOINTS, W_ANGLES_DEG, strict=True):
         qpos[m.jnt_qposadr[m.joint(name).id]] = math.radians(angle)
     return qpos
 

@@ -9,8 +9,8 @@ import numpy as np
 from biped import models
 from biped.control import WorkspaceController
 from biped.control.limits import MODEL_MASS_KG, torque_limits
-from biped.sim.scene import build_scene
 from biped.sim.scenario import Scenario
+from biped.sim.scene import build_scene
 
 
 def test_joint_names_are_the_mjcf_hinges_in_w_order(wendlandt_mj):

@@ -18,7 +18,7 @@ B_GAINS = [runs.BODY_LEG_GAINS_EQ_3_83, runs.BODY_LEG_GAINS]
 
 def _numeric(expr_matrix, params, p):
     return np.array(
-        expr_matrix.subs(dict(zip(params, (p.m, p.I, p.r, p.l, p.g)))).evalf(), dtype=float
+        expr_matrix.subs(dict(zip(params, (p.m, p.I, p.r, p.l, p.g), strict=True))).evalf(), dtype=float
     )
 
 
@@ -45,7 +45,7 @@ def test_eq_3_80_matches_symbolic_determinant():
     poly, ks, params = symbolic.body_leg_characteristic_polynomial()
     rng = np.random.default_rng(5)
     for gains in [*B_GAINS, *rng.uniform(0, 5e4, size=(4, 4))]:
-        sub = dict(zip(params, (P.m, P.I, P.r, P.l, P.g))) | dict(zip(ks, gains))
+        sub = dict(zip(params, (P.m, P.I, P.r, P.l, P.g), strict=True)) | dict(zip(ks, gains, strict=True))
         expected = [float(c.subs(sub)) for c in poly.all_coeffs()]
         np.testing.assert_allclose(an.characteristic_polynomial(P, gains), expected, rtol=1e-12)
         # and its roots are the closed-loop eigenvalues

@@ -54,7 +54,7 @@ def test_linear_form_is_the_derivations_tangent():
     """Eq. 3.51/3.54 equal the symbolic Jacobian of the derived model applied to (x, u)."""
     A, B, params = symbolic.body_leg_linearization()
     for p, x, u in _cases(5, seed=4):
-        sub = dict(zip(params, (p.m, p.I, p.r, p.l, p.g)))
+        sub = dict(zip(params, (p.m, p.I, p.r, p.l, p.g), strict=True))
         An = np.array(A.subs(sub).evalf(), dtype=float)
         Bn = np.array(B.subs(sub).evalf(), dtype=float)
         xdot = An @ x + Bn @ u

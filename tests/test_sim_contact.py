@@ -33,7 +33,7 @@ def rigid_biped_spec(scenario: Scenario, slides=("z",), gravity=(0.0, 0.0, 0.0),
     """The push scene with the biped frozen in W's initial posture (each hinge's angle baked into
     its body's orientation, the hinge removed) on slide joints along ``slides`` (no rotation)."""
     spec = scene_spec(scenario)
-    angles = dict(zip(JOINT_NAMES, np.radians(scenario.initial_joint_angles_deg)))
+    angles = dict(zip(JOINT_NAMES, np.radians(scenario.initial_joint_angles_deg), strict=True))
     for name, angle in angles.items():
         j = spec.joint(name)
         body = j.parent
@@ -228,7 +228,7 @@ class ReferenceMonitor:
                 if x == self.block and y in self.biped:
                     block = True
         if self.rows:
-            for i, (old, new) in enumerate(zip(self.flags, flags)):
+            for i, (old, new) in enumerate(zip(self.flags, flags, strict=True)):
                 if old != new:
                     foot, part = SOLE_GEOMS[i]
                     self.events.append(ContactEvent(round(float(t), 9), foot, part,

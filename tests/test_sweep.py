@@ -23,7 +23,6 @@ import biped
 from biped import models
 from biped.errors import ScenarioError
 from biped.sim.scenario import Scenario
-from biped.sim.sweep.store import part_files, read_part
 from biped.sim.sweep import (
     AXES,
     SweepSpec,
@@ -34,6 +33,7 @@ from biped.sim.sweep import (
     parts_dir,
     run_sweep,
 )
+from biped.sim.sweep.store import part_files, read_part
 
 GRID = {"speed_m_s": (1.0, 3.0, 5.0), "direction_deg": (0.0, 90.0, 180.0, 270.0)}
 

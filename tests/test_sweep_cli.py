@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from biped.cli import main
 from biped.analysis import feet_in_place_bound
+from biped.cli import main
 from biped.sim.sweep import load
 
 

@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from biped import models
+from biped.analysis import envelope, hof_bound, ray_to_polygon_edge, support_polygon
 from biped.control.joint_pd import JointPDController
 from biped.control.limits import HUMAN_N_M_PER_KG, JOINT_NAMES, clip_torques, torque_limits
 from biped.errors import ScenarioError
-from biped.analysis import envelope, hof_bound, ray_to_polygon_edge, support_polygon
 from biped.sim.contact import contact_solref
 from biped.sim.scenario import PHYSICS, Scenario
 from biped.sim.sweep import SweepSpec, ballistic_impulse, run_trial

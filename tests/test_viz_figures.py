@@ -59,7 +59,7 @@ def _fake_run(T=301, dt=0.01):
     pitch = 10.0 * np.exp(-2 * t)
     yaw = -5.0 * t * np.exp(-t)
     target = _target()
-    quat = np.array([_compose(target, r, p, y) for r, p, y in zip(roll, pitch, yaw)])
+    quat = np.array([_compose(target, r, p, y) for r, p, y in zip(roll, pitch, yaw, strict=False)])
     quat[::7] *= -1                                    # the sign of a quaternion is free
     joints = [f"{s}_{j}" for s in ("left", "right") for j in
               ("hip_abduction", "hip_flexion", "hip_rotation", "knee", "ankle_inversion",
@@ -132,11 +132,11 @@ def test_each_panel_has_a_zoom_of_the_first_half_second_with_the_same_data(make)
         zooms = [ax for ax in axes if ax.get_xlim() == pytest.approx((0.0, ZOOM_S))]
         fulls = [ax for ax in axes if ax not in zooms]
         assert len(zooms) == len(fulls) >= 2
-        for f, z in zip(fulls, zooms):
+        for f, z in zip(fulls, zooms, strict=False):
             fc = [ln.get_ydata() for ln in f.get_lines() if len(ln.get_xdata()) == run.times.size]
             zc = [ln.get_ydata() for ln in z.get_lines() if len(ln.get_xdata()) == run.times.size]
             assert len(fc) == len(zc) >= 1
-            for a, b in zip(fc, zc):
+            for a, b in zip(fc, zc, strict=False):
                 np.testing.assert_array_equal(a, b)
             assert z.get_ylim() == f.get_ylim()
             evs = [t for t in _vertical_lines(z) if t <= ZOOM_S]

@@ -303,7 +303,7 @@ def test_chromium_builds_each_shape_where_mujoco_puts_it(biped_replay, tmp_path)
     assert probe["violations"] == []
     assert all(u.startswith(("blob:", "file:")) for u in probe["resources"]), probe["resources"]
     assert [b["name"] for b in probe["boxes"]] == [g.name for g in rep.geoms]
-    for g, (geom, box) in enumerate(zip(rep.geoms, probe["boxes"])):
+    for g, (geom, box) in enumerate(zip(rep.geoms, probe["boxes"], strict=True)):
         pos = (rep.pos[1, g] + rep.pos[2, g]) / 2
         q12 = rep.quat[1:3, g][:, [1, 2, 3, 0]]                   # scipy wants (x, y, z, w)
         quat = Slerp([0.0, 1.0], Rotation.from_quat(q12))(0.5).as_quat()[[3, 0, 1, 2]]

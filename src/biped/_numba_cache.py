@@ -51,5 +51,5 @@ def configure() -> str | None:
     os.environ["NUMBA_CACHE_DIR"] = folder
     config = sys.modules.get("numba.core.config")
     if config is not None:  # numba already imported: it read the environment then
-        config.CACHE_DIR = folder
+        config.CACHE_DIR = folder  # type: ignore[attr-defined]
     return folder

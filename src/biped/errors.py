@@ -5,6 +5,9 @@ Every message says what is wrong and what would be valid.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+from typing import Any
+
 
 class BipedError(Exception):
     """Base class of every error raised by biped."""
@@ -30,7 +33,7 @@ class ScenarioError(BipedError, ValueError):
     """A scenario or command-line parameter that is unknown, of the wrong shape or out of range."""
 
 
-def unknown_name(kind: str, name: str, valid) -> str:
+def unknown_name(kind: str, name: object, valid: Iterable[Any]) -> str:
     """Message for an unknown name, listing the valid ones."""
     valid = sorted(valid)
     return f"unknown {kind} {name!r}; valid {kind}s: {', '.join(map(repr, valid))}"

@@ -20,6 +20,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -97,10 +98,10 @@ class TreeModel:
             raise ModelError(unknown_name("body", name, self.body_names)) from None
 
     @classmethod
-    def from_mjcf(cls, source, feet: tuple[str, str] = DEFAULT_FEET) -> TreeModel:
+    def from_mjcf(cls, source: Any, feet: tuple[str, str] = DEFAULT_FEET) -> TreeModel:
         """Build from an MJCF path, an XML string or a compiled ``mujoco.MjModel``."""
         model, label = _load(source)
-        return _build(model, tuple(feet), label)
+        return _build(model, (feet[0], feet[1]), label)
 
 
 def _load(source):
@@ -247,7 +248,7 @@ class SoleRectangle:
     half_width: float
 
 
-def sole_rectangles(source, feet: tuple[str, str] = DEFAULT_FEET) -> tuple[SoleRectangle, SoleRectangle]:
+def sole_rectangles(source: Any, feet: tuple[str, str] = DEFAULT_FEET) -> tuple[SoleRectangle, SoleRectangle]:
     """(left, right) :class:`SoleRectangle` of ``feet`` in an MJCF (path, XML text or MjModel):
     the bounding rectangle of the bottom faces of the box geoms attached to each foot body (boxes
     axis-aligned with the foot body; W's model: a heel and a toe box)."""

@@ -21,6 +21,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+#: a 3-vector: an array or, inside the compiled kernel, a tuple of three floats (no allocation)
+Vec3 = np.ndarray | tuple[float, float, float]
+
 __all__ = [
     "ad",
     "ad_into",
@@ -52,19 +55,19 @@ __all__ = [
 
 
 @njit(cache=True)
-def hat(w):
+def hat(w: np.ndarray) -> np.ndarray:
     """(3,) -> (3, 3) skew matrix with ``hat(w) @ v == cross(w, v)``."""
     return np.array([[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]])
 
 
 @njit(cache=True)
-def vee(S):
+def vee(S: np.ndarray) -> np.ndarray:
     """(3, 3) skew matrix -> (3,) vector; inverse of :func:`hat`."""
     return np.array([S[2, 1], S[0, 2], S[1, 0]])
 
 
 @njit(cache=True)
-def quat_to_rot_into(q, R):
+def quat_to_rot_into(q: np.ndarray, R: np.ndarray) -> None:
     """Unit quaternion ``(w, x, y, z)`` -> rotation matrix, written into ``R`` (3, 3)."""
     w, x, y, z = q[0], q[1], q[2], q[3]
     n = w * w + x * x + y * y + z * z
@@ -81,7 +84,7 @@ def quat_to_rot_into(q, R):
 
 
 @njit(cache=True)
-def quat_to_rot(q):
+def quat_to_rot(q: np.ndarray) -> np.ndarray:
     """Unit quaternion ``(w, x, y, z)`` -> (3, 3) rotation matrix."""
     R = np.empty((3, 3))
     quat_to_rot_into(q, R)
@@ -89,7 +92,7 @@ def quat_to_rot(q):
 
 
 @njit(cache=True)
-def rot_to_quat(R):
+def rot_to_quat(R: np.ndarray) -> np.ndarray:
     """(3, 3) rotation matrix -> unit quaternion ``(w, x, y, z)`` with ``w >= 0`` (Shepperd)."""
     q = np.empty(4)
     tr = R[0, 0] + R[1, 1] + R[2, 2]
@@ -123,7 +126,7 @@ def rot_to_quat(R):
 
 
 @njit(cache=True)
-def quat_mul_into(a, b, out):
+def quat_mul_into(a: np.ndarray, b: np.ndarray, out: np.ndarray) -> None:
     """Hamilton product ``a * b`` of ``(w, x, y, z)`` quaternions, written into ``out``."""
     w = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3]
     x = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2]
@@ -136,7 +139,7 @@ def quat_mul_into(a, b, out):
 
 
 @njit(cache=True)
-def quat_mul(a, b):
+def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Hamilton product ``a * b`` (the rotation ``R(a) @ R(b)``)."""
     out = np.empty(4)
     quat_mul_into(a, b, out)
@@ -144,12 +147,12 @@ def quat_mul(a, b):
 
 
 @njit(cache=True)
-def quat_conj(q):
+def quat_conj(q: np.ndarray) -> np.ndarray:
     """Conjugate ``(w, -x, -y, -z)``: the inverse rotation of a unit quaternion."""
     return np.array([q[0], -q[1], -q[2], -q[3]])
 
 
-def axis_angle_quat(axis, angle: float) -> np.ndarray:
+def axis_angle_quat(axis: Vec3, angle: float) -> np.ndarray:
     """Unit quaternion ``(w, x, y, z)`` of a rotation by ``angle`` [rad] about ``axis`` (3,)."""
     axis = np.asarray(axis, dtype=float)
     axis = axis / np.linalg.norm(axis)
@@ -157,7 +160,7 @@ def axis_angle_quat(axis, angle: float) -> np.ndarray:
 
 
 @njit(cache=True)
-def adjoint_into(R, p, A):
+def adjoint_into(R: np.ndarray, p: np.ndarray, A: np.ndarray) -> None:
     """``Ad_g`` of ``g = (R, p)``, W eq. 3.7, written into ``A`` (6, 6)."""
     for i in range(3):
         for j in range(3):
@@ -172,7 +175,7 @@ def adjoint_into(R, p, A):
 
 
 @njit(cache=True)
-def adjoint(R, p):
+def adjoint(R: np.ndarray, p: np.ndarray) -> np.ndarray:
     """``Ad_g`` (6, 6) of ``g = (R, p)``, W eq. 3.7: maps twists of frame K to frame J."""
     A = np.empty((6, 6))
     adjoint_into(R, p, A)
@@ -180,7 +183,7 @@ def adjoint(R, p):
 
 
 @njit(cache=True)
-def ad_into(V, out):
+def ad_into(V: np.ndarray, out: np.ndarray) -> None:
     """``ad_V = [[w^, v^], [0, w^]]`` of a twist ``V = [v; w]``, written into ``out`` (6, 6)."""
     v0, v1, v2, w0, w1, w2 = V[0], V[1], V[2], V[3], V[4], V[5]
     for i in range(6):
@@ -202,14 +205,14 @@ def ad_into(V, out):
 
 
 @njit(cache=True)
-def ad(V):
+def ad(V: np.ndarray) -> np.ndarray:
     """``ad_V`` (6, 6): ``ad_V W`` is the Lie bracket of twists ``[V, W]``."""
     out = np.empty((6, 6))
     ad_into(V, out)
     return out
 
 
-def transform(R, p) -> np.ndarray:
+def transform(R: np.ndarray, p: np.ndarray) -> np.ndarray:
     """4x4 homogeneous matrix of ``g = (R, p)`` (W eq. 3.1)."""
     g = np.eye(4)
     g[:3, :3] = R
@@ -217,13 +220,13 @@ def transform(R, p) -> np.ndarray:
     return g
 
 
-def inverse(g) -> np.ndarray:
+def inverse(g: np.ndarray) -> np.ndarray:
     """Inverse of a 4x4 rigid transform, W eq. 3.2."""
     R, p = g[:3, :3], g[:3, 3]
     return transform(R.T, -R.T @ p)
 
 
-def compose(*gs) -> np.ndarray:
+def compose(*gs: np.ndarray) -> np.ndarray:
     """Product ``g_1 g_2 ... g_n`` of 4x4 rigid transforms."""
     out = np.eye(4)
     for g in gs:
@@ -236,13 +239,13 @@ def compose(*gs) -> np.ndarray:
 
 
 @njit(cache=True, inline="always")
-def cross(a, b):
+def cross(a: Vec3, b: Vec3) -> tuple[float, float, float]:
     """``a x b`` of two 3-vectors (arrays or tuples), returned as a tuple (allocates nothing)."""
     return a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]
 
 
 @njit(cache=True, inline="always")
-def rot_mul(R, x):
+def rot_mul(R: np.ndarray, x: Vec3) -> tuple[float, float, float]:
     """``R x`` for a (3, 3) matrix and a 3-vector, returned as a tuple."""
     return (R[0, 0] * x[0] + R[0, 1] * x[1] + R[0, 2] * x[2],
             R[1, 0] * x[0] + R[1, 1] * x[1] + R[1, 2] * x[2],
@@ -250,7 +253,7 @@ def rot_mul(R, x):
 
 
 @njit(cache=True, inline="always")
-def rot_T_mul(R, x):
+def rot_T_mul(R: np.ndarray, x: Vec3) -> tuple[float, float, float]:
     """``R^T x`` for a (3, 3) matrix and a 3-vector, returned as a tuple."""
     return (R[0, 0] * x[0] + R[1, 0] * x[1] + R[2, 0] * x[2],
             R[0, 1] * x[0] + R[1, 1] * x[1] + R[2, 1] * x[2],
@@ -258,7 +261,7 @@ def rot_T_mul(R, x):
 
 
 @njit(cache=True, inline="always")
-def adjoint_mul(R, p, x, out):
+def adjoint_mul(R: np.ndarray, p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
     """``out = Ad_g x = [R v + p x (R w); R w]`` for ``g = (R, p)`` (W eq. 3.6-3.7): the twist
     ``x = [v; w]`` of frame K in frame J when ``g = g_{j,k}``."""
     w0, w1, w2 = rot_mul(R, x[3:])
@@ -272,7 +275,7 @@ def adjoint_mul(R, p, x, out):
 
 
 @njit(cache=True, inline="always")
-def adjoint_inv_mul(R, p, x, out):
+def adjoint_inv_mul(R: np.ndarray, p: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
     """``out = Ad_g^-1 x = Ad_{g^-1} x`` for ``g = (R, p)``, with ``g^-1 = (R^T, -R^T p)``
     (W eq. 3.2): the twist ``x`` of frame J in frame K when ``g = g_{j,k}``."""
     q0, q1, q2 = rot_T_mul(R, p)
@@ -288,7 +291,7 @@ def adjoint_inv_mul(R, p, x, out):
 
 
 @njit(cache=True, inline="always")
-def adjoint_T_mul(R, p, F, out):
+def adjoint_T_mul(R: np.ndarray, p: np.ndarray, F: np.ndarray, out: np.ndarray) -> None:
     """``out = Ad_g^T F = [R^T f; R^T (tau - p x f)]`` for ``g = (R, p)`` (W eq. 3.8): the wrench
     ``F = [f; tau]`` of frame J in frame K when ``g = g_{j,k}``."""
     t0 = F[3] - (p[1] * F[2] - p[2] * F[1])
@@ -299,7 +302,7 @@ def adjoint_T_mul(R, p, F, out):
 
 
 @njit(cache=True, inline="always")
-def adjoint_inv_T_mul(R, p, F, out):
+def adjoint_inv_T_mul(R: np.ndarray, p: np.ndarray, F: np.ndarray, out: np.ndarray) -> None:
     """``out = Ad_g^-T F = [R f; R tau + p x (R f)]`` for ``g = (R, p)``: the wrench ``F`` of
     frame K in frame J when ``g = g_{j,k}`` (W eq. 3.8 with ``Ad^T_{g_{k,j}} = Ad^-T_{g_{j,k}}``)."""
     f0, f1, f2 = rot_mul(R, F[:3])
@@ -312,7 +315,8 @@ def adjoint_inv_T_mul(R, p, F, out):
 
 
 @njit(cache=True, inline="always")
-def adjoint_inv_congruence_add(R, p, M, out, Q, S):
+def adjoint_inv_congruence_add(R: np.ndarray, p: np.ndarray, M: np.ndarray, out: np.ndarray, Q: np.ndarray,
+                               S: np.ndarray) -> None:
     """``out += Ad_g^-T M Ad_g^-1`` for ``g = (R, p)`` and a symmetric (6, 6) ``M``: the inertia
     ``M`` of frame K added in frame J when ``g = g_{j,k}`` (``A^T M A`` with ``A = Ad_{g_{k,j}}``,
     W Alg. 3). Scratch ``Q`` (6, 6) and ``S`` (3, 3).
@@ -363,7 +367,7 @@ def adjoint_inv_congruence_add(R, p, M, out, Q, S):
 
 
 @njit(cache=True, inline="always")
-def mat6_mul_vec(M, x, out):
+def mat6_mul_vec(M: np.ndarray, x: np.ndarray, out: np.ndarray) -> None:
     """``out = M x`` for a (6, 6) matrix and a 6-vector."""
     for i in range(6):
         s = 0.0
@@ -373,7 +377,7 @@ def mat6_mul_vec(M, x, out):
 
 
 @njit(cache=True, inline="always")
-def mat6_mul_vec_add(M, x, y, out):
+def mat6_mul_vec_add(M: np.ndarray, x: np.ndarray, y: np.ndarray, out: np.ndarray) -> None:
     """``out = y + M x`` for a (6, 6) matrix and 6-vectors (``out`` may be ``y``)."""
     for i in range(6):
         s = y[i]
@@ -383,7 +387,7 @@ def mat6_mul_vec_add(M, x, y, out):
 
 
 @njit(cache=True, inline="always")
-def dot6(x, y):
+def dot6(x: np.ndarray, y: np.ndarray) -> float:
     """``x . y`` of two 6-vectors."""
     s = 0.0
     for i in range(6):
@@ -392,7 +396,7 @@ def dot6(x, y):
 
 
 @njit(cache=True, inline="always")
-def cholesky6_solve(A, b, y):
+def cholesky6_solve(A: np.ndarray, b: np.ndarray, y: np.ndarray) -> bool:
     """Solve ``A y = b`` for a symmetric positive-definite (6, 6) ``A``; ``A`` is overwritten by
     its lower Cholesky factor. Returns False, leaving ``y`` unset, when a pivot is not positive
     to working precision (``A`` not positive definite, or not finite)."""

@@ -207,7 +207,8 @@ def _run(args) -> int:
     if args.scheduler is None:  # compile before the local workers start: they load the cache
         from biped.sim.jit import kernels_for, warm_up
 
-        warm_up(kernels_for(spec.base.controller, spec.base.distribution), log=lambda line: print(line, file=sys.stderr))
+        warm_up(kernels_for(spec.base.controller, spec.base.distribution),
+                log=lambda line: print(line, file=sys.stderr))
     try:
         summary = run_sweep(spec, out, workers=args.workers, scheduler=args.scheduler,
                             progress=not args.quiet, retry_failed=args.retry_failed,

@@ -151,7 +151,7 @@ def _run(args) -> int:
     bar = tqdm(total=len(walk_stages(**flags)), desc=f"biped walk {args.gait}", disable=args.quiet,
                unit="stage")
 
-    started = []
+    started: list[str] = []
 
     def on_stage(stage):  # the bar counts finished stages and names the running one
         if started:

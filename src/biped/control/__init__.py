@@ -1,10 +1,14 @@
 """Wendlandt's recursive workspace balancing controller (W, 1997) as a Python object.
 
->>> import biped.models
+>>> import mujoco, numpy as np
+>>> from biped import models
+>>> m = mujoco.MjModel.from_xml_path(str(models.path("wendlandt")))
+>>> qpos, qvel = m.key_qpos[m.key("wendlandt_initial").id], np.zeros(m.nv)   # W's initial state
 >>> from biped.control import WorkspaceController
->>> ctrl = WorkspaceController.from_mjcf(biped.models.path("wendlandt"))
+>>> ctrl = WorkspaceController.from_mjcf(models.path("wendlandt"))
 >>> out = ctrl.compute(qpos, qvel)       # MuJoCo's qpos (19,) / qvel (18,) of the biped's model
->>> out.torques                           # (12,) [N m], ordered as ctrl.joint_names
+>>> out.torques.shape                     # [N m], ordered as ctrl.joint_names
+(12,)
 
 Frames and units: every 6-vector of the output is a twist ``[v; w]`` or a wrench ``[f; tau]``
 expressed in the central body's COM principal-axis frame (MuJoCo's inertial frame of the root

@@ -1,9 +1,14 @@
 """The baseline of the push-recovery envelopes: a joint-space PD controller holding a posture.
 
->>> import biped.models
+>>> import mujoco, numpy as np
+>>> from biped import models
+>>> m = mujoco.MjModel.from_xml_path(str(models.path("wendlandt")))
+>>> qpos, qvel = m.key_qpos[m.key("wendlandt_initial").id], np.zeros(m.nv)   # W's initial state
 >>> from biped.control.joint_pd import JointPDController
->>> ctrl = JointPDController.from_mjcf(biped.models.path("wendlandt"))   # holds W's initial angles
->>> ctrl.compute(qpos, qvel).torques          # (12,) [N m], ordered as ctrl.joint_names
+>>> ctrl = JointPDController.from_mjcf(models.path("wendlandt"))   # holds W's initial angles
+>>> tau = ctrl.compute(qpos, qvel).torques    # (12,) [N m], ordered as ctrl.joint_names
+>>> round(float(np.abs(tau).max()), 6)        # at its set point and at rest: no torque
+0.0
 
 Control law, joint by joint (no coupling, no model of the floating base)::
 

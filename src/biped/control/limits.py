@@ -1,8 +1,11 @@
 """Joint torque limits for the push experiments: none (as in W) or a human-like set.
 
+>>> import numpy as np
 >>> from biped.control.limits import torque_limits, clip_torques
 >>> lim = torque_limits("human", body_mass_kg=73.0)       # TorqueLimits, per joint (lower, upper)
->>> clip_torques(tau, lim)                                 # (12,) clipped [N m]
+>>> tau = clip_torques(np.full(12, 1e4), lim)             # (12,) clipped [N m]
+>>> bool(np.all(tau == lim.upper))
+True
 
 Sign convention (checked against the shipped MJCF's joint axes, see ``docs/sweep.md``): a
 positive torque on ``*_hip_abduction`` abducts, ``*_hip_flexion`` flexes the hip,
@@ -19,16 +22,18 @@ direction of each joint limited separately (plantarflexion is ~3.5x dorsiflexion
   participants), https://pmc.ncbi.nlm.nih.gov/articles/PMC8554160 (2021).
 * hip flexion/extension and ankle plantar-/dorsiflexion: rounded isometric peaks of young men
   in the ranges reported by Anderson, Madigan & Nussbaum, J. Biomech. 40(14):3105-3113 (2007)
-  and Hussain & Frey-Law, J. Foot Ankle Res. (2016), rounded (not re-read value by value); hip ab-/adduction and rotation and ankle
-  inversion/eversion: rounded typical hand-held / isokinetic dynamometry values. These are
-  representative magnitudes (about +-25 % between studies, postures and subjects), not a
-  measurement of one person; ``docs/sweep.md`` says so next to every result that uses them.
+  and Hussain & Frey-Law, J. Foot Ankle Res. (2016), rounded (not re-read value by value); hip
+  ab-/adduction and rotation and ankle inversion/eversion: rounded typical hand-held /
+  isokinetic dynamometry values. These are representative magnitudes (about +-25 % between
+  studies, postures and subjects), not a measurement of one person;
+  ``docs/sweep.md`` says so next to every result that uses them.
 
 Limits are applied by clipping the controller's torques, joint by joint (no redistribution).
 """
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
@@ -83,7 +88,7 @@ class TorqueLimits:
     def unlimited(self) -> bool:
         return self.lower is None
 
-    def reorder(self, joint_names) -> TorqueLimits:
+    def reorder(self, joint_names: Iterable[str]) -> TorqueLimits:
         """The same limits in another joint order (names must match)."""
         if self.unlimited:
             return TorqueLimits(self.name, tuple(joint_names), None, None)
@@ -92,6 +97,7 @@ class TorqueLimits:
             if n not in self.joint_names:
                 raise ScenarioError(unknown_name("joint", n, self.joint_names))
             idx.append(self.joint_names.index(n))
+        assert self.lower is not None and self.upper is not None  # not unlimited
         return TorqueLimits(self.name, tuple(joint_names), self.lower[idx], self.upper[idx])
 
 
@@ -117,6 +123,7 @@ def clip_torques(tau: np.ndarray, limits: TorqueLimits) -> np.ndarray:
     tau = np.asarray(tau, dtype=float)
     if limits.unlimited:
         return tau.copy()
+    assert limits.lower is not None and limits.upper is not None  # not unlimited
     if tau.shape != limits.lower.shape:
         raise ScenarioError(f"torques must have shape {limits.lower.shape} "
                             f"({', '.join(limits.joint_names)}); got {tau.shape}")

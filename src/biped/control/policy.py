@@ -1,9 +1,15 @@
 """One factory for the push experiments' controllers: W's workspace controller or the joint-PD
 baseline, with optional torque limits, as a policy ``(qpos, qvel, feet) -> torques``.
 
+>>> import mujoco, numpy as np
+>>> from biped import models
+>>> m = mujoco.MjModel.from_xml_path(str(models.path("wendlandt")))
+>>> qpos, qvel = m.key_qpos[m.key("wendlandt_initial").id], np.zeros(m.nv)   # W's initial state
 >>> from biped.control.policy import PolicyConfig, make_policy
 >>> policy = make_policy(PolicyConfig())                      # W's controller, set point, gains
->>> tau = policy(qpos, qvel, (True, True))                    # (12,) [N m], policy.joint_names order
+>>> tau = policy(qpos, qvel, (True, True))                    # [N m], policy.joint_names order
+>>> tau.shape
+(12,)
 
 ``biped push`` and ``biped sweep`` both build their controllers here (``biped.sim.push`` turns a
 :class:`~biped.sim.scenario.Scenario` into a :class:`PolicyConfig`); this module knows nothing of
@@ -17,12 +23,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from os import PathLike
+from typing import Any
 
 import numpy as np
 
+from biped.control.distribution import QPWeights
 from biped.control.joint_pd import W_INITIAL_ANGLES_DEG, JointPDController
 from biped.control.limits import JOINT_NAMES, TorqueLimits, clip_torques
-from biped.control.distribution import QPWeights
 from biped.control.workspace import DISTRIBUTIONS, Gains, Target, WorkspaceController
 from biped.errors import ScenarioError, unknown_name
 from biped.model import TreeModel
@@ -111,24 +118,26 @@ def make_policy(config: PolicyConfig | None = None, joint_order=None, *,
     """
     config = config or PolicyConfig()
     if config.controller == "workspace":
-        qp = {}
+        qp: dict[str, Any] = {}
         if config.distribution == "qp":
             qp = {"qp_weights": config.qp_weights, "torque_limits": config.torque_limits}
-        ctrl = WorkspaceController(tree or TreeModel.from_mjcf(_model_path(config)),
-                                   target=config.target, gains=config.gains,
-                                   distribution=config.distribution, **qp)
+        ws = WorkspaceController(tree or TreeModel.from_mjcf(_model_path(config)),
+                                 target=config.target, gains=config.gains,
+                                 distribution=config.distribution, **qp)
         # the QP distributes over the contacts that exist: with W's fixed support it kept loading
         # a foot that had left the floor, and 15 of 64 sweep trials diverged (0 with the sensed
         # contacts; docs/controller.md), so "qp" always takes the sensed feet
         if config.support == "sensed" or config.distribution == "qp":
-            raw = lambda q, v, feet: ctrl.torques(q, v, feet_in_contact=feet)
+            raw = lambda q, v, feet: ws.torques(q, v, feet_in_contact=feet)
         else:
-            raw = lambda q, v, feet: ctrl.torques(q, v)
+            raw = lambda q, v, feet: ws.torques(q, v)
+        ctrl: WorkspaceController | JointPDController = ws
     else:
-        ctrl = JointPDController.from_mjcf(_model_path(config), q_ref_deg=config.q_ref_deg,
-                                           gain_scale=config.gain_scale,
-                                           control_period_s=config.control_period_s)
-        raw = lambda q, v, feet: ctrl.compute(q, v).torques
+        pd = JointPDController.from_mjcf(_model_path(config), q_ref_deg=config.q_ref_deg,
+                                         gain_scale=config.gain_scale,
+                                         control_period_s=config.control_period_s)
+        raw = lambda q, v, feet: pd.compute(q, v).torques
+        ctrl = pd
     names = tuple(ctrl.joint_names)
     order_names = tuple(joint_order) if joint_order is not None else names
     if sorted(order_names) != sorted(names):

@@ -26,11 +26,11 @@ Alg. 5) are inlined helpers of :mod:`biped.spatial`.
 
 from __future__ import annotations
 
-from collections import namedtuple
-
 import numpy as np
 from numba import njit
 
+# the buffers (fields, layout, views) live in biped.control.buffers; re-exported here
+from biped.control.buffers import _FIELDS, Ints, Model, Out, Work, layout, unpack  # noqa: F401
 from biped.spatial import (
     adjoint_into,
     adjoint_inv_congruence_add,
@@ -58,138 +58,6 @@ ZERO_QUATERNION = 4
 
 #: ints "mode": 0 W Alg. 5 (statics), 1 W's printed Alg. 5, 2 stop after Alg. 4 (the QP distributes)
 STOP_AFTER_ALG4 = 2
-
-# ----------------------------------------------------------------------------- buffers
-# The controller's four flat buffers, field by field: (name, shape), "n" = number of links
-# (link 0 = W's link 1, the central body), "n-1" = number of joints. ``layout`` turns this table
-# into offsets; ``unpack`` (compiled, used by the kernel and by WorkspaceController's debugging
-# methods alike) cuts the buffers into these named views, in this order.
-_FIELDS = {
-    "ints": (  # int64: the tree (biped.model.TreeModel) and options
-        ("n", (1,)), ("feet", (2,)), ("mode", (1,)),  # links; left/right foot links; Alg. 5 mode
-        ("parent", ("n",)), ("qadr", ("n",)), ("dadr", ("n",)),  # inboard link; qpos and qvel addresses
-        ("leg", ("n",)), ("beyond", ("n",))),  # 0 left, 1 right, -1 neither; 1 outboard of a foot
-    "model": (  # float64, constant
-        ("H", ("n", 6)), ("G0", ("n", 4, 4)),  # joint twists H_k; g_{k.i,k.o}(theta = qref)
-        ("mass", ("n",)), ("inertia", ("n", 3)), ("qref", ("n",)),  # m_k; diag I_k; MJCF qpos0
-        ("gravity", (3,)), ("root_qbi", (4,)), ("big_base", (1,))),  # world; body->COM frame; Alg. 3
-    "work": (  # float64, overwritten by every call
-        ("g", ("n", 4, 4)), ("gl", ("n", 4, 4)),  # g_{0,k}; g_{k.i,k.o}(theta_k) (Alg. 2)
-        ("V", ("n", 6)), ("a", ("n", 6)), ("b", ("n", 6)),  # V_k^b, a_k, b_k (Alg. 1-2)
-        ("P", ("n", 6, 6)), ("z", ("n", 6)), ("F", ("n", 6)),  # P_k, z_k (Alg. 3); F_k (Alg. 6)
-        ("q_root", (4,)), ("q01", (4,)),  # root joint quaternion; q_{0,1} of the COM frame (Alg. 1)
-        ("E", (4, 4)),  # exp(H_k^ theta_k) (Alg. 2)
-        ("PH", (6,)), ("c", (6,)), ("c_in", (6,)),  # P H; projected P a + z; it in frame k.i (Alg. 3)
-        ("Pa", (6, 6)), ("Q", (6, 6)), ("S", (3, 3)),  # projected P; congruence scratch (Alg. 3)
-        ("qd_conj", (4,)), ("Re", (3, 3)),  # conj(q_{0,d}); R(q_e) (Alg. 4)
-        ("dist_vecs", (3, 6)), ("dist_mats", (2, 6, 6)), ("R_foot", (2, 3, 3))),  # Alg. 5 scratch
-    "out": (  # float64, the results (ControllerOutput)
-        ("tau", ("n-1",)), ("P1", (6, 6)), ("z1", (6,)), ("Fd", (6,)), ("Fl_tilde", (6,)),
-        ("Fr_tilde", (6,)), ("Fl", (6,)), ("Fr", (6,)), ("X", (6,)), ("qe", (4,))),
-}
-
-Ints = namedtuple("Ints", [name for name, _ in _FIELDS["ints"]])
-Model = namedtuple("Model", [name for name, _ in _FIELDS["model"]])
-Work = namedtuple("Work", [name for name, _ in _FIELDS["work"]])
-Out = namedtuple("Out", [name for name, _ in _FIELDS["out"]])
-
-
-def layout(n: int) -> dict[str, dict[str, tuple[int, tuple[int, ...]]]]:
-    """Offsets and shapes ``{buffer: {field: (offset, shape)}}`` of the ints, model, work and out
-    buffers for ``n`` links; ``{buffer: {"_size": (size, ())}}`` is each buffer's length."""
-    dims = {"n": n, "n-1": n - 1}
-    result = {}
-    for buf, fields in _FIELDS.items():
-        spans, off = {}, 0
-        for name, shape in fields:
-            shape = tuple(dims.get(d, d) for d in shape)
-            spans[name] = (off, shape)
-            off += int(np.prod(shape))
-        spans["_size"] = (off, ())
-        result[buf] = spans
-    return result
-
-
-@njit(cache=True, inline="always")
-def _take1(buf, o, d0):
-    return buf[o:o + d0], o + d0
-
-
-@njit(cache=True, inline="always")
-def _take2(buf, o, d0, d1):
-    return buf[o:o + d0 * d1].reshape((d0, d1)), o + d0 * d1
-
-
-@njit(cache=True, inline="always")
-def _take3(buf, o, d0, d1, d2):
-    return buf[o:o + d0 * d1 * d2].reshape((d0, d1, d2)), o + d0 * d1 * d2
-
-
-@njit(cache=True, inline="always")
-def unpack(mi, mf, work, out):
-    """Named views ``(Ints, Model, Work, Out)`` of the four flat buffers, field by field as
-    :data:`_FIELDS` lists them (``tests/test_control_layout.py`` checks it against :func:`layout`).
-    Allocates nothing; callable from Python, where the views share the buffers' memory."""
-    n = mi[0]
-    o = 0
-    v_n, o = _take1(mi, o, 1)
-    feet, o = _take1(mi, o, 2)
-    mode, o = _take1(mi, o, 1)
-    parent, o = _take1(mi, o, n)
-    qadr, o = _take1(mi, o, n)
-    dadr, o = _take1(mi, o, n)
-    leg, o = _take1(mi, o, n)
-    beyond, o = _take1(mi, o, n)
-    ints = Ints(v_n, feet, mode, parent, qadr, dadr, leg, beyond)
-    o = 0
-    H, o = _take2(mf, o, n, 6)
-    G0, o = _take3(mf, o, n, 4, 4)
-    mass, o = _take1(mf, o, n)
-    inertia, o = _take2(mf, o, n, 3)
-    qref, o = _take1(mf, o, n)
-    gravity, o = _take1(mf, o, 3)
-    root_qbi, o = _take1(mf, o, 4)
-    big_base, o = _take1(mf, o, 1)
-    model = Model(H, G0, mass, inertia, qref, gravity, root_qbi, big_base)
-    o = 0
-    g, o = _take3(work, o, n, 4, 4)
-    gl, o = _take3(work, o, n, 4, 4)
-    V, o = _take2(work, o, n, 6)
-    a, o = _take2(work, o, n, 6)
-    b, o = _take2(work, o, n, 6)
-    P, o = _take3(work, o, n, 6, 6)
-    z, o = _take2(work, o, n, 6)
-    F, o = _take2(work, o, n, 6)
-    q_root, o = _take1(work, o, 4)
-    q01, o = _take1(work, o, 4)
-    E, o = _take2(work, o, 4, 4)
-    PH, o = _take1(work, o, 6)
-    c, o = _take1(work, o, 6)
-    c_in, o = _take1(work, o, 6)
-    Pa, o = _take2(work, o, 6, 6)
-    Q, o = _take2(work, o, 6, 6)
-    S, o = _take2(work, o, 3, 3)
-    qd_conj, o = _take1(work, o, 4)
-    Re, o = _take2(work, o, 3, 3)
-    dist_vecs, o = _take2(work, o, 3, 6)
-    dist_mats, o = _take3(work, o, 2, 6, 6)
-    R_foot, o = _take3(work, o, 2, 3, 3)
-    wk = Work(g, gl, V, a, b, P, z, F, q_root, q01, E, PH, c, c_in, Pa, Q, S, qd_conj, Re, dist_vecs,
-              dist_mats, R_foot)
-    o = 0
-    tau, o = _take1(out, o, n - 1)
-    P1, o = _take2(out, o, 6, 6)
-    z1, o = _take1(out, o, 6)
-    Fd, o = _take1(out, o, 6)
-    Fl_tilde, o = _take1(out, o, 6)
-    Fr_tilde, o = _take1(out, o, 6)
-    Fl, o = _take1(out, o, 6)
-    Fr, o = _take1(out, o, 6)
-    X, o = _take1(out, o, 6)
-    qe, o = _take1(out, o, 4)
-    res = Out(tau, P1, z1, Fd, Fl_tilde, Fr_tilde, Fl, Fr, X, qe)
-    return ints, model, wk, res
-
 
 # ----------------------------------------------------------------------------- small helpers
 
@@ -283,8 +151,10 @@ def _mat4_mul(A, B, C):
 
 
 @njit(cache=True)
-def alg1_initialize(qpos, qvel, root_qadr, root_dadr, G0root, root_qbi, mass, inertia, gravity,
-                    g, V, a, b, q_root, q01):
+def alg1_initialize(qpos: np.ndarray, qvel: np.ndarray, root_qadr: int, root_dadr: int,
+                    G0root: np.ndarray, root_qbi: np.ndarray, mass: np.ndarray, inertia: np.ndarray,
+                    gravity: np.ndarray, g: np.ndarray, V: np.ndarray, a: np.ndarray, b: np.ndarray,
+                    q_root: np.ndarray, q01: np.ndarray) -> None:
     """W Alg. 1 (controller initialization): pose ``g_{0,1}``, body velocity ``V_1^b``,
     ``a_1 = 0`` and ``b_1 = -F_1^be + Omega_1 M_1 V_1`` of the central body.
 
@@ -331,8 +201,11 @@ def alg1_initialize(qpos, qvel, root_qadr, root_dadr, G0root, root_qbi, mass, in
 
 
 @njit(cache=True)
-def alg2_velocity_propagation(qpos, qvel, parent, qadr, dadr, H, G0, qref, mass, inertia,
-                              gravity, g, gl, V, a, b, E):
+def alg2_velocity_propagation(qpos: np.ndarray, qvel: np.ndarray, parent: np.ndarray, qadr: np.ndarray,
+                              dadr: np.ndarray, H: np.ndarray, G0: np.ndarray, qref: np.ndarray,
+                              mass: np.ndarray, inertia: np.ndarray, gravity: np.ndarray, g: np.ndarray,
+                              gl: np.ndarray, V: np.ndarray, a: np.ndarray, b: np.ndarray,
+                              E: np.ndarray) -> None:
     """W Alg. 2 (forward kinematics, outboard): for each joint k = link k's joint,
     ``g_{k.o,0}``, ``A = Ad_{g_{k.o,k.i}}``, ``V_{k.o} = A V_{k.i} + H_k thetadot_k``,
     ``a_k = ad_{V_{k.o}} H_k thetadot_k``, ``b_{k.o} = -F^be + Omega M V``.
@@ -355,8 +228,11 @@ def alg2_velocity_propagation(qpos, qvel, parent, qadr, dadr, H, G0, qref, mass,
 
 
 @njit(cache=True)
-def alg3_workspace_dynamics(parent, H, mass, inertia, feet, contact, beyond, big_base, gl, a, b, P, z,
-                            PH, c, c_in, Pa, Q, S):
+def alg3_workspace_dynamics(parent: np.ndarray, H: np.ndarray, mass: np.ndarray, inertia: np.ndarray,
+                            feet: np.ndarray, contact: np.ndarray, beyond: np.ndarray, big_base: float,
+                            gl: np.ndarray, a: np.ndarray, b: np.ndarray, P: np.ndarray, z: np.ndarray,
+                            PH: np.ndarray, c: np.ndarray, c_in: np.ndarray, Pa: np.ndarray, Q: np.ndarray,
+                            S: np.ndarray) -> None:
     """W Alg. 3 (workspace dynamics, inboard): articulated-body inertias ``P_k`` and biases
     ``z_k`` from the feet to the central body with the big-base approximation
     ``P_foot = big_base * M_1``, ``z_foot = 0``. Result: ``P[0] = P_1``, ``z[0] = z_1`` with
@@ -397,7 +273,9 @@ def alg3_workspace_dynamics(parent, H, mass, inertia, feet, contact, beyond, big
 
 
 @njit(cache=True)
-def alg4_desired_wrench(g, V, P, z, target, gains, q01, qd_conj, Re, X, qe, Fd):
+def alg4_desired_wrench(g: np.ndarray, V: np.ndarray, P: np.ndarray, z: np.ndarray, target: np.ndarray,
+                        gains: np.ndarray, q01: np.ndarray, qd_conj: np.ndarray, Re: np.ndarray,
+                        X: np.ndarray, qe: np.ndarray, Fd: np.ndarray) -> None:
     """W Alg. 4 (desired wrench): PD on the central body's COM position (space frame) and on the
     unit-quaternion orientation error ``q_et = q_{0,1} * conj(q_{0,d})`` with the sign chosen so that
     its scalar part is >= 0; ``F_1^bd = P_1 X^b + z_1`` (W eq. 3.10).
@@ -436,8 +314,10 @@ def alg4_desired_wrench(g, V, P, z, target, gains, q01, qd_conj, Re, X, qe, Fd):
 
 
 @njit(cache=True)
-def alg5_wrench_distribution(g, feet, contact, Fd, vecs, mats, R_foot, Fl, Fr, Fl_tilde, Fr_tilde,
-                             printed=False):
+def alg5_wrench_distribution(g: np.ndarray, feet: np.ndarray, contact: np.ndarray, Fd: np.ndarray,
+                             vecs: np.ndarray, mats: np.ndarray, R_foot: np.ndarray, Fl: np.ndarray,
+                             Fr: np.ndarray, Fl_tilde: np.ndarray, Fr_tilde: np.ndarray,
+                             printed: bool = False) -> bool:
     """W Alg. 5 (desired wrench distribution, eq. 3.11-3.14): ``F_1^bd = G [F_l; F_r]`` with
     ``G = [Ad^T_{g_{7,1}}  Ad^T_{g_{13,1}}]`` (each foot's wrench moved to the central body),
     ``[F_l; F_r] = G^T (G G^T)^-1 F_1^bd`` (minimum norm), ``F~_2 = Ad^T_{g_{7,1}} F_l``,
@@ -515,7 +395,8 @@ def alg5_wrench_distribution(g, feet, contact, Fd, vecs, mats, R_foot, Fl, Fr, F
 
 
 @njit(cache=True)
-def alg6_torques(parent, H, leg, beyond, gl, Fl_tilde, Fr_tilde, F, tau):
+def alg6_torques(parent: np.ndarray, H: np.ndarray, leg: np.ndarray, beyond: np.ndarray, gl: np.ndarray,
+                 Fl_tilde: np.ndarray, Fr_tilde: np.ndarray, F: np.ndarray, tau: np.ndarray) -> None:
     """W Alg. 6 (torque calculation, outboard): ``F_k = -Ad^{-T}_{g_{k.o,k.i}} F~_k`` (equal and
     opposite wrenches across joint k), ``tau_k = H_k^T F_k``, ``F~_{k+1} = -F_k`` (link k.o in
     equilibrium). Equivalent to ``tau = J^T F~`` with J the leg's body Jacobian, foot fixed.
@@ -544,7 +425,9 @@ def alg6_torques(parent, H, leg, beyond, gl, Fl_tilde, Fr_tilde, F, tau):
 
 
 @njit(cache=True)
-def compute_kernel(qpos, qvel, target, gains, contact, mi, mf, work, out):
+def compute_kernel(qpos: np.ndarray, qvel: np.ndarray, target: np.ndarray, gains: np.ndarray,
+                   contact: np.ndarray, mi: np.ndarray, mf: np.ndarray, work: np.ndarray,
+                   out: np.ndarray) -> int:
     """One controller call: W Alg. 1-6 on flat buffers (see :func:`layout` and :func:`unpack`);
     ``contact`` (2,) int flags the (left, right) feet taken as fixed to the ground (W: both).
     Returns a status code (0 ok, 1 non-finite state, 2 non-finite result, 3 singular wrench

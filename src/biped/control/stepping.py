@@ -13,14 +13,16 @@ Phases (one :class:`SteppingController` call per control period, ``(t, qpos, qve
   taken, a step starts.
 - **swing**: swing foot rule: for the first step, the foot off the floor if only one is on it,
   else the foot whose sole centre lies nearer to xi across the body (the push side: a push to
-  the biped's right steps with the right foot; no crossover); later steps alternate feet. The stance leg carries the body through W's
+  the biped's right steps with the right foot; no crossover); later steps alternate feet. The stance
+  leg carries the body through W's
   recursions with the contact flags (stance, not swing): Alg. 3 with one big base, the QP's
   single-sole cone (or the min-norm split with one foot); the stance controller keeps the
   height and orientation set points and lets the COM run horizontally (kp, kv of x, y zero),
   as the LIPM prediction assumes. The landing point of the swing sole's centre is
   :func:`~biped.control.capture.step_target` (xi when the foot lands, from the stance sole
   centre as CoP, plus ``offset_m``, clamped to :class:`~biped.control.capture.StepLimits`),
-  recomputed every control period for the first ``retarget_until`` of the swing. The ankle follows a minimum-jerk path to it in x, y, with a
+  recomputed every control period for the first ``retarget_until`` of the swing. The ankle follows a
+  minimum-jerk path to it in x, y, with a
   bump of height ``apex_m`` in z, flat sole, zero yaw; after ``swing_time_s`` it keeps moving
   down at ``descent_m_s`` until touchdown. Swing-leg torques: task-space computed torque on the
   leg's own 6 joints, ``tau = M_ll J_leg^{-1} (a_d + Kp e + Kd e') + b_l`` (J_leg the (6, 6)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field, fields
 from os import PathLike
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -28,6 +29,9 @@ from biped.control.recursions import (
 from biped.errors import BipedError, ModelError, ScenarioError, SingularityError, StateError
 from biped.model import DEFAULT_FEET, TreeModel, sole_rectangles
 from biped.spatial import axis_angle_quat, rot_to_quat
+
+if TYPE_CHECKING:
+    from biped.control.distribution import ContactQP
 
 __all__ = ["DISTRIBUTIONS", "TARGET_AXES", "W_TARGET_AXIS", "W_TARGET_COM_M", "W_TARGET_TILT_DEG",
            "ControllerOutput", "Gains", "Target", "WorkspaceController"]
@@ -205,7 +209,7 @@ class WorkspaceController:
         # (slice, shape or None for 1-d) of each output field, in ControllerOutput's order
         self._fields = tuple((slice(o, o + int(np.prod(sh))), sh if len(sh) > 1 else None) for o, sh in (
             lay["out"][k] for k in ("tau", "P1", "z1", "X", "Fd", "Fl_tilde", "Fr_tilde", "Fl", "Fr", "qe")))
-        self.qp = None
+        self.qp: ContactQP | None = None
         if distribution == "qp":
             self._init_qp(qp_weights, torque_limits, soles, qp_solver)
 
@@ -220,7 +224,8 @@ class WorkspaceController:
                 raise ScenarioError(
                     f"distribution 'qp' needs the soles: the tree's source {tree.source!r} is not "
                     f"a model file; pass soles=biped.model.sole_rectangles(model)") from None
-        lower = upper = None
+        lower: np.ndarray | None = None
+        upper: np.ndarray | None = None
         if limits is not None and not limits.unlimited:
             lim = limits.reorder(tree.joint_names)
             lower, upper = lim.lower, lim.upper
@@ -347,7 +352,7 @@ class WorkspaceController:
         buf = self._out.copy()  # one fresh buffer; the fields are views of it
         out = object.__new__(ControllerOutput)  # skips the frozen __init__'s 10 setattr calls (3 us)
         out.__dict__.update(zip(_OUTPUT_FIELDS, [buf[sl] if sh is None else buf[sl].reshape(sh)
-                                                 for sl, sh in self._fields]))
+                                                 for sl, sh in self._fields], strict=True))
         return out
 
     # ------------------------------------------------------------------ debugging / checking

@@ -24,6 +24,7 @@ accelerations are central differences of the plan (``h`` = 1 ms) through ``mj_di
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -41,7 +42,7 @@ FRICTION = 0.3
 _RZ_PI = np.diag([-1.0, -1.0, 1.0])
 
 
-def load_biped(name: str = "wendlandt"):
+def load_biped(name: str | Path = "wendlandt"):
     """The biped MJCF (a shipped model's name or a checked MJCF path, see
     :func:`biped.models.subject.resolve`) as a ``mujoco.MjModel`` with contacts disabled (the
     feet's wrenches are solved for, not simulated)."""
@@ -238,15 +239,15 @@ def _plan_derivatives(model, plan: Plan, times: np.ndarray, names, h: float):
     T = times.size
     vm, vp = np.zeros((T, model.nv)), np.zeros((T, model.nv))
     hm, hp = times - tm, tp - times
-    for t in range(T):
-        if hp[t] > 0:
-            mujoco.mj_differentiatePos(model, vp[t], hp[t], qs[1][t], qs[2][t])
-        if hm[t] > 0:
-            mujoco.mj_differentiatePos(model, vm[t], hm[t], qs[0][t], qs[1][t])
-        if hp[t] == 0:
-            vp[t] = vm[t]
-        if hm[t] == 0:
-            vm[t] = vp[t]
+    for i in range(T):
+        if hp[i] > 0:
+            mujoco.mj_differentiatePos(model, vp[i], hp[i], qs[1][i], qs[2][i])
+        if hm[i] > 0:
+            mujoco.mj_differentiatePos(model, vm[i], hm[i], qs[0][i], qs[1][i])
+        if hp[i] == 0:
+            vp[i] = vm[i]
+        if hm[i] == 0:
+            vm[i] = vp[i]
     qvel = 0.5 * (vp + vm)
     qacc = 2.0 * (vp - vm) / np.maximum(hm + hp, 1e-12)[:, None]
     return qs[1], qvel, qacc, plan.evaluate(times)

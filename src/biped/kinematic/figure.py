@@ -33,9 +33,12 @@ from the heel), ankle height 0.066 m, hips 0.168 m apart, shoulders 0.336 m apar
 
 from __future__ import annotations
 
+from collections.abc import Iterable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from biped.errors import ModelError, StateError, unknown_name
 
@@ -136,7 +139,7 @@ class FigureDims:
             upper_arm=d["upper_arm"], forearm=d["forearm"], hand=d["hand"], scale=s)
 
     @classmethod
-    def from_mjcf(cls, model) -> FigureDims:
+    def from_mjcf(cls, model: Any) -> FigureDims:
         """The figure of another biped model (a shipped name or an MJCF path with W's structure,
         e.g. written by ``biped model``): legs and feet exactly as in the file (hip spacing, thigh,
         shank, ankle height and the heel/toe sole boxes); the upper body, which the figure shows
@@ -219,7 +222,7 @@ def _offset(dims: FigureDims, name: str) -> np.ndarray:
 def part_geoms(dims: FigureDims) -> dict:
     """Shape of every part: name -> (kind, size (MuJoCo semantics), centre in the part frame) [m]."""
     d, s = dims, dims.scale
-    out = {}
+    out: dict[str, tuple[str, tuple[float, ...], tuple[float, float, float]]] = {}
 
     def capsule(length, r):
         return "capsule", (r, max(length / 2 - r, 1e-3)), (0.0, 0.0, -length / 2)
@@ -261,7 +264,7 @@ class FigurePoses:
     pos: np.ndarray
     rot: np.ndarray
 
-    def part(self, name: str):
+    def part(self, name: str) -> tuple[np.ndarray, np.ndarray]:
         """``(pos (T, 3), rot (T, 3, 3))`` of part ``name``."""
         if name not in _P:
             raise ModelError(unknown_name("part", name, _P))
@@ -269,7 +272,7 @@ class FigurePoses:
         return self.pos[:, i], self.rot[:, i]
 
 
-def part_poses(dims: FigureDims, pelvis_pos, pelvis_rot, angles) -> FigurePoses:
+def part_poses(dims: FigureDims, pelvis_pos: ArrayLike, pelvis_rot: ArrayLike, angles: ArrayLike) -> FigurePoses:
     """Forward kinematics of the DCS tree: the world frame of every part (B IV-B-2).
 
     Args:
@@ -324,7 +327,7 @@ def _f(v) -> str:
     return " ".join(repr(float(x)) for x in np.atleast_1d(v))
 
 
-def figure_mjcf(dims: FigureDims, terrain_boxes=(), floor: bool = True) -> str:
+def figure_mjcf(dims: FigureDims, terrain_boxes: Iterable = (), floor: bool = True) -> str:
     """MJCF of the figure (for MuJoCo's kinematics and video): a free pelvis and hinge joints
     named as :data:`JOINT_NAMES`, each body frame equal to the part frame of :func:`part_poses`.
 

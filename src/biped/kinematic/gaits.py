@@ -28,7 +28,8 @@ stance foot slides and sinks, and every gait starts with a jump of the joint ang
   both ends (on stairs it rises before it moves forward, to clear the nosing).
 - **Arms** swing with the opposite leg (B): shoulder ``0.7 theta1 - 10 deg``, elbow
   ``1.5 theta1 + 10 deg`` of the opposite hip angle (B's ``+10`` / ``-10`` in his leg frame, whose
-  y axis must point backward for his ``theta2 = +acos`` to be a human knee; docs/walk.md). **Torso** rolls toward the stance leg,
+  y axis must point backward for his ``theta2 = +acos`` to be a human knee; docs/walk.md).
+  **Torso** rolls toward the stance leg,
   ``11/3 deg sin(pi s)`` (B: z/3 for z up to 11), and leans 7 deg on stairs (B).
 - **Jump** (B's ``jump``): crouch, straight up, along a semicircle (with B's 360 deg somersault
   unless disabled), straight down, absorb, back up to standing.
@@ -45,13 +46,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from biped.errors import ReachError, ScenarioError
-from biped.kinematic.figure import JOINT_NAMES, FigureDims, FigurePoses, landmarks, part_poses
-from biped.kinematic.ik import leg_ik, stair_elevation
+from biped.errors import ScenarioError
+from biped.kinematic.figure import FigureDims
+from biped.kinematic.ik import stair_elevation
+
+# the gait's parts, one concept a module; re-exported here, where callers have always found them
+from biped.kinematic.metrics import WalkMetrics, walk_metrics
+from biped.kinematic.plan import Motion, Plan
+from biped.kinematic.segments import DEG, SIDES, STAIR_CLEARANCE, _Flight, _HalfStep, _hip_y, _Squat, _Stand
 from biped.kinematic.terrain import FLAT, Terrain
 
 __all__ = [
     "GAITS",
+    "SIDES",
+    "STAIR_CLEARANCE",
     "GaitParams",
     "Motion",
     "Plan",
@@ -65,16 +73,9 @@ __all__ = [
     "walk_metrics",
 ]
 
-DEG = math.pi / 180.0
-SIDES = ("left", "right")
-_J = {n: i for i, n in enumerate(JOINT_NAMES)}
-
 #: B's frame increments (Appendix B, delta_t units): a forward half step takes 21 / 0.5 frames,
 #: a stair step 21 / 0.35, the jump's phases 100 / 1, 100 / 5, 100 / 1, 100 / 3, 100 / 5, 100 / 2.
 _B_STEP_FRAMES = 21.0 / 0.5
-
-#: Height [m] the swing foot's path rises above the landing tread before it moves over it.
-STAIR_CLEARANCE = 0.03
 
 
 @dataclass(frozen=True)
@@ -141,337 +142,6 @@ class GaitParams:
 
 
 # ------------------------------------------------------------------------------------------
-# time profiles
-# ------------------------------------------------------------------------------------------
-
-def _smooth(s):
-    """Minimum-jerk step 10 s^3 - 15 s^4 + 6 s^5 on [0, 1] (zero velocity and acceleration at
-    both ends), clipped outside."""
-    s = np.clip(s, 0.0, 1.0)
-    return s * s * s * (10.0 + s * (-15.0 + 6.0 * s))
-
-
-def _hermite(p0, p1, m0, m1, s):
-    """Cubic Hermite between points p0, p1 (3,) with tangents m0, m1 (per unit s); s (n,) -> (n, 3)."""
-    s = s[:, None]
-    s2, s3 = s * s, s * s * s
-    return ((2 * s3 - 3 * s2 + 1) * p0 + (s3 - 2 * s2 + s) * m0 + (-2 * s3 + 3 * s2) * p1
-            + (s3 - s2) * m1)
-
-
-def _lerp(a, b, w):
-    return a + (b - a) * w
-
-
-# ------------------------------------------------------------------------------------------
-# segments: each maps a phase s in [0, 1] to pelvis, torso, arm blend and foot targets
-# ------------------------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class _Frame:
-    """What a segment prescribes at n phases (world frame, m and rad)."""
-
-    pelvis: np.ndarray  # (n, 3) mid-hip point
-    pitch: np.ndarray  # (n,) pelvis pitch, forward > 0 (about +y)
-    roll: np.ndarray  # (n,) torso roll (about +x)
-    lean: np.ndarray  # (n,) torso pitch (about +y)
-    arm_w: np.ndarray  # (n,) 0 = B's arm swing rule, 1 = the jump's arm angles
-    feet: dict  # side -> ("world", ankle (n, 3)) or ("hip", depth (n,)): foot straight below the hip
-    stance: dict  # side -> (n,) bool: the foot bears weight
-    swing_s: dict  # side -> (n,) phase of the swing in [0, 1], nan when not swinging
-
-
-def _hip_y(dims, side):
-    return dims.hip_half_width if side == "left" else -dims.hip_half_width
-
-
-@dataclass(frozen=True)
-class _Stand:
-    duration: float
-    pelvis: np.ndarray
-    ankles: dict
-    lean: float = 0.0
-    arm_w: float = 0.0
-    pitch: float = 0.0
-    label: str = "stand"
-
-    def evaluate(self, dims, params, s):
-        n = s.size
-        z = np.zeros(n)
-        return _Frame(np.tile(self.pelvis, (n, 1)), z + self.pitch, z, z + self.lean, z + self.arm_w,
-                      {sd: ("world", np.tile(self.ankles[sd], (n, 1))) for sd in SIDES},
-                      {sd: np.ones(n, bool) for sd in SIDES}, {sd: np.full(n, np.nan) for sd in SIDES})
-
-
-@dataclass(frozen=True)
-class _HalfStep:
-    """One foot in stance, the other swinging from ``lift`` to ``land`` (B IV-B-3)."""
-
-    duration: float
-    stance_side: str
-    p_stance: np.ndarray
-    lift: np.ndarray
-    land: np.ndarray
-    P0: np.ndarray
-    V0: np.ndarray
-    P1: np.ndarray
-    V1: np.ndarray
-    bump: float
-    lean0: float
-    lean1: float
-    label: str
-    roll_ramp: str = ""  # "in" from standing, "out" to standing: the roll rate is 0 there
-
-    def evaluate(self, dims, params, s):
-        n = s.size
-        T = self.duration
-        pelvis = _hermite(self.P0, self.P1, self.V0 * T, self.V1 * T, s)
-        pelvis[:, 2] += self.bump * (1.0 - np.cos(2.0 * np.pi * s))  # eq. 4.22
-        sw = "left" if self.stance_side == "right" else "right"
-        hip = pelvis + np.array([0.0, _hip_y(dims, sw), 0.0])
-        g = np.empty((n, 3))
-        g[:, 1] = self.lift[1]
-        if self.land[2] - self.lift[2] > 1e-9:
-            # stairs: the point rises to STAIR_CLEARANCE above the landing tread, moves forward,
-            # then sets down (the foot clears the nosing whatever the run)
-            c = STAIR_CLEARANCE
-            g[:, 0] = _lerp(self.lift[0], self.land[0], _smooth((s - 0.25) / 0.6))
-            g[:, 2] = (_lerp(self.lift[2], self.land[2] + c, _smooth(s / 0.4))
-                       - c * _smooth((s - 0.8) / 0.2))
-        else:
-            w = _smooth(s)
-            g[:, 0] = _lerp(self.lift[0], self.land[0], w)
-            g[:, 2] = _lerp(self.lift[2], self.land[2], w)
-        k = 1.0 - (1.0 - params.swing_factor) * np.sin(np.pi * s) ** 2  # eq. 4.21, continuous
-        foot = hip + k[:, None] * (g - hip)
-        sign = -1.0 if self.stance_side == "left" else 1.0  # roll toward the stance side
-        roll = sign * params.torso_roll * DEG * np.sin(np.pi * s)
-        if self.roll_ramp:
-            roll = roll * _smooth(s if self.roll_ramp == "in" else 1.0 - s)
-        lean = _lerp(self.lean0, self.lean1, _smooth(s))
-        z = np.zeros(n)
-        swinging = (s > 0.0) & (s < 1.0)
-        return _Frame(pelvis, z, roll, lean, z,
-                      {self.stance_side: ("world", np.tile(self.p_stance, (n, 1))), sw: ("world", foot)},
-                      {self.stance_side: np.ones(n, bool), sw: ~swinging},
-                      {self.stance_side: np.full(n, np.nan), sw: np.where(swinging, s, np.nan)})
-
-
-@dataclass(frozen=True)
-class _Squat:
-    """Both feet planted, the pelvis moving straight from P0 to P1 (jump: crouch, up, absorb)."""
-
-    duration: float
-    ankles: dict
-    P0: np.ndarray
-    P1: np.ndarray
-    lean0: float
-    lean1: float
-    w0: float
-    w1: float
-    label: str
-
-    def evaluate(self, dims, params, s):
-        n = s.size
-        w = _smooth(s)
-        z = np.zeros(n)
-        return _Frame(self.P0 + (self.P1 - self.P0) * w[:, None], z, z, _lerp(self.lean0, self.lean1, w),
-                      _lerp(self.w0, self.w1, w),
-                      {sd: ("world", np.tile(self.ankles[sd], (n, 1))) for sd in SIDES},
-                      {sd: np.ones(n, bool) for sd in SIDES}, {sd: np.full(n, np.nan) for sd in SIDES})
-
-
-@dataclass(frozen=True)
-class _Flight:
-    """Feet off the ground, straight below the hips at depth ``depth(s)`` in the pelvis frame.
-
-    ``kind`` "arc": the pelvis goes along the upper semicircle from P0 to P1 (same height),
-    turning by ``turn`` rad (B's somersault); "drop": straight from P0 to P1.
-    """
-
-    duration: float
-    kind: str
-    P0: np.ndarray
-    P1: np.ndarray
-    depth0: float
-    depth_mid: float
-    depth1: float
-    turn: float
-    lean: float
-    label: str
-
-    def evaluate(self, dims, params, s):
-        n = s.size
-        w = _smooth(s)
-        if self.kind == "arc":
-            c, r = 0.5 * (self.P0 + self.P1), 0.5 * np.linalg.norm(self.P1 - self.P0)
-            psi = np.pi * (1.0 - w)
-            pelvis = np.tile(c, (n, 1))
-            pelvis[:, 0] += r * np.cos(psi)
-            pelvis[:, 2] += r * np.sin(psi)
-            # tuck during the first 40 %, hold, re-extend to depth1 during the last 30 %
-            depth = np.where(s < 0.4, _lerp(self.depth0, self.depth_mid, _smooth(s / 0.4)),
-                             _lerp(self.depth_mid, self.depth1, _smooth((s - 0.7) / 0.3)))
-        else:
-            pelvis = self.P0 + (self.P1 - self.P0) * w[:, None]
-            depth = _lerp(self.depth0, self.depth1, w)
-        z = np.zeros(n)
-        # the feet leave the ground as the arc starts and touch it as the drop ends
-        air = s > 0.0 if self.kind == "arc" else s < 1.0
-        return _Frame(pelvis, self.turn * w, z, z + self.lean, z + 1.0,
-                      {sd: ("hip", depth) for sd in SIDES},
-                      {sd: ~air for sd in SIDES}, {sd: np.where(air, s, np.nan) for sd in SIDES})
-
-
-# ------------------------------------------------------------------------------------------
-# plans and motions
-# ------------------------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class Plan:
-    """A gait as a sequence of segments; evaluate it at any times with :meth:`evaluate`.
-
-    Attributes:
-        dims, params: the figure and the gait parameters.
-        segments: the segments in time order (private types).
-        terrain: the ground.
-        markers: ``({"time_s", "label"}, ...)`` gait changes and events.
-        distance: forward distance travelled by the feet [m]; climbed: height gained on stairs
-            [m] (a jump down does not subtract from it).
-    """
-
-    dims: FigureDims
-    params: GaitParams
-    segments: tuple
-    terrain: Terrain = FLAT
-    markers: tuple = ()
-    distance: float = 0.0
-    climbed: float = 0.0
-
-    @property
-    def starts(self) -> np.ndarray:
-        d = np.array([seg.duration for seg in self.segments])
-        return np.concatenate([[0.0], np.cumsum(d)])
-
-    @property
-    def duration(self) -> float:
-        return float(sum(seg.duration for seg in self.segments))
-
-    def evaluate(self, times) -> Motion:
-        """The figure's pose at ``times`` (T,) [s]: targets of the segments, then leg IK
-        (eq. 4.12-4.19) and B's arm rule. Raises :class:`ReachError` if a foot is out of reach."""
-        times = np.asarray(times, dtype=float)
-        starts = self.starts
-        if times.ndim != 1 or np.any(times < -1e-12) or np.any(times > starts[-1] + 1e-9):
-            raise ScenarioError(f"times must be a 1-D array within [0, {starts[-1]:.6g}] s")
-        idx = np.clip(np.searchsorted(starts, times, side="right") - 1, 0, len(self.segments) - 1)
-        T = times.size
-        d, p = self.dims, self.params
-        pelvis, pitch = np.empty((T, 3)), np.empty(T)
-        roll, lean, arm_w = np.empty(T), np.empty(T), np.empty(T)
-        stance = np.empty((T, 2), bool)
-        swing_s = np.empty((T, 2))
-        leg_xy = {sd: np.empty((T, 2)) for sd in SIDES}
-        leg_phi = {sd: np.empty(T) for sd in SIDES}
-        labels = np.empty(T, dtype=object)
-        for k, seg in enumerate(self.segments):
-            m = idx == k
-            if not np.any(m):
-                continue
-            s = np.clip((times[m] - starts[k]) / seg.duration, 0.0, 1.0)
-            f = seg.evaluate(d, p, s)
-            pelvis[m], pitch[m], roll[m], lean[m], arm_w[m] = f.pelvis, f.pitch, f.roll, f.lean, f.arm_w
-            labels[m] = seg.label
-            cp, sp = np.cos(f.pitch), np.sin(f.pitch)
-            for j, sd in enumerate(SIDES):
-                stance[m, j] = f.stance[sd]
-                swing_s[m, j] = f.swing_s[sd]
-                mode, val = f.feet[sd]
-                if mode == "world":
-                    # ankle relative to the hip, in the pelvis frame (pelvis pitched about +y;
-                    # the lateral hip offset is along the pitch axis, so it does not turn)
-                    hip = f.pelvis + np.array([0.0, _hip_y(d, sd), 0.0])
-                    r = val - hip
-                    rx = cp * r[:, 0] - sp * r[:, 2]
-                    rz = sp * r[:, 0] + cp * r[:, 2]
-                    leg_xy[sd][m] = np.stack([-rz, rx], 1)
-                    leg_phi[sd][m] = f.pitch  # a flat foot seen from the pitched pelvis
-                else:
-                    leg_xy[sd][m] = np.stack([val, np.zeros(s.size)], 1)
-                    leg_phi[sd][m] = 0.0
-        angles = np.zeros((T, len(JOINT_NAMES)))
-        angles[:, _J["torso_roll"]] = roll
-        angles[:, _J["torso_pitch"]] = lean
-        for sd in SIDES:
-            try:
-                ik = leg_ik(leg_xy[sd][:, 0], leg_xy[sd][:, 1], leg_phi[sd], d.thigh, d.shank, knee=p.knee)
-            except ReachError as exc:
-                raise ReachError(f"{sd} leg: {exc}") from None
-            angles[:, _J[f"{sd}_hip_flexion"]] = ik.theta1
-            angles[:, _J[f"{sd}_knee"]] = ik.theta2
-            angles[:, _J[f"{sd}_ankle_dorsiflexion"]] = ik.theta3
-        for sd, other in (("left", "right"), ("right", "left")):
-            th = angles[:, _J[f"{other}_hip_flexion"]]
-            sh = p.shoulder_gain * th + p.shoulder_offset * DEG
-            el = p.elbow_gain * th + p.elbow_offset * DEG
-            angles[:, _J[f"{sd}_shoulder_flexion"]] = _lerp(sh, p.jump_shoulder * DEG, arm_w)
-            angles[:, _J[f"{sd}_elbow_flexion"]] = _lerp(el, p.jump_elbow * DEG, arm_w)
-        c, s_ = np.cos(pitch), np.sin(pitch)
-        rot = np.zeros((T, 3, 3))
-        rot[:, 0, 0], rot[:, 0, 2], rot[:, 1, 1], rot[:, 2, 0], rot[:, 2, 2] = c, s_, 1.0, -s_, c
-        return Motion(self, times, pelvis, rot, pitch, angles, stance, swing_s, labels)
-
-    def sample(self, rate: float = 200.0) -> Motion:
-        """:meth:`evaluate` on a uniform grid of ``rate`` Hz covering the whole plan."""
-        if not rate > 0:
-            raise ScenarioError(f"rate must be > 0 Hz, got {rate!r}")
-        n = math.floor(self.duration * rate + 1e-9) + 1
-        times = np.arange(n) / rate
-        if times[-1] < self.duration - 1e-12:
-            times = np.append(times, self.duration)
-        return self.evaluate(times)
-
-
-@dataclass(frozen=True)
-class Motion:
-    """The figure's motion on a time grid.
-
-    Attributes:
-        plan: the plan it was evaluated from.
-        times: (T,) s.
-        pelvis_pos: (T, 3) mid-hip point in the world [m].
-        pelvis_rot: (T, 3, 3) pelvis orientation (world <- pelvis).
-        pelvis_pitch: (T,) its pitch about +y [rad] (nonzero only in the somersault).
-        angles: (T, 12) joint angles [rad], columns :data:`~biped.kinematic.figure.JOINT_NAMES`.
-        stance: (T, 2) bool, [left, right] foot bears weight (planted).
-        swing_phase: (T, 2) phase in [0, 1] of a swinging / flying foot, nan otherwise.
-        labels: (T,) segment label at each time.
-    """
-
-    plan: Plan
-    times: np.ndarray
-    pelvis_pos: np.ndarray
-    pelvis_rot: np.ndarray
-    pelvis_pitch: np.ndarray
-    angles: np.ndarray
-    stance: np.ndarray
-    swing_phase: np.ndarray
-    labels: np.ndarray
-
-    @property
-    def dims(self) -> FigureDims:
-        return self.plan.dims
-
-    def poses(self) -> FigurePoses:
-        """World frames of the 15 parts (:func:`~biped.kinematic.figure.part_poses`)."""
-        return part_poses(self.dims, self.pelvis_pos, self.pelvis_rot, self.angles)
-
-    def landmarks(self) -> dict:
-        """Heel, toe, ankle and hip points in the world, name -> (T, 3) [m]."""
-        return landmarks(self.dims, self.poses())
-
-
-# ------------------------------------------------------------------------------------------
 # gait builders
 # ------------------------------------------------------------------------------------------
 
@@ -529,7 +199,7 @@ def _walk(dims, params, footholds, a_trail, a_lead, T, lean, label, bump=True):
 
 
 def stair_geometry(dims: FigureDims, params: GaitParams, rise: float | None = None,
-                   run: float | None = None):
+                   run: float | None = None) -> tuple[float, float, float]:
     """Rise, run and leading-leg angle of B's stair step (B IV-B-3b).
 
     The trailing leg at double support is B's bar at ``alpha_down`` (eq. 4.20): the hip is
@@ -662,7 +332,9 @@ def chain(*plans: Plan, terrain: Terrain | None = None) -> Plan:
     """Plans one after the other (each starts where and as the previous one ends: standing)."""
     if not plans:
         raise ScenarioError("chain needs at least one plan")
-    segs, markers, t = [], [], 0.0
+    segs: list = []
+    markers: list[dict] = []
+    t = 0.0
     for p in plans:
         segs.extend(p.segments)
         markers.extend({"time_s": m["time_s"] + t, "label": m["label"]} for m in p.markers)
@@ -692,75 +364,3 @@ def demo(dims: FigureDims | None = None, speed: float = 1.0, params: GaitParams 
 
 
 GAITS = ("forward", "upstairs", "jump", "demo")
-
-
-# ------------------------------------------------------------------------------------------
-# what B's code does not guarantee
-# ------------------------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class WalkMetrics:
-    """Checks of a motion against the ground (m, rad).
-
-    Attributes:
-        max_penetration_m: deepest point of any sole below the terrain, over every frame.
-        max_stance_slip_m: largest displacement of a heel or toe from where it stood when its
-            foot began to bear weight, over every stance interval.
-        min_swing_clearance_m: smallest gap between a swinging (or flying) sole and the terrain
-            below it during the middle half of each swing (lift-off and touch-down are at 0).
-        max_swing_penetration_m: deepest point of a swinging sole below the terrain (0 if none).
-        max_joint_step_rad: largest change of a joint angle between two frames.
-        distance_m: forward distance travelled by the pelvis.
-        height_climbed_m: height gained on stairs (a jump down does not subtract from it).
-        duration_s: length of the motion.
-    """
-
-    max_penetration_m: float
-    max_stance_slip_m: float
-    min_swing_clearance_m: float
-    max_swing_penetration_m: float
-    max_joint_step_rad: float
-    distance_m: float
-    height_climbed_m: float
-    duration_s: float
-
-    def as_dict(self) -> dict:
-        return {k: float(v) for k, v in self.__dict__.items()}
-
-
-def _runs(mask):
-    """(start, stop) index pairs of the True runs of a 1-D bool array."""
-    m = np.concatenate([[False], mask, [False]]).astype(int)
-    d = np.diff(m)
-    return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)))
-
-
-def walk_metrics(motion: Motion, lm: dict | None = None) -> WalkMetrics:
-    """Penetration, stance slip and swing clearance of ``motion``, measured on the figure's
-    forward kinematics (not on the planned targets)."""
-    lm = lm or motion.landmarks()
-    terrain = motion.plan.terrain
-    pen, slip, clear, swing_pen = 0.0, 0.0, math.inf, 0.0
-    for j, sd in enumerate(SIDES):
-        heel, toe = lm[f"{sd}_heel"], lm[f"{sd}_toe"]
-        gap = terrain.sole_gap(heel, toe)
-        pen = max(pen, float(np.max(-gap, initial=0.0)))
-        st = motion.stance[:, j]
-        for a, b in _runs(st):
-            for pt in (heel, toe):
-                slip = max(slip, float(np.max(np.linalg.norm(pt[a:b] - pt[a], axis=1))))
-        ph = motion.swing_phase[:, j]
-        sw = ~st
-        if np.any(sw):
-            swing_pen = max(swing_pen, float(np.max(-gap[sw], initial=0.0)))
-        mid = np.isfinite(ph) & (ph >= 0.25) & (ph <= 0.75)
-        if np.any(mid):
-            clear = min(clear, float(np.min(gap[mid])))
-    return WalkMetrics(
-        max_penetration_m=pen, max_stance_slip_m=slip,
-        min_swing_clearance_m=clear if math.isfinite(clear) else float("nan"),
-        max_swing_penetration_m=swing_pen,
-        max_joint_step_rad=float(np.max(np.abs(np.diff(motion.angles, axis=0)), initial=0.0)),
-        distance_m=float(motion.pelvis_pos[-1, 0] - motion.pelvis_pos[0, 0]),
-        height_climbed_m=float(motion.plan.climbed),
-        duration_s=float(motion.times[-1] - motion.times[0]))

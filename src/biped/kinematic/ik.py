@@ -24,6 +24,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from biped.errors import ReachError, ScenarioError
 
@@ -50,7 +51,8 @@ class LegAngles:
     theta3: np.ndarray
 
 
-def leg_fk(theta1, theta2, theta3, l1: float, l2: float):
+def leg_fk(theta1: ArrayLike, theta2: ArrayLike, theta3: ArrayLike, l1: float,
+           l2: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Forward kinematics of the planar leg, B eq. 4.6 (= 4.8-4.11).
 
     Args:
@@ -73,7 +75,8 @@ def _check_lengths(l1: float, l2: float) -> None:
         raise ScenarioError(f"leg link lengths must be finite and positive (m), got l1={l1!r}, l2={l2!r}")
 
 
-def leg_ik(x, y, phi, l1: float, l2: float, knee: str = "human", tol: float = 1e-12) -> LegAngles:
+def leg_ik(x: ArrayLike, y: ArrayLike, phi: ArrayLike, l1: float, l2: float, knee: str = "human",
+           tol: float = 1e-12) -> LegAngles:
     """Inverse kinematics of the 3-link planar leg, B eq. 4.12-4.19.
 
     eq. 4.12-4.13: ``cos theta2 = (x^2 + y^2 - l1^2 - l2^2) / (2 l1 l2)``, with the knee-bend
@@ -121,7 +124,7 @@ def leg_ik(x, y, phi, l1: float, l2: float, knee: str = "human", tol: float = 1e
     return LegAngles(theta1, theta2, theta3)
 
 
-def bar_foot(alpha, P1: float, k=1.0):
+def bar_foot(alpha: ArrayLike, P1: float, k: ArrayLike = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """The ankle on B's "swinging bar" of the stepping-forward algorithm, B eq. 4.20-4.21.
 
     A straight leg of length ``P1 = l1 + l2`` at angle ``alpha`` from the vertical is shortened to
@@ -135,7 +138,7 @@ def bar_foot(alpha, P1: float, k=1.0):
     return p * np.cos(a), p * np.sin(a)
 
 
-def stair_elevation(beta, l1: float, l2: float):
+def stair_elevation(beta: ArrayLike, l1: float, l2: float) -> np.ndarray:
     """Elevation a straight leg gains when swung forward by ``beta``, B eq. 4.23 [m].
 
     ``h = (l1 + l2) - (l1 + l2) cos(beta)``: the height of the stair a straight leg at angle
@@ -146,7 +149,7 @@ def stair_elevation(beta, l1: float, l2: float):
     return (l1 + l2) * (1.0 - np.cos(np.asarray(beta, dtype=float)))
 
 
-def stair_angle(rise, l1: float, l2: float):
+def stair_angle(rise: ArrayLike, l1: float, l2: float) -> np.ndarray:
     """Inverse of :func:`stair_elevation`: the angle ``beta`` [rad] at which a straight leg of
     length ``l1 + l2`` reaches a stair ``rise`` m high (B eq. 4.23 solved for ``beta``)."""
     _check_lengths(l1, l2)

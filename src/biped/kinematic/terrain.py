@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from biped.errors import ScenarioError
 
@@ -43,7 +44,7 @@ class Terrain:
             blocks.append((x0, x1, i * rise))
         return cls(tuple(blocks))
 
-    def height(self, x) -> np.ndarray:
+    def height(self, x: ArrayLike) -> np.ndarray:
         """Terrain height at ``x`` (any shape) [m]."""
         x = np.asarray(x, dtype=float)
         h = np.zeros_like(x)
@@ -51,7 +52,7 @@ class Terrain:
             h = np.where((x >= x0) & (x < x1), np.maximum(h, top), h)
         return h
 
-    def sole_gap(self, heel, toe) -> np.ndarray:
+    def sole_gap(self, heel: np.ndarray, toe: np.ndarray) -> np.ndarray:
         """Smallest vertical gap between a straight sole and the terrain below it [m].
 
         Args:
@@ -76,7 +77,7 @@ class Terrain:
             gap = np.where(over, np.minimum(gap, g), gap)
         return gap
 
-    def boxes(self, width: float = 2.0):
+    def boxes(self, width: float = 2.0) -> tuple[tuple[tuple[float, float, float], tuple[float, float, float]], ...]:
         """The blocks as MuJoCo boxes ``(centre (3,), half sizes (3,))`` [m], ``width`` wide."""
         return tuple(((0.5 * (x0 + x1), 0.0, 0.5 * top), (0.5 * (x1 - x0), 0.5 * width, 0.5 * top))
                      for x0, x1, top in self.blocks)

@@ -1,8 +1,10 @@
 """Another subject's biped: validate its MJCF and move W's experiment onto it.
 
 >>> from biped.models import subject
->>> path = subject.resolve("runs/f155.xml")   # a shipped name or an MJCF path, checked up front
->>> subject.subject_state(path, ...)           # W's initial state and set point on that body
+>>> subject.resolve("wendlandt").name   # a shipped name or an MJCF path, checked up front
+'wendlandt.xml'
+
+then ``subject.subject_state(path, ...)`` gives W's initial state and set point on that body.
 
 A model file works with the push, sweep and walk commands when it has W's structure, the one
 ``biped model`` writes (:data:`EXPECTED`): checked by :func:`check_biped` with MuJoCo before any

@@ -2,13 +2,16 @@
 figures and the animation of one run; comparison.json/.png of B's equation forms; gains.json,
 stability_map.npz/.png of the gain design.
 
+>>> import tempfile
 >>> from pathlib import Path
 >>> from biped.planar import PendulumParams
 >>> from biped.planar.runs import PENDULUM_GAINS
 >>> from biped.outputs.posture import run_model
 >>> traj, lin = run_model("pendulum", PendulumParams(), "newton-euler", PENDULUM_GAINS, (1.0, 0.0),
-...                       (0.0,), out=Path("runs/posture-pendulum"), dt=0.02, duration=20.0,
-...                       integrator="euler")
+...                       (0.0,), out=Path(tempfile.mkdtemp()), dt=0.02, duration=20.0,
+...                       integrator="euler", animation=False)
+>>> lin.stable
+True
 """
 
 from __future__ import annotations
@@ -16,6 +19,7 @@ from __future__ import annotations
 import csv
 import dataclasses
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -36,7 +40,7 @@ def _write_csv(path: Path, header: list[str], columns: list[np.ndarray]) -> None
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(header)
-        for row in zip(*columns):
+        for row in zip(*columns, strict=True):
             w.writerow([f"{v:.10g}" for v in row])
 
 
@@ -88,7 +92,7 @@ def run_model(model: str, params, method: str, gains, x0, alpha, *, out: Path, d
     its figures, animation.gif (unless ``animation`` is False) and, with ``compare``, the
     comparison of B's forms (:func:`compare_forms`) into ``out``. Returns ``(traj, lin)``."""
     out.mkdir(parents=True, exist_ok=True)
-    common = {"dt": dt, "duration": duration, "integrator": integrator,
+    common: dict[str, Any] = {"dt": dt, "duration": duration, "integrator": integrator,
               "hold": hold, "progress": True}  # fmt: skip
     if model == "pendulum":
         traj = runs.simulate_pendulum(params, method, gains, x0, alpha=alpha[0], **common)
@@ -123,11 +127,11 @@ def compare_forms(params, gains, x0, alpha, common: dict, out: Path) -> dict:
         except StateError as exc:
             errors[method] = str(exc)
     ref = trajs.get("lagrange")
-    result = {"diverged": errors, "max_abs_difference_vs_lagrange": {}}
+    result: dict[str, Any] = {"diverged": errors, "max_abs_difference_vs_lagrange": {}}
     for name, tr in trajs.items():
         if ref is not None and name != "lagrange":
             d = np.abs(tr.states - ref.states).max(axis=0)
-            result["max_abs_difference_vs_lagrange"][name] = dict(zip(tr.state_names, d.tolist()))
+            result["max_abs_difference_vs_lagrange"][name] = dict(zip(tr.state_names, d.tolist(), strict=True))
         result.setdefault("wall_time_s", {})[name] = tr.wall_time
     viz.comparison_figure(trajs).savefig(out / "comparison.png")
     _write_json(out / "comparison.json", result)
@@ -143,12 +147,13 @@ def run_gains(params, *, out: Path, grid: int, k1_max: float, k2_max: float, rat
     Returns ``(gains.json content, best local gains)``."""
     out.mkdir(parents=True, exist_ok=True)
     A, B = analysis.ab_matrices(params)
-    result = {"parameters": dataclasses.asdict(params), "units": UNITS, "A": A, "B": B}
+    result: dict[str, Any] = {"parameters": dataclasses.asdict(params), "units": UNITS, "A": A, "B": B}
     b_sets = {"B eq. 3.81-3.84 (K2 = 4000)": runs.BODY_LEG_GAINS_EQ_3_83,
               "B eq. 5.5-5.8 (K2 = 40000)": runs.BODY_LEG_GAINS}  # fmt: skip
     result["bediz_gains"] = {}
     for label, g in b_sets.items():
         lin = analysis.analyze_body_leg(params, g)
+        assert lin.char_poly is not None  # the body-leg analysis has one
         result["bediz_gains"][label] = {
             "gains": list(g), "eigenvalues": lin.eigenvalue_pairs(), "stable": lin.stable,
             "stability_margin": lin.margin, "characteristic_polynomial": lin.char_poly,

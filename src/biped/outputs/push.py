@@ -1,9 +1,12 @@
 """The files of a push run (W section 4): summary.json, trajectory.csv, scenario.toml, figures/,
 video.mp4 and replay.html.
 
+>>> import tempfile
 >>> from biped.sim import Scenario, simulate
 >>> from biped.outputs.push import write_outputs
->>> write_outputs(simulate(Scenario()), "runs/mine")
+>>> result = simulate(Scenario(duration_s=0.1))
+>>> sorted(write_outputs(result, tempfile.mkdtemp(), figures=False, video=False, replay=False))
+['scenario', 'summary', 'trajectory']
 """
 
 from __future__ import annotations

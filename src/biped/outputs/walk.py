@@ -14,11 +14,12 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import mujoco
 import numpy as np
 
-from biped.kinematic.dynamics import inverse_dynamics, load_biped
+from biped.kinematic.dynamics import InverseDynamics, inverse_dynamics, load_biped
 from biped.kinematic.figure import (
     JOINT_NAMES,
     PARTS,
@@ -27,7 +28,7 @@ from biped.kinematic.figure import (
     figure_mjcf,
     part_geoms,
 )
-from biped.kinematic.gaits import stair_geometry, walk_metrics
+from biped.kinematic.gaits import Motion, WalkMetrics, stair_geometry, walk_metrics
 from biped.outputs._json import write_json
 from biped.spatial import rot_to_quat
 from biped.viz.replay import Replay, ReplayGeom, write_replay
@@ -195,9 +196,9 @@ class WalkRun:
     (:func:`~biped.kinematic.walk_metrics`), the inverse dynamics ``idyn`` (None if skipped), the
     ``summary`` dict written to summary.json, and ``notes`` (why an output is missing)."""
 
-    motion: object
-    metrics: object
-    idyn: object
+    motion: Motion
+    metrics: WalkMetrics
+    idyn: InverseDynamics | None
     summary: dict
     notes: dict
 
@@ -226,7 +227,8 @@ def write_walk(plan, out: Path, *, gait: str, speed: float, rate: float,
     callback. The inverse dynamics stage also writes inverse_dynamics.csv."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    paths, notes = {}, {}
+    paths: dict[str, Any] = {}
+    notes: dict[str, str | None] = {}
     idyn = None
     for stage in walk_stages(dynamics=dynamics, figures=figures, replay=replay, video=video):
         if on_stage is not None:

@@ -3,13 +3,18 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable, Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from biped.errors import ScenarioError, SingularityError, StateError, unknown_name
 
+#: a state, input or parameter vector: an array or a sequence of floats
+Vector = np.ndarray | Sequence[float]
 
-def check_state(x, n: int, what: str = "state") -> np.ndarray:
+
+def check_state(x: ArrayLike, n: int, what: str = "state") -> np.ndarray:
     """Return ``x`` as a float array of shape (n,), or raise StateError naming the problem."""
     arr = np.asarray(x, dtype=float)
     if arr.shape != (n,):
@@ -37,7 +42,7 @@ def check_positive(name: str, value: float, *, allow_zero: bool = False) -> floa
     return value
 
 
-def check_choice(kind: str, name: str, valid) -> str:
+def check_choice(kind: str, name: str, valid: Iterable[str]) -> str:
     """``name`` if it is one of ``valid``, else ScenarioError listing the valid names."""
     if name not in valid:
         raise ScenarioError(unknown_name(kind, name, valid))

@@ -9,12 +9,14 @@ Units are B's (lb as mass, ft, s).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 import scipy.linalg
 import scipy.optimize
 import scipy.signal
+from numpy.typing import ArrayLike
 
 from biped.errors import ScenarioError
 from biped.planar import body_leg as bl
@@ -58,7 +60,8 @@ def ab_matrices_as_printed(p: bl.BodyLegParams) -> tuple[np.ndarray, np.ndarray]
     return A, B
 
 
-def linearize(accel, nq: int, nu: int, eps: float = 1e-6, du: float = 1.0):
+def linearize(accel: Callable[[np.ndarray, np.ndarray], ArrayLike], nq: int, nu: int, eps: float = 1e-6,
+              du: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
     """Central finite-difference Jacobians of x_dot = f(x, u) at x = 0, u = 0.
 
     accel(x, u) -> the nq accelerations (first nq entries of a form's result); states interleave
@@ -88,7 +91,7 @@ def linearize(accel, nq: int, nu: int, eps: float = 1e-6, du: float = 1.0):
     return A, B
 
 
-def body_leg_linearized(p: bl.BodyLegParams, method: str = "lagrange"):
+def body_leg_linearized(p: bl.BodyLegParams, method: str = "lagrange") -> tuple[np.ndarray, np.ndarray]:
     """A, B by finite differences of a body-leg form (default: the nonlinear eq. 3.18, 3.24)."""
     fn = bl.BODY_LEG_METHODS[method]
     return linearize(lambda x, u: fn(p, x, u)[:2], 2, 2)
@@ -101,13 +104,13 @@ def pendulum_ab(p: pd.PendulumParams) -> tuple[np.ndarray, np.ndarray]:
 
 
 # --------------------------------------------------------------------------- feedback
-def local_gain_matrix(gains) -> np.ndarray:
+def local_gain_matrix(gains: ArrayLike) -> np.ndarray:
     """K (2, 4) of eq. 3.60 from (K_theta1, K_theta1dot, K_theta2, K_theta2dot)."""
     k1, k1d, k2, k2d = check_state(gains, 4, "local gains (K1, K1D, K2, K2D)")
     return -np.array([[k1, k1d, 0.0, 0.0], [0.0, 0.0, k2, k2d]])
 
 
-def characteristic_polynomial(p: bl.BodyLegParams, gains) -> np.ndarray:
+def characteristic_polynomial(p: bl.BodyLegParams, gains: ArrayLike) -> np.ndarray:
     """Coefficients (5,), highest power first, of eq. 3.80: I m r^2 det(s I - (A + B K)).
 
     s^4: I m r^2
@@ -130,7 +133,7 @@ def characteristic_polynomial(p: bl.BodyLegParams, gains) -> np.ndarray:
     )  # fmt: skip
 
 
-def hurwitz_minors(coeffs) -> np.ndarray:
+def hurwitz_minors(coeffs: ArrayLike) -> np.ndarray:
     """Leading principal minors of the Hurwitz matrix of a0 s^n + a1 s^(n-1) + ... + an (a0 > 0).
 
     All coefficients and all minors positive <=> all roots in the open left half plane (Routh-
@@ -149,7 +152,7 @@ def hurwitz_minors(coeffs) -> np.ndarray:
     return np.array([np.linalg.det(H[: i + 1, : i + 1]) for i in range(n)])
 
 
-def routh_hurwitz_stable(coeffs) -> bool:
+def routh_hurwitz_stable(coeffs: ArrayLike) -> bool:
     """True iff every root of the polynomial has a negative real part (Routh-Hurwitz test)."""
     a = np.asarray(coeffs, dtype=float)
     if a[0] < 0:
@@ -183,13 +186,13 @@ def _analysis(A, B, K, char_poly=None) -> LinearAnalysis:
     return LinearAnalysis(A, B, K, ev, margin, margin > 0, char_poly)
 
 
-def analyze_body_leg(p: bl.BodyLegParams, gains) -> LinearAnalysis:
+def analyze_body_leg(p: bl.BodyLegParams, gains: ArrayLike) -> LinearAnalysis:
     """Closed-loop eigenvalues of eq. 3.57 with the local gains of eq. 3.60."""
     A, B = ab_matrices(p)
     return _analysis(A, B, local_gain_matrix(gains), characteristic_polynomial(p, gains))
 
 
-def analyze_pendulum(p: pd.PendulumParams, gains) -> LinearAnalysis:
+def analyze_pendulum(p: pd.PendulumParams, gains: ArrayLike) -> LinearAnalysis:
     """Closed loop of eq. 2.27 linearized with M = -K_theta theta - K_thetadot theta_dot (4.32).
 
     Characteristic polynomial (I + m l^2) s^2 + K_thetadot s + (K_theta - m g l)."""
@@ -200,7 +203,7 @@ def analyze_pendulum(p: pd.PendulumParams, gains) -> LinearAnalysis:
 
 
 # --------------------------------------------------------------------------- gain design
-def place_poles_gains(A, B, poles) -> np.ndarray:
+def place_poles_gains(A: np.ndarray, B: np.ndarray, poles: ArrayLike) -> np.ndarray:
     """Full-state K (u = K x) placing the eigenvalues of A + B K at ``poles`` (scipy's
     ``place_poles``, which returns the opposite sign)."""
     res = scipy.signal.place_poles(A, B, np.asarray(poles))
@@ -216,14 +219,15 @@ class LqrResult:
     eigenvalues: np.ndarray
 
 
-def lqr(A, B, Q, R) -> LqrResult:
+def lqr(A: np.ndarray, B: np.ndarray, Q: np.ndarray, R: np.ndarray) -> LqrResult:
     """Continuous LQR via ``scipy.linalg.solve_continuous_are``: K = -R^-1 B' P."""
     P = scipy.linalg.solve_continuous_are(A, B, Q, R)
     K = -np.linalg.solve(R, B.T @ P)
     return LqrResult(K, P, np.linalg.eigvals(A + B @ K))
 
 
-def bryson_weights(max_angle: float = 0.1, max_rate: float = 1.0, max_torque: float = 5000.0):
+def bryson_weights(max_angle: float = 0.1, max_rate: float = 1.0,
+                   max_torque: float = 5000.0) -> tuple[np.ndarray, np.ndarray]:
     """Bryson's rule weights for the body-leg: Q = diag(1/x_max^2), R = diag(1/u_max^2)."""
     q = np.array([max_angle, max_rate, max_angle, max_rate], dtype=float) ** -2
     return np.diag(q), np.eye(2) / max_torque**2
@@ -243,7 +247,8 @@ class LocalGainSearch:
 DEFAULT_LOCAL_BOUNDS = np.array([[0.0, 50000.0], [0.0, 5000.0], [0.0, 50000.0], [0.0, 5000.0]])
 
 
-def best_local_gains(p: bl.BodyLegParams, bounds=None, *, seed: int = 0, maxiter: int = 200):
+def best_local_gains(p: bl.BodyLegParams, bounds: ArrayLike | None = None, *, seed: int = 0,
+                     maxiter: int = 200) -> LocalGainSearch:
     """Maximize the stability margin -max Re(lambda(A + B K_local)) over the local gains of eq.
     3.60 inside a box (default: 0..50000 for K1, K2 and 0..5000 for the rate gains, which holds
     both of B's sets). Differential evolution (scipy) then Nelder-Mead polish."""
@@ -283,7 +288,7 @@ class StabilityMap:
 
 
 def stability_map(
-    p: bl.BodyLegParams, k_theta1, k_theta2, k_theta1_dot: float = 2500.0,
+    p: bl.BodyLegParams, k_theta1: ArrayLike, k_theta2: ArrayLike, k_theta1_dot: float = 2500.0,
     k_theta2_dot: float = 400.0,
 ) -> StabilityMap:  # fmt: skip
     """The closed-loop margin over a (K_theta1, K_theta2) grid with the rate gains fixed."""

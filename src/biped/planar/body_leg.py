@@ -24,7 +24,7 @@ from typing import NamedTuple
 import numpy as np
 
 from biped.errors import SingularityError
-from biped.planar._checks import check_positive, check_state, solve3
+from biped.planar._checks import Vector, check_positive, check_state, solve3
 
 
 @dataclass(frozen=True)
@@ -72,7 +72,7 @@ def mass_matrix(p: BodyLegParams, theta1: float, theta2: float) -> np.ndarray:
     return np.array([[p.m * p.r**2, mrl * c], [mrl * c, p.I + p.m * p.l**2]])
 
 
-def lagrange(p: BodyLegParams, x, u) -> BodyLegAccel:
+def lagrange(p: BodyLegParams, x: Vector, u: Vector) -> BodyLegAccel:
     """Nonlinear Lagrangian equations, eq. 3.18 and 3.24, solved for the accelerations.
 
     m r^2 t1dd + m l r cos(t2 - t1) t2dd + m l r t2d^2 sin(t1 - t2) - m g r sin t1 = M_1 - M_2
@@ -98,7 +98,7 @@ def lagrange(p: BodyLegParams, x, u) -> BodyLegAccel:
     return BodyLegAccel((a22 * b1 - a12 * b2) / det, (a11 * b2 - a12 * b1) / det)
 
 
-def lagrange_linear(p: BodyLegParams, x, u) -> BodyLegAccel:
+def lagrange_linear(p: BodyLegParams, x: Vector, u: Vector) -> BodyLegAccel:
     """Linearized equations 3.47, 3.48 as B's Lisp code integrates them (eq. 3.51, 3.54).
 
     t1dd = (l^2 m^2 r g t2 - m g r (I + m l^2) t1 - (I + m l^2) M_1 + (l m r + I + m l^2) M_2)
@@ -125,7 +125,8 @@ def leg_reaction(p: BodyLegParams, M1: float, M2: float) -> float:
     return (M1 - M2) / p.r
 
 
-def newton_euler_system(p: BodyLegParams, x, u, *, as_printed: bool = False):
+def newton_euler_system(p: BodyLegParams, x: Vector, u: Vector, *,
+                        as_printed: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """The 3x3 matrix and right-hand side of eq. 3.42 in the unknowns (t1dd, t2dd, F).
 
     Rows: body rotation (eq. 3.31 with F_r of eq. 3.28), body y and z translation (eq. 3.40,
@@ -154,7 +155,7 @@ def newton_euler_system(p: BodyLegParams, x, u, *, as_printed: bool = False):
     return a, b
 
 
-def newton_euler(p: BodyLegParams, x, u, *, as_printed: bool = False) -> BodyLegAccel:
+def newton_euler(p: BodyLegParams, x: Vector, u: Vector, *, as_printed: bool = False) -> BodyLegAccel:
     """Newton-Euler 3x3 form, eq. 3.42, with the leg reaction F_r of eq. 3.28.
 
     Solves for (t1dd, t2dd, F); the matrix has determinant -m r (I + m l^2 sin^2(t2 - t1)), so it is
@@ -165,7 +166,7 @@ def newton_euler(p: BodyLegParams, x, u, *, as_printed: bool = False) -> BodyLeg
     return BodyLegAccel(float(y[0]), float(y[1]), float(y[2]), (float(u[0]) - float(u[1])) / p.r)
 
 
-def newton_euler_printed(p: BodyLegParams, x, u) -> BodyLegAccel:
+def newton_euler_printed(p: BodyLegParams, x: Vector, u: Vector) -> BodyLegAccel:
     """Eq. 3.42 exactly as B prints it and as B's Lisp code integrates it (see newton_euler)."""
     return newton_euler(p, x, u, as_printed=True)
 
@@ -179,7 +180,7 @@ BODY_LEG_METHODS = {
 }
 
 
-def points(p: BodyLegParams, x) -> dict[str, np.ndarray]:
+def points(p: BodyLegParams, x: Vector) -> dict[str, np.ndarray]:
     """Ankle, hip, body centre of mass and the body's top (2 l above the hip), each (2,) (y, z)
     [ft], for drawing (eq. 3.32, 3.33)."""
     t1, t2 = float(x[0]), float(x[2])
@@ -188,7 +189,7 @@ def points(p: BodyLegParams, x) -> dict[str, np.ndarray]:
     return {"ankle": np.zeros(2), "hip": hip, "com": hip + p.l * b, "top": hip + 2 * p.l * b}
 
 
-def energy(p: BodyLegParams, x) -> float:
+def energy(p: BodyLegParams, x: Vector) -> float:
     """Kinetic plus potential energy (eq. 3.10, 3.11) [lb ft^2/s^2]."""
     t1, t1d, t2, t2d = (float(v) for v in x)
     m, I, r, l, g = p.m, p.I, p.r, p.l, p.g

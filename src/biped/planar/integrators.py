@@ -14,7 +14,7 @@ from collections.abc import Callable
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from biped.planar._checks import check_choice
+from biped.planar._checks import Vector, check_choice
 
 Rhs = Callable[[float, np.ndarray], np.ndarray]
 
@@ -78,7 +78,7 @@ def get(name: str):
     return INTEGRATORS[check_choice("integrator", name, INTEGRATORS)]
 
 
-def integrate(f: Rhs, x0, t_end: float, dt: float, method: str = "rk4") -> np.ndarray:
+def integrate(f: Rhs, x0: Vector, t_end: float, dt: float, method: str = "rk4") -> np.ndarray:
     """Integrate from t = 0 to ``t_end`` with ``n = round(t_end / dt)`` fixed steps; returns the
     (n + 1, len(x0)) states."""
     step = get(method)

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from biped.errors import SingularityError
-from biped.planar._checks import check_positive, check_state
+from biped.planar._checks import Vector, check_positive, check_state
 
 #: Distance [rad] from theta = +-pi/2 inside which the Euler-angle posture is refused.
 GIMBAL_TOLERANCE = 1e-3
@@ -37,7 +37,7 @@ class RigidBodyParams:
         check_positive("mass", self.mass)
         if len(self.inertia) != 3:
             raise ValueError("inertia must be (I_xx, I_yy, I_zz)")
-        for name, v in zip(("I_xx", "I_yy", "I_zz"), self.inertia):
+        for name, v in zip(("I_xx", "I_yy", "I_zz"), self.inertia, strict=True):
             check_positive(name, v)
         check_positive("g", self.g, allow_zero=True)
 
@@ -85,7 +85,8 @@ def body_rate_to_euler_rate_matrix(phi: float, theta: float) -> np.ndarray:
     return np.array([[1.0, tth * sph, tth * cph], [0.0, cph, -sph], [0.0, sph / cth, cph / cth]])
 
 
-def velocity_growth_rate(p: RigidBodyParams, posture, velocity, force, torque) -> np.ndarray:
+def velocity_growth_rate(p: RigidBodyParams, posture: Vector, velocity: Vector, force: Vector,
+                         torque: Vector) -> np.ndarray:
     """(u_dot, v_dot, w_dot, p_dot, q_dot, r_dot), eq. 4.24 and 4.25 (Frank and McGhee).
 
     u_dot = r v - q w + f_x / m - g sin theta
@@ -112,7 +113,7 @@ def velocity_growth_rate(p: RigidBodyParams, posture, velocity, force, torque) -
     )
 
 
-def earth_velocity(posture, velocity) -> np.ndarray:
+def earth_velocity(posture: Vector, velocity: Vector) -> np.ndarray:
     """Posture rate (x_dot, y_dot, z_dot, phi_dot, theta_dot, psi_dot) = (R v_b, T w_b)."""
     _, _, _, phi, theta, psi = posture
     R = rotation_matrix(phi, theta, psi)
@@ -120,7 +121,7 @@ def earth_velocity(posture, velocity) -> np.ndarray:
     return np.concatenate([R @ np.asarray(velocity[:3]), T @ np.asarray(velocity[3:])])
 
 
-def state_derivative(p: RigidBodyParams, state, wrench) -> np.ndarray:
+def state_derivative(p: RigidBodyParams, state: Vector, wrench: Vector) -> np.ndarray:
     """d/dt of the 12-state (posture, velocity) under a body-frame wrench (f_x, f_y, f_z, L, M, N)
     (biped.spatial's [f; tau] order)."""
     s = check_state(state, 12, "rigid-body state (x, y, z, phi, theta, psi, u, v, w, p, q, r)")
@@ -130,7 +131,7 @@ def state_derivative(p: RigidBodyParams, state, wrench) -> np.ndarray:
     )
 
 
-def update_rigid_body(p: RigidBodyParams, state, wrench, dt: float) -> np.ndarray:
+def update_rigid_body(p: RigidBodyParams, state: Vector, wrench: Vector, dt: float) -> np.ndarray:
     """One step of the Lisp ``update-rigid-body`` (Euler): posture with the old velocity, then
     velocity with the growth rate (here evaluated at the start of the step). Returns the new
     12-state."""
@@ -138,13 +139,13 @@ def update_rigid_body(p: RigidBodyParams, state, wrench, dt: float) -> np.ndarra
     return np.asarray(state, dtype=float) + dt * d
 
 
-def kinetic_energy(p: RigidBodyParams, state) -> float:
+def kinetic_energy(p: RigidBodyParams, state: Vector) -> float:
     """1/2 m |v|^2 + 1/2 w' I w [lb ft^2/s^2]."""
     v, w = np.asarray(state[6:9]), np.asarray(state[9:12])
     return 0.5 * p.mass * float(v @ v) + 0.5 * float(w @ (np.asarray(p.inertia) * w))
 
 
-def angular_momentum_earth(p: RigidBodyParams, state) -> np.ndarray:
+def angular_momentum_earth(p: RigidBodyParams, state: Vector) -> np.ndarray:
     """Angular momentum about the centre of mass in earth axes, R I w, (3,) [lb ft^2/s]."""
     R = rotation_matrix(*state[3:6])
     return R @ (np.asarray(p.inertia) * np.asarray(state[9:12]))

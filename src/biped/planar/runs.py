@@ -12,9 +12,11 @@ from __future__ import annotations
 
 import math
 import time as _time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from biped.errors import BipedError, ScenarioError, StateError
 from biped.planar import body_leg as bl
@@ -56,11 +58,11 @@ class LocalFeedback:
     def gains(self) -> tuple[float, float, float, float]:
         return (self.k_theta1, self.k_theta1_dot, self.k_theta2, self.k_theta2_dot)
 
-    def pendulum_torque(self, x) -> np.ndarray:
+    def pendulum_torque(self, x: np.ndarray) -> np.ndarray:
         """(1,) torque M of eq. 4.32 for the pendulum state (theta, theta_dot)."""
         return np.array([-self.k_theta1 * (x[0] - self.alpha1) - self.k_theta1_dot * x[1]])
 
-    def body_leg_torques(self, x) -> np.ndarray:
+    def body_leg_torques(self, x: np.ndarray) -> np.ndarray:
         """(2,) torques (M_1, M_2) of eq. 3.6, 3.7 for the body-leg state (eq. 3.1)."""
         return np.array(
             [
@@ -135,10 +137,12 @@ def _run(model, method, acc_fn, nq, torque_fn, x0, dt, duration, integrator, hol
         x = xs[i]
         u = torque_fn(x)
         us[i] = u
+        f: Callable[[float, np.ndarray], np.ndarray]
         if hold:
-            f = lambda t, y, u=u: rhs(t, y, u)
+            f = lambda t, y, u=u: rhs(t, y, u)  # type: ignore[misc]
         else:
             f = lambda t, y: rhs(t, y, torque_fn(y))
+        cause: Exception | None
         try:
             with np.errstate(over="ignore", invalid="ignore"):
                 x_next = step(f, i * dt, x, dt)
@@ -164,8 +168,8 @@ def _run(model, method, acc_fn, nq, torque_fn, x0, dt, duration, integrator, hol
 def simulate_pendulum(
     params: pd.PendulumParams | None = None,
     method: str = "newton-euler",
-    gains=PENDULUM_GAINS,
-    x0=(1.0, 0.0),
+    gains: ArrayLike = PENDULUM_GAINS,
+    x0: ArrayLike = (1.0, 0.0),
     dt: float = 0.02,
     duration: float = 20.0,
     integrator: str = "euler",
@@ -194,7 +198,7 @@ def simulate_pendulum(
     )
     forces = {}
     if method.startswith("newton-euler"):
-        sol = [fn(params, x[0], x[1], u[0]) for x, u in zip(xs, us)]
+        sol = [fn(params, x[0], x[1], u[0]) for x, u in zip(xs, us, strict=True)]
         forces = {"fx": np.array([s.fx for s in sol]), "fy": np.array([s.fy for s in sol])}
     return Trajectory(
         "pendulum", method, integrator, dt, hold, params, fb,
@@ -205,8 +209,8 @@ def simulate_pendulum(
 def simulate_body_leg(
     params: bl.BodyLegParams | None = None,
     method: str = "lagrange-linear",
-    gains=BODY_LEG_GAINS,
-    x0=(0.5, 0.0, 1.0, 0.0),
+    gains: ArrayLike = BODY_LEG_GAINS,
+    x0: ArrayLike = (0.5, 0.0, 1.0, 0.0),
     dt: float = 0.01,
     duration: float = 5.0,
     integrator: str = "heun",
@@ -224,10 +228,11 @@ def simulate_body_leg(
     """
     params = params or bl.BodyLegParams()
     fn = bl.BODY_LEG_METHODS[check_choice("body-leg method", method, bl.BODY_LEG_METHODS)]
-    gains = tuple(check_state(gains, 4, "body-leg gains (K1, K1D, K2, K2D)"))
+    k1, k1d, k2, k2d = check_state(gains, 4, "body-leg gains (K1, K1D, K2, K2D)")
+    gains = (k1, k1d, k2, k2d)
     alpha = tuple(check_state(alpha, 2, "set points (alpha_1, alpha_2)"))
     x0 = check_state(x0, 4, "body-leg x0 (theta1, theta1_dot, theta2, theta2_dot)")
-    fb = LocalFeedback(*gains, alpha1=alpha[0], alpha2=alpha[1])
+    fb = LocalFeedback(k1, k1d, k2, k2d, alpha1=alpha[0], alpha2=alpha[1])
     integrators.get(integrator)
 
     def acc(x, u):
@@ -239,7 +244,7 @@ def simulate_body_leg(
     )  # fmt: skip
     forces = {}
     if method.startswith("newton-euler"):
-        sol = [fn(params, x, u) for x, u in zip(xs, us)]
+        sol = [fn(params, x, u) for x, u in zip(xs, us, strict=True)]
         forces = {"F": np.array([s.F for s in sol]), "F_r": np.array([s.F_r for s in sol])}
     return Trajectory(
         "body-leg", method, integrator, dt, hold, params, fb,
@@ -248,7 +253,7 @@ def simulate_body_leg(
 
 
 def simulate_pendulum_as_lisp(
-    params: pd.PendulumParams | None = None, gains=PENDULUM_GAINS, x0=(1.0, 0.0),
+    params: pd.PendulumParams | None = None, gains: ArrayLike = PENDULUM_GAINS, x0: ArrayLike = (1.0, 0.0),
     dt: float = 0.02, steps: int = 1001,
 ) -> Trajectory:  # fmt: skip
     """B's Fig. 25 run exactly as its Lisp rigid-body class steps it (Appendix A).
@@ -271,8 +276,8 @@ def simulate_pendulum_as_lisp(
         a_prev = a_now
         xs.append(x.copy())
     us.append(fb.pendulum_torque(x))
-    xs = np.array(xs)
+    states = np.array(xs)
     return Trajectory(
         "pendulum", "newton-euler", "lisp-delayed-euler", dt, True, params, fb,
-        np.arange(len(xs)) * dt, xs, np.array(us), {}, 0.0,
+        np.arange(len(states)) * dt, states, np.array(us), {}, 0.0,
     )  # fmt: skip

@@ -45,7 +45,7 @@ class Derivation:
 
         def evaluate(params, q, qd, torques):
             acc, frc = f(*params, *q, *qd, *torques)
-            return np.array(acc, dtype=float), dict(zip(names, map(float, frc)))
+            return np.array(acc, dtype=float), dict(zip(names, map(float, frc), strict=True))
 
         return evaluate
 
@@ -228,7 +228,7 @@ def rigid_body() -> RigidBodyDerivation:
     kdd = km.kindiffdict()
     qsym = sp.symbols("q0:6", real=True)
     usym = sp.symbols("u0:6", real=True)
-    rep = dict(zip(us, usym)) | dict(zip(qs, qsym))
+    rep = dict(zip(us, usym, strict=True)) | dict(zip(qs, qsym, strict=True))
     return RigidBodyDerivation(
         params=(m, Ixx, Iyy, Izz, g),
         q=qsym,

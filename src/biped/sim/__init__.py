@@ -1,9 +1,11 @@
 """W's push-recovery experiment (section 4) closed loop on MuJoCo.
 
 >>> from biped.sim import Scenario, simulate
->>> result = simulate(Scenario())
->>> from biped.outputs.push import write_outputs     # files are written a layer above
->>> write_outputs(result, "runs/w-default")
+>>> result = simulate(Scenario(duration_s=0.2))     # W's push, cut short (default 3 s)
+>>> result.block_contact_time_s, result.fell
+(0.082, False)
+
+Files are written a layer above, by :func:`biped.outputs.push.write_outputs`.
 """
 
 from biped.sim import mjlog as _mjlog

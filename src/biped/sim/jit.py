@@ -64,7 +64,7 @@ def is_cached(dispatcher) -> bool | None:
         return True  # compiled in this process already
     cache = getattr(dispatcher, "_cache", None)
     try:
-        index = cache._cache_file._load_index()
+        index = cache._cache_file._load_index()  # type: ignore[union-attr]
         from numba.core.registry import cpu_target
 
         magic = cpu_target.target_context.codegen().magic_tuple()

@@ -4,7 +4,7 @@ pressure (W section 4's outputs, and what a biomechanics lab measures with force
 
 >>> from biped.sim import Scenario, simulate, build_scene
 >>> from biped.sim.measure import measure_rows
->>> scenario = Scenario(duration_s=0.5)
+>>> scenario = Scenario(duration_s=0.05)       # before the block hits (0.082 s)
 >>> scene = build_scene(scenario)
 >>> result = simulate(scenario, scene=scene)
 >>> rows = measure_rows(scene, result)

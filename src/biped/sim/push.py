@@ -1,10 +1,12 @@
 """W section 4 closed loop on MuJoCo: the biped rises to its set point while the block hits it.
 
 >>> from biped.sim import Scenario, simulate
->>> result = simulate(Scenario())          # W's defaults, 3 s
->>> result.recovered, result.final_com_error_m
->>> from biped.outputs.push import write_outputs
->>> write_outputs(result, "runs/mine")      # summary.json, trajectory.csv, figures, video, replay
+>>> result = simulate(Scenario(duration_s=0.2))   # W's defaults but 0.2 s (default 3 s)
+>>> result.block_contact_time_s, result.fell
+(0.082, False)
+
+``biped.outputs.push.write_outputs(result, "runs/mine")`` writes summary.json, trajectory.csv,
+the figures, the video and the replay.
 
 Loop (one control period ``1 / control_rate_hz``): read the biped's qpos/qvel (its own layout,
 picked out of the scene by name), ask the policy for torques, hold them for ``control_substeps``
@@ -116,7 +118,7 @@ class PushResult:
 def orientation_error_deg(quat, target_quat) -> float:
     """Angle [deg] of the rotation between two unit quaternions (w, x, y, z)."""
     c = abs(float(np.dot(quat, target_quat))) / (np.linalg.norm(quat) * np.linalg.norm(target_quat))
-    return math.degrees(2.0 * math.acos(min(1.0, c)))
+    return math.degrees(2.0 * math.acos(min(1.0, float(c))))
 
 
 # ---------------------------------------------------------------------------------------------

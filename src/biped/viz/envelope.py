@@ -1,10 +1,12 @@
 """Polar maps of push-recovery envelopes (plotting only; the numbers come from
 :mod:`biped.analysis`).
 
->>> from biped.viz.envelope import plot_envelope, plot_comparison
->>> fig = plot_envelope("runs/sweep-workspace-none.parquet", by="impulse_n_s")
->>> fig = plot_comparison(["runs/sweep-workspace-none.parquet", "runs/sweep-joint-pd-none.parquet"],
-...                       out="docs/sweep_envelopes.png")
+Usage (needs the sweeps' Parquet files, so not a doctest)::
+
+    from biped.viz.envelope import plot_envelope, plot_comparison
+    fig = plot_envelope("runs/sweep-workspace-none.parquet", by="impulse_n_s")
+    fig = plot_comparison(["runs/sweep-workspace-none.parquet", "runs/sweep-joint-pd-none.parquet"],
+                          out="docs/sweep_envelopes.png")
 
 Each trial is a dot at (direction the block travels, speed or impulse): filled green if the biped
 survived, red cross if not. The line is the envelope (per direction, the largest value below

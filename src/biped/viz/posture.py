@@ -7,6 +7,7 @@ simulates. Uses the object-oriented matplotlib API (no pyplot state, no display 
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -206,7 +207,7 @@ def animate(traj, path, *, fps: float = 20.0, max_frames: int = 80, dpi: int = 7
     dynamic = [clock, com] + ([link] if traj.model == "pendulum" else [leg, body])
     for artist in dynamic:
         artist.set_animated(True)
-    canvas = fig.canvas
+    canvas: Any = fig.canvas  # Agg: copy_from_bbox, restore_region, buffer_rgba
     canvas.draw()  # static background once (blitting)
     background = canvas.copy_from_bbox(fig.bbox)
     images = []

@@ -142,7 +142,7 @@ def fig4_joint_torques(result, zoom=True):
 def fig5_body_position(result, zoom=True):
     """W Fig. 5: central-body COM position [cm] against the set point (right: the first 0.5 s)."""
     fig, axes, zooms = _panels(3, zoom=zoom)
-    for i, (ax, c) in enumerate(zip(axes, "xyz")):
+    for i, (ax, c) in enumerate(zip(axes, "xyz", strict=False)):
         for a in [ax] + zooms[i:i + 1]:
             a.plot(result.times, 100 * result.com[:, i], lw=1.4,
                    label=f"COM {c}" if a is ax else None)
@@ -212,7 +212,7 @@ def fig6_orientation(result, zoom=True):
         err_axes.append(fig.add_subplot(gs[2:4, 1], sharey=err_axes[0]))
     for ax in err_axes:
         for k, (name, col) in enumerate(zip(("roll (x)", "pitch (y)", "yaw (z)"),
-                                            ("tab:purple", "tab:green", "tab:brown"))):
+                                            ("tab:purple", "tab:green", "tab:brown"), strict=False)):
             ax.plot(result.times, rpy[:, k], color=col, lw=1.3, label=name)
         ax.axhline(0.0, color="0.3", ls="-.", lw=1.0)
         mark_events(ax, result)

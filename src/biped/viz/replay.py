@@ -136,7 +136,8 @@ class Replay:
         norms = np.linalg.norm(quat, axis=-1)
         if G and np.max(np.abs(norms - 1.0)) > 1e-3:
             raise StateError(
-                f"quat must hold unit quaternions (w, x, y, z); worst norm {norms.flat[np.argmax(np.abs(norms - 1))]:.6g}")
+                f"quat must hold unit quaternions (w, x, y, z); worst norm "
+                f"{norms.flat[np.argmax(np.abs(norms - 1))]:.6g}")
         if not isinstance(self.title, str):
             raise BipedError(f"title must be a str, got {type(self.title).__name__}")
         if not isinstance(self.info, Mapping):
@@ -323,15 +324,15 @@ def replay_from_mujoco(model: mujoco.MjModel, times, qpos, *, geom_groups=None,
     pos = np.empty((T, G, 3))
     quat = np.empty((T, G, 4))
     ids_arr = np.asarray(ids)
-    offsets = np.asarray(offsets)
-    has_offset = bool(np.any(offsets))
+    offsets_arr = np.asarray(offsets)
+    has_offset = bool(np.any(offsets_arr))
     for t in range(T):
         data.qpos[:] = qpos[t]
         mujoco.mj_kinematics(model, data)
         xmat = data.geom_xmat[ids_arr].reshape(G, 3, 3)
         pos[t] = data.geom_xpos[ids_arr]
         if has_offset:
-            pos[t] += np.einsum("gij,gj->gi", xmat, offsets)
+            pos[t] += np.einsum("gij,gj->gi", xmat, offsets_arr)
         for g in range(G):
             mujoco.mju_mat2Quat(quat[t, g], data.geom_xmat[ids_arr[g]])
     return Replay(geoms=tuple(geoms), times=times, pos=pos, quat=quat, title=title,

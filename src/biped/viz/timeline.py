@@ -165,7 +165,7 @@ def overlay_text(frame_times: Sequence[float], fps: float, *, events: Iterable[M
     out = []
     for k, tau in enumerate(ft):
         speed = next((w.speed for w in wins if w.start_s <= tau < w.end_s), None)
-        shown = [f"{t:.3f} s  {lab}" for (t, lab), f in zip(evs, first)
+        shown = [f"{t:.3f} s  {lab}" for (t, lab), f in zip(evs, first, strict=False)
                  if f <= k and (k - f) / fps < hold_s]
         out.append({"time": f"t = {tau:.3f} s",
                     "speed": f"{speed:g}x slow motion" if speed is not None else "",

@@ -44,7 +44,7 @@ def _stance_bands(ax, times, stance):
     for j, sd in enumerate(("left", "right")):
         st = np.concatenate([[False], stance[:, j], [False]]).astype(int)
         d = np.diff(st)
-        for a, b in zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)):
+        for a, b in zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1), strict=True):
             ax.axvspan(times[a], times[b - 1], ymin=0.0 if j == 0 else 0.03, ymax=0.03 if j == 0 else 0.06,
                        color=_SIDE_COLOURS[sd], alpha=0.6, lw=0)
 
@@ -72,7 +72,7 @@ def plot_joint_angles(motion, path) -> Path:
         ("elbow flexion", "elbow_flexion"),
     ]
     fig, axes = plt.subplots(len(panels) + 1, 1, figsize=(10, 12), sharex=True)
-    for ax, (title, j) in zip(axes, panels):
+    for ax, (title, j) in zip(axes, panels, strict=False):
         for sd in ("left", "right"):
             ax.plot(t, a[:, J[f"{sd}_{j}"]], color=_SIDE_COLOURS[sd], lw=1.0, label=sd)
         ax.set_ylabel(f"{title}\n[deg]", fontsize=8)
@@ -84,7 +84,8 @@ def plot_joint_angles(motion, path) -> Path:
     ax.plot(t, a[:, J["torso_roll"]], color="tab:green", lw=1.0, label="torso roll")
     ax.plot(t, a[:, J["torso_pitch"]], color="tab:purple", lw=1.0, label="torso pitch (lean)")
     if np.any(motion.pelvis_pitch != 0):
-        ax.plot(t, np.degrees(motion.pelvis_pitch) / 10.0, color="k", lw=0.8, label="pelvis pitch / 10 (somersault; 360 deg = 0)")
+        ax.plot(t, np.degrees(motion.pelvis_pitch) / 10.0, color="k", lw=0.8,
+                label="pelvis pitch / 10 (somersault; 360 deg = 0)")
     ax.set_ylabel("torso [deg]", fontsize=8)
     ax.legend(loc="upper right", fontsize=7)
     _markers(ax, motion.plan.markers)
@@ -143,10 +144,11 @@ def inverse_dynamics_figure(result, markers):
     t = result.times
     names = list(result.joint_names)
     fig, axes = plt.subplots(5, 1, figsize=(10, 13), sharex=True)
-    for ax, joints, title in ((axes[0], ("hip_flexion", "knee", "ankle_dorsiflexion"), "sagittal torques"),
-                              (axes[1], ("hip_abduction", "hip_rotation", "ankle_inversion"), "frontal / axial torques")):
+    panels = ((axes[0], ("hip_flexion", "knee", "ankle_dorsiflexion"), "sagittal torques"),
+              (axes[1], ("hip_abduction", "hip_rotation", "ankle_inversion"), "frontal / axial torques"))
+    for ax, joints, title in panels:
         styles = ("-", "--", ":")
-        for j, ls in zip(joints, styles):
+        for j, ls in zip(joints, styles, strict=True):
             for sd in ("left", "right"):
                 ax.plot(t, result.torques[:, names.index(f"{sd}_{j}")], color=_SIDE_COLOURS[sd], ls=ls, lw=0.9,
                         label=f"{sd} {j}")
@@ -155,10 +157,10 @@ def inverse_dynamics_figure(result, markers):
         _markers(ax, markers, labels=ax is axes[0])
     ax = axes[2]
     mg = result.mass * result.gravity
-    for j, sd in enumerate(("left", "right")):
-        ax.plot(t, result.grf[:, j, 2], color=_SIDE_COLOURS[sd], lw=1.0, label=f"{sd} vertical")
-        ax.plot(t, result.grf[:, j, 0], color=_SIDE_COLOURS[sd], lw=0.8, ls="--", label=f"{sd} forward")
-        ax.plot(t, result.grf[:, j, 1], color=_SIDE_COLOURS[sd], lw=0.6, ls=":", label=f"{sd} lateral")
+    for k, sd in enumerate(("left", "right")):
+        ax.plot(t, result.grf[:, k, 2], color=_SIDE_COLOURS[sd], lw=1.0, label=f"{sd} vertical")
+        ax.plot(t, result.grf[:, k, 0], color=_SIDE_COLOURS[sd], lw=0.8, ls="--", label=f"{sd} forward")
+        ax.plot(t, result.grf[:, k, 1], color=_SIDE_COLOURS[sd], lw=0.6, ls=":", label=f"{sd} lateral")
     ax.axhline(mg, color="k", lw=0.6, ls="-.", label="body weight")
     ax.axhline(0, color="k", lw=0.4)
     ax.set_ylabel("ground reaction\nforce [N]", fontsize=8)
@@ -166,8 +168,8 @@ def inverse_dynamics_figure(result, markers):
     _markers(ax, markers)
     ax = axes[3]
     fr = result.friction_ratio()
-    for j, sd in enumerate(("left", "right")):
-        ax.plot(t, fr[:, j], color=_SIDE_COLOURS[sd], lw=0.9, label=sd)
+    for k, sd in enumerate(("left", "right")):
+        ax.plot(t, fr[:, k], color=_SIDE_COLOURS[sd], lw=0.9, label=sd)
     ax.axhline(0.3, color="k", lw=0.6, ls="-.", label="W's friction 0.3")
     # log scale up to the peak: the summary's peak_friction_ratio (e.g. 15.7) is on the axis
     finite = fr[np.isfinite(fr) & (fr > 0)]

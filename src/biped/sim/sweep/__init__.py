@@ -6,8 +6,13 @@ of travel, its mass, its height and a scale on the controller gains, around one 
 
 >>> from biped.sim.sweep import SweepSpec, run_sweep
 >>> spec = SweepSpec(axes={"speed_m_s": (2, 4, 6), "direction_deg": range(0, 360, 45)})
->>> summary = run_sweep(spec, "sweep.parquet")          # all local cores, processes
->>> summary = run_sweep(spec, "sweep.parquet", scheduler="tcp://10.0.0.5:8786")   # Dask
+>>> spec.n_trials
+24
+
+then (minutes of simulation, so not a doctest)::
+
+    summary = run_sweep(spec, "sweep.parquet")          # all local cores, processes
+    summary = run_sweep(spec, "sweep.parquet", scheduler="tcp://10.0.0.5:8786")   # Dask
 
 One concept per module:
 
