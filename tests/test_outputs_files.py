@@ -202,12 +202,12 @@ def test_push_outputs_report_stages_and_video_frames(tmp_path, monkeypatch):
     from biped.sim import Scenario, simulate
     from biped.viz.video import VideoResult
 
-    def fake_render(model, times, qpos, path, progress=None, **kw):
+    def fake_render(model, result, path, progress=None, **kw):
         for i in range(2):
             progress(i + 1, 2)
         return VideoResult(None, "stubbed", None, 0)
 
-    monkeypatch.setattr(push_out, "render_video", fake_render)
+    monkeypatch.setattr(push_out, "render_push_video", fake_render)
     stages, frames = [], []
     push_out.write_outputs(simulate(Scenario(duration_s=0.02)), tmp_path, figures=False,
                            replay=False, log=lambda m: None, on_stage=stages.append,

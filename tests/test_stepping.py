@@ -109,7 +109,7 @@ def test_summary_has_steps(tmp_path):
     assert d["steps"] == []
     json.dumps(d)
     cols = trajectory_columns(r.joint_names)
-    assert cols[-6:] == [f"{f}_foot_{a}" for f in ("left", "right") for a in "xyz"]
+    assert {f"{f}_foot_{a}" for f in ("left", "right") for a in "xyz"} <= set(cols)
 
 
 def test_cli_flags_set_the_key():

@@ -79,9 +79,9 @@ def build_plan(args):
     if not (math.isfinite(args.speed) and args.speed > 0):
         raise ScenarioError(f"--speed: speed must be a positive number of m/s, got {args.speed!r}")
     check_range("--speed", args.speed, *SPEED_RANGE, "m/s, human walking speeds")
-    for flag, v in (("--stair-rise", args.stair_rise), ("--stair-run", args.stair_run)):
+    for opt, v in (("--stair-rise", args.stair_rise), ("--stair-run", args.stair_run)):
         if v is not None:
-            check_range(flag, v, 0.0, 2.0, "m", lo_open=True)
+            check_range(opt, v, 0.0, 2.0, "m", lo_open=True)
     dims = FigureDims.from_mjcf(args.model) if getattr(args, "model", None) else FigureDims.from_anthropometry()
     params = GaitParams()
     if args.no_somersault:
@@ -91,21 +91,23 @@ def build_plan(args):
         raise ScenarioError(f"--steps must be in [1, {MAX_STEPS}] (bounds the run), got {steps}")
     try:
         if args.gait == "forward":
+            assert steps is not None  # every gait but jump and demo has a default
             plan = step_forward(dims, steps, args.speed, params)
         elif args.gait == "upstairs":
+            assert steps is not None
             plan = step_upward(dims, steps, args.speed, params, args.stair_rise, args.stair_run)
         elif args.gait == "jump":
             plan = jump(dims, args.speed, params)
         else:
             plan = demo(dims, args.speed, params, rise=args.stair_rise, run=args.stair_run)
     except ScenarioError as exc:  # the stairs' geometric limits: name the options
-        msg = str(exc)
-        flag = ("--stair-rise / --stair-run" if msg.startswith("stair rise") and " and run " in msg
-                else "--stair-rise" if msg.startswith("stair rise")
-                else "--stair-run" if msg.startswith("stair run") else None)
+        text = str(exc)
+        flag = ("--stair-rise / --stair-run" if text.startswith("stair rise") and " and run " in text
+                else "--stair-rise" if text.startswith("stair rise")
+                else "--stair-run" if text.startswith("stair run") else None)
         if flag is None:
             raise
-        raise ScenarioError(f"{flag}: {msg}") from None
+        raise ScenarioError(f"{flag}: {text}") from None
     if plan.duration > MAX_MOTION_S:
         raise ScenarioError(f"the motion lasts {plan.duration:.1f} s, more than the limit of "
                             f"{MAX_MOTION_S:g} s (bounds the run: every second is simulated, "

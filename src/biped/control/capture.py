@@ -77,7 +77,14 @@ def predict_capture_point(xi, cop, omega: float, t: float) -> np.ndarray:
 
 def convex_hull(points) -> np.ndarray:
     """Counter-clockwise convex hull (p, 2) of (n, 2) points (Andrew's monotone chain)."""
-    pts = sorted(set(map(tuple, np.asarray(points, dtype=float).reshape(-1, 2))))
+    arr = np.asarray(points, dtype=float).reshape(-1, 2)
+    # points closer than 1e-12 of the set's extent are one point (rounding, denormal offsets):
+    # snap them to that grid before the exact orientation tests
+    scale = float(np.abs(arr).max()) if arr.size else 0.0
+    if scale > 0:
+        q = 1e-12 * scale
+        arr = np.round(arr / q) * q
+    pts = sorted(set(map(tuple, arr)))
     if len(pts) < 3:
         return np.array(pts, dtype=float)
 

@@ -207,7 +207,7 @@ class SteppingController:
         self.phase = "double"
         self.target = self.base_target
         self.steps: list[dict] = []
-        self.swing = None  # index of the swinging foot
+        self.swing: int | None = None  # index of the swinging foot
         self._mid0: np.ndarray | None = None  # the feet's midpoint at the first call
         self._t_start = 0.0
         self._p0: np.ndarray | None = None
@@ -292,6 +292,7 @@ class SteppingController:
     def _swing_call(self, t, qpos, qvel, xi, omega, feet):
         s = self.stepping
         i = self.swing
+        assert i is not None  # called only while a foot swings
         st = 1 - i
         step = self.steps[-1]
         el = t - self._t_start
@@ -389,6 +390,7 @@ class SteppingController:
 
     def _touch_down(self, t, qpos, qvel, feet):
         i = self.swing
+        assert i is not None and self._mid0 is not None  # a foot swings, after the first call
         step = self.steps[-1]
         c, _ = self._sole_pose(i)
         step["touch_down_s"] = t

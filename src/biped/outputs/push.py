@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -269,7 +270,7 @@ def write_outputs(result: PushResult, out_dir: str | Path, *, figures: bool = Tr
     stage("trajectory.csv")
     scene = scene or build_scene(result.scenario)
     rows = measure_rows(scene, result)
-    written = {"trajectory": write_trajectory_csv(result, out / "trajectory.csv", rows=rows),
+    written: dict[str, Any] = {"trajectory": write_trajectory_csv(result, out / "trajectory.csv", rows=rows),
                "columns": write_json(out / "columns.json", column_dictionary(result.joint_names)),
                "summary": write_summary(result, out / "summary.json", rows=rows)}
     (out / "scenario.toml").write_text(result.scenario.to_toml())

@@ -174,7 +174,8 @@ class ControllerPolicy:
 
 
 def controller_policy(scenario: Scenario, scene: Scene, *, gain_scale: float = 1.0,
-                      torque_limits: TorqueLimits | None = None, tree=None) -> ControllerPolicy:
+                      torque_limits: TorqueLimits | None = None, tree=None
+                      ) -> Callable[[float, np.ndarray, np.ndarray, tuple[bool, bool]], np.ndarray]:
     """The loop policy of ``scenario``'s controller (:func:`policy_config`), torques in
     ``scene.joint_names`` order. ``tree``: a cached :class:`~biped.model.TreeModel` of the biped."""
     config = policy_config(scenario, gain_scale=gain_scale, torque_limits=torque_limits)

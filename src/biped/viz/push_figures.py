@@ -195,7 +195,7 @@ def fig6_orientation(result, zoom=True):
     fig = plt.figure(figsize=(11.5, 7.5))
     gs = fig.add_gridspec(4, 2, width_ratios=(1.6, 1.0))
     q = result.quat * np.sign(result.quat @ result.target_quat)[:, None]  # same hemisphere
-    axes = []
+    axes: list = []
     for i, c in enumerate("wxyz"):
         ax = fig.add_subplot(gs[i, 0], sharex=axes[0] if axes else None)
         ax.plot(result.times, q[:, i], lw=1.4, label=f"q_{c}")

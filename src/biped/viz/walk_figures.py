@@ -175,11 +175,12 @@ def inverse_dynamics_figure(result, markers):
     finite = fr[np.isfinite(fr) & (fr > 0)]
     if finite.size:
         peak = float(finite.max())
-        k, j = np.unravel_index(np.nanargmax(np.where(np.isfinite(fr), fr, -np.inf)), fr.shape)
+        pk, pj = (int(i) for i in np.unravel_index(np.nanargmax(np.where(np.isfinite(fr), fr, -np.inf)),
+                                                   fr.shape))
         ax.set_yscale("log")
         ax.set_ylim(max(min(float(np.percentile(finite, 1)), 0.1) / 2, 1e-3), 2.0 * max(peak, 0.3))
-        ax.plot([t[k]], [peak], "v", color="k", ms=5)
-        ax.annotate(f"peak {peak:.3g} (t = {t[k]:.2f} s, {('left', 'right')[j]})", (t[k], peak),
+        ax.plot([t[pk]], [peak], "v", color="k", ms=5)
+        ax.annotate(f"peak {peak:.3g} (t = {t[pk]:.2f} s, {('left', 'right')[pj]})", (t[pk], peak),
                     textcoords="offset points", xytext=(4, 2), fontsize=7)
     else:
         ax.set_ylim(0, 1.0)

@@ -4,6 +4,7 @@ its MuJoCo scene (built once per process and reused), then :func:`measure` -> :c
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import mujoco
@@ -12,7 +13,7 @@ import numpy as np
 from biped.control.limits import torque_limits
 from biped.model import TreeModel
 from biped.models import subject
-from biped.sim.push import ControllerPolicy, PushResult, controller_policy, run_closed_loop
+from biped.sim.push import PushResult, controller_policy, run_closed_loop
 from biped.sim.scenario import Scenario
 from biped.sim.scene import Scene, build_scene
 from biped.sim.sweep.record import Measured
@@ -47,7 +48,8 @@ def _tree(model: str) -> TreeModel:
     return _TREES[model]
 
 
-def make_policy(setup: TrialSetup, scene: Scene) -> ControllerPolicy:
+def make_policy(setup: TrialSetup, scene: Scene
+                ) -> Callable[[float, np.ndarray, np.ndarray, tuple[bool, bool]], np.ndarray]:
     """The trial's loop policy ``policy(t, qpos_biped, qvel_biped, feet) -> torques (12,)`` in
     ``scene.joint_names`` order (:func:`biped.sim.push.controller_policy`): W's workspace
     controller with the scenario's set point, gains and distribution, or the joint-space PD of
