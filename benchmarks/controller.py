@@ -51,8 +51,13 @@ def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--calls", type=int, default=20000, help="timed calls per function (>= 10^4)")
     ap.add_argument("--rounds", type=int, default=5, help="interleaved rounds the calls are split into")
-    ap.add_argument("--push", type=int, default=0, metavar="N",
-                    help="also time W's default push closed loop, statics vs qp, N times each")
+    ap.add_argument(
+        "--push",
+        type=int,
+        default=0,
+        metavar="N",
+        help="also time W's default push closed loop, statics vs qp, N times each",
+    )
     args = ap.parse_args(argv)
 
     path = str(models.path("wendlandt"))
@@ -68,8 +73,10 @@ def main(argv=None) -> int:
     ctrl.compute(qpos, qvel)  # compiles, or loads numba's cache
     t_first = time.perf_counter() - t0
 
-    qp = {name: WorkspaceController.from_mjcf(path, distribution="qp", qp_solver=name)
-          for name in ("quadprog", "daqp")}
+    qp = {
+        name: WorkspaceController.from_mjcf(path, distribution="qp", qp_solver=name)
+        for name in ("quadprog", "daqp")
+    }
     for c in qp.values():
         c.compute(qpos, qvel)
     qpq, qpd = qp["quadprog"].qp, qp["daqp"].qp
@@ -105,9 +112,11 @@ def main(argv=None) -> int:
             samples[name].append(per_call_us(fn, per_round))
     stats = {name: np.concatenate(s) for name, s in samples.items()}
 
-    print(f"W's biped ({m.nbody - 1} bodies, {m.nv} DOF), {per_round * args.rounds} calls each, "
-          f"{platform.python_implementation()} {platform.python_version()}, "
-          f"{platform.machine()}, {os.cpu_count()} cores")
+    print(
+        f"W's biped ({m.nbody - 1} bodies, {m.nv} DOF), {per_round * args.rounds} calls each, "
+        f"{platform.python_implementation()} {platform.python_version()}, "
+        f"{platform.machine()}, {os.cpu_count()} cores"
+    )
     ref = np.median(stats["pin.aba"]) if "pin.aba" in stats else None
     print(f"{'call':22s} {'median [us]':>12s} {'p99 [us]':>10s} {'/ pin.aba':>10s}")
     for name, s in stats.items():
@@ -115,12 +124,16 @@ def main(argv=None) -> int:
         print(f"{name:22s} {np.median(s):12.2f} {np.percentile(s, 99):10.2f} {ratio}")
     print("W (1997): 7000 us per control call on a 100 MHz SGI R4000")
     med = {name: float(np.median(s)) for name, s in stats.items()}
-    print(f"qp / statics (torques): {med['qp.torques'] / med['controller.torques']:.2f}x; the QP adds "
-          f"{med['qp.torques'] - med['controller.torques']:.1f} us (goal: qp call <= 50 us median)")
-    print(f"QP solve alone: quadprog {med['qp solve (quadprog)']:.1f} us, daqp "
-          f"{med['qp solve (daqp)']:.1f} us (daqp / quadprog "
-          f"{med['qp solve (daqp)'] / med['qp solve (quadprog)']:.2f}); same solution: max |dx| = "
-          f"{np.max(np.abs(qpq._solve_once() - qpd._solve_once())):.1e} N or N m")
+    print(
+        f"qp / statics (torques): {med['qp.torques'] / med['controller.torques']:.2f}x; the QP adds "
+        f"{med['qp.torques'] - med['controller.torques']:.1f} us (goal: qp call <= 50 us median)"
+    )
+    print(
+        f"QP solve alone: quadprog {med['qp solve (quadprog)']:.1f} us, daqp "
+        f"{med['qp solve (daqp)']:.1f} us (daqp / quadprog "
+        f"{med['qp solve (daqp)'] / med['qp solve (quadprog)']:.2f}); same solution: max |dx| = "
+        f"{np.max(np.abs(qpq._solve_once() - qpd._solve_once())):.1e} N or N m"
+    )
 
     # no allocation on the hot path: traced memory after 1000 and after 10000 more calls
     fn = fns["controller.torques"]
@@ -135,10 +148,14 @@ def main(argv=None) -> int:
         growth.append(tracemalloc.get_traced_memory()[0] - base)
     peak = tracemalloc.get_traced_memory()[1] - base
     tracemalloc.stop()
-    print(f"hot path traced memory growth: {growth[0]} bytes after 1000 calls, {growth[1]} bytes after "
-          f"11000 (peak {peak} bytes above the start)")
-    print(f"first call (numba compile or cache load): {t_first:.2f} s; import of biped.control: "
-          f"{t_import:.2f} s")
+    print(
+        f"hot path traced memory growth: {growth[0]} bytes after 1000 calls, {growth[1]} bytes after "
+        f"11000 (peak {peak} bytes above the start)"
+    )
+    print(
+        f"first call (numba compile or cache load): {t_first:.2f} s; import of biped.control: "
+        f"{t_import:.2f} s"
+    )
     if args.push:
         push_ratio(args.push)
     return 0
@@ -161,8 +178,14 @@ def push_ratio(repeat: int) -> None:
         if name == "qp (quadprog)":
             ctrl = policy.policy.controller
             q = ctrl.qp
-            ctrl.qp = ContactQP(ctrl.tree, q.soles, q.weights, q._lo if q.limited else None,
-                                q._hi if q.limited else None, solver="quadprog")
+            ctrl.qp = ContactQP(
+                ctrl.tree,
+                q.soles,
+                q.weights,
+                q._lo if q.limited else None,
+                q._hi if q.limited else None,
+                solver="quadprog",
+            )
         acc = per_call[name] = [0.0, 0]
 
         def timed(t, qpos, qvel, feet, policy=policy, acc=acc):
@@ -188,14 +211,20 @@ def push_ratio(repeat: int) -> None:
             assert res.recovered, f"W's push with {k!r} did not recover"
     med = {k: float(np.median(v)) for k, v in wall.items()}
     medc = {k: float(np.median(v)) for k, v in cpu.items()}
-    print(f"W's push closed loop (3 s, faithful physics), median of {repeat}, interleaved "
-          f"(load average {os.getloadavg()[0]:.1f}: the machine is shared, wall times move with "
-          f"other work; thread CPU is the steadier figure):")
-    print(f"{'':16s} {'wall [ms]':>10s} {'/ statics':>10s} {'CPU [ms]':>10s} {'/ statics':>10s} "
-          f"{'CPU per controller call [us]':>30s}")
+    print(
+        f"W's push closed loop (3 s, faithful physics), median of {repeat}, interleaved "
+        f"(load average {os.getloadavg()[0]:.1f}: the machine is shared, wall times move with "
+        f"other work; thread CPU is the steadier figure):"
+    )
+    print(
+        f"{'':16s} {'wall [ms]':>10s} {'/ statics':>10s} {'CPU [ms]':>10s} {'/ statics':>10s} "
+        f"{'CPU per controller call [us]':>30s}"
+    )
     for k in runs:
-        print(f"{k:16s} {med[k] * 1e3:10.0f} {med[k] / med['statics']:10.2f} {medc[k] * 1e3:10.0f} "
-              f"{medc[k] / medc['statics']:10.2f} {per_call[k][0] / per_call[k][1] * 1e6:30.1f}")
+        print(
+            f"{k:16s} {med[k] * 1e3:10.0f} {med[k] / med['statics']:10.2f} {medc[k] * 1e3:10.0f} "
+            f"{medc[k] / medc['statics']:10.2f} {per_call[k][0] / per_call[k][1] * 1e6:30.1f}"
+        )
     print("goal: qp / statics <= 1.3")
 
 

@@ -41,11 +41,12 @@ def compare_w_run() -> bool:
     print("W's default push (workspace controller, 3 s):")
     for p in PRESETS:
         r = runs[p]
-        print(f"  {p:8s}: recovered={r.recovered} fell={r.fell}, final COM error "
-              f"{r.final_com_error_m * 1e3:.3f} mm, orientation error "
-              f"{r.final_orientation_error_deg:.3f} deg; foot events: "
-              + ", ".join(f"{e.foot} {e.part} {e.kind.replace('_', ' ')} {e.time_s:.3f}"
-                          for e in r.events))
+        print(
+            f"  {p:8s}: recovered={r.recovered} fell={r.fell}, final COM error "
+            f"{r.final_com_error_m * 1e3:.3f} mm, orientation error "
+            f"{r.final_orientation_error_deg:.3f} deg; foot events: "
+            + ", ".join(f"{e.foot} {e.part} {e.kind.replace('_', ' ')} {e.time_s:.3f}" for e in r.events)
+        )
     print("\n| W's event | faithful [s] | fast [s] | difference [ms] |")
     print("|---|---|---|---|")
     worst = 0.0
@@ -55,8 +56,7 @@ def compare_w_run() -> bool:
         worst = max(worst, diff)
         print(f"| {name} | {a} | {b} | {diff * 1e3:.0f} |")
     ok = worst <= 0.010 and runs["fast"].recovered == runs["faithful"].recovered
-    print(f"largest difference {worst * 1e3:.0f} ms (criterion <= 10 ms): "
-          f"{'holds' if ok else 'FAILS'}")
+    print(f"largest difference {worst * 1e3:.0f} ms (criterion <= 10 ms): {'holds' if ok else 'FAILS'}")
     return ok
 
 
@@ -72,8 +72,10 @@ def main() -> None:
     speeds = parse_axis("speed_m_s", args.speeds)
     dirs = parse_axis("direction_deg", args.directions)
     out = Path(args.out)
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores "
-          f"(shared with other work), Python {platform.python_version()}")
+    print(
+        f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores "
+        f"(shared with other work), Python {platform.python_version()}"
+    )
     w_ok = True if args.skip_w else compare_w_run()
     all_ok = True
     for controller in args.controllers.split(","):
@@ -89,8 +91,10 @@ def main() -> None:
                 walls[p] = s.wall_time_s / s.ran
         step = np.diff(speeds).min() if len(speeds) > 1 else math.inf
         a, b = envs["faithful"], envs["fast"]
-        print(f"\n{controller} controller, hold task: largest speed survived before the first "
-              f"fall [m/s] (grid step {step:g} m/s)")
+        print(
+            f"\n{controller} controller, hold task: largest speed survived before the first "
+            f"fall [m/s] (grid step {step:g} m/s)"
+        )
         print("| direction [deg] | faithful | fast | difference [steps] |")
         print("|---|---|---|---|")
         worst = 0
@@ -102,11 +106,12 @@ def main() -> None:
             print(f"| {d:g} | {x:g} | {y:g} | {diff} |")
         ok = worst <= 1 and np.array_equal(a.directions_deg, b.directions_deg)
         all_ok &= ok
-        print(f"largest difference: {worst} grid step(s) (criterion <= 1): "
-              f"{'holds' if ok else 'FAILS'}")
+        print(f"largest difference: {worst} grid step(s) (criterion <= 1): {'holds' if ok else 'FAILS'}")
         if walls:
-            print("wall time per trial (this run): "
-                  + ", ".join(f"{p} {w * 1e3:.0f} ms" for p, w in walls.items()))
+            print(
+                "wall time per trial (this run): "
+                + ", ".join(f"{p} {w * 1e3:.0f} ms" for p, w in walls.items())
+            )
     print(f"\nfast is faithful enough on this grid: {'yes' if all_ok and w_ok else 'NO'}")
 
 

@@ -51,9 +51,7 @@ def main() -> None:
     steps = 500
 
     def loop(method):
-        return lambda: (
-            runs.simulate_body_leg(method=method, duration=steps * 0.01).wall_time / steps
-        )
+        return lambda: runs.simulate_body_leg(method=method, duration=steps * 0.01).wall_time / steps
 
     med = _interleaved({m: loop(m) for m in ("lagrange", "lagrange-linear", "newton-euler")},
                        args.repeats)  # fmt: skip

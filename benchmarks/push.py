@@ -68,7 +68,7 @@ def physics_rollout(scenario, scene, torques, steps, data):
     ctrl[:, scene.actuator_index] = torques[:steps]
     ctrl = np.repeat(ctrl, scenario.control_substeps, axis=0)
     state, _ = rollout.rollout(m, data, x0, ctrl)
-    return state[0, -1, 1:1 + m.nq]  # FULLPHYSICS = (time, qpos, qvel, ...)
+    return state[0, -1, 1 : 1 + m.nq]  # FULLPHYSICS = (time, qpos, qvel, ...)
 
 
 def main() -> None:
@@ -77,8 +77,7 @@ def main() -> None:
     ap.add_argument("--physics", choices=("faithful", "fast"), default="faithful")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     args = ap.parse_args()
-    scenario = Scenario(physics=args.physics).with_overrides(
-        **dict(parse_assignment(a) for a in args.set))
+    scenario = Scenario(physics=args.physics).with_overrides(**dict(parse_assignment(a) for a in args.set))
     scene = build_scene(scenario)
     policy = controller_policy(scenario, scene)
     result = run_closed_loop(scenario.with_overrides(duration_s=0.02), scene, policy)  # compile, warm caches
@@ -109,37 +108,61 @@ def main() -> None:
     med = {k: statistics.median(v) for k, v in runs.items()}
     medc = {k: statistics.median(v) for k, v in cpu.items()}
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
-    print(f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
-          f"python {platform.python_version()}, mujoco {mujoco.__version__}; load average "
-          f"{load:.1f} at the end (the machine is shared: wall times move with other work)")
-    print(f"scenario: physics {scenario.physics!r} ({scenario.physics_timestep_s * 1e3:g} ms step, "
-          f"contact time constant {scenario.contact_timeconst_s * 1e3:g} ms"
-          f"{', sleep' if scenario.sleep else ''}), control {scenario.control_rate_hz:g} Hz, "
-          f"controller {scenario.controller}, simulated {sim_time:.3f} s of "
-          f"{scenario.duration_s:g} s"
-          + ("" if sim_time >= scenario.duration_s - 1e-9 else
-             f" (the run ended early: fell={result.fell}, diverged={bool(result.diverged)})"))
-    print(f"physics-only reproduces the closed loop's final state exactly: bare loop {same_loop}, "
-          f"rollout {same_roll}")
+    print(
+        f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores, "
+        f"python {platform.python_version()}, mujoco {mujoco.__version__}; load average "
+        f"{load:.1f} at the end (the machine is shared: wall times move with other work)"
+    )
+    print(
+        f"scenario: physics {scenario.physics!r} ({scenario.physics_timestep_s * 1e3:g} ms step, "
+        f"contact time constant {scenario.contact_timeconst_s * 1e3:g} ms"
+        f"{', sleep' if scenario.sleep else ''}), control {scenario.control_rate_hz:g} Hz, "
+        f"controller {scenario.controller}, simulated {sim_time:.3f} s of "
+        f"{scenario.duration_s:g} s"
+        + (
+            ""
+            if sim_time >= scenario.duration_s - 1e-9
+            else f" (the run ended early: fell={result.fell}, diverged={bool(result.diverged)})"
+        )
+    )
+    print(
+        f"physics-only reproduces the closed loop's final state exactly: bare loop {same_loop}, "
+        f"rollout {same_roll}"
+    )
     print(f"median of {args.repeat}      wall [ms]  x real time   thread CPU [ms]  x real time")
-    names = {"closed": "closed loop", "replay": "the loop, recorded torques",
-             "loop": "physics only, mj_step loop",
-             "rollout": "physics only, mujoco.rollout"}
+    names = {
+        "closed": "closed loop",
+        "replay": "the loop, recorded torques",
+        "loop": "physics only, mj_step loop",
+        "rollout": "physics only, mujoco.rollout",
+    }
     for k, name in names.items():
-        print(f"  {name:28s} {med[k] * 1e3:8.1f}  {sim_time / med[k]:8.1f}    "
-              f"{medc[k] * 1e3:10.1f}    {sim_time / medc[k]:8.1f}")
-    print(f"ratio closed loop / physics-only (mj_step loop): wall {med['closed'] / med['loop']:.3f}, "
-          f"CPU {medc['closed'] / medc['loop']:.3f}   (goal <= 1.25 on faithful)")
-    print(f"ratio closed loop / physics-only (rollout):      wall "
-          f"{med['closed'] / med['rollout']:.3f}, CPU {medc['closed'] / medc['rollout']:.3f}")
-    print(f"closed loop: {sim_time / med['closed']:.1f}x real time wall, "
-          f"{sim_time / medc['closed']:.1f}x on CPU time (goal >= 30x with --physics fast)")
-    print(f"per control period: closed loop {medc['closed'] / steps * 1e6:.1f} us CPU, physics "
-          f"{medc['loop'] / steps * 1e6:.1f} us, the difference (controller, contact monitor, "
-          f"records) {(medc['closed'] - medc['loop']) / steps * 1e6:.1f} us")
-    print(f"  of which the loop's bookkeeping (contact monitor, records, foot poses; the loop "
-          f"replaying the torques) {(medc['replay'] - medc['loop']) / steps * 1e6:.1f} us and the "
-          f"controller in the loop {(medc['closed'] - medc['replay']) / steps * 1e6:.1f} us")
+        print(
+            f"  {name:28s} {med[k] * 1e3:8.1f}  {sim_time / med[k]:8.1f}    "
+            f"{medc[k] * 1e3:10.1f}    {sim_time / medc[k]:8.1f}"
+        )
+    print(
+        f"ratio closed loop / physics-only (mj_step loop): wall {med['closed'] / med['loop']:.3f}, "
+        f"CPU {medc['closed'] / medc['loop']:.3f}   (goal <= 1.25 on faithful)"
+    )
+    print(
+        f"ratio closed loop / physics-only (rollout):      wall "
+        f"{med['closed'] / med['rollout']:.3f}, CPU {medc['closed'] / medc['rollout']:.3f}"
+    )
+    print(
+        f"closed loop: {sim_time / med['closed']:.1f}x real time wall, "
+        f"{sim_time / medc['closed']:.1f}x on CPU time (goal >= 30x with --physics fast)"
+    )
+    print(
+        f"per control period: closed loop {medc['closed'] / steps * 1e6:.1f} us CPU, physics "
+        f"{medc['loop'] / steps * 1e6:.1f} us, the difference (controller, contact monitor, "
+        f"records) {(medc['closed'] - medc['loop']) / steps * 1e6:.1f} us"
+    )
+    print(
+        f"  of which the loop's bookkeeping (contact monitor, records, foot poses; the loop "
+        f"replaying the torques) {(medc['replay'] - medc['loop']) / steps * 1e6:.1f} us and the "
+        f"controller in the loop {(medc['closed'] - medc['replay']) / steps * 1e6:.1f} us"
+    )
     print(f"W (1997): 3 s in 2066 s = {3 / 2066:.4f}x real time")
 
 

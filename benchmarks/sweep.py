@@ -76,16 +76,24 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3)
     ap.add_argument("--reference", type=int, default=5, help="trials timed against bare physics")
     ap.add_argument("--controller", choices=("workspace", "joint-pd"), default="workspace")
-    ap.add_argument("--physics", choices=("faithful", "fast"), default="fast",
-                    help="physics preset (biped sweep's default: fast)")
+    ap.add_argument(
+        "--physics",
+        choices=("faithful", "fast"),
+        default="fast",
+        help="physics preset (biped sweep's default: fast)",
+    )
     args = ap.parse_args()
     base = hold_scenario(Scenario(physics=args.physics)).with_overrides(controller=args.controller)
-    spec = SweepSpec(axes={"speed_m_s": (2.0, 5.0), "direction_deg": (150.0, 210.0)},
-                     samples=args.trials, seed=1, base=base)
+    spec = SweepSpec(
+        axes={"speed_m_s": (2.0, 5.0), "direction_deg": (150.0, 210.0)},
+        samples=args.trials,
+        seed=1,
+        base=base,
+    )
     warm = SweepSpec(axes={"speed_m_s": 3.0}, base=base.with_overrides(duration_s=0.05))
     with tempfile.TemporaryDirectory() as tmp:
         run_sweep(warm, os.path.join(tmp, "warm.parquet"), workers=1, progress=False)
-        pairs = [physics_only(spec.setup(t)) for t in spec.trials()[:args.reference]]
+        pairs = [physics_only(spec.setup(t)) for t in spec.trials()[: args.reference]]
         trial_cpu = statistics.median(p[0] for p in pairs)
         phys_cpu = statistics.median(p[1] for p in pairs)
         times: dict[int, list[float]] = {1: [], 2: []}
@@ -109,28 +117,44 @@ def main() -> None:
     c1, c2 = statistics.median(cpus[1]), statistics.median(cpus[2])
     r1, r2 = args.trials / t1, args.trials / t2
     phys_rate = 1.0 / phys_cpu
-    print(f"machine: {platform.machine()}, {os.cpu_count()} cores, "
-          f"load average {os.getloadavg()[0]:.1f} at the end, Python {platform.python_version()}, "
-          f"MuJoCo {mujoco.__version__}")
-    print(f"{args.trials} trials ({args.controller}, hold task), {sim:.1f} s simulated in all "
-          f"({sim / args.trials:.2f} s per trial); medians")
+    print(
+        f"machine: {platform.machine()}, {os.cpu_count()} cores, "
+        f"load average {os.getloadavg()[0]:.1f} at the end, Python {platform.python_version()}, "
+        f"MuJoCo {mujoco.__version__}"
+    )
+    print(
+        f"{args.trials} trials ({args.controller}, hold task), {sim:.1f} s simulated in all "
+        f"({sim / args.trials:.2f} s per trial); medians"
+    )
     print(f"reference, {args.reference} trials, thread CPU time per trial:")
-    print(f"  physics only (bare mj_step, recorded torques): {1e3 * phys_cpu:7.1f} ms "
-          f"({phys_rate:5.2f} trials/s per core)")
-    print(f"  closed-loop trial (run_trial):                 {1e3 * trial_cpu:7.1f} ms "
-          f"= {trial_cpu / phys_cpu:.2f}x physics only")
+    print(
+        f"  physics only (bare mj_step, recorded torques): {1e3 * phys_cpu:7.1f} ms "
+        f"({phys_rate:5.2f} trials/s per core)"
+    )
+    print(
+        f"  closed-loop trial (run_trial):                 {1e3 * trial_cpu:7.1f} ms "
+        f"= {trial_cpu / phys_cpu:.2f}x physics only"
+    )
     print(f"sweeps, wall time (median of {args.repeat}):")
-    print(f"  1 worker (this process): {t1:7.2f} s  {r1:6.2f} trials/s  "
-          f"= {r1 / phys_rate:.2f} of physics-only on 1 core")
-    print(f"  2 worker processes:      {t2:7.2f} s  {r2:6.2f} trials/s  "
-          f"= {r2 / (2 * phys_rate):.2f} of physics-only on 2 cores")
+    print(
+        f"  1 worker (this process): {t1:7.2f} s  {r1:6.2f} trials/s  "
+        f"= {r1 / phys_rate:.2f} of physics-only on 1 core"
+    )
+    print(
+        f"  2 worker processes:      {t2:7.2f} s  {r2:6.2f} trials/s  "
+        f"= {r2 / (2 * phys_rate):.2f} of physics-only on 2 cores"
+    )
     print(f"  speed-up 2 vs 1: {t1 / t2:.2f}   parallel efficiency: {t1 / t2 / 2:.0%}")
     print(f"  projected 1000 trials on 2 workers: {1000 / r2:.0f} s (goal: <= 60 s)")
     print("sweeps, CPU time (this process + its workers; median):")
-    print(f"  1 worker: {c1:7.2f} s = {1e3 * c1 / args.trials:6.1f} ms per trial   "
-          f"2 workers: {c2:7.2f} s = {1e3 * c2 / args.trials:6.1f} ms per trial")
-    print(f"  CPU-based parallel efficiency CPU(1) / CPU(2): {c1 / c2:.0%}   projected 1000 "
-          f"trials on 2 idle cores: {1000 * c2 / args.trials / 2:.0f} s (goal: <= 60 s)")
+    print(
+        f"  1 worker: {c1:7.2f} s = {1e3 * c1 / args.trials:6.1f} ms per trial   "
+        f"2 workers: {c2:7.2f} s = {1e3 * c2 / args.trials:6.1f} ms per trial"
+    )
+    print(
+        f"  CPU-based parallel efficiency CPU(1) / CPU(2): {c1 / c2:.0%}   projected 1000 "
+        f"trials on 2 idle cores: {1000 * c2 / args.trials / 2:.0f} s (goal: <= 60 s)"
+    )
 
 
 if __name__ == "__main__":

@@ -43,16 +43,18 @@ def main() -> None:
     cam.type = mujoco.mjtCamera.mjCAMERA_FREE
     cam.lookat[:] = d.subtree_com[1]
     cam.distance, cam.azimuth, cam.elevation = 3.5, -110.0, -10.0
-    settings = {"shadow 4096, 4x MSAA (MuJoCo's default)": (4096, 4),
-                "shadow 2048, 4x MSAA (the push video)": (2048, 4),
-                "shadow 2048, no MSAA": (2048, 0)}
+    settings = {
+        "shadow 4096, 4x MSAA (MuJoCo's default)": (4096, 4),
+        "shadow 2048, 4x MSAA (the push video)": (2048, 4),
+        "shadow 2048, no MSAA": (2048, 0),
+    }
     times: dict[str, list[float]] = {k: [] for k in settings}
     for _ in range(args.rounds):
         for name, (texels, samples) in settings.items():
             m.vis.quality.shadowsize, m.vis.quality.offsamples = texels, samples
             ren = mujoco.Renderer(m, 720, 1280)
             ren.update_scene(d, camera=cam)
-            ren.render()                                   # first frame: context set-up
+            ren.render()  # first frame: context set-up
             for _ in range(args.frames):
                 t = time.perf_counter()
                 ren.update_scene(d, camera=cam)
@@ -60,8 +62,10 @@ def main() -> None:
                 times[name].append(time.perf_counter() - t)
             ren.close()
     ref = float(np.median(times[next(iter(settings))]))
-    print(f"{platform.machine()}, {os.cpu_count()} cores, MUJOCO_GL={os.environ['MUJOCO_GL']}, "
-          f"{args.rounds} rounds x {args.frames} frames")
+    print(
+        f"{platform.machine()}, {os.cpu_count()} cores, MUJOCO_GL={os.environ['MUJOCO_GL']}, "
+        f"{args.rounds} rounds x {args.frames} frames"
+    )
     for name, ts in times.items():
         med = float(np.median(ts))
         print(f"  {name:<40} median {med:.3f} s/frame   ratio {med / ref:.2f}")

@@ -150,8 +150,11 @@ def compare_file(pa: Path, pb: Path, root_a: str = "", root_b: str = "") -> tupl
         return compare_csv(a, b)
     if suffix in (".png", ".gif"):
         return compare_image(a, b)
-    first = next(i for i, (x, y) in enumerate(zip(a, b, strict=False)) if x != y) if min(len(a), len(b)) and \
-        any(x != y for x, y in zip(a, b, strict=False)) else min(len(a), len(b))
+    first = (
+        next(i for i, (x, y) in enumerate(zip(a, b, strict=False)) if x != y)
+        if min(len(a), len(b)) and any(x != y for x, y in zip(a, b, strict=False))
+        else min(len(a), len(b))
+    )
     return False, f"bytes differ ({len(a)} vs {len(b)} bytes, first at byte {first})"
 
 
@@ -184,8 +187,10 @@ def main(argv=None) -> int:
     for rel, _, note in rows:
         print(f"  {rel:<{w}}  {note}")
     bad = sum(not ok for _, ok, _ in rows)
-    print(f"{args.a} vs {args.b}: {len(rows) - bad} of {len(rows)} files the same"
-          + ("" if not bad else f", {bad} differ"))
+    print(
+        f"{args.a} vs {args.b}: {len(rows) - bad} of {len(rows)} files the same"
+        + ("" if not bad else f", {bad} differ")
+    )
     return 1 if bad else 0
 
 

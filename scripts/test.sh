@@ -17,9 +17,8 @@ echo "installing biped and the test dependencies (first run: a few minutes)"
 DIRS=(src tests benchmarks scripts)
 echo "== ruff check"
 "$PY" -m ruff check "${DIRS[@]}"
-# enabled once the tree has been formatted (`ruff format src tests benchmarks scripts`):
-# echo "== ruff format --check"
-# "$PY" -m ruff format --check "${DIRS[@]}"
+echo "== ruff format --check"
+"$PY" -m ruff format --check "${DIRS[@]}"
 echo "== mypy"
 "$PY" -m mypy
 echo "== doctests"

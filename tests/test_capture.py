@@ -21,8 +21,13 @@ W = cp.omega0(0.95)
 def _integrate(x0, v0, p, omega, t):
     """x'' = omega^2 (x - p) integrated numerically (RK45, tight tolerances): independent of the
     closed form."""
-    sol = solve_ivp(lambda _, y: [y[2], y[3], omega ** 2 * (y[0] - p[0]), omega ** 2 * (y[1] - p[1])],
-                    (0.0, t), [*x0, *v0], rtol=1e-11, atol=1e-12)
+    sol = solve_ivp(
+        lambda _, y: [y[2], y[3], omega**2 * (y[0] - p[0]), omega**2 * (y[1] - p[1])],
+        (0.0, t),
+        [*x0, *v0],
+        rtol=1e-11,
+        atol=1e-12,
+    )
     return sol.y[:2, -1], sol.y[2:, -1]
 
 

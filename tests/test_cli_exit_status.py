@@ -22,8 +22,15 @@ SRC = str(Path(__file__).resolve().parents[1] / "src")
 
 def _biped(*args, cwd, **kw):
     env = {**os.environ, "PYTHONPATH": SRC + os.pathsep + os.environ.get("PYTHONPATH", "")}
-    return subprocess.Popen([sys.executable, "-m", "biped", *args], cwd=cwd, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kw)
+    return subprocess.Popen(
+        [sys.executable, "-m", "biped", *args],
+        cwd=cwd,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        **kw,
+    )
 
 
 def test_exit_status_table_is_documented():
@@ -36,13 +43,19 @@ def test_exit_status_table_is_documented():
         assert f"`biped {command}`" in doc
 
 
-@pytest.mark.parametrize("argv", [
-    ["push", "--duration", "0"], ["walk", "--speed", "0"], ["posture", "pendulum", "--dt", "0"],
-    ["sweep", "--speed", "0"], ["model", "--stature", "9", "--mass", "50", "--sex", "female",
-                                "--out", "m.xml"],
-    ["model", "--stature", "1.7", "--mass", "50", "--sex", "female", "--out", "/proc/no/m.xml"],
-    ["push", "--no-such-option"], [],
-])
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["push", "--duration", "0"],
+        ["walk", "--speed", "0"],
+        ["posture", "pendulum", "--dt", "0"],
+        ["sweep", "--speed", "0"],
+        ["model", "--stature", "9", "--mass", "50", "--sex", "female", "--out", "m.xml"],
+        ["model", "--stature", "1.7", "--mass", "50", "--sex", "female", "--out", "/proc/no/m.xml"],
+        ["push", "--no-such-option"],
+        [],
+    ],
+)
 def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, argv):
     p = _biped(*argv, cwd=tmp_path)
     _out, err = p.communicate(timeout=120)
@@ -54,14 +67,24 @@ def test_bad_input_exits_2_with_one_line_and_writes_nothing(tmp_path, argv):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize(("sig", "status", "word"), [(signal.SIGTERM, 143, "interrupted"),
-                                                     (signal.SIGINT, 130, "interrupted")])
+@pytest.mark.parametrize(
+    ("sig", "status", "word"), [(signal.SIGTERM, 143, "interrupted"), (signal.SIGINT, 130, "interrupted")]
+)
 def test_a_stopped_push_writes_what_it_computed(tmp_path, sig, status, word):
     # SIGINT back to its default in the child: a shell's background job (CI, nohup ... &) starts
     # with SIGINT ignored, and Python then rightly leaves it ignored
-    p = _biped("push", "--duration", "60", "--no-video", "--no-replay", "--no-figures",
-               "--out", "run", cwd=tmp_path,
-               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    p = _biped(
+        "push",
+        "--duration",
+        "60",
+        "--no-video",
+        "--no-replay",
+        "--no-figures",
+        "--out",
+        "run",
+        cwd=tmp_path,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     # wait until the simulation has advanced (the progress bar shows simulated time > 0.1 s)
     buf, t0 = "", time.monotonic()
     fd = p.stderr.fileno()

@@ -46,9 +46,18 @@ def _real_python() -> str:
     """A Python outside any virtual environment (the system's), as a fresh machine has."""
     for candidate in ("/usr/bin/python3", getattr(sys, "_base_executable", ""), sys.executable):
         if candidate and Path(candidate).is_file():
-            ok = subprocess.run([candidate, "-c", ("import sys, venv, ensurepip; "
-                                 "sys.exit(sys.prefix != sys.base_prefix or sys.version_info < (3, 11))")],
-                                capture_output=True, check=False)
+            ok = subprocess.run(
+                [
+                    candidate,
+                    "-c",
+                    (
+                        "import sys, venv, ensurepip; "
+                        "sys.exit(sys.prefix != sys.base_prefix or sys.version_info < (3, 11))"
+                    ),
+                ],
+                capture_output=True,
+                check=False,
+            )
             if ok.returncode == 0:
                 return candidate
     pytest.skip("no Python >= 3.11 with venv and ensurepip outside a virtual environment")
@@ -58,19 +67,26 @@ def test_env_installs_python3_venv_and_the_debian_packages_then_makes_a_venv(tmp
     real = _real_python()
     fake = tmp_path / "fake"
     fake.mkdir()
-    for name, text in (("dpkg", _DPKG), ("apt-get", _APT), ("id", _ID),
-                       ("python3", _PYTHON.replace("{real}", real))):
+    for name, text in (
+        ("dpkg", _DPKG),
+        ("apt-get", _APT),
+        ("id", _ID),
+        ("python3", _PYTHON.replace("{real}", real)),
+    ):
         (fake / name).write_text(text)
         (fake / name).chmod(0o755)
     (fake / "installed").write_text("python3\n")
     repo = tmp_path / "clone"
     (repo / "scripts").mkdir(parents=True)
     shutil.copy(ROOT / "scripts" / "_env.sh", repo / "scripts" / "_env.sh")
-    script = ('set -euo pipefail; . scripts/_env.sh; ensure_env libosmesa6 chromium; '
-              'echo "PY=$PY"; "$PY" -c "import sys; print(\'venv\', sys.prefix != sys.base_prefix)"')
+    script = (
+        "set -euo pipefail; . scripts/_env.sh; ensure_env libosmesa6 chromium; "
+        'echo "PY=$PY"; "$PY" -c "import sys; print(\'venv\', sys.prefix != sys.base_prefix)"'
+    )
     env = {"HOME": str(tmp_path), "PATH": f"{fake}:/usr/bin:/bin", "FAKE_DIR": str(fake)}
-    r = subprocess.run(["bash", "-c", script], cwd=repo, env=env, capture_output=True, text=True, check=False,
-                       timeout=300)
+    r = subprocess.run(
+        ["bash", "-c", script], cwd=repo, env=env, capture_output=True, text=True, check=False, timeout=300
+    )
     assert r.returncode == 0, r.stdout + r.stderr
     apt = (fake / "apt.log").read_text().splitlines()
     installs = [line.split()[1:] for line in apt if line.split()[1] == "install"]
@@ -80,8 +96,9 @@ def test_env_installs_python3_venv_and_the_debian_packages_then_makes_a_venv(tmp
     assert "venv True" in r.stdout
     # a second run finds everything in place: no apt-get, the same environment
     (fake / "apt.log").unlink()
-    r = subprocess.run(["bash", "-c", script], cwd=repo, env=env, capture_output=True, text=True, check=False,
-                       timeout=120)
+    r = subprocess.run(
+        ["bash", "-c", script], cwd=repo, env=env, capture_output=True, text=True, check=False, timeout=120
+    )
     assert r.returncode == 0 and not (fake / "apt.log").exists(), r.stdout + r.stderr
     assert f"PY={repo}/.venv/bin/python" in r.stdout
 
@@ -89,9 +106,15 @@ def test_env_installs_python3_venv_and_the_debian_packages_then_makes_a_venv(tmp
 def test_env_uses_the_active_virtual_environment(tmp_path):
     if sys.prefix == sys.base_prefix:
         pytest.skip("the tests do not run in a virtual environment")
-    env = {**os.environ, "VIRTUAL_ENV": sys.prefix,
-           "PATH": f"{Path(sys.executable).parent}:/usr/bin:/bin"}
-    r = subprocess.run(["bash", "-c", ". scripts/_env.sh; ensure_env; echo \"PY=$PY\""],
-                       cwd=ROOT, env=env, capture_output=True, text=True, timeout=60, check=False)
+    env = {**os.environ, "VIRTUAL_ENV": sys.prefix, "PATH": f"{Path(sys.executable).parent}:/usr/bin:/bin"}
+    r = subprocess.run(
+        ["bash", "-c", '. scripts/_env.sh; ensure_env; echo "PY=$PY"'],
+        cwd=ROOT,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=60,
+        check=False,
+    )
     assert r.returncode == 0, r.stderr
     assert f"PY={sys.prefix}/bin/python" in r.stdout

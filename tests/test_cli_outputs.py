@@ -39,8 +39,7 @@ def test_a_folder_with_foreign_files_is_refused(tmp_path, capsys):
     assert rc == 2 and "holds no biped run" in err and "notes.txt" in err
 
 
-def test_overwrite_removes_what_the_new_run_does_not_write_and_keeps_foreign_files(tmp_path,
-                                                                                   capsys):
+def test_overwrite_removes_what_the_new_run_does_not_write_and_keeps_foreign_files(tmp_path, capsys):
     out = tmp_path / "R"
     rc, _ = _posture(capsys, out)  # with animation.gif
     assert rc == 0 and (out / "animation.gif").is_file()
@@ -60,14 +59,16 @@ def test_overwrite_removes_what_the_new_run_does_not_write_and_keeps_foreign_fil
 
 @pytest.mark.parametrize("where", ["file", "under_file", "proc"])
 def test_an_out_where_nothing_can_be_written_is_refused_before_the_simulation(
-        tmp_path, capsys, monkeypatch, where):
+    tmp_path, capsys, monkeypatch, where
+):
     def never(*a, **k):
         raise AssertionError("the simulation started")
 
     monkeypatch.setattr(biped.sim.push, "simulate", never)
     (tmp_path / "f").write_text("x")
-    out = {"file": tmp_path / "f", "under_file": tmp_path / "f" / "run",
-           "proc": "/proc/biped-test/run"}[where]
+    out = {"file": tmp_path / "f", "under_file": tmp_path / "f" / "run", "proc": "/proc/biped-test/run"}[
+        where
+    ]
     rc = main(["push", "--quiet", "--out", str(out)])
     err = capsys.readouterr().err
     assert rc == 2 and "--out" in err and "Traceback" not in err

@@ -36,9 +36,28 @@ _counter = itertools.count()
 _NUMBER = st.one_of(
     st.floats(allow_nan=True, allow_infinity=True).map(repr),
     st.floats(min_value=-10, max_value=10).map(lambda x: f"{x:.3g}"),
-    st.integers(min_value=-10**20, max_value=10**20).map(str),
-    st.sampled_from(["0", "-0", "1e300", "-1e300", "1e-300", "-1e6", "nan", "-inf", "inf", "x",
-                     "", "1,5", "0x10", "1e", "--", "-.5", "+3"]),
+    st.integers(min_value=-(10**20), max_value=10**20).map(str),
+    st.sampled_from(
+        [
+            "0",
+            "-0",
+            "1e300",
+            "-1e300",
+            "1e-300",
+            "-1e6",
+            "nan",
+            "-inf",
+            "inf",
+            "x",
+            "",
+            "1,5",
+            "0x10",
+            "1e",
+            "--",
+            "-.5",
+            "+3",
+        ]
+    ),
 )
 
 
@@ -77,17 +96,23 @@ def _check(capsys, tmp_path, command, argv, names):
 # biped push
 
 _PUSH_SINGLE = {  # option -> the words its error may name
-    "--duration": ("duration_s",), "--block-mass": ("block_mass_kg",),
+    "--duration": ("duration_s",),
+    "--block-mass": ("block_mass_kg",),
     "--timestep": ("physics_timestep_s", "control_rate_hz", "contact_timeconst_s"),
     "--seed": ("seed",),
 }
-_PUSH_TRIPLE = {"--block-position": ("block_position_m",),
-                "--block-velocity": ("block_velocity_m_s",)}
-_PUSH_CHOICE = {"--controller": ["workspace", "joint-pd", "pd", ""],
-                "--physics": ["faithful", "fast", "slow"],
-                "--distribution": ["statics", "printed", "qp", "x"]}
-_SET_VALUE = st.one_of(_NUMBER, st.sampled_from(["[1, 2, 3]", "[1, 2]", "'a'", '"-x"', "none",
-                                                 "[nan, 0, 0]", "{a = 1}", "true", "[]", "[[1]]"]))
+_PUSH_TRIPLE = {"--block-position": ("block_position_m",), "--block-velocity": ("block_velocity_m_s",)}
+_PUSH_CHOICE = {
+    "--controller": ["workspace", "joint-pd", "pd", ""],
+    "--physics": ["faithful", "fast", "slow"],
+    "--distribution": ["statics", "printed", "qp", "x"],
+}
+_SET_VALUE = st.one_of(
+    _NUMBER,
+    st.sampled_from(
+        ["[1, 2, 3]", "[1, 2]", "'a'", '"-x"', "none", "[nan, 0, 0]", "{a = 1}", "true", "[]", "[[1]]"]
+    ),
+)
 
 
 @st.composite
@@ -107,17 +132,18 @@ def _push_line(draw):
         argv += ["--set", f"{key}={draw(_SET_VALUE)}"]
         names += ["--set", key or "KEY=VALUE"]
     if draw(st.booleans()):
-        argv += ["--model", draw(st.sampled_from(["wendlandt", "", "nope", "/dev/null",
-                                                  "/nonexistent.xml"]))]
+        argv += ["--model", draw(st.sampled_from(["wendlandt", "", "nope", "/dev/null", "/nonexistent.xml"]))]
         names += ["--model", "model"]
     return argv, names or ["--"]
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[
-    HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=150,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
 @given(_push_line())
-def test_any_push_line_starts_the_simulation_or_is_a_one_line_error(tmp_path, capsys,
-                                                                   monkeypatch, line):
+def test_any_push_line_starts_the_simulation_or_is_a_one_line_error(tmp_path, capsys, monkeypatch, line):
     monkeypatch.setattr(biped.sim.push, "simulate", _sentinel)
     argv, names = line
     _check(capsys, tmp_path, ["push"], [*argv, "--quiet", "--no-video"], names)
@@ -126,15 +152,20 @@ def test_any_push_line_starts_the_simulation_or_is_a_one_line_error(tmp_path, ca
 # ---------------------------------------------------------------------------------------------
 # biped walk
 
+
 @st.composite
 def _walk_line(draw):
     argv, names = [], []
     gait = draw(st.sampled_from(["forward", "upstairs", "jump", "demo", "run"]))
     argv += ["--gait", gait]
     names.append("--gait")
-    options = {"--steps": st.one_of(st.integers(-5, 10**7).map(str), _NUMBER),
-               "--speed": _NUMBER, "--stair-rise": _NUMBER, "--stair-run": _NUMBER,
-               "--rate": _NUMBER}
+    options = {
+        "--steps": st.one_of(st.integers(-5, 10**7).map(str), _NUMBER),
+        "--speed": _NUMBER,
+        "--stair-rise": _NUMBER,
+        "--stair-run": _NUMBER,
+        "--rate": _NUMBER,
+    }
     for opt in draw(st.sets(st.sampled_from(sorted(options)), max_size=3)):
         argv += [opt, draw(options[opt])]
         names.append(opt)
@@ -145,11 +176,13 @@ def _walk_line(draw):
     return argv, names
 
 
-@settings(max_examples=120, deadline=None, suppress_health_check=[
-    HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=120,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
 @given(_walk_line())
-def test_any_walk_line_starts_the_motion_or_is_a_one_line_error(tmp_path, capsys, monkeypatch,
-                                                               line):
+def test_any_walk_line_starts_the_motion_or_is_a_one_line_error(tmp_path, capsys, monkeypatch, line):
     monkeypatch.setattr(biped.outputs.walk, "write_walk", _sentinel)
     argv, names = line
     _check(capsys, tmp_path, ["walk"], [*argv, "--quiet"], names)
@@ -160,18 +193,24 @@ def test_any_walk_line_starts_the_motion_or_is_a_one_line_error(tmp_path, capsys
 # library's own checks of gains, x0 and set points are part of the property; gains' design
 # (~12 s) is the sentinel.
 
+
 class _Figure:
     def savefig(self, *args, **kwargs):
         pass
 
 
 _STUB_VIZ = types.SimpleNamespace(
-    pendulum_attitude_figure=lambda *a, **k: _Figure(), body_leg_figure=lambda *a, **k: _Figure(),
-    comparison_figure=lambda *a, **k: _Figure(), animate=lambda *a, **k: None)
+    pendulum_attitude_figure=lambda *a, **k: _Figure(),
+    body_leg_figure=lambda *a, **k: _Figure(),
+    comparison_figure=lambda *a, **k: _Figure(),
+    animate=lambda *a, **k: None,
+)
 
 # time steps and durations whose valid pairs stay under ~500 steps (fast), plus the invalid ones
-_DT = st.one_of(st.sampled_from(["0.02", "0.01", "0.05", "1e-9", "0", "-0.01", "nan", "inf", "1.5",
-                                 "x", "1e300"]), _NUMBER)
+_DT = st.one_of(
+    st.sampled_from(["0.02", "0.01", "0.05", "1e-9", "0", "-0.01", "nan", "inf", "1.5", "x", "1e300"]),
+    _NUMBER,
+)
 _DURATION = st.sampled_from(["0.5", "2", "0", "-1", "nan", "inf", "1e6", "1e300", "x"])
 
 
@@ -185,8 +224,7 @@ def _posture_line(draw):
     for opt in draw(st.sets(st.sampled_from(sorted(vectors)), max_size=2)):
         count = draw(st.sampled_from([vectors[opt], vectors[opt], vectors[opt] + 1]))
         argv += [opt, *draw(st.lists(_NUMBER, min_size=count, max_size=count))]
-        names += [opt, opt.lstrip("-"), "gains" if opt == "--gains" else "state",
-                  "alpha", "x0"]
+        names += [opt, opt.lstrip("-"), "gains" if opt == "--gains" else "state", "alpha", "x0"]
     for _ in range(draw(st.integers(0, 2))):
         name = draw(st.sampled_from(["m", "l", "g", "I", "m1", "m2", "l1", "l2", "L", "x", ""]))
         argv += ["--param", f"{name}={draw(_NUMBER)}"]
@@ -198,8 +236,11 @@ def _posture_line(draw):
     return [model], argv, names
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[
-    HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=150,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
 @given(_posture_line())
 def test_any_posture_line_is_a_run_or_a_one_line_error(tmp_path, capsys, monkeypatch, line):
     monkeypatch.setattr(biped.outputs.posture, "viz", _STUB_VIZ)
@@ -215,14 +256,24 @@ def test_any_posture_line_is_a_run_or_a_one_line_error(tmp_path, capsys, monkeyp
         assert not out.exists(), "a rejected or failed run left its folder behind"
 
 
-@settings(max_examples=120, deadline=None, suppress_health_check=[
-    HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
-@given(st.dictionaries(
-    st.sampled_from(["--grid", "--k1-max", "--k2-max", "--rate-gains", "--poles", "--param"]),
-    st.lists(st.one_of(_NUMBER, st.sampled_from(["-1", "-2", "-3", "-1", "401", "402", "2"])),
-             min_size=1, max_size=5), min_size=1, max_size=3))
-def test_any_gains_line_starts_the_design_or_is_a_one_line_error(tmp_path, capsys, monkeypatch,
-                                                                options):
+@settings(
+    max_examples=120,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
+@given(
+    st.dictionaries(
+        st.sampled_from(["--grid", "--k1-max", "--k2-max", "--rate-gains", "--poles", "--param"]),
+        st.lists(
+            st.one_of(_NUMBER, st.sampled_from(["-1", "-2", "-3", "-1", "401", "402", "2"])),
+            min_size=1,
+            max_size=5,
+        ),
+        min_size=1,
+        max_size=3,
+    )
+)
+def test_any_gains_line_starts_the_design_or_is_a_one_line_error(tmp_path, capsys, monkeypatch, options):
     monkeypatch.setattr(biped.outputs.posture, "run_gains", _sentinel)
     argv, names = [], []
     for opt, values in options.items():
@@ -234,19 +285,25 @@ def test_any_gains_line_starts_the_design_or_is_a_one_line_error(tmp_path, capsy
 # ---------------------------------------------------------------------------------------------
 # the reported cases, each named
 
-@pytest.mark.parametrize(("argv", "says"), [
-    (["push", "--block-velocity", "-1e6", "0", "0"], "at most 100 m/s"),  # a number, not an option
-    (["push", "--duration", "1e6"], "duration_s must be in (0, 60]"),
-    (["push", "--set", "duration_s=1e300"], "duration_s must be in (0, 60]"),
-    (["walk", "--gait", "forward", "--steps", "1000000"], "--steps must be in [1, 100]"),
-    (["walk", "--speed", "1e6"], "--speed must be in [0.1, 2.5]"),
-    (["walk", "--gait", "upstairs", "--steps", "100", "--speed", "0.1"], "more than the limit of 300 s"),
-    (["posture", "pendulum", "--dt", "1e-9"], "more than the limit of 1,000,000"),
-    (["posture", "gains", "--grid", "100000"], "--grid must be in [2, 401]"),
-    (["posture", "gains", "--poles", "-1", "-1", "-1", "-1"], "-1 is given 4 times"),
-    (["posture", "pendulum", "--poles", "1", "2"],
-     "biped posture pendulum: error: unrecognized arguments: --poles"),
-])
+
+@pytest.mark.parametrize(
+    ("argv", "says"),
+    [
+        (["push", "--block-velocity", "-1e6", "0", "0"], "at most 100 m/s"),  # a number, not an option
+        (["push", "--duration", "1e6"], "duration_s must be in (0, 60]"),
+        (["push", "--set", "duration_s=1e300"], "duration_s must be in (0, 60]"),
+        (["walk", "--gait", "forward", "--steps", "1000000"], "--steps must be in [1, 100]"),
+        (["walk", "--speed", "1e6"], "--speed must be in [0.1, 2.5]"),
+        (["walk", "--gait", "upstairs", "--steps", "100", "--speed", "0.1"], "more than the limit of 300 s"),
+        (["posture", "pendulum", "--dt", "1e-9"], "more than the limit of 1,000,000"),
+        (["posture", "gains", "--grid", "100000"], "--grid must be in [2, 401]"),
+        (["posture", "gains", "--poles", "-1", "-1", "-1", "-1"], "-1 is given 4 times"),
+        (
+            ["posture", "pendulum", "--poles", "1", "2"],
+            "biped posture pendulum: error: unrecognized arguments: --poles",
+        ),
+    ],
+)
 def test_reported_inputs_are_one_line_errors(tmp_path, capsys, argv, says):
     out = tmp_path / "new"
     rc, last, started = _run(capsys, [*argv, "--out", str(out)])

@@ -87,8 +87,7 @@ def test_compute_on_any_input_is_finite_or_a_one_line_error(setup):
     ctrl, q0, v0 = setup
 
     @settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-    @given(_state(q0, v0), _target(), _gains(),
-           st.one_of(st.none(), st.tuples(st.booleans(), st.booleans())))
+    @given(_state(q0, v0), _target(), _gains(), st.one_of(st.none(), st.tuples(st.booleans(), st.booleans())))
     def check(state, target, gains, feet):
         qpos, qvel = state
         try:
@@ -100,15 +99,15 @@ def test_compute_on_any_input_is_finite_or_a_one_line_error(setup):
             event(f"error: {type(exc).__name__}")
             return
         event("computed")
-        arrays = (out.torques, out.P1, out.z1, out.wrench_desired, out.wrench_left,
-                  out.wrench_right)
+        arrays = (out.torques, out.P1, out.z1, out.wrench_desired, out.wrench_left, out.wrench_right)
         assert all(np.isfinite(a).all() for a in arrays)
         assert out.torques.shape == (len(ctrl.joint_names),)
         both_down = feet is None or all(feet)
         if both_down:  # W Alg. 5: the two shares sum to F_1^bd
             scale = max(1.0, float(np.abs(out.wrench_desired).max()))
-            assert np.allclose(out.wrench_left + out.wrench_right, out.wrench_desired,
-                               rtol=1e-9, atol=1e-9 * scale)
+            assert np.allclose(
+                out.wrench_left + out.wrench_right, out.wrench_desired, rtol=1e-9, atol=1e-9 * scale
+            )
         elif feet == (False, False):  # no foot down: nothing is distributed
             assert not out.wrench_left.any() and not out.wrench_right.any()
 
@@ -132,12 +131,13 @@ def test_non_finite_and_scaled_quaternions_are_named(setup):
 # ---------------------------------------------------------------------------------------------
 # the reported model inputs
 
-_THIRD_LEG = ('<body name="t1" pos="0.1 0 -0.2"><joint name="tj1" axis="0 1 0"/>'
-              '<inertial pos="0 0 -0.2" mass="2" diaginertia="0.03 0.03 0.006"/></body>')
+_THIRD_LEG = (
+    '<body name="t1" pos="0.1 0 -0.2"><joint name="tj1" axis="0 1 0"/>'
+    '<inertial pos="0 0 -0.2" mass="2" diaginertia="0.03 0.03 0.006"/></body>'
+)
 
 
-def test_a_root_foot_a_third_leg_and_an_empty_source_are_model_errors(tmp_path,
-                                                                       wendlandt_path):
+def test_a_root_foot_a_third_leg_and_an_empty_source_are_model_errors(tmp_path, wendlandt_path):
     from conftest import ASYM_XML
 
     from biped.errors import ModelError

@@ -41,8 +41,12 @@ def test_adjoint_products_match_the_matrices(seed):
     R, p = _rot(rng), rng.normal(size=3)
     A = _ad(R, p)
     x, out = rng.normal(size=6), np.empty(6)
-    for fn, M in ((spatial.adjoint_mul, A), (spatial.adjoint_inv_mul, np.linalg.inv(A)),
-                  (spatial.adjoint_T_mul, A.T), (spatial.adjoint_inv_T_mul, np.linalg.inv(A).T)):
+    for fn, M in (
+        (spatial.adjoint_mul, A),
+        (spatial.adjoint_inv_mul, np.linalg.inv(A)),
+        (spatial.adjoint_T_mul, A.T),
+        (spatial.adjoint_inv_T_mul, np.linalg.inv(A).T),
+    ):
         fn(R, p, x, out)
         np.testing.assert_allclose(out, M @ x, rtol=1e-12, atol=1e-12, err_msg=fn.__name__)
     np.testing.assert_allclose(spatial.rot_mul(R, x[:3]), R @ x[:3], atol=1e-14)
@@ -76,9 +80,12 @@ def test_unpack_follows_layout(n):
     lay = layout(n)
     mi = np.arange(lay["ints"]["_size"][0], dtype=np.int64)
     mi[0] = n
-    bufs = {"ints": mi, "model": np.arange(float(lay["model"]["_size"][0])),
-            "work": np.arange(float(lay["work"]["_size"][0])),
-            "out": np.arange(float(lay["out"]["_size"][0]))}
+    bufs = {
+        "ints": mi,
+        "model": np.arange(float(lay["model"]["_size"][0])),
+        "work": np.arange(float(lay["work"]["_size"][0])),
+        "out": np.arange(float(lay["out"]["_size"][0])),
+    }
     views = unpack(bufs["ints"], bufs["model"], bufs["work"], bufs["out"])
     for name, nt in zip(("ints", "model", "work", "out"), views, strict=True):
         assert list(nt._fields) == [k for k in lay[name] if k != "_size"], name
@@ -92,5 +99,5 @@ def test_unpack_follows_layout(n):
                 assert view[0] == n
                 idx = idx * 0 + n
             np.testing.assert_array_equal(view, idx, err_msg=f"{name}.{field}")
-            covered[off:off + view.size] += 1
+            covered[off : off + view.size] += 1
         assert np.all(covered == 1), name

@@ -18,11 +18,13 @@ from biped.control import Target, WorkspaceController
 
 def foot_to_body(m, d, foot: int, body: int) -> np.ndarray:
     """4x4 pose of the body's COM frame in the foot's COM frame, from MuJoCo's xipos/ximat."""
+
     def pose(b):
         g = np.eye(4)
         g[:3, :3] = d.ximat[b].reshape(3, 3)
         g[:3, 3] = d.xipos[b]
         return g
+
     return np.linalg.solve(pose(foot), pose(body))
 
 
@@ -68,8 +70,9 @@ def test_alg6_torques_are_jacobian_transpose_per_leg(tree_case):
         np.testing.assert_allclose(tau, expected[hinge_dofs], rtol=0, atol=1e-8 * np.abs(expected).max())
         # and the full controller passes its own split through the same recursion
         out = ctrl.compute(qpos, rng.normal(size=m.nv))
-        np.testing.assert_allclose(out.torques, ctrl.leg_torques(qpos, out.wrench_left, out.wrench_right),
-                                   rtol=1e-12, atol=1e-9)
+        np.testing.assert_allclose(
+            out.torques, ctrl.leg_torques(qpos, out.wrench_left, out.wrench_right), rtol=1e-12, atol=1e-9
+        )
 
 
 # --------------------------------------------------------------------------- static check
@@ -136,8 +139,9 @@ def hard_constraint_qacc(m, d, tau):
 def welded(m_source_xml: str) -> mujoco.MjModel:
     """The biped with both feet welded to the world by MuJoCo equality constraints (as stiff as
     MuJoCo allows: impedance 0.9999)."""
-    eq = "".join(f'<weld name="{f}_weld" body1="{f}" solimp="0.9999 0.9999 0.001" solref="0.004 1"/>'
-                 for f in FEET)
+    eq = "".join(
+        f'<weld name="{f}_weld" body1="{f}" solimp="0.9999 0.9999 0.001" solref="0.004 1"/>' for f in FEET
+    )
     xml = m_source_xml.replace("<actuator>", f"<equality>{eq}</equality>\n  <actuator>", 1)
     return mujoco.MjModel.from_xml_string(xml)
 

@@ -102,8 +102,11 @@ def test_alg2_body_velocities_equal_pinocchio(tree_case):
 
 def test_link_poses_equal_mujoco_with_joint_reference_angles(asym_xml_path):
     """MuJoCo's ``ref`` (qpos0) shifts the zero of a hinge; poses must follow MuJoCo's xipos/ximat."""
-    xml = asym_xml_path.read_text().replace('name="lj2"', 'name="lj2" ref="0.7"').replace(
-        'name="rj3"', 'name="rj3" ref="-1.2"')
+    xml = (
+        asym_xml_path.read_text()
+        .replace('name="lj2"', 'name="lj2" ref="0.7"')
+        .replace('name="rj3"', 'name="rj3" ref="-1.2"')
+    )
     m = mujoco.MjModel.from_xml_string(xml)
     d = mujoco.MjData(m)
     ctrl = WorkspaceController.from_mjcf(m, feet=("lfoot", "rfoot"))
@@ -204,8 +207,12 @@ def test_torques_give_the_commanded_acceleration_with_feet_fixed(tree_case):
     for _ in range(6):
         qpos, qvel = nominal_state(pb.mj, rng)
         quat = rng.normal(size=4)
-        target = Target(com=tuple(rng.normal(0, 0.05, 3) + [0, 0, 1]), quat=tuple(quat / np.linalg.norm(quat)),
-                        com_vel=tuple(rng.normal(size=3)), ang_acc=tuple(rng.normal(size=3)))
+        target = Target(
+            com=tuple(rng.normal(0, 0.05, 3) + [0, 0, 1]),
+            quat=tuple(quat / np.linalg.norm(quat)),
+            com_vel=tuple(rng.normal(size=3)),
+            ang_acc=tuple(rng.normal(size=3)),
+        )
         out = ctrl.compute(qpos, qvel, target=target)
         _, _, p = exact_workspace_dynamics(pb, body, feet, qpos, qvel)
         tau = np.zeros(pb.model.nv)
@@ -217,5 +224,6 @@ def test_torques_give_the_commanded_acceleration_with_feet_fixed(tree_case):
         qdd = Mi @ (tau - p["c"] + Jc.T @ lam)
         V1dot = p["J1"] @ qdd + p["J1d"]
         assert np.abs(out.accel_desired).max() > 1.0  # a real command, not a trivial zero
-        np.testing.assert_allclose(V1dot, out.accel_desired, rtol=0,
-                                   atol=1e-5 * np.abs(out.accel_desired).max())
+        np.testing.assert_allclose(
+            V1dot, out.accel_desired, rtol=0, atol=1e-5 * np.abs(out.accel_desired).max()
+        )

@@ -56,9 +56,16 @@ def test_cone_rows_are_the_span_of_the_corner_forces():
     for _ in range(400):
         X, Y, mu = rng.uniform(0.03, 0.15), rng.uniform(0.02, 0.08), rng.uniform(0.1, 0.9)
         Ct, b = _rows(X, Y, mu)
-        w = np.array([rng.uniform(-1.2, 1.2) * mu, rng.uniform(-1.2, 1.2) * mu, 1.0,
-                      rng.uniform(-1.2, 1.2) * Y, rng.uniform(-1.2, 1.2) * X,
-                      rng.uniform(-1.2, 1.2) * (X + Y) * mu]) * rng.uniform(1, 500)
+        w = np.array(
+            [
+                rng.uniform(-1.2, 1.2) * mu,
+                rng.uniform(-1.2, 1.2) * mu,
+                1.0,
+                rng.uniform(-1.2, 1.2) * Y,
+                rng.uniform(-1.2, 1.2) * X,
+                rng.uniform(-1.2, 1.2) * (X + Y) * mu,
+            ]
+        ) * rng.uniform(1, 500)
         slack = Ct @ w - b
         if np.min(np.abs(slack)) < 1e-6 * np.linalg.norm(w):
             continue
@@ -116,7 +123,9 @@ def _sole_wrenches(m, d, out, soles):
     cb = m.body("central_body").id
     g01 = transform(d.ximat[cb].reshape(3, 3), d.xipos[cb])
     sole_w, body_w = [], []
-    for foot, F, sole in zip(("left", "right"), (out.foot_wrench_left, out.foot_wrench_right), soles, strict=True):
+    for foot, F, sole in zip(
+        ("left", "right"), (out.foot_wrench_left, out.foot_wrench_right), soles, strict=True
+    ):
         gfs = sole.g_foot_sole
         w = adjoint(gfs[:3, :3], gfs[:3, 3]).T @ F  # F_s = Ad^T_{g_{f,s}} F_f
         b = m.body(f"{foot}_foot").id
@@ -129,12 +138,14 @@ def _sole_wrenches(m, d, out, soles):
 
 @pytest.fixture(scope="module")
 def ctrls(wendlandt_path):
-    return {"statics": WorkspaceController.from_mjcf(wendlandt_path),
-            "qp": WorkspaceController.from_mjcf(wendlandt_path, distribution="qp"),
-            "qp_human": WorkspaceController.from_mjcf(wendlandt_path, distribution="qp",
-                                                      torque_limits=HUMAN),
-            "qp_quadprog": WorkspaceController.from_mjcf(wendlandt_path, distribution="qp",
-                                                         torque_limits=HUMAN, qp_solver="quadprog")}
+    return {
+        "statics": WorkspaceController.from_mjcf(wendlandt_path),
+        "qp": WorkspaceController.from_mjcf(wendlandt_path, distribution="qp"),
+        "qp_human": WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", torque_limits=HUMAN),
+        "qp_quadprog": WorkspaceController.from_mjcf(
+            wendlandt_path, distribution="qp", torque_limits=HUMAN, qp_solver="quadprog"
+        ),
+    }
 
 
 def test_qp_wrenches_satisfy_every_cone_cop_and_torque_row(ctrls, wendlandt_mj, soles):
@@ -147,17 +158,21 @@ def test_qp_wrenches_satisfy_every_cone_cop_and_torque_row(ctrls, wendlandt_mj, 
         out = ctrl.compute(d.qpos, d.qvel)
         assert ctrl.qp.status == SOLVED
         sole_w, body_w = _sole_wrenches(m, d, out, soles)
-        for w, sole, share, bw in zip(sole_w, soles, (out.wrench_left, out.wrench_right), body_w, strict=True):
+        for w, sole, share, bw in zip(
+            sole_w, soles, (out.wrench_left, out.wrench_right), body_w, strict=True
+        ):
             scale = max(1.0, np.linalg.norm(w))
             assert wts.min_normal_n - 1e-6 * scale <= w[2] <= wts.max_normal_n + 1e-6 * scale
             assert _in_cone(w, sole.half_length, sole.half_width, mu, tol=1e-6)
             np.testing.assert_allclose(share, bw, atol=1e-8 * scale)  # MuJoCo's poses
         assert np.all(out.torques >= lim.lower - 1e-6) and np.all(out.torques <= lim.upper + 1e-6)
         # torques are W Alg. 6 of the legs' shares (the QP's torque map is that linear map)
-        np.testing.assert_allclose(out.torques, ctrl.leg_torques(d.qpos, out.wrench_left,
-                                                                 out.wrench_right), atol=1e-7)
-        active += np.any(np.isclose(out.torques, lim.lower, atol=1e-6)
-                         | np.isclose(out.torques, lim.upper, atol=1e-6))
+        np.testing.assert_allclose(
+            out.torques, ctrl.leg_torques(d.qpos, out.wrench_left, out.wrench_right), atol=1e-7
+        )
+        active += np.any(
+            np.isclose(out.torques, lim.lower, atol=1e-6) | np.isclose(out.torques, lim.upper, atol=1e-6)
+        )
     assert active > 0  # some states needed a torque row
 
 
@@ -188,15 +203,20 @@ def test_qp_reproduces_a_feasible_min_norm_split(ctrls, wendlandt_mj, soles):
     for d in _states(m, 60, 3, spread=0.1, vel=0.3):
         mn = ctrls["statics"].compute(d.qpos, d.qvel)
         sole_mn, _ = _sole_wrenches(m, d, mn, soles)
-        if not all(_in_cone(w, s.half_length, s.half_width, mu) and
-                   wts.min_normal_n <= w[2] <= wts.max_normal_n for w, s in zip(sole_mn, soles, strict=True)):
+        if not all(
+            _in_cone(w, s.half_length, s.half_width, mu) and wts.min_normal_n <= w[2] <= wts.max_normal_n
+            for w, s in zip(sole_mn, soles, strict=True)
+        ):
             continue
         out = ctrls["qp"].compute(d.qpos, d.qvel)
         err = out.wrench_left + out.wrench_right - out.wrench_desired
         bound = sum(reg @ w**2 for w in sole_mn) + wts.split * (sole_mn[0][2] - sole_mn[1][2]) ** 2
         assert W @ err**2 <= bound * (1 + 1e-6) + 1e-9
-        np.testing.assert_allclose(out.wrench_left + out.wrench_right, mn.wrench_desired,
-                                   atol=1e-2 * (1 + np.abs(mn.wrench_desired)).max() * 0.05)
+        np.testing.assert_allclose(
+            out.wrench_left + out.wrench_right,
+            mn.wrench_desired,
+            atol=1e-2 * (1 + np.abs(mn.wrench_desired)).max() * 0.05,
+        )
         checked += 1
     assert checked >= 10
 
@@ -214,7 +234,7 @@ def test_quadprog_matches_daqp_and_the_kkt_conditions(ctrls, wendlandt_mj):
         # solver-free certificate (KKT): x feasible and the cost gradient a nonnegative
         # combination of the active rows' normals (NNLS), so x is the convex QP's minimizer
         qp = a.qp
-        G, av, C, lo = qp.Gq, qp.av, qp.Ct[:qp.rows], qp.b[:qp.rows]
+        G, av, C, lo = qp.Gq, qp.av, qp.Ct[: qp.rows], qp.b[: qp.rows]
         scale = 1 + np.abs(xa).max()
         slack = C @ xa - lo
         assert np.all(slack >= -1e-6 * scale)
@@ -252,8 +272,9 @@ def test_infeasible_qp_falls_back_without_an_exception(wendlandt_path, wendlandt
     from biped.control.limits import TorqueLimits
 
     tiny = TorqueLimits("tiny", HUMAN.joint_names, -0.01 * np.ones(12), 0.01 * np.ones(12))
-    ctrl = WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", torque_limits=tiny,
-                                         qp_solver=solver)
+    ctrl = WorkspaceController.from_mjcf(
+        wendlandt_path, distribution="qp", torque_limits=tiny, qp_solver=solver
+    )
     d = next(_states(wendlandt_mj, 1, 6))
     tau = ctrl.compute(d.qpos, d.qvel).torques
     assert ctrl.qp.status == RELAXED and ctrl.qp.fallbacks[RELAXED] == 1
@@ -269,8 +290,9 @@ def test_a_failed_solve_zeroes_the_wrenches_without_an_exception(wendlandt_path,
     d = next(_states(wendlandt_mj, 1, 7))
     good = ctrl.compute(d.qpos, d.qvel).torques
     qp = ctrl.qp
-    for k, bad in enumerate((np.full(6, 1e300), np.array([np.inf, 0, 0, 0, 0, 0]),
-                             np.array([0, 0, np.nan, 0, 0, 0]))):
+    for k, bad in enumerate(
+        (np.full(6, 1e300), np.array([np.inf, 0, 0, 0, 0, 0]), np.array([0, 0, np.nan, 0, 0, 0]))
+    ):
         qp.build(ctrl._w.g, ctrl._w.gl, ctrl._both, bad)
         x = qp.solve()
         assert qp.status == ZEROED and qp.fallbacks[ZEROED] == k + 1
@@ -359,6 +381,7 @@ def test_unlimited_qp_torques_are_alg6_of_the_shares(ctrls, wendlandt_path, wend
         out = ctrl.compute(d.qpos, d.qvel, feet_in_contact=feet)
         ref = mapped.compute(d.qpos, d.qvel, feet_in_contact=feet)
         scale = 1 + np.abs(out.torques).max()
-        np.testing.assert_allclose(out.torques, ctrl.leg_torques(d.qpos, out.wrench_left,
-                                                                 out.wrench_right), atol=1e-9 * scale)
+        np.testing.assert_allclose(
+            out.torques, ctrl.leg_torques(d.qpos, out.wrench_left, out.wrench_right), atol=1e-9 * scale
+        )
         np.testing.assert_allclose(out.torques, ref.torques, atol=1e-6 * scale)

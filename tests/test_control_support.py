@@ -49,9 +49,14 @@ def ctrl(wendlandt_path):
     return WorkspaceController.from_mjcf(wendlandt_path)
 
 
-@pytest.mark.parametrize("flags, fixed", [((True, False), ("left_foot",)),
-                                          ((False, True), ("right_foot",)),
-                                          ((True, True), ("left_foot", "right_foot"))])
+@pytest.mark.parametrize(
+    "flags, fixed",
+    [
+        ((True, False), ("left_foot",)),
+        ((False, True), ("right_foot",)),
+        ((True, True), ("left_foot", "right_foot")),
+    ],
+)
 def test_p1_equals_the_exact_inertia_of_the_feet_in_contact(ctrl, wendlandt_mj, flags, fixed):
     rng = np.random.default_rng(5)
     for _ in range(5):
@@ -84,8 +89,9 @@ def test_one_foot_down_takes_the_whole_wrench_and_the_free_leg_is_passive(ctrl, 
     assert not out.wrench_right.any() and not out.foot_wrench_right.any()
     assert not out.torques[right].any() and out.torques[~right].any()
     # the stance leg's torques are Alg. 6 of the whole wrench on that leg alone
-    np.testing.assert_allclose(out.torques, ctrl.leg_torques(d.qpos, out.wrench_desired, np.zeros(6)),
-                               rtol=1e-10, atol=1e-9)
+    np.testing.assert_allclose(
+        out.torques, ctrl.leg_torques(d.qpos, out.wrench_desired, np.zeros(6)), rtol=1e-10, atol=1e-9
+    )
 
 
 def test_default_is_both_feet_fixed_as_in_w(ctrl, wendlandt_mj):

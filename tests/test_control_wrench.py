@@ -17,8 +17,18 @@ from biped.control import Gains, Target, WorkspaceController
 from biped.control.recursions import alg5_wrench_distribution
 from biped.errors import ScenarioError, SingularityError, StateError
 
-OUTPUTS = ("torques", "P1", "z1", "accel_desired", "wrench_desired", "wrench_left", "wrench_right",
-           "foot_wrench_left", "foot_wrench_right", "quat_error")
+OUTPUTS = (
+    "torques",
+    "P1",
+    "z1",
+    "accel_desired",
+    "wrench_desired",
+    "wrench_left",
+    "wrench_right",
+    "foot_wrench_left",
+    "foot_wrench_right",
+    "quat_error",
+)
 
 
 @pytest.fixture(scope="module")
@@ -75,13 +85,18 @@ def test_alg4_quaternion_sign_does_not_matter(ctrl, wendlandt_mj):
     rng = np.random.default_rng(6)
     for _ in range(5):
         qpos, qvel = near_initial(wendlandt_mj, rng)
-        target = Target(com=tuple(rng.normal(0, 0.1, 3) + [0, 0, 1]), quat=tuple(rotvec_quat(rng.normal(size=3))),
-                        ang_vel=tuple(rng.normal(size=3)), ang_acc=tuple(rng.normal(size=3)))
+        target = Target(
+            com=tuple(rng.normal(0, 0.1, 3) + [0, 0, 1]),
+            quat=tuple(rotvec_quat(rng.normal(size=3))),
+            ang_vel=tuple(rng.normal(size=3)),
+            ang_acc=tuple(rng.normal(size=3)),
+        )
         ref = ctrl.compute(qpos, qvel, target=target)
         flipped = qpos.copy()
         flipped[3:7] *= -1.0
-        neg_target = Target(com=target.com, quat=tuple(-np.array(target.quat)), ang_vel=target.ang_vel,
-                            ang_acc=target.ang_acc)
+        neg_target = Target(
+            com=target.com, quat=tuple(-np.array(target.quat)), ang_vel=target.ang_vel, ang_acc=target.ang_acc
+        )
         for q, t in ((flipped, target), (qpos, neg_target), (flipped, neg_target)):
             out = ctrl.compute(q, qvel, target=t)
             for name in OUTPUTS:
@@ -105,8 +120,14 @@ def test_alg4_zero_error_commands_the_desired_acceleration(ctrl, wendlandt_mj):
         d.qpos[:], d.qvel[:] = near_initial(m, rng)
         p, R, pdot, w = com_frame_state(m, d)
         acc, alpha = rng.normal(0, 2, 3), rng.normal(0, 2, 3)
-        target = Target(com=tuple(p), com_vel=tuple(pdot), com_acc=tuple(acc), quat=tuple(quat_of(R)),
-                        ang_vel=tuple(w), ang_acc=tuple(alpha))
+        target = Target(
+            com=tuple(p),
+            com_vel=tuple(pdot),
+            com_acc=tuple(acc),
+            quat=tuple(quat_of(R)),
+            ang_vel=tuple(w),
+            ang_acc=tuple(alpha),
+        )
         out = ctrl.compute(d.qpos, d.qvel, target=target)
         h = 1e-5
         args = (R, pdot, acc, w, alpha)
@@ -137,8 +158,7 @@ def test_alg4_pd_law_and_shorter_way_round(ctrl, wendlandt_mj, angle_deg):
     qe_vec = math.sin(a / 2) * n * (1.0 if math.cos(a / 2) >= 0 else -1.0)
     np.testing.assert_allclose(out.quat_error[1:], qe_vec, atol=1e-12)
     assert out.quat_error[0] >= 0
-    expected = np.concatenate([R.T @ (-np.array(gains.kp_com) * e),
-                               R.T @ (-np.array(gains.kp_rot) * qe_vec)])
+    expected = np.concatenate([R.T @ (-np.array(gains.kp_com) * e), R.T @ (-np.array(gains.kp_rot) * qe_vec)])
     np.testing.assert_allclose(out.accel_desired, expected, atol=1e-10)
 
 
@@ -189,15 +209,24 @@ def test_alg5_split_sums_and_is_minimum_norm(ctrl, wendlandt_mj):
         out = ctrl.compute(d.qpos, d.qvel)
         Fd = out.wrench_desired
         # the two legs' shares add up to the desired wrench (to rounding)
-        np.testing.assert_allclose(out.wrench_left + out.wrench_right, Fd, rtol=0,
-                                   atol=1e-13 * np.abs(Fd).max())
+        np.testing.assert_allclose(
+            out.wrench_left + out.wrench_right, Fd, rtol=0, atol=1e-13 * np.abs(Fd).max()
+        )
         # each share is its foot's wrench moved to the central body
-        np.testing.assert_allclose(out.wrench_left, transfer(g1l, out.foot_wrench_left), atol=1e-9 * np.abs(Fd).max())
-        np.testing.assert_allclose(out.wrench_right, transfer(g1r, out.foot_wrench_right), atol=1e-9 * np.abs(Fd).max())
+        np.testing.assert_allclose(
+            out.wrench_left, transfer(g1l, out.foot_wrench_left), atol=1e-9 * np.abs(Fd).max()
+        )
+        np.testing.assert_allclose(
+            out.wrench_right, transfer(g1r, out.foot_wrench_right), atol=1e-9 * np.abs(Fd).max()
+        )
         # minimum-norm solution of G [F_l; F_r] = F_1^bd
         x = np.linalg.lstsq(G, Fd, rcond=None)[0]
-        np.testing.assert_allclose(np.concatenate([out.foot_wrench_left, out.foot_wrench_right]), x,
-                                   rtol=0, atol=1e-10 * np.abs(x).max())
+        np.testing.assert_allclose(
+            np.concatenate([out.foot_wrench_left, out.foot_wrench_right]),
+            x,
+            rtol=0,
+            atol=1e-10 * np.abs(x).max(),
+        )
 
 
 def _coincident_feet_xml(path) -> str:
@@ -239,9 +268,13 @@ def test_alg5_reports_a_numerically_singular_distribution():
     legs = "".join(
         f'<body name="{s}1" pos="0 {y} 0"><joint name="{s}j" axis="1 0 0"/><geom size="0.1"/>'
         f'<body name="{s}foot" pos="0 0 -1e9"><joint name="{s}k" axis="0 1 0"/><geom size="0.1"/>'
-        f"</body></body>" for s, y in (("l", -0.1), ("r", 0.1)))
-    xml = (f'<mujoco><worldbody><body name="torso"><freejoint/><geom size="0.2"/>{legs}'
-           f"</body></worldbody></mujoco>")
+        f"</body></body>"
+        for s, y in (("l", -0.1), ("r", 0.1))
+    )
+    xml = (
+        f'<mujoco><worldbody><body name="torso"><freejoint/><geom size="0.2"/>{legs}'
+        f"</body></worldbody></mujoco>"
+    )
     ctrl = WorkspaceController.from_mjcf(xml, feet=("lfoot", "rfoot"))
     qpos = np.zeros(ctrl.tree.nq)
     qpos[3] = 1.0
@@ -251,8 +284,16 @@ def test_alg5_reports_a_numerically_singular_distribution():
     g = np.tile(np.eye(4), (3, 1, 1))
     g[1, :3, 3] = [0.1, -0.1, -0.9]
     g[2, :3, 3] = [0.1, 0.1, -0.9]
-    args = lambda g: (g, np.array([1, 2]), np.array([1, 1]), np.ones(6), np.zeros((4, 6)), np.zeros((3, 6, 6)),
-                      np.zeros((2, 3, 3)), *(np.zeros(6) for _ in range(4)))
+    args = lambda g: (
+        g,
+        np.array([1, 2]),
+        np.array([1, 1]),
+        np.ones(6),
+        np.zeros((4, 6)),
+        np.zeros((3, 6, 6)),
+        np.zeros((2, 3, 3)),
+        *(np.zeros(6) for _ in range(4)),
+    )
     assert alg5_wrench_distribution(*args(g))
     g[2, 0, 3] = np.nan
     assert not alg5_wrench_distribution(*args(g))
@@ -264,8 +305,11 @@ def test_alg5_reports_a_numerically_singular_distribution():
 def test_bad_states_raise_state_errors(ctrl, wendlandt_mj):
     qpos, qvel = wendlandt_mj.key_qpos[0].copy(), np.zeros(18)
     for call in (ctrl.compute, ctrl.torques, ctrl.link_velocities):
-        for arr, i, val, where in ((qpos, 2, np.nan, "qpos[2]"), (qvel, 9, np.inf, "qvel[9]"),
-                                   (qpos, 10, -np.inf, "qpos[10]")):
+        for arr, i, val, where in (
+            (qpos, 2, np.nan, "qpos[2]"),
+            (qvel, 9, np.inf, "qvel[9]"),
+            (qpos, 10, -np.inf, "qpos[10]"),
+        ):
             bad = arr.copy()
             bad[i] = val
             args = (bad, qvel) if arr is qpos else (qpos, bad)
@@ -293,6 +337,7 @@ def test_bad_states_raise_state_errors(ctrl, wendlandt_mj):
 
 def re_escape(s):
     import re
+
     return re.escape(s)
 
 
@@ -322,8 +367,12 @@ def test_alg5_printed_reading_is_selectable_and_differs(wendlandt_path, wendland
         scale = np.abs(Fd).max()
         np.testing.assert_allclose(out.wrench_left + out.wrench_right, Fd, rtol=0, atol=1e-12 * scale)
         x = np.linalg.lstsq(np.hstack([A1l, A1r]), Fd, rcond=None)[0]
-        np.testing.assert_allclose(np.concatenate([out.foot_wrench_left, out.foot_wrench_right]), x,
-                                   rtol=0, atol=1e-10 * np.abs(x).max())
+        np.testing.assert_allclose(
+            np.concatenate([out.foot_wrench_left, out.foot_wrench_right]),
+            x,
+            rtol=0,
+            atol=1e-10 * np.abs(x).max(),
+        )
         np.testing.assert_allclose(out.wrench_left, A1l @ x[:6], rtol=0, atol=1e-9 * scale)
         ref = statics.compute(d.qpos, d.qvel)
         np.testing.assert_allclose(ref.wrench_desired, Fd, rtol=1e-12, atol=1e-9)

@@ -109,15 +109,19 @@ def test_imports_run_one_way():
                 continue
             if tlayer > layer or (tlayer == layer and layer > 0):
                 where = path.relative_to(PACKAGE.parent)
-                bad.append(f"{where}:{line} ({top or 'biped'}, layer {layer}) imports {target} "
-                           f"({ttop}, layer {tlayer})")
+                bad.append(
+                    f"{where}:{line} ({top or 'biped'}, layer {layer}) imports {target} "
+                    f"({ttop}, layer {tlayer})"
+                )
     assert not bad, f"imports that run upward or sideways ({ORDER}):\n" + "\n".join(bad)
 
 
 def test_the_checker_sees_function_level_and_relative_imports():
     """The walker itself: an import inside a function, a relative import and `from biped import
     <subpackage>` are all found and resolved."""
-    src = ("def f():\n    from biped.viz import replay\n"
-           "from . import scene\nfrom ..control import policy\nfrom biped import models\n")
+    src = (
+        "def f():\n    from biped.viz import replay\n"
+        "from . import scene\nfrom ..control import policy\nfrom biped import models\n"
+    )
     found = {t for _, t in _imported("biped.sim.push", ast.parse(src))}
     assert found == {"biped.viz.replay", "biped.sim.scene", "biped.control.policy", "biped.models"}

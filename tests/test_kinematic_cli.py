@@ -30,7 +30,9 @@ def _read_csv(path):
 
 def test_forward_writes_csv_summary_figures_and_replay(tmp_path, capsys):
     out = tmp_path / "fw"
-    assert main(["walk", "--gait", "forward", "--steps", "2", "--out", str(out), "--no-video", "--quiet"]) == 0
+    assert (
+        main(["walk", "--gait", "forward", "--steps", "2", "--out", str(out), "--no-video", "--quiet"]) == 0
+    )
     header, data = _read_csv(out / "trajectory.csv")
     assert tuple(header) == CSV_COLUMNS
     for col in ("time", "left_knee", "pelvis_z", "left_heel_x", "right_toe_z"):
@@ -42,8 +44,14 @@ def test_forward_writes_csv_summary_figures_and_replay(tmp_path, capsys):
         assert np.max(np.abs(data[st, c[f"{side}_heel_z"]])) < 1e-6
         assert np.max(np.abs(data[st, c[f"{side}_toe_z"]])) < 1e-6
     s = json.loads((out / "summary.json").read_text())
-    for k in ("max_penetration_m", "max_stance_slip_m", "min_swing_clearance_m", "distance_m",
-              "height_climbed_m", "inverse_dynamics"):
+    for k in (
+        "max_penetration_m",
+        "max_stance_slip_m",
+        "min_swing_clearance_m",
+        "distance_m",
+        "height_climbed_m",
+        "inverse_dynamics",
+    ):
         assert k in s
     L = s["step_length_m"]
     assert s["distance_m"] == pytest.approx(2 * L, abs=1e-9)
@@ -57,24 +65,48 @@ def test_forward_writes_csv_summary_figures_and_replay(tmp_path, capsys):
 
 def test_upstairs_options_reach_the_stairs(tmp_path):
     out = tmp_path / "up"
-    assert main(["walk", "--gait", "upstairs", "--steps", "3", "--stair-rise", "0.15", "--stair-run", "0.32",
-                 "--out", str(out), "--no-video", "--no-replay", "--no-figures", "--no-dynamics", "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "walk",
+                "--gait",
+                "upstairs",
+                "--steps",
+                "3",
+                "--stair-rise",
+                "0.15",
+                "--stair-run",
+                "0.32",
+                "--out",
+                str(out),
+                "--no-video",
+                "--no-replay",
+                "--no-figures",
+                "--no-dynamics",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     s = json.loads((out / "summary.json").read_text())
     assert s["stairs"]["rise_m"] == 0.15 and s["stairs"]["run_m"] == 0.32
     assert s["height_climbed_m"] == pytest.approx(0.45)
     header, data = _read_csv(out / "trajectory.csv")
     c = {n: i for i, n in enumerate(header)}
-    assert data[-1, c["left_heel_z"]] == pytest.approx(0.45, abs=1e-6)   # both feet on tread 3
+    assert data[-1, c["left_heel_z"]] == pytest.approx(0.45, abs=1e-6)  # both feet on tread 3
     assert data[-1, c["right_toe_z"]] == pytest.approx(0.45, abs=1e-6)
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["--gait", "jump", "--steps", "3"], "--steps applies to --gait forward and upstairs"),
-    (["--gait", "forward", "--stair-rise", "0.1"], "apply to --gait upstairs and demo"),
-    (["--gait", "upstairs", "--stair-run", "0.1"], "stair run must be at least"),
-    (["--gait", "forward", "--speed", "-1"], "speed must be a positive number"),
-    (["--gait", "forward", "--rate", "5"], r"--rate must be in \[20, 2000\] Hz"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--gait", "jump", "--steps", "3"], "--steps applies to --gait forward and upstairs"),
+        (["--gait", "forward", "--stair-rise", "0.1"], "apply to --gait upstairs and demo"),
+        (["--gait", "upstairs", "--stair-run", "0.1"], "stair run must be at least"),
+        (["--gait", "forward", "--speed", "-1"], "speed must be a positive number"),
+        (["--gait", "forward", "--rate", "5"], r"--rate must be in \[20, 2000\] Hz"),
+    ],
+)
 def test_bad_arguments_exit_2_with_a_clear_message(tmp_path, capsys, argv, message):
     assert main(["walk", *argv, "--out", str(tmp_path / "x"), "--no-video", "--quiet"]) == 2
     assert re.search(message, capsys.readouterr().err)
@@ -82,8 +114,20 @@ def test_bad_arguments_exit_2_with_a_clear_message(tmp_path, capsys, argv, messa
 
 def test_existing_run_is_not_overwritten(tmp_path, capsys):
     out = tmp_path / "r"
-    args = ["walk", "--gait", "forward", "--steps", "1", "--out", str(out), "--no-video", "--no-replay",
-            "--no-figures", "--no-dynamics", "--quiet"]
+    args = [
+        "walk",
+        "--gait",
+        "forward",
+        "--steps",
+        "1",
+        "--out",
+        str(out),
+        "--no-video",
+        "--no-replay",
+        "--no-figures",
+        "--no-dynamics",
+        "--quiet",
+    ]
     assert main(args) == 0
     assert main(args) == 2
     assert "--overwrite" in capsys.readouterr().err
@@ -112,10 +156,24 @@ def test_chromium_draws_the_stance_foot_on_its_tread(tmp_path):
     t = float(plan.starts[2])  # both feet down: treads 1 and 2
     i = int(np.argmin(np.abs(rep.times - t)))
     t = float(rep.times[i])
-    cmd = [_chromium(), "--headless", "--no-sandbox", "--disable-gpu", "--use-angle=swiftshader",
-           "--enable-unsafe-swiftshader", "--disable-background-networking", "--disable-component-update",
-           "--disable-sync", "--no-first-run", "--disable-extensions", f"--user-data-dir={tmp_path / 'profile'}",
-           "--window-size=800,600", "--virtual-time-budget=8000", "--dump-dom", f"{f.as_uri()}#t={t!r}&probe=1"]
+    cmd = [
+        _chromium(),
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--use-angle=swiftshader",
+        "--enable-unsafe-swiftshader",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--no-first-run",
+        "--disable-extensions",
+        f"--user-data-dir={tmp_path / 'profile'}",
+        "--window-size=800,600",
+        "--virtual-time-budget=8000",
+        "--dump-dom",
+        f"{f.as_uri()}#t={t!r}&probe=1",
+    ]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=90, check=False)
     assert proc.returncode == 0, proc.stderr[-2000:]
     probe = re.search(r'<pre id="probe" style="[^"]*">(.*?)</pre>', proc.stdout, re.DOTALL)
@@ -140,8 +198,17 @@ def test_video_of_the_figure(tmp_path):
     model = figure_model(motion)
     q = figure_qpos(model, motion)
     k = slice(0, 20)
-    res = render_video(model, motion.times[k], q[k], tmp_path / "v.mp4", fps=10, width=160, height=120,
-                       track_body="pelvis", distance=3.0)
+    res = render_video(
+        model,
+        motion.times[k],
+        q[k],
+        tmp_path / "v.mp4",
+        fps=10,
+        width=160,
+        height=120,
+        track_body="pelvis",
+        distance=3.0,
+    )
     assert res.path is not None, res.reason
     assert res.frames == math.floor((motion.times[19] - motion.times[0]) * 10 + 1e-9) + 1
     assert res.path.stat().st_size > 1000
@@ -165,8 +232,18 @@ def test_walk_with_video_writes_its_summary(tmp_path, monkeypatch, model):
 
     monkeypatch.setattr(ow, "render_video", fake_video)
     path = str(resolve("wendlandt")) if model else None
-    run = ow.write_walk(step_forward(steps=1), tmp_path / "w", gait="forward", speed=1.0, rate=50.0,
-                        dynamics=False, figures=False, replay=False, video=True, model=path)
+    run = ow.write_walk(
+        step_forward(steps=1),
+        tmp_path / "w",
+        gait="forward",
+        speed=1.0,
+        rate=50.0,
+        dynamics=False,
+        figures=False,
+        replay=False,
+        video=True,
+        model=path,
+    )
     s = json.loads((tmp_path / "w" / "summary.json").read_text())
     assert s["model"] == (str(resolve("wendlandt").resolve()) if model else "wendlandt")
     assert s["notes"]["video"] == "stubbed in the test" and seen["nbody"] > 10

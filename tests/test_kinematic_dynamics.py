@@ -29,8 +29,11 @@ def biped():
 @pytest.fixture(scope="module")
 def walks(biped):
     out = {}
-    for name, plan in (("forward", step_forward(steps=3)), ("upstairs", step_upward(steps=2)),
-                       ("jump", jump(params=GaitParams(somersault=True)))):
+    for name, plan in (
+        ("forward", step_forward(steps=3)),
+        ("upstairs", step_upward(steps=2)),
+        ("jump", jump(params=GaitParams(somersault=True))),
+    ):
         motion = plan.sample(200.0)
         out[name] = (motion, inverse_dynamics(motion, biped))
     return out
@@ -56,7 +59,9 @@ def test_forward_dynamics_of_the_result_reproduces_the_motion(biped, walks, name
         qfrc[:6] += res.residual[t]
         for j in range(2):
             if res.stance[t, j]:
-                mujoco.mj_applyFT(m, d, res.grf[t, j], res.grf_moment[t, j], res.sole_centre[t, j], feet[j], qfrc)
+                mujoco.mj_applyFT(
+                    m, d, res.grf[t, j], res.grf_moment[t, j], res.sole_centre[t, j], feet[j], qfrc
+                )
         d.qfrc_applied[:] = qfrc
         mujoco.mj_forward(m, d)
         scale = 1.0 + np.max(np.abs(res.qacc[t]))
@@ -95,8 +100,9 @@ def test_standing_still_weight_splits_evenly_and_torques_mirror(walks):
     np.testing.assert_allclose(res.grf[k, :, :2], 0.0, atol=1e-6 * res.mass * G)
     names = list(res.joint_names)
     for j in ("hip_flexion", "knee", "ankle_dorsiflexion"):
-        np.testing.assert_allclose(res.torques[k, names.index(f"left_{j}")],
-                                   res.torques[k, names.index(f"right_{j}")], atol=1e-6)
+        np.testing.assert_allclose(
+            res.torques[k, names.index(f"left_{j}")], res.torques[k, names.index(f"right_{j}")], atol=1e-6
+        )
     assert np.all(np.abs(res.residual[k]) < 1e-6)
 
 

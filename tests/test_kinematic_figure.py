@@ -85,8 +85,11 @@ def test_biped_driven_by_the_figure_puts_its_soles_where_the_figure_does():
             # biped heel is the +x (back) end of its heel box, toe the -x end of its toe box
             p_heel = d.geom_xpos[gh] + Rh @ [heel.size[0], 0.0, -heel.size[2]]
             p_toe = d.geom_xpos[gt] + Rt @ [-toe.size[0], 0.0, -toe.size[2]]
-            worst = max(worst, np.max(np.abs(p_heel - lm[f"{side}_heel"][t])),
-                        np.max(np.abs(p_toe - lm[f"{side}_toe"][t])))
+            worst = max(
+                worst,
+                np.max(np.abs(p_heel - lm[f"{side}_heel"][t])),
+                np.max(np.abs(p_toe - lm[f"{side}_toe"][t])),
+            )
     assert worst < 1e-5
 
 

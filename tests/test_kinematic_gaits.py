@@ -44,12 +44,31 @@ def _soles_by_mujoco(motion):
     from scipy.spatial.transform import Rotation
 
     quat = Rotation.from_matrix(motion.pelvis_rot).as_quat()[:, [3, 0, 1, 2]]
-    adr = [m.joint(n).qposadr[0] for n in
-           ("torso_roll", "torso_pitch", "left_hip_flexion", "left_knee", "left_ankle_dorsiflexion",
-            "right_hip_flexion", "right_knee", "right_ankle_dorsiflexion", "left_shoulder_flexion",
-            "left_elbow_flexion", "right_shoulder_flexion", "right_elbow_flexion")]
-    local = np.stack([np.linspace(-d_.heel_back, d_.toe_front, N_SOLE), np.zeros(N_SOLE),
-                      np.full(N_SOLE, -d_.ankle_height)], 1)
+    adr = [
+        m.joint(n).qposadr[0]
+        for n in (
+            "torso_roll",
+            "torso_pitch",
+            "left_hip_flexion",
+            "left_knee",
+            "left_ankle_dorsiflexion",
+            "right_hip_flexion",
+            "right_knee",
+            "right_ankle_dorsiflexion",
+            "left_shoulder_flexion",
+            "left_elbow_flexion",
+            "right_shoulder_flexion",
+            "right_elbow_flexion",
+        )
+    ]
+    local = np.stack(
+        [
+            np.linspace(-d_.heel_back, d_.toe_front, N_SOLE),
+            np.zeros(N_SOLE),
+            np.full(N_SOLE, -d_.ankle_height),
+        ],
+        1,
+    )
     feet = [m.body("left_foot").id, m.body("right_foot").id]
     T = motion.times.size
     out = np.empty((T, 2, N_SOLE, 3))
@@ -170,15 +189,21 @@ def test_level_double_support_and_mid_stance_follow_eq_4_20_and_4_22():
     for side in ("left", "right"):
         dist = np.linalg.norm(lm[f"{side}_hip"][:k] - lm[f"{side}_ankle"][:k], axis=1)
         np.testing.assert_allclose(dist, P1 * math.cos(a), atol=1e-9)
-        ang = np.degrees(np.arctan2(np.abs(lm[f"{side}_hip"][:k, 0] - lm[f"{side}_ankle"][:k, 0]),
-                                    lm[f"{side}_hip"][:k, 2] - lm[f"{side}_ankle"][:k, 2]))
+        ang = np.degrees(
+            np.arctan2(
+                np.abs(lm[f"{side}_hip"][:k, 0] - lm[f"{side}_ankle"][:k, 0]),
+                lm[f"{side}_hip"][:k, 2] - lm[f"{side}_ankle"][:k, 2],
+            )
+        )
         np.testing.assert_allclose(ang, 20.0, atol=1e-7)
     z_ds, z_mid = m.pelvis_pos[:k, 2], m.pelvis_pos[k:, 2]
     np.testing.assert_allclose(z_ds, d.ankle_height + P1 * math.cos(a) ** 2, atol=1e-9)
     np.testing.assert_allclose(z_mid - z_ds[:3], 2 * 0.08 * d.thigh, atol=1e-9)
     ends = plan.evaluate(np.array([0.0, plan.duration])).landmarks()
     for side in ("left", "right"):  # six footfalls of L = P1 sin(2 alpha)
-        assert ends[f"{side}_heel"][1, 0] - ends[f"{side}_heel"][0, 0] == pytest.approx(6 * P1 * math.sin(2 * a))
+        assert ends[f"{side}_heel"][1, 0] - ends[f"{side}_heel"][0, 0] == pytest.approx(
+            6 * P1 * math.sin(2 * a)
+        )
 
 
 def test_default_stairs_are_bediz_minus_10_to_plus_30_deg():
@@ -192,9 +217,17 @@ def test_default_stairs_are_bediz_minus_10_to_plus_30_deg():
     m = plan.evaluate(plan.starts[2:5])
     lm = m.landmarks()
     for t in range(3):
-        angs = sorted(abs(math.degrees(math.atan2(lm[f"{s}_hip"][t, 0] - lm[f"{s}_ankle"][t, 0],
-                                                  lm[f"{s}_hip"][t, 2] - lm[f"{s}_ankle"][t, 2])))
-                      for s in ("left", "right"))
+        angs = sorted(
+            abs(
+                math.degrees(
+                    math.atan2(
+                        lm[f"{s}_hip"][t, 0] - lm[f"{s}_ankle"][t, 0],
+                        lm[f"{s}_hip"][t, 2] - lm[f"{s}_ankle"][t, 2],
+                    )
+                )
+            )
+            for s in ("left", "right")
+        )
         assert angs == pytest.approx([10.0, 30.0], abs=1e-7)
     assert plan.climbed == pytest.approx(5 * rise)
 

@@ -51,7 +51,7 @@ def test_fk_of_ik_returns_the_target_to_1e_9(knee, l1, l2):
 
 
 def test_knee_branch_is_explicit_human_knees_point_forward():
-    """"human": theta2 <= 0 and the knee lies ahead of the hip-ankle line; "reverse" the mirror
+    """ "human": theta2 <= 0 and the knee lies ahead of the hip-ankle line; "reverse" the mirror
     image; both reach the same ankle."""
     rng = np.random.default_rng(3)
     l1, l2 = 0.41, 0.42
@@ -80,8 +80,11 @@ def test_ik_angles_drive_mujoco_figure_ankle_onto_the_target():
     d.qpos[3] = 1.0  # pelvis at the origin, upright
     foot = m.body("left_foot").id
     for k in range(x.size):
-        for name, val in (("left_hip_flexion", sol.theta1[k]), ("left_knee", sol.theta2[k]),
-                          ("left_ankle_dorsiflexion", sol.theta3[k])):
+        for name, val in (
+            ("left_hip_flexion", sol.theta1[k]),
+            ("left_knee", sol.theta2[k]),
+            ("left_ankle_dorsiflexion", sol.theta3[k]),
+        ):
             d.qpos[m.joint(name).qposadr[0]] = val
         mujoco.mj_kinematics(m, d)
         np.testing.assert_allclose(d.xpos[foot], [y[k], dims.hip_half_width, -x[k]], atol=1e-12)

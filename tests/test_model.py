@@ -23,15 +23,25 @@ W_COM = np.array([0.0, 0.0, 1.035])
 W_TILT_DEG = 5.0
 
 # W's joint k = 2..13 in MJCF names (docs/controller.md lists the same table).
-W_JOINTS = [f"{side}_{j}" for side in ("left", "right") for j in (
-    "hip_abduction", "hip_flexion", "hip_rotation", "knee", "ankle_inversion", "ankle_dorsiflexion")]
-W_BODIES = ["central_body"] + [f"{side}_{b}" for side in ("left", "right") for b in (
-    "hip_1", "hip_2", "thigh", "shank", "ankle_1", "foot")]
+W_JOINTS = [
+    f"{side}_{j}"
+    for side in ("left", "right")
+    for j in ("hip_abduction", "hip_flexion", "hip_rotation", "knee", "ankle_inversion", "ankle_dorsiflexion")
+]
+W_BODIES = ["central_body"] + [
+    f"{side}_{b}"
+    for side in ("left", "right")
+    for b in ("hip_1", "hip_2", "thigh", "shank", "ankle_1", "foot")
+]
 
 # de Leva (1996), Table 4, males: mass fraction, segment length [m] at stature 1.741 m, CM from the
 # proximal end (fraction of length), radii of gyration (sagittal, transverse, longitudinal; fraction).
 DE_LEVA = {
-    "head": 0.0694, "trunk": 0.4346, "upper_arm": 0.0271, "forearm": 0.0162, "hand": 0.0061,
+    "head": 0.0694,
+    "trunk": 0.4346,
+    "upper_arm": 0.0271,
+    "forearm": 0.0162,
+    "hand": 0.0061,
 }
 DE_LEVA_THIGH = (0.1416, 0.4222, 0.4095, 0.329, 0.329, 0.149)
 DE_LEVA_SHANK = (0.0433, 0.4340, 0.4459, 0.255, 0.249, 0.103)
@@ -58,8 +68,7 @@ def w_initial_qpos(m: mujoco.MjModel) -> np.ndarray:
 def sole_corners(m, d, geom: str) -> np.ndarray:
     gid = m.geom(geom).id
     R, c, s = d.geom_xmat[gid].reshape(3, 3), d.geom_xpos[gid], m.geom_size[gid]
-    return np.array([c + R @ (s * np.array([a, b, e]))
-                     for a in (-1, 1) for b in (-1, 1) for e in (-1, 1)])
+    return np.array([c + R @ (s * np.array([a, b, e])) for a in (-1, 1) for b in (-1, 1) for e in (-1, 1)])
 
 
 # --------------------------------------------------------------------------- the shipped biped
@@ -108,8 +117,9 @@ def test_w_initial_state_puts_soles_flat_just_above_floor(wendlandt_mj):
 def test_segment_parameters_are_de_levas(wendlandt_mj):
     m = wendlandt_mj
     mass = {m.body(i).name: m.body_mass[i] for i in range(1, m.nbody)}
-    hat = DE_LEVA["head"] + DE_LEVA["trunk"] + 2 * (
-        DE_LEVA["upper_arm"] + DE_LEVA["forearm"] + DE_LEVA["hand"])
+    hat = (
+        DE_LEVA["head"] + DE_LEVA["trunk"] + 2 * (DE_LEVA["upper_arm"] + DE_LEVA["forearm"] + DE_LEVA["hand"])
+    )
     assert mass["central_body"] == pytest.approx(hat * BODY_MASS, rel=1e-5)
     for side in ("left", "right"):
         assert mass[f"{side}_thigh"] == pytest.approx(DE_LEVA_THIGH[0] * BODY_MASS, rel=1e-5)
@@ -143,6 +153,7 @@ def test_unknown_model_name_lists_valid_ones():
 
 
 # --------------------------------------------------------------------------- TreeModel errors
+
 
 def _mjcf(body: str, extra: str = "") -> str:
     return f"<mujoco><worldbody>{body}{extra}</worldbody></mujoco>"

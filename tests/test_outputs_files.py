@@ -48,8 +48,7 @@ def test_walk_inverse_dynamics_csv_obeys_newtons_law(tmp_path, gait):
     dims, params = FigureDims.from_anthropometry(), GaitParams()
     plan = step_forward(dims, 2, 1.0, params) if gait == "forward" else jump(dims, 1.0, params)
     out = tmp_path / "w"
-    run = write_walk(plan, out, gait=gait, speed=1.0, rate=200.0, figures=False, replay=False,
-                     video=False)
+    run = write_walk(plan, out, gait=gait, speed=1.0, rate=200.0, figures=False, replay=False, video=False)
     head, data = _read_csv(out / "inverse_dynamics.csv")
     summary = _strict((out / "summary.json").read_text())
     assert list(summary["inverse_dynamics_columns"]) == head
@@ -73,8 +72,7 @@ def test_walk_inverse_dynamics_csv_obeys_newtons_law(tmp_path, gait):
     ok = np.flatnonzero(np.abs(h[1:] - h[:-1]) < 1e-9) + 1
     acc = np.zeros_like(com)
     acc[ok] = (com[ok + 1] - 2 * com[ok] + com[ok - 1]) / h[ok][:, None] ** 2
-    force = np.stack([c(f"left_grf_{a}") + c(f"right_grf_{a}") + c(f"residual_f{a}")
-                      for a in "xyz"], axis=1)
+    force = np.stack([c(f"left_grf_{a}") + c(f"right_grf_{a}") + c(f"residual_f{a}") for a in "xyz"], axis=1)
     # away from the gait's switches (stance changes make the acceleration jump)
     st = np.column_stack([c("left_stance"), c("right_stance")])
     same = np.zeros(len(t), dtype=bool)
@@ -85,17 +83,26 @@ def test_walk_inverse_dynamics_csv_obeys_newtons_law(tmp_path, gait):
     weight = mass * np.linalg.norm(g)
     # measured: median 1e-5, 95th percentile 3e-4 of the weight (second differences, h = 5 ms)
     assert np.median(err) < 1e-4 * weight and np.percentile(err, 95) < 2e-3 * weight
-    air = (c("left_stance") == 0)
+    air = c("left_stance") == 0
     assert np.isnan(c("left_cop_x")[air]).all()
 
 
 def test_finite_json_replaces_every_non_finite_value(tmp_path):
-    obj = {"a": float("nan"), "b": [1.0, float("inf"), np.float64("-inf")],
-           "c": np.array([[np.nan, 2.0]]), "d": {"e": np.float32(3.5), "f": np.int64(4)},
-           "g": (True, None, "x")}
+    obj = {
+        "a": float("nan"),
+        "b": [1.0, float("inf"), np.float64("-inf")],
+        "c": np.array([[np.nan, 2.0]]),
+        "d": {"e": np.float32(3.5), "f": np.int64(4)},
+        "g": (True, None, "x"),
+    }
     path = write_json(tmp_path / "x.json", obj)
-    assert _strict(path.read_text()) == {"a": None, "b": [1.0, None, None], "c": [[None, 2.0]],
-                                         "d": {"e": 3.5, "f": 4}, "g": [True, None, "x"]}
+    assert _strict(path.read_text()) == {
+        "a": None,
+        "b": [1.0, None, None],
+        "c": [[None, 2.0]],
+        "d": {"e": 3.5, "f": 4},
+        "g": [True, None, "x"],
+    }
     assert finite_json(float("nan")) is None
 
 
@@ -125,8 +132,15 @@ _WARN = textwrap.dedent("""
 def _warn(cwd: Path, *args: str):
     env = dict(os.environ, PYTHONPATH=SRC)
     env.pop("BIPED_MUJOCO_LOG", None)
-    return subprocess.run([sys.executable, "-c", _WARN, *args], check=False, cwd=cwd, env=env,
-                          capture_output=True, text=True, timeout=120)
+    return subprocess.run(
+        [sys.executable, "-c", _WARN, *args],
+        check=False,
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
 
 
 def test_mujoco_warnings_never_land_in_the_current_directory(tmp_path):
@@ -148,8 +162,22 @@ def test_mujoco_warnings_never_land_in_the_current_directory(tmp_path):
 def test_push_says_what_it_writes_and_the_whole_time(tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)
     out = tmp_path / "run"
-    assert main(["push", "--duration", "0.05", "--no-video", "--no-replay", "--out", str(out),
-                 "--controller", "joint-pd"]) == 0
+    assert (
+        main(
+            [
+                "push",
+                "--duration",
+                "0.05",
+                "--no-video",
+                "--no-replay",
+                "--out",
+                str(out),
+                "--controller",
+                "joint-pd",
+            ]
+        )
+        == 0
+    )
     text = capsys.readouterr().out
     assert "writing trajectory.csv" in text and "writing figures/" in text
     assert "the whole command" in text
@@ -161,8 +189,24 @@ def test_push_says_what_it_writes_and_the_whole_time(tmp_path, capsys, monkeypat
 
 def test_walk_cli_writes_the_dynamics_csv_and_the_whole_time(tmp_path, capsys):
     out = tmp_path / "w"
-    assert main(["walk", "--gait", "forward", "--steps", "1", "--out", str(out), "--no-video",
-                 "--no-replay", "--no-figures", "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "walk",
+                "--gait",
+                "forward",
+                "--steps",
+                "1",
+                "--out",
+                str(out),
+                "--no-video",
+                "--no-replay",
+                "--no-figures",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     text = capsys.readouterr().out
     assert "the whole command" in text
     head, _data = _read_csv(out / "inverse_dynamics.csv")
@@ -190,9 +234,17 @@ def test_walk_with_video_records_the_biped_model_not_the_figure(tmp_path, monkey
 
     monkeypatch.setattr(walk_out, "render_video", fake_render)
     plan = step_forward(FigureDims.from_anthropometry(), 1, 1.0, GaitParams())
-    run = walk_out.write_walk(plan, tmp_path / "w", gait="forward", speed=1.0, rate=100.0,
-                              figures=False, replay=False, dynamics=False,
-                              on_frame=lambda done, total: frames.append((done, total)))
+    run = walk_out.write_walk(
+        plan,
+        tmp_path / "w",
+        gait="forward",
+        speed=1.0,
+        rate=100.0,
+        figures=False,
+        replay=False,
+        dynamics=False,
+        on_frame=lambda done, total: frames.append((done, total)),
+    )
     assert run.summary["model"] == "wendlandt" and run.summary["notes"]["video"] == "stubbed"
     assert frames == [(1, 3), (2, 3), (3, 3)]
 
@@ -209,9 +261,15 @@ def test_push_outputs_report_stages_and_video_frames(tmp_path, monkeypatch):
 
     monkeypatch.setattr(push_out, "render_push_video", fake_render)
     stages, frames = [], []
-    push_out.write_outputs(simulate(Scenario(duration_s=0.02)), tmp_path, figures=False,
-                           replay=False, log=lambda m: None, on_stage=stages.append,
-                           on_frame=lambda d, n: frames.append((d, n)))
+    push_out.write_outputs(
+        simulate(Scenario(duration_s=0.02)),
+        tmp_path,
+        figures=False,
+        replay=False,
+        log=lambda m: None,
+        on_stage=stages.append,
+        on_frame=lambda d, n: frames.append((d, n)),
+    )
     assert stages == ["trajectory.csv", "video.mp4"] and frames == [(1, 2), (2, 2)]
 
 
@@ -222,11 +280,18 @@ def test_any_nested_value_gives_strict_json(tmp_path):
     from hypothesis import given, settings
     from hypothesis import strategies as st
 
-    leaf = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.integers(), st.booleans(),
-                     st.none(), st.text(max_size=5))
-    tree = st.recursive(leaf, lambda ch: st.one_of(st.lists(ch, max_size=4),
-                                                   st.dictionaries(st.text(max_size=4), ch, max_size=4)),
-                        max_leaves=20)
+    leaf = st.one_of(
+        st.floats(allow_nan=True, allow_infinity=True),
+        st.integers(),
+        st.booleans(),
+        st.none(),
+        st.text(max_size=5),
+    )
+    tree = st.recursive(
+        leaf,
+        lambda ch: st.one_of(st.lists(ch, max_size=4), st.dictionaries(st.text(max_size=4), ch, max_size=4)),
+        max_leaves=20,
+    )
 
     def same(a, b):
         if isinstance(a, float):

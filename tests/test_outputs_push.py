@@ -42,11 +42,17 @@ def w_run(tmp_path_factory):
     scene = build_scene(scenario)
     result = simulate(scenario, scene=scene)
     out = tmp_path_factory.mktemp("w_run")
-    write_outputs(result, out, figures=False, video=False, replay=False, scene=scene,
-                  log=lambda m: None)
+    write_outputs(result, out, figures=False, video=False, replay=False, scene=scene, log=lambda m: None)
     head, data = _read_csv(out / "trajectory.csv")
-    return {"scenario": scenario, "scene": scene, "result": result, "out": out,
-            "head": head, "data": data, "col": lambda n: data[:, head.index(n)]}
+    return {
+        "scenario": scenario,
+        "scene": scene,
+        "result": result,
+        "out": out,
+        "head": head,
+        "data": data,
+        "col": lambda n: data[:, head.index(n)],
+    }
 
 
 def _biped_weight() -> float:
@@ -211,8 +217,7 @@ def test_feet_drift_is_checkable_from_the_csv(w_run):
 
 def test_column_dictionary_names_every_column_with_a_unit(tmp_path):
     r = simulate(Scenario(duration_s=0.05))
-    paths = write_outputs(r, tmp_path, figures=False, video=False, replay=False,
-                          log=lambda m: None)
+    paths = write_outputs(r, tmp_path, figures=False, video=False, replay=False, log=lambda m: None)
     head, data = _read_csv(paths["trajectory"])
     cols = _strict((tmp_path / "columns.json").read_text())
     assert list(cols) == head == list(column_dictionary(r.joint_names))
@@ -228,11 +233,15 @@ def test_summary_is_strict_json_when_values_do_not_exist(tmp_path):
     """A run that stops before its first row has NaN errors and an infinite real-time factor;
     summary.json holds null there, never NaN / Infinity (not JSON)."""
     r = simulate(Scenario(duration_s=0.05))
-    bad = dataclasses.replace(r, final_com_error_m=float("nan"), realtime_factor=float("inf"),
-                              final_orientation_error_deg=float("nan"), wall_time_s=float("nan"),
-                              block_momentum_before=np.array([np.nan, np.inf, -np.inf]))
-    path = write_summary(bad, tmp_path / "summary.json",
-                         rows=measure_rows(build_scene(r.scenario), r))
+    bad = dataclasses.replace(
+        r,
+        final_com_error_m=float("nan"),
+        realtime_factor=float("inf"),
+        final_orientation_error_deg=float("nan"),
+        wall_time_s=float("nan"),
+        block_momentum_before=np.array([np.nan, np.inf, -np.inf]),
+    )
+    path = write_summary(bad, tmp_path / "summary.json", rows=measure_rows(build_scene(r.scenario), r))
     data = _strict(path.read_text())
     assert data["final_com_error_m"] is None and data["realtime_factor"] is None
     assert data["block_momentum_before_kg_m_s"] == [None, None, None]
@@ -252,8 +261,9 @@ def test_joint_pd_is_judged_against_its_own_set_point():
 
 
 def test_block_separation_without_a_hit():
-    r = simulate(Scenario(duration_s=0.05, block_position_m=(3.0, 3.0, 0.06),
-                          block_velocity_m_s=(0.0, 0.0, 0.0)))
+    r = simulate(
+        Scenario(duration_s=0.05, block_position_m=(3.0, 3.0, 0.06), block_velocity_m_s=(0.0, 0.0, 0.0))
+    )
     sep = block_separation(r, measure_rows(build_scene(r.scenario), r))
     assert sep.contact_time_s is None and sep.time_s is None and np.isnan(sep.momentum).all()
     assert foot_drift(r) is None or set(foot_drift(r)) == {"from_s", "to_s", "left", "right"}

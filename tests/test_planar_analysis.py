@@ -96,9 +96,7 @@ def test_pole_placement_places_poles():
     A, B = an.ab_matrices(P)
     poles = np.array([-2.0, -3.0, -4.0, -5.0])
     K = an.place_poles_gains(A, B, poles)
-    np.testing.assert_allclose(
-        np.sort(np.linalg.eigvals(A + B @ K).real), np.sort(poles), rtol=1e-8
-    )
+    np.testing.assert_allclose(np.sort(np.linalg.eigvals(A + B @ K).real), np.sort(poles), rtol=1e-8)
 
 
 def test_lqr_solves_riccati_and_matches_cost():

@@ -67,9 +67,7 @@ def test_printed_newton_euler_row_differs_from_derivation(derived):
     p = bl.BodyLegParams()
     u = np.array([-3000.0, 5000.0])
     aligned = np.array([0.4, 0.3, 0.4, -0.2])
-    np.testing.assert_allclose(
-        bl.newton_euler_printed(p, aligned, u)[:3], bl.newton_euler(p, aligned, u)[:3]
-    )
+    np.testing.assert_allclose(bl.newton_euler_printed(p, aligned, u)[:3], bl.newton_euler(p, aligned, u)[:3])
     bent = np.array([0.5, 0.0, 1.0, 0.0])
     acc, _ = derived((p.m, p.I, p.r, p.l, p.g), bent[0::2], bent[1::2], u)
     assert abs(bl.newton_euler_printed(p, bent, u).theta2_ddot - acc[1]) > 1.0
@@ -103,9 +101,7 @@ def test_singular_configuration_raises():
         bl.lagrange_linear(p, x, [0.0, 0.0])
     # away from alignment the point-mass body is fine, and the two forms agree
     y = np.array([0.2, 0.1, 0.5, -0.3])
-    np.testing.assert_allclose(
-        bl.newton_euler(p, y, [10.0, 3.0])[:2], bl.lagrange(p, y, [10.0, 3.0])[:2]
-    )
+    np.testing.assert_allclose(bl.newton_euler(p, y, [10.0, 3.0])[:2], bl.lagrange(p, y, [10.0, 3.0])[:2])
 
 
 def test_bad_state_errors():

@@ -67,10 +67,7 @@ def test_gains_outputs(tmp_path):
 
 def test_bad_input_gets_clear_errors(tmp_path, capsys):
     assert main(["posture", "body-leg", "--param", "mass=3", "--out", str(tmp_path)]) == 2
-    assert (
-        "unknown parameter 'mass'; valid parameters: 'I', 'g', 'l', 'm', 'r'"
-        in capsys.readouterr().err
-    )
+    assert "unknown parameter 'mass'; valid parameters: 'I', 'g', 'l', 'm', 'r'" in capsys.readouterr().err
     assert main(["posture", "pendulum", "--x0", "nan", "0", "--out", str(tmp_path)]) == 2
     assert "must be finite" in capsys.readouterr().err
     with pytest.raises(SystemExit) as exc:

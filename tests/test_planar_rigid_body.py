@@ -74,16 +74,12 @@ def test_growth_rates_and_euler_rates_match_kanes_method():
     f = symbolic.rigid_body().numeric()
     rng = np.random.default_rng(7)
     for _ in range(10):
-        p = rb.RigidBodyParams(
-            rng.uniform(1, 100), tuple(rng.uniform(1, 10, 3)), rng.uniform(0, 40)
-        )
+        p = rb.RigidBodyParams(rng.uniform(1, 100), tuple(rng.uniform(1, 10, 3)), rng.uniform(0, 40))
         s = rng.uniform(-2, 2, 12)
         s[4] = rng.uniform(-1.4, 1.4)
         wrench = rng.uniform(-50, 50, 6)
         expected = f((p.mass, *p.inertia, p.g), s, wrench)
-        np.testing.assert_allclose(
-            rb.state_derivative(p, s, wrench), expected, rtol=1e-12, atol=1e-12
-        )
+        np.testing.assert_allclose(rb.state_derivative(p, s, wrench), expected, rtol=1e-12, atol=1e-12)
 
 
 def test_torque_free_keeps_energy_and_angular_momentum():

@@ -35,6 +35,15 @@ def test_readme_python_section_runs(tmp_path, monkeypatch):
     assert "0.082" in out.getvalue()  # the README's comment
     with open(run / "trajectory.csv") as f:
         head = next(csv.reader(f))
-    for col in ("left_grf_x", "left_grf_y", "left_grf_z", "left_cop_x", "left_cop_y",
-                "right_grf_z", "right_cop_y", "whole_body_com_z", "central_body_com_z"):
+    for col in (
+        "left_grf_x",
+        "left_grf_y",
+        "left_grf_z",
+        "left_cop_x",
+        "left_cop_y",
+        "right_grf_z",
+        "right_cop_y",
+        "whole_body_com_z",
+        "central_body_com_z",
+    ):
         assert col in head

@@ -49,8 +49,9 @@ def rigid_biped_spec(scenario: Scenario, slides=("z",), gravity=(0.0, 0.0, 0.0),
     cb.pos = list(scenario.initial_com_m)
     cb.quat = list(axis_angle_quat(np.array([0.0, -1.0, 0.0]), math.radians(scenario.initial_tilt_deg)))
     for ax in slides:
-        cb.add_joint(name=f"slide_{ax}", type=mujoco.mjtJoint.mjJNT_SLIDE,
-                     axis=[float(ax == c) for c in "xyz"])
+        cb.add_joint(
+            name=f"slide_{ax}", type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[float(ax == c) for c in "xyz"]
+        )
     if not keep_block:
         _delete(spec, spec.body("block"))
     spec.option.gravity = list(gravity)
@@ -59,8 +60,9 @@ def rigid_biped_spec(scenario: Scenario, slides=("z",), gravity=(0.0, 0.0, 0.0),
 
 def _sole_bottom(model, data):
     ids = [model.geom(n).id for n in ("left_heel", "left_toe", "right_heel", "right_toe")]
-    return min(data.geom_xpos[g, 2] - np.abs(data.geom_xmat[g].reshape(3, 3))[2] @ model.geom_size[g]
-               for g in ids)
+    return min(
+        data.geom_xpos[g, 2] - np.abs(data.geom_xmat[g].reshape(3, 3))[2] @ model.geom_size[g] for g in ids
+    )
 
 
 def _bounce(model, data, normal_velocity, max_steps=20000):
@@ -111,14 +113,14 @@ def test_restitution_block_body(mass, physics):
     half = s.block_size_m[0] / 2
     bq = model.jnt_qposadr[model.joint("block_root").id]
     bv = model.jnt_dofadr[model.joint("block_root").id]
-    data.qpos[bq:bq + 3] = back + n * (half + 0.002)
-    data.qpos[bq + 3:bq + 7] = data.xquat[cb]  # faces parallel to the trunk's
+    data.qpos[bq : bq + 3] = back + n * (half + 0.002)
+    data.qpos[bq + 3 : bq + 7] = data.xquat[cb]  # faces parallel to the trunk's
     speed = 4.5
-    data.qvel[bv:bv + 3] = -speed * n
-    v_after = _bounce(model, data, lambda d: d.qvel[bv:bv + 3] @ n)
+    data.qvel[bv : bv + 3] = -speed * n
+    v_after = _bounce(model, data, lambda d: d.qvel[bv : bv + 3] @ n)
     e = v_after / speed
     assert abs(e - s.restitution) < E_TOL, e
-    assert abs(data.qvel[bv + 3:bv + 6]).max() < 0.5  # a square hit: the block does not tumble
+    assert abs(data.qvel[bv + 3 : bv + 6]).max() < 0.5  # a square hit: the block does not tumble
 
 
 def _slope_gravity(tan_slope: float) -> list:
@@ -231,8 +233,9 @@ class ReferenceMonitor:
             for i, (old, new) in enumerate(zip(self.flags, flags, strict=True)):
                 if old != new:
                     foot, part = SOLE_GEOMS[i]
-                    self.events.append(ContactEvent(round(float(t), 9), foot, part,
-                                                    "touch_down" if new else "lift_off"))
+                    self.events.append(
+                        ContactEvent(round(float(t), 9), foot, part, "touch_down" if new else "lift_off")
+                    )
         self.flags = flags
         self.rows.append(flags)
         if block and self.block_time is None:
@@ -253,13 +256,17 @@ def _sweep_scenario(controller, speed, direction, duration):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("scenario, ends", [
-    (Scenario(), "recovered"),                                            # W's run
-    (Scenario(physics="fast", duration_s=2.0), "recovered"),  # the block falls asleep ~1.5 s
-    (_sweep_scenario("workspace", 9.0, 0.0, 0.5), "left_shank touched"),  # a shank on the floor
-    (_sweep_scenario("joint-pd", 9.0, 180.0, 1.6), "central-body COM"),   # sinks below 0.6 m
-    (_sweep_scenario("workspace", 3.0, 90.0, 0.5), "diverged"),           # MuJoCo gives up
-], ids=["w", "w-fast", "sweep-shank", "sweep-com", "sweep-diverged"])
+@pytest.mark.parametrize(
+    "scenario, ends",
+    [
+        (Scenario(), "recovered"),  # W's run
+        (Scenario(physics="fast", duration_s=2.0), "recovered"),  # the block falls asleep ~1.5 s
+        (_sweep_scenario("workspace", 9.0, 0.0, 0.5), "left_shank touched"),  # a shank on the floor
+        (_sweep_scenario("joint-pd", 9.0, 180.0, 1.6), "central-body COM"),  # sinks below 0.6 m
+        (_sweep_scenario("workspace", 3.0, 90.0, 0.5), "diverged"),  # MuJoCo gives up
+    ],
+    ids=["w", "w-fast", "sweep-shank", "sweep-com", "sweep-diverged"],
+)
 def test_monitor_events_are_the_reference_classification(scenario, ends):
     """Every period of a closed-loop run, the compiled monitor (inside the loop) and the plain
     reference (fed the same MjData after every control period) agree exactly: per-period sole
@@ -278,8 +285,9 @@ def test_monitor_events_are_the_reference_classification(scenario, ends):
         ref.update(len(ref.rows) * period, data)
 
     r = simulate(scenario, scene=scene, on_step=on_step)
-    outcome = ("recovered" if r.recovered else r.fall_reason if r.fell
-               else "diverged" if r.diverged else "completed")
+    outcome = (
+        "recovered" if r.recovered else r.fall_reason if r.fell else "diverged" if r.diverged else "completed"
+    )
     assert outcome.startswith(ends), outcome
     assert len(ref.rows) == len(r.times)
     np.testing.assert_array_equal(r.contacts, np.array(ref.rows, dtype=bool))
@@ -294,8 +302,7 @@ def test_monitor_classifies_a_lying_biped_and_a_resting_block():
     """A static check of the same equivalence without a controller: the biped dropped on its
     side with the block dropped on it; both monitors read the same MjData after each of 300
     steps."""
-    s = Scenario(block_position_m=(0.0, 0.0, 0.6), block_velocity_m_s=(0.0, 0.0, 0.0),
-                 fall_height_m=0.01)
+    s = Scenario(block_position_m=(0.0, 0.0, 0.6), block_velocity_m_s=(0.0, 0.0, 0.0), fall_height_m=0.01)
     scene = build_scene(s)
     m = scene.model
     d = mujoco.MjData(m)
@@ -303,9 +310,15 @@ def test_monitor_classifies_a_lying_biped_and_a_resting_block():
     d.qpos[scene.biped_qpos_index[3:7]] = axis_angle_quat(np.array([1.0, 0.0, 0.0]), math.pi / 2)
     d.qpos[scene.biped_qpos_index[2]] = 0.25
     mujoco.mj_forward(m, d)
-    mon = ContactMonitor(m, floor_geom=scene.floor_geom, block_geom=scene.block_geom,
-                         sole_geoms=scene.sole_geoms, biped_geoms=scene.biped_geoms,
-                         central_body=scene.central_body, fall_height_m=s.fall_height_m)
+    mon = ContactMonitor(
+        m,
+        floor_geom=scene.floor_geom,
+        block_geom=scene.block_geom,
+        sole_geoms=scene.sole_geoms,
+        biped_geoms=scene.biped_geoms,
+        central_body=scene.central_body,
+        fall_height_m=s.fall_height_m,
+    )
     ref = ReferenceMonitor(m, scene, s.fall_height_m)
     for k in range(300):
         mon.update(k * 0.001, d)
@@ -322,13 +335,27 @@ def test_monitor_classifies_a_lying_biped_and_a_resting_block():
 def test_heel_timeline_reads_w_events_through_chatter():
     """Hand-made events: a 2 ms bounce before the long rise and one after the return are not
     W's events; a heel that never comes back has no return time."""
-    ev = [ContactEvent(t, foot, "heel", kind) for t, foot, kind in [
-        (0.010, "left", "touch_down"), (0.086, "left", "lift_off"), (0.088, "left", "touch_down"),
-        (0.090, "left", "lift_off"), (0.274, "left", "touch_down"), (0.300, "left", "lift_off"),
-        (0.302, "left", "touch_down"), (0.094, "right", "lift_off")]]
+    ev = [
+        ContactEvent(t, foot, "heel", kind)
+        for t, foot, kind in [
+            (0.010, "left", "touch_down"),
+            (0.086, "left", "lift_off"),
+            (0.088, "left", "touch_down"),
+            (0.090, "left", "lift_off"),
+            (0.274, "left", "touch_down"),
+            (0.300, "left", "lift_off"),
+            (0.302, "left", "touch_down"),
+            (0.094, "right", "lift_off"),
+        ]
+    ]
     line = heel_timeline(ev, 0.082)
-    assert line == {"block hits the body": 0.082, "left heel rises": 0.086,
-                    "left heel back": 0.274, "right heel rises": 0.094, "right heel back": None}
+    assert line == {
+        "block hits the body": 0.082,
+        "left heel rises": 0.086,
+        "left heel back": 0.274,
+        "right heel rises": 0.094,
+        "right heel back": None,
+    }
     assert heel_timeline(ev, None)["left heel rises"] is None
 
 

@@ -21,12 +21,17 @@ SRC = str(Path(__file__).resolve().parents[1] / "src")
 
 
 def _python(code: str, cache: Path, cwd: Path, *args: str) -> subprocess.CompletedProcess:
-    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache),
-           "PYTHONPATH": os.pathsep.join([SRC, str(cwd)])}
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(cache), "PYTHONPATH": os.pathsep.join([SRC, str(cwd)])}
     env.pop("NUMBA_DISABLE_JIT", None)
-    return subprocess.run([sys.executable, "-c", textwrap.dedent(code), *args], check=False,
-                          cwd=cwd, env=env,
-                          capture_output=True, text=True, timeout=600)
+    return subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code), *args],
+        check=False,
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
 
 
 _KERNEL = """
@@ -89,14 +94,28 @@ def test_cold_cache_says_compiling_once_then_nothing(tmp_path):
 
     cache = tmp_path / "cache"
     out = tmp_path / "s.parquet"
-    args = ["sweep", "--controller", "joint-pd", "--speed", "2", "--direction", "0,180",
-            "--duration", "0.02", "--workers", "2", "--quiet", "--out", str(out)]
-    p = _python("import sys; from biped.cli import main; sys.exit(main(sys.argv[1:]))",
-                cache, tmp_path, *args)
+    args = [
+        "sweep",
+        "--controller",
+        "joint-pd",
+        "--speed",
+        "2",
+        "--direction",
+        "0,180",
+        "--duration",
+        "0.02",
+        "--workers",
+        "2",
+        "--quiet",
+        "--out",
+        str(out),
+    ]
+    p = _python(
+        "import sys; from biped.cli import main; sys.exit(main(sys.argv[1:]))", cache, tmp_path, *args
+    )
     assert p.returncode == 0, p.stderr
     lines = [ln for ln in p.stderr.splitlines() if ln.startswith("compiling")]
-    assert len(lines) == 1 and "contact monitor" in lines[0] and "first run only" in lines[0], \
-        p.stderr
+    assert len(lines) == 1 and "contact monitor" in lines[0] and "first run only" in lines[0], p.stderr
     rows = pq.read_table(out).to_pylist()
     assert len(rows) == 2 and all(r["error"] is None for r in rows)
     assert len({r["worker"] for r in rows}) == 2  # two worker processes ran
@@ -113,8 +132,7 @@ def test_warm_up_one_line_when_cold_nothing_when_warm(monkeypatch):
     compiled = []
     monkeypatch.setattr(jit, "_compile", compiled.append)
     for cold in (["controller", "qp", "contact"], ["contact"], []):
-        monkeypatch.setattr(jit, "cold_kernels", lambda names, cold=cold: [n for n in names
-                                                                          if n in cold])
+        monkeypatch.setattr(jit, "cold_kernels", lambda names, cold=cold: [n for n in names if n in cold])
         lines, compiled[:] = [], []
         jit.warm_up(jit.kernels_for("workspace", "qp"), log=lines.append)
         assert compiled == cold

@@ -49,10 +49,14 @@ def _welded_feet_model(scenario):
     scene = build_scene(scenario)
     spec = scene_spec(scenario)
     for foot in ("left_foot", "right_foot"):
-        spec.add_equality(type=mujoco.mjtEq.mjEQ_WELD, objtype=mujoco.mjtObj.mjOBJ_BODY,
-                          name1="world", name2=foot,
-                          solref=[2 * scenario.physics_timestep_s, 1.0],  # as stiff as stable
-                          solimp=[0.99, 0.999, 0.001, 0.5, 2.0])
+        spec.add_equality(
+            type=mujoco.mjtEq.mjEQ_WELD,
+            objtype=mujoco.mjtObj.mjOBJ_BODY,
+            name1="world",
+            name2=foot,
+            solref=[2 * scenario.physics_timestep_s, 1.0],  # as stiff as stable
+            solimp=[0.99, 0.999, 0.001, 0.5, 2.0],
+        )
     model = spec.compile()
     data = mujoco.MjData(model)
     data.qpos[:], data.qvel[:] = initial_state(scene, scenario)
@@ -74,8 +78,12 @@ def test_controller_wiring_recovers_with_welded_feet():
     scene, model, data = _welded_feet_model(s)
     policy = controller_policy(s, scene)
     for k in range(s.control_steps):
-        data.ctrl[scene.actuator_index] = policy(k / s.control_rate_hz, data.qpos[scene.biped_qpos_index],
-                                                 data.qvel[scene.biped_qvel_index], (True, True))
+        data.ctrl[scene.actuator_index] = policy(
+            k / s.control_rate_hz,
+            data.qpos[scene.biped_qpos_index],
+            data.qvel[scene.biped_qvel_index],
+            (True, True),
+        )
         mujoco.mj_step(model, data, s.control_substeps)
     com = data.xipos[scene.central_body]
     quat = data.qpos[scene.biped_qpos_index[3:7]]
@@ -92,10 +100,16 @@ def test_centred_push_recovers_on_real_contacts():
     assert not r.fell and r.diverged is None
     assert r.recovered
     assert r.final_com_error_m < 0.02 and r.final_orientation_error_deg < 2.0
-    heel_off = [e.time_s for e in r.events if e.part == "heel" and e.kind == "lift_off"
-                and e.time_s > r.block_contact_time_s]
-    heel_on = [e.time_s for e in r.events if e.part == "heel" and e.kind == "touch_down"
-               and e.time_s > r.block_contact_time_s]
+    heel_off = [
+        e.time_s
+        for e in r.events
+        if e.part == "heel" and e.kind == "lift_off" and e.time_s > r.block_contact_time_s
+    ]
+    heel_on = [
+        e.time_s
+        for e in r.events
+        if e.part == "heel" and e.kind == "touch_down" and e.time_s > r.block_contact_time_s
+    ]
     assert heel_off and heel_off[0] - r.block_contact_time_s < 0.03  # heels rise after the hit
     assert heel_on and heel_on[0] < 0.6  # and come back (W: 0.36 / 0.38 s)
 
@@ -127,17 +141,39 @@ def test_outputs_columns_and_summary(tmp_path):
         rows = list(csv.DictReader(f))
     assert len(rows) == 51  # t = 0, 2 ms, ..., 100 ms: the control rate
     assert float(rows[1]["time"]) == pytest.approx(0.002)
-    need = ["time", "central_body_com_x", "central_body_com_y", "central_body_com_z",
-            "quat_w", "quat_x", "quat_y", "quat_z",
-            "block_x", "block_y", "block_z", "left_contact", "right_contact"]
+    need = [
+        "time",
+        "central_body_com_x",
+        "central_body_com_y",
+        "central_body_com_z",
+        "quat_w",
+        "quat_x",
+        "quat_y",
+        "quat_z",
+        "block_x",
+        "block_y",
+        "block_z",
+        "left_contact",
+        "right_contact",
+    ]
     for j in r.joint_names:
         need += [f"q_{j}", f"tau_{j}"]
     assert set(need) <= set(rows[0])
     assert float(rows[0]["central_body_com_z"]) == pytest.approx(1.035)
     summary = json.loads((tmp_path / "summary.json").read_text())
-    for k in ("recovered", "fell", "final_com_error_m", "final_orientation_error_deg",
-              "block_contact_time_s", "events", "wall_time_s", "realtime_factor",
-              "control_rate_hz", "physics_timestep_s", "scenario"):
+    for k in (
+        "recovered",
+        "fell",
+        "final_com_error_m",
+        "final_orientation_error_deg",
+        "block_contact_time_s",
+        "events",
+        "wall_time_s",
+        "realtime_factor",
+        "control_rate_hz",
+        "physics_timestep_s",
+        "scenario",
+    ):
         assert k in summary
     assert summary["scenario"]["block_mass_kg"] == 1.8
     for e in summary["events"]:
@@ -150,8 +186,23 @@ def test_outputs_columns_and_summary(tmp_path):
 
 def test_cli_default_layout(tmp_path, capsys):
     out = tmp_path / "run"
-    code = main(["push", "--quiet", "--no-video", "--no-replay", "--no-figures", "--duration",
-                 "0.05", "--block-velocity", "-4", "0", "0.1", "--out", str(out)])
+    code = main(
+        [
+            "push",
+            "--quiet",
+            "--no-video",
+            "--no-replay",
+            "--no-figures",
+            "--duration",
+            "0.05",
+            "--block-velocity",
+            "-4",
+            "0",
+            "0.1",
+            "--out",
+            str(out),
+        ]
+    )
     assert code == 0
     summary = json.loads((out / "summary.json").read_text())
     assert summary["scenario"]["block_velocity_m_s"] == [-4.0, 0.0, 0.1]
@@ -163,8 +214,11 @@ def test_cli_default_layout(tmp_path, capsys):
 def test_a_fall_is_a_result_not_a_crash():
     """A 20 kg block at 6 m/s knocks the biped over (or makes the run diverge): the run ends
     early with fell/diverged set, never an exception."""
-    r = simulate(Scenario(block_mass_kg=20.0, block_velocity_m_s=(-6.0, 0.0, 0.0),
-                          controller="joint-pd", duration_s=2.0))
+    r = simulate(
+        Scenario(
+            block_mass_kg=20.0, block_velocity_m_s=(-6.0, 0.0, 0.0), controller="joint-pd", duration_s=2.0
+        )
+    )
     assert r.fell or r.diverged
     assert not r.recovered
     assert r.times[-1] < 2.0
@@ -172,6 +226,7 @@ def test_a_fall_is_a_result_not_a_crash():
 
 def test_ctrl_c_keeps_what_was_simulated(tmp_path):
     """A KeyboardInterrupt during the run returns the rows simulated so far, which are written."""
+
     def progress(t):
         if t >= 0.1:
             raise KeyboardInterrupt

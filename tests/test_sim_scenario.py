@@ -27,29 +27,31 @@ def test_defaults_are_w_section_4():
 
 
 def test_toml_round_trip(tmp_path):
-    s = Scenario(block_mass_kg=2.5, kp_com=(60.0, 60.0, 210.0), controller="joint-pd",
-                 torque_limits=150.0)
+    s = Scenario(block_mass_kg=2.5, kp_com=(60.0, 60.0, 210.0), controller="joint-pd", torque_limits=150.0)
     p = tmp_path / "s.toml"
     p.write_text(s.to_toml())
     assert Scenario.from_toml(p) == s
 
 
-@pytest.mark.parametrize("text, words", [
-    ("block_mas_kg = 2.0", ["unknown scenario key 'block_mas_kg'", "block_mass_kg"]),
-    ("block_position_m = [0.5, 0.1]", ["block_position_m", "3 numbers", "got 2"]),
-    ("initial_joint_angles_deg = [0, 40, 0]", ["initial_joint_angles_deg", "12 numbers"]),
-    ("block_mass_kg = -1.0", ["block_mass_kg", "> 0"]),
-    ("friction = nan", ["friction", "finite"]),
-    ("block_velocity_m_s = [-4.5, nan, 0.2]", ["block_velocity_m_s[1]", "finite"]),
-    ("controller = \"pid\"", ["controller", "'workspace'", "'joint-pd'"]),
-    ("physics_timestep_s = 0.002", ["physics_timestep_s", "0.001"]),
-    ("control_rate_hz = 700.0", ["control_rate_hz", "whole number"]),
-    ("restitution = 1.5", ["restitution", "[0, 0.8]"]),
-    ("torque_limits = [1, 2]", ["torque_limits", "12 numbers"]),
-    ("seed = -3", ["seed", ">= 0"]),
-    ("[block]\nmass = 2", ["tables", "top-level"]),
-    ("block_mass_kg = ", ["not valid TOML"]),
-])
+@pytest.mark.parametrize(
+    "text, words",
+    [
+        ("block_mas_kg = 2.0", ["unknown scenario key 'block_mas_kg'", "block_mass_kg"]),
+        ("block_position_m = [0.5, 0.1]", ["block_position_m", "3 numbers", "got 2"]),
+        ("initial_joint_angles_deg = [0, 40, 0]", ["initial_joint_angles_deg", "12 numbers"]),
+        ("block_mass_kg = -1.0", ["block_mass_kg", "> 0"]),
+        ("friction = nan", ["friction", "finite"]),
+        ("block_velocity_m_s = [-4.5, nan, 0.2]", ["block_velocity_m_s[1]", "finite"]),
+        ('controller = "pid"', ["controller", "'workspace'", "'joint-pd'"]),
+        ("physics_timestep_s = 0.002", ["physics_timestep_s", "0.001"]),
+        ("control_rate_hz = 700.0", ["control_rate_hz", "whole number"]),
+        ("restitution = 1.5", ["restitution", "[0, 0.8]"]),
+        ("torque_limits = [1, 2]", ["torque_limits", "12 numbers"]),
+        ("seed = -3", ["seed", ">= 0"]),
+        ("[block]\nmass = 2", ["tables", "top-level"]),
+        ("block_mass_kg = ", ["not valid TOML"]),
+    ],
+)
 def test_bad_scenario_file_names_the_key(tmp_path, text, words):
     p = tmp_path / "bad.toml"
     p.write_text(text + "\n")
@@ -73,12 +75,15 @@ def test_set_assignment_parses_toml_values():
         parse_assignment("kp_com")
 
 
-@pytest.mark.parametrize("argv, words", [
-    (["--block-mass", "-1"], ["block_mass_kg", "> 0"]),
-    (["--set", "frobnicate=1"], ["unknown scenario key 'frobnicate'"]),
-    (["--set", "block_size_m=[0.1, 0.1]"], ["block_size_m", "3 numbers"]),
-    (["--duration", "nan"], ["duration_s", "finite"]),
-])
+@pytest.mark.parametrize(
+    "argv, words",
+    [
+        (["--block-mass", "-1"], ["block_mass_kg", "> 0"]),
+        (["--set", "frobnicate=1"], ["unknown scenario key 'frobnicate'"]),
+        (["--set", "block_size_m=[0.1, 0.1]"], ["block_size_m", "3 numbers"]),
+        (["--duration", "nan"], ["duration_s", "finite"]),
+    ],
+)
 def test_cli_rejects_bad_input_before_simulating(tmp_path, capsys, argv, words):
     out = tmp_path / "run"
     code = main(["push", "--quiet", "--no-video", "--no-replay", "--out", str(out), *argv])

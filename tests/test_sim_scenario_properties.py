@@ -17,15 +17,32 @@ from biped.sim.scene import build_scene
 _SCALAR = st.one_of(
     st.floats(allow_nan=True, allow_infinity=True),
     st.floats(min_value=-2, max_value=2),
-    st.integers(min_value=-2**70, max_value=2**70),
+    st.integers(min_value=-(2**70), max_value=2**70),
     st.booleans(),
     st.text(max_size=6),
-    st.sampled_from(["none", "workspace", "joint-pd", "fast", "faithful", "-x", "-y", "qp",
-                     "sensed", "wendlandt", "", "1e300"]),
+    st.sampled_from(
+        [
+            "none",
+            "workspace",
+            "joint-pd",
+            "fast",
+            "faithful",
+            "-x",
+            "-y",
+            "qp",
+            "sensed",
+            "wendlandt",
+            "",
+            "1e300",
+        ]
+    ),
 )
-_VALUE = st.one_of(_SCALAR, st.lists(_SCALAR, max_size=13),
-                   st.lists(st.floats(min_value=-1, max_value=1.5), min_size=3, max_size=3),
-                   st.dictionaries(st.text(max_size=3), _SCALAR, max_size=2))
+_VALUE = st.one_of(
+    _SCALAR,
+    st.lists(_SCALAR, max_size=13),
+    st.lists(st.floats(min_value=-1, max_value=1.5), min_size=3, max_size=3),
+    st.dictionaries(st.text(max_size=3), _SCALAR, max_size=2),
+)
 _DEFAULTS = Scenario().to_dict()
 
 
@@ -35,8 +52,9 @@ def _near_default(key):
     if isinstance(d, float):
         return st.floats(min_value=0.0, max_value=3 * d if d > 0 else 1.0)
     if isinstance(d, (list, tuple)) and d and isinstance(d[0], float):
-        return st.lists(st.floats(min_value=-1.5, max_value=1.5), min_size=len(d),
-                        max_size=len(d)).map(lambda v, d=d: [a + b for a, b in zip(d, v, strict=True)])
+        return st.lists(st.floats(min_value=-1.5, max_value=1.5), min_size=len(d), max_size=len(d)).map(
+            lambda v, d=d: [a + b for a, b in zip(d, v, strict=True)]
+        )
     return st.just(d)
 
 
@@ -44,7 +62,9 @@ _NOT_MODEL = [k for k in keys() if k != "model"]
 _SCENARIO = st.one_of(
     st.dictionaries(st.sampled_from(keys()), _VALUE, max_size=4),
     st.sets(st.sampled_from(_NOT_MODEL), max_size=4).flatmap(
-        lambda ks: st.fixed_dictionaries({k: _near_default(k) for k in sorted(ks)})))
+        lambda ks: st.fixed_dictionaries({k: _near_default(k) for k in sorted(ks)})
+    ),
+)
 
 
 def _one_line_naming_a_key(exc: BaseException, values: dict) -> None:
@@ -65,7 +85,7 @@ def test_any_scenario_is_valid_or_a_one_line_error_naming_the_key(values):
     event("accepted")
     # accepted: every number finite and within its physical range; MuJoCo compiles the scene
     for k, v in s.to_dict().items():
-        for x in (v if isinstance(v, list) else [v]):
+        for x in v if isinstance(v, list) else [v]:
             if isinstance(x, float):
                 assert math.isfinite(x), (k, v)
     lo, hi, _ = RANGES["duration_s"]
@@ -81,15 +101,38 @@ def test_any_scenario_is_valid_or_a_one_line_error_naming_the_key(values):
     assert all(math.isfinite(a) for a in data.qacc)
 
 
-@settings(max_examples=200, deadline=None, suppress_health_check=[
-    HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
-@given(st.one_of(
-    st.binary(max_size=60),
-    st.lists(st.tuples(st.sampled_from([*keys(), "x", "[t]", "a.b"]),
-                       st.sampled_from(["1", "-1e300", "nan", "inf", '"a"', "[1,2,3]", "true",
-                                        "{a=1}", "'\\xff'", "[", "1979-05-27"])), max_size=4)
-    .map(lambda kv: "\n".join(f"{k} = {v}" for k, v in kv).encode()),
-    st.binary(max_size=20).map(lambda b: b"duration_s = 1.0\n# " + b + b"\n")))
+@settings(
+    max_examples=200,
+    deadline=None,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
+@given(
+    st.one_of(
+        st.binary(max_size=60),
+        st.lists(
+            st.tuples(
+                st.sampled_from([*keys(), "x", "[t]", "a.b"]),
+                st.sampled_from(
+                    [
+                        "1",
+                        "-1e300",
+                        "nan",
+                        "inf",
+                        '"a"',
+                        "[1,2,3]",
+                        "true",
+                        "{a=1}",
+                        "'\\xff'",
+                        "[",
+                        "1979-05-27",
+                    ]
+                ),
+            ),
+            max_size=4,
+        ).map(lambda kv: "\n".join(f"{k} = {v}" for k, v in kv).encode()),
+        st.binary(max_size=20).map(lambda b: b"duration_s = 1.0\n# " + b + b"\n"),
+    )
+)
 def test_any_scenario_file_is_values_or_a_one_line_error(tmp_path, data):
     path = tmp_path / "s.toml"
     path.write_bytes(data)

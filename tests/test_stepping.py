@@ -58,8 +58,13 @@ def test_big_push_steps_foot_above_floor_within_reach():
     the policy takes a step; the swing sole never goes below the floor (MuJoCo's kinematics of
     the recorded states), the step lands within 5 cm of its last target and within the
     StepLimits of the stance foot."""
-    sc = Scenario(stepping=True, distribution="qp", block_mass_kg=4.0,
-                  block_velocity_m_s=(-8.0, 0.0, 0.2), duration_s=0.6)
+    sc = Scenario(
+        stepping=True,
+        distribution="qp",
+        block_mass_kg=4.0,
+        block_velocity_m_s=(-8.0, 0.0, 0.2),
+        duration_s=0.6,
+    )
     r = simulate(sc)
     steps = r.extra["steps"]
     assert steps, "no step taken"
@@ -90,8 +95,11 @@ def test_big_push_steps_foot_above_floor_within_reach():
         mujoco.mj_kinematics(m, d)
         for g in geoms:
             R = d.geom_xmat[g].reshape(3, 3)
-            corners = d.geom_xpos[g] + (np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1)
-                                                  for c in (-1, 1)]) * m.geom_size[g]) @ R.T
+            corners = (
+                d.geom_xpos[g]
+                + (np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)]) * m.geom_size[g])
+                @ R.T
+            )
             lowest = min(lowest, corners[:, 2].min())
     assert lowest > -0.005
     # reach: the landing respects the step limits relative to the stance sole at touchdown
@@ -131,8 +139,12 @@ def test_push_beyond_feet_in_place_recovers_with_a_step():
     """The issue's goal push: 4 kg at 8 m/s from behind (32 N s, above Hof's ~25 N s from behind):
     feet in place it falls; with stepping it recovers by the stepping rule after >= 1 step, each
     landing on the floor (sole centre < 7 cm up at first contact) and in time order."""
-    base = {"distribution": "qp", "block_mass_kg": 4.0, "block_velocity_m_s": (-8.0, 0.0, 0.2),
-            "duration_s": 4.0}
+    base = {
+        "distribution": "qp",
+        "block_mass_kg": 4.0,
+        "block_velocity_m_s": (-8.0, 0.0, 0.2),
+        "duration_s": 4.0,
+    }
     assert simulate(Scenario(**base)).fell
     r = simulate(Scenario(**base, stepping=True))
     steps = r.extra["steps"]

@@ -24,8 +24,11 @@ from biped.sim import Scenario, build_scene
 # de Leva (1996) Table 4, females: segment length [m] at 1.735 m, mass fraction, CM from the
 # proximal end (fraction of length), radii of gyration (sagittal, transverse, longitudinal).
 FEMALE = {
-    "head": (0.2437, 0.0668), "trunk": (0.6148, 0.4257), "upper_arm": (0.2751, 0.0255),
-    "forearm": (0.2643, 0.0138), "hand": (0.0780, 0.0056),
+    "head": (0.2437, 0.0668),
+    "trunk": (0.6148, 0.4257),
+    "upper_arm": (0.2751, 0.0255),
+    "forearm": (0.2643, 0.0138),
+    "hand": (0.0780, 0.0056),
 }
 FEMALE_THIGH = (0.3685, 0.1478, 0.3612, 0.369, 0.364, 0.162)
 FEMALE_SHANK = (0.4323, 0.0481, 0.4416, 0.271, 0.267, 0.093)
@@ -42,8 +45,7 @@ W_COM, W_TARGET = (0.0, 0.0, 1.035), (-0.01, 0.0, 1.14)  # W section 4 [m]
 @pytest.fixture(scope="module")
 def female(tmp_path_factory):
     path = tmp_path_factory.mktemp("subject") / "f155.xml"
-    assert main(["model", "--stature", "1.55", "--mass", "50", "--sex", "female",
-                 "--out", str(path)]) == 0
+    assert main(["model", "--stature", "1.55", "--mass", "50", "--sex", "female", "--out", str(path)]) == 0
     return path
 
 
@@ -66,18 +68,21 @@ def test_printed_fractions_sum_to_one():
     assert h + t + 2 * (ua + fa + ha + th + sh + fo) == pytest.approx(1.0, abs=1e-12)
     f = sum(v[1] for k, v in FEMALE.items() if k in ("head", "trunk")) + 2 * (
         sum(v[1] for k, v in FEMALE.items() if k not in ("head", "trunk"))
-        + FEMALE_THIGH[1] + FEMALE_SHANK[1] + FEMALE_FOOT[1])
+        + FEMALE_THIGH[1]
+        + FEMALE_SHANK[1]
+        + FEMALE_FOOT[1]
+    )
     assert f == pytest.approx(PRINTED_SUM, abs=1e-12)
     fr = anthropometry.mass_fractions("female")
     total = sum(anthropometry._COUNT[k] * v for k, v in fr.items())
     assert total == pytest.approx(1.0, abs=1e-12)
 
 
-@pytest.mark.parametrize("stature,mass,sex", [(1.55, 50.0, "female"), (1.85, 90.0, "male"),
-                                              (1.70, 62.0, "female")])
+@pytest.mark.parametrize(
+    "stature,mass,sex", [(1.55, 50.0, "female"), (1.85, 90.0, "male"), (1.70, 62.0, "female")]
+)
 def test_total_mass_is_the_given_mass(stature, mass, sex):
-    m = mujoco.MjModel.from_xml_string(
-        anthropometry.build_xml(anthropometry.Subject(stature, mass, sex)))
+    m = mujoco.MjModel.from_xml_string(anthropometry.build_xml(anthropometry.Subject(stature, mass, sex)))
     assert float(m.body_mass.sum()) == pytest.approx(mass, abs=2e-4)  # 6 printed digits
 
 
@@ -85,8 +90,7 @@ def test_total_mass_is_the_given_mass(stature, mass, sex):
 def test_keyframe_puts_both_soles_flat_5mm_up(stature, mass, sex):
     """MuJoCo's forward kinematics of the keyframe: every bottom corner of the four sole boxes
     5 mm above the floor (to the file's 6 digits), W's tilt and angles in the keyframe."""
-    m = mujoco.MjModel.from_xml_string(
-        anthropometry.build_xml(anthropometry.Subject(stature, mass, sex)))
+    m = mujoco.MjModel.from_xml_string(anthropometry.build_xml(anthropometry.Subject(stature, mass, sex)))
     d = mujoco.MjData(m)
     mujoco.mj_resetDataKeyframe(m, d, m.key("wendlandt_initial").id)
     mujoco.mj_kinematics(m, d)
@@ -109,10 +113,12 @@ def test_female_segments_match_de_leva(female):
     m = mujoco.MjModel.from_xml_path(str(female))
     M = (50.0 - INTERMEDIATE) / PRINTED_SUM
     k = 1.55 / FEMALE_STATURE
-    hat = FEMALE["head"][1] + FEMALE["trunk"][1] + 2 * sum(
-        FEMALE[s][1] for s in ("upper_arm", "forearm", "hand"))
-    expect = {"central_body": hat, "thigh": FEMALE_THIGH[1], "shank": FEMALE_SHANK[1],
-              "foot": FEMALE_FOOT[1]}
+    hat = (
+        FEMALE["head"][1]
+        + FEMALE["trunk"][1]
+        + 2 * sum(FEMALE[s][1] for s in ("upper_arm", "forearm", "hand"))
+    )
+    expect = {"central_body": hat, "thigh": FEMALE_THIGH[1], "shank": FEMALE_SHANK[1], "foot": FEMALE_FOOT[1]}
     for body, frac in expect.items():
         names = [body] if body == "central_body" else [f"left_{body}", f"right_{body}"]
         for n in names:
@@ -122,9 +128,16 @@ def test_female_segments_match_de_leva(female):
     L, mt = FEMALE_THIGH[0] * k, FEMALE_THIGH[1] * M
     thigh = m.body("left_thigh")
     assert thigh.ipos[2] == pytest.approx(-FEMALE_THIGH[2] * L, abs=2e-6)
-    assert sorted(thigh.inertia) == pytest.approx(sorted(
-        [mt * (FEMALE_THIGH[3] * L) ** 2, mt * (FEMALE_THIGH[4] * L) ** 2,
-         mt * (FEMALE_THIGH[5] * L) ** 2]), rel=1e-5)
+    assert sorted(thigh.inertia) == pytest.approx(
+        sorted(
+            [
+                mt * (FEMALE_THIGH[3] * L) ** 2,
+                mt * (FEMALE_THIGH[4] * L) ** 2,
+                mt * (FEMALE_THIGH[5] * L) ** 2,
+            ]
+        ),
+        rel=1e-5,
+    )
 
 
 def test_male_path_reproduces_the_shipped_file(tmp_path):
@@ -132,8 +145,10 @@ def test_male_path_reproduces_the_shipped_file(tmp_path):
     bodies) writes the shipped file byte for byte."""
     w = anthropometry.w_subject()
     out = tmp_path / "w.xml"
-    assert main(["model", "--stature", repr(w.stature_m), "--mass", "73.06", "--sex", "male",
-                 "--out", str(out)]) == 0
+    assert (
+        main(["model", "--stature", repr(w.stature_m), "--mass", "73.06", "--sex", "male", "--out", str(out)])
+        == 0
+    )
     assert out.read_bytes() == models.path("wendlandt").read_bytes()
 
 
@@ -141,17 +156,21 @@ def test_same_structure_as_the_shipped_biped(female):
     a = mujoco.MjModel.from_xml_path(str(female))
     b = mujoco.MjModel.from_xml_path(str(models.path("wendlandt")))
     for kind, n in (("body", "nbody"), ("joint", "njnt"), ("actuator", "nu"), ("geom", "ngeom")):
-        assert [getattr(a, kind)(i).name for i in range(getattr(a, n))] == \
-               [getattr(b, kind)(i).name for i in range(getattr(b, n))]
+        assert [getattr(a, kind)(i).name for i in range(getattr(a, n))] == [
+            getattr(b, kind)(i).name for i in range(getattr(b, n))
+        ]
     assert np.array_equal(a.jnt_axis, b.jnt_axis) and np.array_equal(a.body_parentid, b.body_parentid)
 
 
-@pytest.mark.parametrize("argv,msg", [
-    (["--stature", "2.5", "--mass", "60"], "stature must be in [1.4, 2.1] m"),
-    (["--stature", "1.7", "--mass", "20"], "mass must be in [35, 150] kg"),
-    (["--stature", "1.5", "--mass", "140"], "outside [15, 45] kg/m^2"),
-    (["--stature", "nan", "--mass", "60"], "stature must be in"),
-])
+@pytest.mark.parametrize(
+    "argv,msg",
+    [
+        (["--stature", "2.5", "--mass", "60"], "stature must be in [1.4, 2.1] m"),
+        (["--stature", "1.7", "--mass", "20"], "mass must be in [35, 150] kg"),
+        (["--stature", "1.5", "--mass", "140"], "outside [15, 45] kg/m^2"),
+        (["--stature", "nan", "--mass", "60"], "stature must be in"),
+    ],
+)
 def test_model_cli_rejects_out_of_range(tmp_path, capsys, argv, msg):
     assert main(["model", *argv, "--sex", "female", "--out", str(tmp_path / "x.xml")]) == 2
     err = capsys.readouterr().err
@@ -179,8 +198,14 @@ def test_model_cli_refuses_to_clobber(tmp_path, capsys):
 
 def test_subject_state_on_w_biped_gives_w_numbers():
     """Moving W's experiment onto W's own biped returns W's printed initial COM and set point."""
-    st = subject_state(models.path("wendlandt"), initial_tilt_deg=5.0, joint_angles_deg=W_ANGLES_DEG,
-                       target_com_m=W_TARGET, target_tilt_deg=15.0, reference_com_m=W_COM)
+    st = subject_state(
+        models.path("wendlandt"),
+        initial_tilt_deg=5.0,
+        joint_angles_deg=W_ANGLES_DEG,
+        target_com_m=W_TARGET,
+        target_tilt_deg=15.0,
+        reference_com_m=W_COM,
+    )
     assert st.initial_com_m == pytest.approx(W_COM, abs=2e-6)
     assert st.target_com_m == pytest.approx(W_TARGET, abs=2e-6)
     assert st.height_ratio == pytest.approx(1.0, abs=2e-6) and st.mass_ratio == 1.0
@@ -201,8 +226,14 @@ def test_female_set_point_keeps_the_feet_where_they_stand(female):
     d.qpos[:] = q0
     mujoco.mj_kinematics(m, d)
     before = _sole_bottoms(m, d)
-    st = subject_state(female, initial_tilt_deg=5.0, joint_angles_deg=W_ANGLES_DEG,
-                       target_com_m=W_TARGET, target_tilt_deg=15.0, reference_com_m=W_COM)
+    st = subject_state(
+        female,
+        initial_tilt_deg=5.0,
+        joint_angles_deg=W_ANGLES_DEG,
+        target_com_m=W_TARGET,
+        target_tilt_deg=15.0,
+        reference_com_m=W_COM,
+    )
     q = q0.copy()
     q[:3] = s.target_com_m
     h = math.radians(15.0) / 2
@@ -223,8 +254,7 @@ def test_scenario_scene_and_controller_read_the_same_file(female):
     assert s.model == str(female.resolve())
     assert s.block_mass_kg == pytest.approx(1.8 * 50.0 / 73.06, rel=1e-5)
     scene = build_scene(s)
-    biped_mass = sum(scene.model.body_mass[b] for b in range(1, scene.model.nbody)
-                     if b != scene.block_body)
+    biped_mass = sum(scene.model.body_mass[b] for b in range(1, scene.model.nbody) if b != scene.block_body)
     assert biped_mass == pytest.approx(50.0, abs=2e-4)
     assert TreeModel.from_mjcf(s.model).mass.sum() == pytest.approx(50.0, abs=2e-4)
 
@@ -241,14 +271,17 @@ def _broken(tmp_path, female, old, new):
     return str(p)
 
 
-@pytest.mark.parametrize("case,msg", [
-    ("missing", "not found"),
-    ("text", "is not XML"),
-    ("notmjcf", "not MJCF (root element <robot>"),
-    ("renamed", "joints ['left_knee2'] are not W's 13"),
-    ("nomotor", "hinges without a motor: ['right_knee']"),
-    ("ball", "are not W's 13"),
-])
+@pytest.mark.parametrize(
+    "case,msg",
+    [
+        ("missing", "not found"),
+        ("text", "is not XML"),
+        ("notmjcf", "not MJCF (root element <robot>"),
+        ("renamed", "joints ['left_knee2'] are not W's 13"),
+        ("nomotor", "hinges without a motor: ['right_knee']"),
+        ("ball", "are not W's 13"),
+    ],
+)
 def test_bad_model_files_are_named_up_front(tmp_path, female, capsys, case, msg):
     path = {
         "missing": lambda: str(tmp_path / "nope.xml"),
@@ -256,16 +289,19 @@ def test_bad_model_files_are_named_up_front(tmp_path, female, capsys, case, msg)
         "notmjcf": lambda: (tmp_path / "r.urdf").write_text("<robot name='r'/>") and str(tmp_path / "r.urdf"),
         "renamed": lambda: _broken(tmp_path, female, '"left_knee"', '"left_knee2"'),
         "nomotor": lambda: _broken(tmp_path, female, '<motor name="right_knee" joint="right_knee"/>', ""),
-        "ball": lambda: _broken(tmp_path, female, '<joint name="left_hip_rotation"',
-                                '<joint type="ball" name="left_hip_rotation"'),
+        "ball": lambda: _broken(
+            tmp_path, female, '<joint name="left_hip_rotation"', '<joint type="ball" name="left_hip_rotation"'
+        ),
     }[case]()
-    with pytest.raises(ModelError, match=msg.replace("[", r"\[").replace("]", r"\]")
-                       .replace("(", r"\(").replace(")", r"\)")):
+    with pytest.raises(
+        ModelError, match=msg.replace("[", r"\[").replace("]", r"\]").replace("(", r"\(").replace(")", r"\)")
+    ):
         check_biped(path)
-    for cmd in (["push", "--quiet", "--no-video", "--no-replay", "--no-figures",
-                 "--out", str(tmp_path / "run")],
-                ["sweep", "--quiet", "--out", str(tmp_path / "s.parquet")],
-                ["walk", "--quiet", "--out", str(tmp_path / "walk")]):
+    for cmd in (
+        ["push", "--quiet", "--no-video", "--no-replay", "--no-figures", "--out", str(tmp_path / "run")],
+        ["sweep", "--quiet", "--out", str(tmp_path / "s.parquet")],
+        ["walk", "--quiet", "--out", str(tmp_path / "walk")],
+    ):
         assert main([*cmd, "--model", path]) == 2, cmd
         err = capsys.readouterr().err
         assert msg.split("(")[0].strip() in err and len(err.strip().splitlines()) == 1
@@ -276,8 +312,7 @@ def test_sweep_records_the_model_and_aims_at_her_height(female):
     from biped.cli import build_parser
     from biped.cli.sweep import build_spec
 
-    args = build_parser().parse_args(["sweep", "--model", str(female), "--speed", "3",
-                                      "--direction", "180"])
+    args = build_parser().parse_args(["sweep", "--model", str(female), "--speed", "3", "--direction", "180"])
     spec = build_spec(args)
     assert spec.base.model == str(female.resolve())
     assert spec.model_path == female.resolve()
@@ -305,8 +340,9 @@ def test_walk_figure_takes_her_legs_and_her_masses(female):
     fz = res.grf[:, :, 2].sum(axis=1) + res.residual[:, 2]
     assert float(np.mean(fz)) == pytest.approx(weight, rel=0.02)
     with pytest.raises(BipedError, match="differs from the biped"):
-        inverse_dynamics(step_forward(FigureDims.from_anthropometry(), 2, 1.0).sample(100.0),
-                         load_biped(str(female)))
+        inverse_dynamics(
+            step_forward(FigureDims.from_anthropometry(), 2, 1.0).sample(100.0), load_biped(str(female))
+        )
 
 
 @pytest.mark.slow
@@ -329,17 +365,55 @@ def test_push_and_sweep_record_the_model(female, tmp_path):
     import pyarrow.parquet as pq
 
     out = tmp_path / "push"
-    assert main(["push", "--model", str(female), "--duration", "0.02", "--set", "block_mass_kg=1.8",
-                 "--no-video", "--no-replay", "--no-figures", "--quiet", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "push",
+                "--model",
+                str(female),
+                "--duration",
+                "0.02",
+                "--set",
+                "block_mass_kg=1.8",
+                "--no-video",
+                "--no-replay",
+                "--no-figures",
+                "--quiet",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     sc = json.loads((out / "summary.json").read_text())["scenario"]
     moved = Scenario.for_model(str(female))
     assert sc["model"] == str(female.resolve()) and sc["block_mass_kg"] == 1.8
     assert sc["initial_com_m"] == list(moved.initial_com_m)
     assert Scenario.from_toml(out / "scenario.toml").model == str(female.resolve())
     sweep = tmp_path / "s.parquet"
-    assert main(["sweep", "--model", str(female), "--speed", "3", "--direction", "180",
-                 "--duration", "0.02", "--workers", "1", "--quiet", "--out", str(sweep)]) == 0
+    assert (
+        main(
+            [
+                "sweep",
+                "--model",
+                str(female),
+                "--speed",
+                "3",
+                "--direction",
+                "180",
+                "--duration",
+                "0.02",
+                "--workers",
+                "1",
+                "--quiet",
+                "--out",
+                str(sweep),
+            ]
+        )
+        == 0
+    )
     meta = pq.read_schema(sweep).metadata
     assert meta[b"biped.model"].decode() == str(female.resolve())
     import hashlib
+
     assert meta[b"biped.model_sha256"].decode() == hashlib.sha256(female.read_bytes()).hexdigest()

@@ -44,8 +44,14 @@ def toy_trial(setup: TrialSetup) -> dict:
     t = setup.trial
     j = 1.2 * t.block_mass_kg * t.speed_m_s
     a = math.radians(t.direction_deg)
-    return {"recovered": j <= 15.0, "fell": j > 15.0, "impulse_n_s": j,
-            "impulse_x_n_s": j * math.cos(a), "impulse_y_n_s": j * math.sin(a), "completed": True}
+    return {
+        "recovered": j <= 15.0,
+        "fell": j > 15.0,
+        "impulse_n_s": j,
+        "impulse_x_n_s": j * math.cos(a),
+        "impulse_y_n_s": j * math.sin(a),
+        "completed": True,
+    }
 
 
 def crashing_trial(setup: TrialSetup) -> dict:
@@ -93,12 +99,18 @@ def _logged(path) -> list[int]:
 
 # ---------------------------------------------------------------------------------------------
 
+
 def test_grid_is_the_product_direction_fastest_with_stable_keys():
     spec = SweepSpec(axes=GRID)
     trials = spec.trials()
     assert len(trials) == 12
     assert [(t.speed_m_s, t.direction_deg) for t in trials[:5]] == [
-        (1.0, 0.0), (1.0, 90.0), (1.0, 180.0), (1.0, 270.0), (3.0, 0.0)]
+        (1.0, 0.0),
+        (1.0, 90.0),
+        (1.0, 180.0),
+        (1.0, 270.0),
+        (3.0, 0.0),
+    ]
     assert {t.block_mass_kg for t in trials} == {1.8} and {t.height_m for t in trials} == {1.2}
     keys = [t.key for t in trials]
     assert len(set(keys)) == 12 and keys == [t.key for t in SweepSpec(axes=GRID).trials()]
@@ -108,8 +120,7 @@ def test_grid_is_the_product_direction_fastest_with_stable_keys():
 
 
 def test_random_sample_is_reproducible_and_within_the_ranges():
-    spec = SweepSpec(axes={"speed_m_s": (1.0, 6.0), "direction_deg": (0.0, 360.0)}, samples=50,
-                     seed=3)
+    spec = SweepSpec(axes={"speed_m_s": (1.0, 6.0), "direction_deg": (0.0, 360.0)}, samples=50, seed=3)
     a, b = spec.trials(), SweepSpec(**{**spec.__dict__, "axes": dict(spec.axes)}).trials()
     assert [t.key for t in a] == [t.key for t in b]
     speeds = np.array([t.speed_m_s for t in a])
@@ -131,9 +142,11 @@ def test_axis_syntax_and_errors():
 
 def test_sweep_toml_file(tmp_path):
     f = tmp_path / "sweep.toml"
-    f.write_text('samples = 4\nseed = 1\ntorque_limits = "human"\n'
-                 '[grid]\nspeed_m_s = {start = 1.0, stop = 2.0, num = 3}\ndirection_deg = [0, 180]\n'
-                 '[scenario]\nduration_s = 0.5\ncontroller = "joint-pd"\n')
+    f.write_text(
+        'samples = 4\nseed = 1\ntorque_limits = "human"\n'
+        "[grid]\nspeed_m_s = {start = 1.0, stop = 2.0, num = 3}\ndirection_deg = [0, 180]\n"
+        '[scenario]\nduration_s = 0.5\ncontroller = "joint-pd"\n'
+    )
     spec = SweepSpec.from_toml(f)
     assert dict(spec.axes)["speed_m_s"] == (1.0, 1.5, 2.0)
     assert spec.base.duration_s == 0.5 and spec.base.controller == "joint-pd"
@@ -151,7 +164,8 @@ def test_aimed_block_passes_through_the_aim_point_in_mujoco():
     model = mujoco.MjModel.from_xml_string(
         '<mujoco><option timestep="0.0001" gravity="0 0 -9.81"/><worldbody><body name="b">'
         '<freejoint/><geom type="box" size=".05 .05 .05" mass="1.8" contype="0" conaffinity="0"/>'
-        '</body></worldbody></mujoco>')
+        "</body></worldbody></mujoco>"
+    )
     data = mujoco.MjData(model)
     data.qpos[:3], data.qvel[:3] = p0, v0
     steps = round(L / speed / model.opt.timestep)
@@ -163,6 +177,7 @@ def test_aimed_block_passes_through_the_aim_point_in_mujoco():
 
 # ---------------------------------------------------------------------------------------------
 # storage
+
 
 def test_serial_sweep_writes_one_parquet_file_with_metadata(tmp_path):
     out = tmp_path / "s.parquet"

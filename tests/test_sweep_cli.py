@@ -13,11 +13,31 @@ from biped.sim.sweep import load
 def test_cli_runs_a_tiny_sweep_and_plots_it(tmp_path, capsys):
     out, png = tmp_path / "s.parquet", tmp_path / "env.png"
     grid = tmp_path / "g.toml"
-    grid.write_text('[grid]\nspeed_m_s = [3.0]\ndirection_deg = [0, 120, 240]\n'
-                    '[scenario]\nduration_s = 0.04\n')
-    rc = main(["sweep", "--grid", str(grid), "--speed", "2,4", "--controller", "joint-pd",
-               "--torque-limits", "human", "--workers", "1", "--quiet", "--out", str(out),
-               "--task", "hold", "--plot", str(png)])
+    grid.write_text(
+        "[grid]\nspeed_m_s = [3.0]\ndirection_deg = [0, 120, 240]\n[scenario]\nduration_s = 0.04\n"
+    )
+    rc = main(
+        [
+            "sweep",
+            "--grid",
+            str(grid),
+            "--speed",
+            "2,4",
+            "--controller",
+            "joint-pd",
+            "--torque-limits",
+            "human",
+            "--workers",
+            "1",
+            "--quiet",
+            "--out",
+            str(out),
+            "--task",
+            "hold",
+            "--plot",
+            str(png),
+        ]
+    )
     assert rc == 0 and png.stat().st_size > 10_000
     data = load(out)
     assert data.table.num_rows == 6
@@ -43,8 +63,27 @@ def test_envelope_plot_draws_hofs_bound(tmp_path):
     from biped.viz.envelope import plot_envelope
 
     out = tmp_path / "s.parquet"
-    assert main(["sweep", "--speed", "3", "--direction", "0,180", "--duration", "0.02",
-                 "--controller", "joint-pd", "--workers", "1", "--quiet", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "sweep",
+                "--speed",
+                "3",
+                "--direction",
+                "0,180",
+                "--duration",
+                "0.02",
+                "--controller",
+                "joint-pd",
+                "--workers",
+                "1",
+                "--quiet",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     ax = plot_envelope(out, by="impulse_n_s")
     (line,) = [ln for ln in ax.get_lines() if ln.get_linestyle() == "--"]
     theta, r = line.get_data()
@@ -54,6 +93,7 @@ def test_envelope_plot_draws_hofs_bound(tmp_path):
 
 # ---------------------------------------------------------------------------------------------
 # the envelope plot: what a reader must be able to see
+
 
 def _toy(setup) -> dict:
     t = setup.trial
@@ -65,8 +105,10 @@ def _toy_sweep(tmp_path, name, controller="workspace"):
     from biped.sim.sweep import SweepSpec, run_sweep
 
     out = tmp_path / name
-    spec = SweepSpec(axes={"speed_m_s": (2.0, 4.0, 6.0), "direction_deg": tuple(range(0, 360, 45))},
-                     base=Scenario(controller=controller))
+    spec = SweepSpec(
+        axes={"speed_m_s": (2.0, 4.0, 6.0), "direction_deg": tuple(range(0, 360, 45))},
+        base=Scenario(controller=controller),
+    )
     run_sweep(spec, out, workers=1, trial_fn=_toy, progress=False)
     return out
 
@@ -100,8 +142,10 @@ def test_envelope_plot_shows_hofs_bound_the_facing_and_no_overlapping_labels(tmp
     others = [t for t in [*ax.get_yticklabels(), *ax.texts, ax.title] if t.get_text()]
     for a in angles:
         for o in others:
-            assert not _boxes_overlap(a.get_window_extent(renderer),
-                                      o.get_window_extent(renderer)), (a.get_text(), o.get_text())
+            assert not _boxes_overlap(a.get_window_extent(renderer), o.get_window_extent(renderer)), (
+                a.get_text(),
+                o.get_text(),
+            )
     text = " ".join(t.get_text() for t in fig.texts)
     assert "faces -x" in text and "180 deg is W's push, from behind" in text
     two = plot_comparison([one, _toy_sweep(tmp_path, "b.parquet", "joint-pd")])
@@ -109,16 +153,18 @@ def test_envelope_plot_shows_hofs_bound_the_facing_and_no_overlapping_labels(tmp
     assert {ln.get_label() for ln in two.axes[-1].get_lines()} == {"workspace", "joint-pd"}
 
 
-@pytest.mark.parametrize("argv, grid, physics, step", [
-    ([], None, "fast", 0.001),                                           # the sweep's default
-    (["--physics", "faithful"], None, "faithful", 0.0005),
-    (["--set", "physics_timestep_s=0.00025"], None, "faithful", 0.00025),  # explicit step kept
-    ([], "physics_timestep_s = 0.0005\n", "faithful", 0.0005),         # ... also from the file
-    ([], 'physics = "faithful"\n', "faithful", 0.0005),
-    (["--physics", "fast"], 'physics = "faithful"\n', "fast", 0.001),  # the flag wins
-])
-def test_sweep_physics_preset_defaults_to_fast_unless_physics_is_given(tmp_path, argv, grid,
-                                                                       physics, step):
+@pytest.mark.parametrize(
+    "argv, grid, physics, step",
+    [
+        ([], None, "fast", 0.001),  # the sweep's default
+        (["--physics", "faithful"], None, "faithful", 0.0005),
+        (["--set", "physics_timestep_s=0.00025"], None, "faithful", 0.00025),  # explicit step kept
+        ([], "physics_timestep_s = 0.0005\n", "faithful", 0.0005),  # ... also from the file
+        ([], 'physics = "faithful"\n', "faithful", 0.0005),
+        (["--physics", "fast"], 'physics = "faithful"\n', "fast", 0.001),  # the flag wins
+    ],
+)
+def test_sweep_physics_preset_defaults_to_fast_unless_physics_is_given(tmp_path, argv, grid, physics, step):
     from biped.cli import build_parser
     from biped.cli.sweep import build_spec
 

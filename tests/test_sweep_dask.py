@@ -13,16 +13,23 @@ distributed = pytest.importorskip("dask.distributed")
 
 @pytest.fixture(scope="module")
 def cluster():
-    with distributed.LocalCluster(n_workers=1, threads_per_worker=2, processes=False, protocol="tcp",
-                                  host="127.0.0.1", dashboard_address=None) as c:
+    with distributed.LocalCluster(
+        n_workers=1,
+        threads_per_worker=2,
+        processes=False,
+        protocol="tcp",
+        host="127.0.0.1",
+        dashboard_address=None,
+    ) as c:
         yield c
 
 
 def test_sweep_runs_on_a_dask_cluster_by_address(cluster, tmp_path):
     """Short real trials (0.15 s of W's push scene, both controllers' code paths exercised by
     the joint-space PD here) sent to the scheduler by its tcp:// address, as from the CLI."""
-    base = Scenario(duration_s=0.15, controller="joint-pd", target_com_m=(0.0, 0.0, 1.035),
-                    target_tilt_deg=5.0)
+    base = Scenario(
+        duration_s=0.15, controller="joint-pd", target_com_m=(0.0, 0.0, 1.035), target_tilt_deg=5.0
+    )
     spec = SweepSpec(axes={"speed_m_s": (3.0, 6.0), "direction_deg": (0.0, 180.0)}, base=base)
     out = tmp_path / "dask.parquet"
     assert cluster.scheduler_address.startswith("tcp://127.0.0.1:")

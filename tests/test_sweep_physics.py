@@ -24,6 +24,7 @@ G = np.array([0.0, 0.0, -9.81])
 # ---------------------------------------------------------------------------------------------
 # impulse
 
+
 def test_impulse_is_m_delta_v_of_a_piecewise_ballistic_block():
     """Closed form: a 1.8 kg block flies, gets dv = (-6.1, 0.4, 0.9) m/s over a 3 ms contact
     that starts between two samples, flies again; J on the body = -m dv."""
@@ -76,6 +77,7 @@ def test_impulse_equals_the_momentum_the_target_gains_in_mujoco(physics):
 # ---------------------------------------------------------------------------------------------
 # Hof's bound
 
+
 def test_hof_bound_hand_computed_case():
     """A 70 kg body, COM 1 m high over the origin, support rectangle x in [-0.1, 0.2], y in
     [-0.15, 0.15]: omega_0 = sqrt(9.81) = 3.1321 1/s; d = 0.2 (0 deg), 0.15 (90 deg), 0.1 (180
@@ -103,6 +105,7 @@ def test_support_polygon_of_the_shipped_biped():
 
 # ---------------------------------------------------------------------------------------------
 # joint-space PD baseline and limits
+
 
 @pytest.fixture(scope="module")
 def pd():
@@ -149,15 +152,18 @@ def test_joint_pd_gravity_compensation_holds_the_weight_on_both_feet(wendlandt_m
     assert np.linalg.norm(J.T @ w0 - d.qfrc_bias) > 10.0
 
 
-@pytest.mark.parametrize("joint, body, point, axis, sign", [
-    ("left_knee", "left_shank", (0, 0, -0.4), 0, -1),                   # extension: foot forward (-x)
-    ("left_ankle_dorsiflexion", "left_foot", (-0.2, 0, -0.05), 2, +1),   # toes (-x) go up
-    ("left_hip_flexion", "left_thigh", (0, 0, -0.4), 0, -1),             # knee goes forward (-x)
-    ("left_hip_abduction", "left_thigh", (0, 0, -0.4), 1, -1),           # left leg goes out (-y)
-    ("left_ankle_inversion", "left_foot", (0, 0, -0.06), 1, +1),         # sole turns medially (+y)
-    ("right_ankle_inversion", "right_foot", (0, 0, -0.06), 1, -1),       # right foot: medial is -y
-    ("right_hip_rotation", "right_shank", (-0.3, 0, 0), 1, -1),          # internal: knee-front point to -y
-])
+@pytest.mark.parametrize(
+    "joint, body, point, axis, sign",
+    [
+        ("left_knee", "left_shank", (0, 0, -0.4), 0, -1),  # extension: foot forward (-x)
+        ("left_ankle_dorsiflexion", "left_foot", (-0.2, 0, -0.05), 2, +1),  # toes (-x) go up
+        ("left_hip_flexion", "left_thigh", (0, 0, -0.4), 0, -1),  # knee goes forward (-x)
+        ("left_hip_abduction", "left_thigh", (0, 0, -0.4), 1, -1),  # left leg goes out (-y)
+        ("left_ankle_inversion", "left_foot", (0, 0, -0.06), 1, +1),  # sole turns medially (+y)
+        ("right_ankle_inversion", "right_foot", (0, 0, -0.06), 1, -1),  # right foot: medial is -y
+        ("right_hip_rotation", "right_shank", (-0.3, 0, 0), 1, -1),  # internal: knee-front point to -y
+    ],
+)
 def test_positive_torque_is_the_anatomical_direction_named_in_limits(joint, body, point, axis, sign):
     """Oracle: MuJoCo. Zero gravity, central body welded, straight legs (qpos0); +1 N m on the
     joint moves a point of the segment the way the name of the positive direction says
@@ -202,13 +208,19 @@ def test_human_limits_clip_each_direction(pd):
 # ---------------------------------------------------------------------------------------------
 # one real trial
 
+
 @pytest.mark.parametrize("physics", PHYSICS)
 def test_real_trial_measures_the_block_hit_and_the_baseline_holds_still(physics):
     """W's throw at the joint-space PD baseline for 0.3 s on the real push scene: the block hits
     at about 0.08 s, pushes the body toward -x with an impulse between its momentum m v (a
     plastic hit) and 2 m v (a perfectly elastic one); then an unpushed 0.6 s stand survives."""
-    base = Scenario(duration_s=0.3, controller="joint-pd", target_com_m=(0.0, 0.0, 1.035),
-                    target_tilt_deg=5.0, physics=physics)
+    base = Scenario(
+        duration_s=0.3,
+        controller="joint-pd",
+        target_com_m=(0.0, 0.0, 1.035),
+        target_tilt_deg=5.0,
+        physics=physics,
+    )
     spec = SweepSpec(axes={"speed_m_s": 4.5, "direction_deg": 180.0}, base=base)
     row = run_trial(spec.setup(spec.trials()[0]))
     assert row["block_contact_time_s"] == pytest.approx(0.08, abs=0.01)
@@ -216,8 +228,11 @@ def test_real_trial_measures_the_block_hit_and_the_baseline_holds_still(physics)
     assert -2 * mv < row["impulse_x_n_s"] < -mv
     assert abs(row["impulse_y_n_s"]) < 1e-6 * mv
     assert row["completed"] and not row["fell"] and row["diverged"] is None
-    far = SweepSpec(axes={"speed_m_s": 0.5, "direction_deg": 0.0},
-                    base=base.with_overrides(duration_s=0.6), launch_distance_m=5.0)
+    far = SweepSpec(
+        axes={"speed_m_s": 0.5, "direction_deg": 0.0},
+        base=base.with_overrides(duration_s=0.6),
+        launch_distance_m=5.0,
+    )
     row = run_trial(far.setup(far.trials()[0]))
     assert row["block_contact_time_s"] != row["block_contact_time_s"]  # NaN: never hit
     assert row["impulse_n_s"] == 0.0 and row["completed"] and not row["fell"]

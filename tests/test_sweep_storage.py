@@ -25,8 +25,7 @@ GRID = {"speed_m_s": (1.0, 3.0), "direction_deg": (0.0, 90.0, 180.0, 270.0)}
 
 def toy_trial(setup) -> dict:
     t = setup.trial
-    return {"impulse_n_s": 1.2 * t.block_mass_kg * t.speed_m_s, "completed": True,
-            "fell": t.speed_m_s > 4}
+    return {"impulse_n_s": 1.2 * t.block_mass_kg * t.speed_m_s, "completed": True, "fell": t.speed_m_s > 4}
 
 
 def slow_trial(setup) -> dict:
@@ -50,8 +49,7 @@ def _rows_on_disk(out: Path) -> list[int]:
 def _done(log: Path) -> dict[int, int]:
     if not log.exists():
         return {}
-    return {int(a): int(b) for a, b in (line.split() for line in log.read_text().split("\n")
-                                         if line.strip())}
+    return {int(a): int(b) for a, b in (line.split() for line in log.read_text().split("\n") if line.strip())}
 
 
 def _alive(pid: int) -> bool:
@@ -82,6 +80,7 @@ def _children(pid: int) -> set[int]:
 # ---------------------------------------------------------------------------------------------
 # a rerun with another grid
 
+
 def test_a_different_grid_is_refused_naming_the_difference(tmp_path):
     """The issue's reproduction: 16 trials, then a 2-trial grid on the same file."""
     out = tmp_path / "b.parquet"
@@ -104,8 +103,7 @@ def test_a_grid_that_extends_the_old_one_adds_rows(tmp_path, monkeypatch):
     monkeypatch.setenv("BIPED_TEST_DONE_LOG", str(log))
     out = tmp_path / "s.parquet"
     run_sweep(SweepSpec(axes=GRID), out, workers=1, trial_fn=slow_trial, progress=False)
-    first = {(r["speed_m_s"], r["direction_deg"]): r["trial_key"]
-             for r in load(out).table.to_pylist()}
+    first = {(r["speed_m_s"], r["direction_deg"]): r["trial_key"] for r in load(out).table.to_pylist()}
     log.unlink()
     wider = SweepSpec(axes={**GRID, "speed_m_s": (1.0, 2.0, 3.0)})
     s = run_sweep(wider, out, workers=1, trial_fn=slow_trial, progress=False)
@@ -113,9 +111,11 @@ def test_a_grid_that_extends_the_old_one_adds_rows(tmp_path, monkeypatch):
     rows = load(out).table.to_pylist()
     assert [r["index"] for r in rows] == list(range(12))  # re-indexed in the wider grid
     assert [(r["speed_m_s"], r["direction_deg"]) for r in rows] == [
-        (s_, d) for s_ in (1.0, 2.0, 3.0) for d in (0.0, 90.0, 180.0, 270.0)]
-    assert all(first[(r["speed_m_s"], r["direction_deg"])] == r["trial_key"]
-               for r in rows if r["speed_m_s"] != 2.0)
+        (s_, d) for s_ in (1.0, 2.0, 3.0) for d in (0.0, 90.0, 180.0, 270.0)
+    ]
+    assert all(
+        first[(r["speed_m_s"], r["direction_deg"])] == r["trial_key"] for r in rows if r["speed_m_s"] != 2.0
+    )
     # and the old, narrower grid is now a different sweep
     with pytest.raises(ScenarioError, match=r"speed_m_s: 3 values \[1, 2, 3\] in the file"):
         run_sweep(SweepSpec(axes=GRID), out, workers=1, trial_fn=toy_trial, progress=False)
@@ -167,17 +167,20 @@ def _finish(out, log):
     """The same sweep again, in this process: it must run exactly the trials not on disk."""
     before = set(_rows_on_disk(out))
     log.unlink(missing_ok=True)
-    s = run_sweep(SweepSpec(axes={"speed_m_s": (1.0, 3.0, 5.0),
-                                  "direction_deg": tuple(range(0, 360, 45))}),
-                  out, workers=1, trial_fn=slow_trial, progress=False)
+    s = run_sweep(
+        SweepSpec(axes={"speed_m_s": (1.0, 3.0, 5.0), "direction_deg": tuple(range(0, 360, 45))}),
+        out,
+        workers=1,
+        trial_fn=slow_trial,
+        progress=False,
+    )
     assert s.complete and s.skipped == len(before)
     assert set(_done(log)) == set(range(N_TRIALS)) - before
     assert load(out).column("index").tolist() == list(range(N_TRIALS))
 
 
 @pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM])
-def test_killing_the_parent_keeps_finished_trials_and_its_workers_exit(tmp_path, monkeypatch,
-                                                                        sig):
+def test_killing_the_parent_keeps_finished_trials_and_its_workers_exit(tmp_path, monkeypatch, sig):
     out, log = tmp_path / "s.parquet", tmp_path / "done"
     monkeypatch.setenv("BIPED_TEST_DONE_LOG", str(log))
     proc = _start(tmp_path, out, log)
@@ -234,5 +237,5 @@ def test_a_torn_part_file_keeps_its_complete_batches(tmp_path):
     w.write([rows[3]])
     w.close()
     data = w.path.read_bytes()
-    w.path.write_bytes(data[:size + (len(data) - size) // 2])  # cut inside the 4th batch
+    w.path.write_bytes(data[: size + (len(data) - size) // 2])  # cut inside the 4th batch
     assert read_part(w.path).column("index").to_pylist() == [0, 1, 2]

@@ -42,7 +42,7 @@ def _mul(a, b):
 
 
 def _target():
-    return _axis_angle([0, -1, 0], 7.5)          # W's set point leans about -y
+    return _axis_angle([0, -1, 0], 7.5)  # W's set point leans about -y
 
 
 def _compose(target, roll, pitch, yaw):
@@ -60,21 +60,39 @@ def _fake_run(T=301, dt=0.01):
     yaw = -5.0 * t * np.exp(-t)
     target = _target()
     quat = np.array([_compose(target, r, p, y) for r, p, y in zip(roll, pitch, yaw, strict=False)])
-    quat[::7] *= -1                                    # the sign of a quaternion is free
-    joints = [f"{s}_{j}" for s in ("left", "right") for j in
-              ("hip_abduction", "hip_flexion", "hip_rotation", "knee", "ankle_inversion",
-               "ankle_dorsiflexion")]
+    quat[::7] *= -1  # the sign of a quaternion is free
+    joints = [
+        f"{s}_{j}"
+        for s in ("left", "right")
+        for j in (
+            "hip_abduction",
+            "hip_flexion",
+            "hip_rotation",
+            "knee",
+            "ankle_inversion",
+            "ankle_dorsiflexion",
+        )
+    ]
     ev = SimpleNamespace
-    events = (ev(time_s=0.086, foot="left", part="heel", kind="lift_off"),
-              ev(time_s=0.274, foot="left", part="heel", kind="touch_down"),
-              ev(time_s=1.2, foot="right", part="toe", kind="lift_off"))
+    events = (
+        ev(time_s=0.086, foot="left", part="heel", kind="lift_off"),
+        ev(time_s=0.274, foot="left", part="heel", kind="touch_down"),
+        ev(time_s=1.2, foot="right", part="toe", kind="lift_off"),
+    )
     rng = np.random.default_rng(0)
     return SimpleNamespace(
-        times=t, quat=quat, target_quat=target, joint_names=tuple(joints),
-        joint_angles=rng.normal(size=(T, 12)).cumsum(0) * 0.01, torques=rng.normal(size=(T, 12)),
+        times=t,
+        quat=quat,
+        target_quat=target,
+        joint_names=tuple(joints),
+        joint_angles=rng.normal(size=(T, 12)).cumsum(0) * 0.01,
+        torques=rng.normal(size=(T, 12)),
         com=np.column_stack([0.01 * np.sin(t), 0 * t, 1.1 + 0 * t]),
-        target_com=np.array([0.0, 0.0, 1.1]), events=events, block_contact_time_s=0.082,
-        fall_time_s=None), np.column_stack([roll, pitch, yaw])
+        target_com=np.array([0.0, 0.0, 1.1]),
+        events=events,
+        block_contact_time_s=0.082,
+        fall_time_s=None,
+    ), np.column_stack([roll, pitch, yaw])
 
 
 def test_orientation_error_is_roll_pitch_yaw_about_the_set_point():
@@ -85,17 +103,22 @@ def test_orientation_error_is_roll_pitch_yaw_about_the_set_point():
     np.testing.assert_allclose(got, rpy, atol=1e-9)
     # scipy's intrinsic z-y-x angles of R_target^T R agree (scipy takes (x, y, z, w))
     rel = Rotation.from_quat(run.target_quat[[1, 2, 3, 0]]).inv() * Rotation.from_quat(
-        run.quat[:, [1, 2, 3, 0]])
+        run.quat[:, [1, 2, 3, 0]]
+    )
     np.testing.assert_allclose(got[:, ::-1], rel.as_euler("ZYX", degrees=True), atol=1e-9)
     # a pure lean about the set point's y axis is all pitch
     q = _mul(run.target_quat, _axis_angle([0, 1, 0], 4.0))
-    np.testing.assert_allclose(orientation_error_rpy_deg(q[None], run.target_quat), [[0, 4, 0]],
-                               atol=1e-12)
+    np.testing.assert_allclose(orientation_error_rpy_deg(q[None], run.target_quat), [[0, 4, 0]], atol=1e-12)
 
 
 def _vertical_lines(ax):
-    return sorted({float(ln.get_xdata()[0]) for ln in ax.get_lines()
-                   if len(ln.get_xdata()) == 2 and ln.get_xdata()[0] == ln.get_xdata()[1]})
+    return sorted(
+        {
+            float(ln.get_xdata()[0])
+            for ln in ax.get_lines()
+            if len(ln.get_xdata()) == 2 and ln.get_xdata()[0] == ln.get_xdata()[1]
+        }
+    )
 
 
 def test_fig6_plots_the_error_in_degrees_beside_the_quaternion_and_zooms_on_the_hit():
@@ -162,8 +185,10 @@ def test_comparison_shows_every_run_in_the_legend_even_when_two_coincide():
     from biped.planar import runs
     from biped.viz.posture import comparison_figure
 
-    trajs = {m: runs.simulate_body_leg(method=m, gains=runs.BODY_LEG_GAINS, duration=2.0)
-             for m in ("lagrange-linear", "lagrange", "newton-euler")}
+    trajs = {
+        m: runs.simulate_body_leg(method=m, gains=runs.BODY_LEG_GAINS, duration=2.0)
+        for m in ("lagrange-linear", "lagrange", "newton-euler")
+    }
     # the case of the issue: two forms give the same curve to rounding
     assert np.abs(trajs["lagrange"].states - trajs["newton-euler"].states).max() < 1e-9
     fig = comparison_figure(trajs)
@@ -172,13 +197,13 @@ def test_comparison_shows_every_run_in_the_legend_even_when_two_coincide():
         ax = fig.axes[0]
         entries = [t.get_text() for t in ax.get_legend().get_texts()]
         assert len(entries) == 3 and [e.split()[0] for e in entries] == list(trajs)
-        diff = float(entries[2].split("from lagrange: ")[1].split()[0])   # says it coincides
+        diff = float(entries[2].split("from lagrange: ")[1].split()[0])  # says it coincides
         assert diff < 1e-9
         # every legend entry's colour is seen in the drawn figure, outside the legend too
         ax.get_legend().set_visible(False)
         for line in ax.get_lines():
             rgb = 255 * np.array(to_rgb(line.get_color()))
-            if line.get_alpha() is not None:     # a pale line on white
+            if line.get_alpha() is not None:  # a pale line on white
                 rgb = 255 - line.get_alpha() * (255 - rgb)
             assert _pixels_of(fig, rgb) > 200, line.get_label()
     finally:
@@ -194,8 +219,12 @@ def test_stability_map_marks_the_best_gains_on_it_and_found():
     k1, k2 = np.linspace(0, 50000, 21), np.linspace(0, 50000, 17)
     smap = analysis.stability_map(p, k1, k2, 2500.0, 400.0)
     # oracle: roots of the characteristic polynomial (eq. 3.80), not the map's eigenvalues
-    margin = np.array([[-np.roots(analysis.characteristic_polynomial(p, (a, 2500.0, b, 400.0))).real
-                        .max() for a in k1] for b in k2])
+    margin = np.array(
+        [
+            [-np.roots(analysis.characteristic_polynomial(p, (a, 2500.0, b, 400.0))).real.max() for a in k1]
+            for b in k2
+        ]
+    )
     i, j = np.unravel_index(np.argmax(margin), margin.shape)
     best = SimpleNamespace(gains=np.array([15776.0, 4999.9, 4776.0, 717.5]), margin=3.83)
     fig = stability_map_figure(smap, {"B": (25000.0, 40000.0)}, best=best)
@@ -222,19 +251,48 @@ def test_walk_friction_panel_reaches_the_peak_the_summary_reports():
     grf = np.zeros((T, 2, 3))
     grf[:, :, 2] = 350.0 + 50 * np.sin(t)[:, None]
     grf[:, :, 0] = 40.0 * np.cos(3 * t)[:, None]
-    grf[123, 0] = [31.4, 0.0, 2.0]                    # a foot nearly unloaded: 15.7 needed
+    grf[123, 0] = [31.4, 0.0, 2.0]  # a foot nearly unloaded: 15.7 needed
     stance = np.ones((T, 2), bool)
     stance[200:220, 1] = False
-    idyn = SimpleNamespace(times=t, joint_names=tuple(f"left_{j}" for j in (
-        "hip_flexion", "knee", "ankle_dorsiflexion", "hip_abduction", "hip_rotation",
-        "ankle_inversion")) + tuple(f"right_{j}" for j in (
-            "hip_flexion", "knee", "ankle_dorsiflexion", "hip_abduction", "hip_rotation",
-            "ankle_inversion")), torques=np.zeros((T, 12)), grf=grf, stance=stance,
-        mass=75.0, gravity=9.81, residual=np.zeros((T, 6)))
+    idyn = SimpleNamespace(
+        times=t,
+        joint_names=tuple(
+            f"left_{j}"
+            for j in (
+                "hip_flexion",
+                "knee",
+                "ankle_dorsiflexion",
+                "hip_abduction",
+                "hip_rotation",
+                "ankle_inversion",
+            )
+        )
+        + tuple(
+            f"right_{j}"
+            for j in (
+                "hip_flexion",
+                "knee",
+                "ankle_dorsiflexion",
+                "hip_abduction",
+                "hip_rotation",
+                "ankle_inversion",
+            )
+        ),
+        torques=np.zeros((T, 12)),
+        grf=grf,
+        stance=stance,
+        mass=75.0,
+        gravity=9.81,
+        residual=np.zeros((T, 6)),
+    )
     idyn.friction_ratio = lambda: InverseDynamics.friction_ratio(idyn)
     # the peak recomputed here from the forces, row by row
-    peak = max(math.hypot(*grf[k, j, :2]) / grf[k, j, 2] for k in range(T) for j in range(2)
-               if stance[k, j] and grf[k, j, 2] > 0)
+    peak = max(
+        math.hypot(*grf[k, j, :2]) / grf[k, j, 2]
+        for k in range(T)
+        for j in range(2)
+        if stance[k, j] and grf[k, j, 2] > 0
+    )
     assert peak == pytest.approx(15.7)
     fig = inverse_dynamics_figure(idyn, [{"time_s": 1.0, "label": "step"}])
     try:
@@ -243,8 +301,7 @@ def test_walk_friction_panel_reaches_the_peak_the_summary_reports():
         assert hi > peak and lo > 0 and ax.get_yscale() == "log"
         left = next(ln for ln in ax.get_lines() if ln.get_label() == "left")
         assert np.nanmax(left.get_ydata()) == pytest.approx(peak)
-        assert any("peak 15.7" in tx.get_text() and "t = 1.23 s" in tx.get_text()
-                   for tx in ax.texts)
+        assert any("peak 15.7" in tx.get_text() and "t = 1.23 s" in tx.get_text() for tx in ax.texts)
         # W's friction 0.3 is still drawn inside the axis
         assert lo < 0.3 < hi
     finally:

@@ -78,16 +78,19 @@ def test_bad_slow_motion_is_refused_in_one_line():
 def test_captions_change_at_the_event_times():
     fps, a, b, s = 30, 0.032, 0.394, 0.25
     ft = playback_times(0.0, 3.0, fps, SlowMotion(a, b, s))
-    events = [{"time_s": 0.294, "label": "right heel down"},
-              {"time_s": 0.082, "label": "block hits"},
-              {"time_s": 0.086, "label": "left heel up"}]
+    events = [
+        {"time_s": 0.294, "label": "right heel down"},
+        {"time_s": 0.082, "label": "block hits"},
+        {"time_s": 0.086, "label": "left heel up"},
+    ]
     cap = overlay_text(ft, fps, events=events, slow_motion=SlowMotion(a, b, s), hold_s=1.5)
     for e in events:
         line = f"{e['time_s']:.3f} s  {e['label']}"
         shown = [k for k, c in enumerate(cap) if line in c["events"]]
         # first frame whose simulated time (closed form) is at or after the event
-        first = next(k for k in range(len(ft)) if _sim_time_of_frame(k, fps, 0, a, b, s)
-                     >= e["time_s"] - 1e-12)
+        first = next(
+            k for k in range(len(ft)) if _sim_time_of_frame(k, fps, 0, a, b, s) >= e["time_s"] - 1e-12
+        )
         assert shown[0] == first, (e, shown[:3], first)
         # on screen for 1.5 s of video, contiguously
         assert shown == list(range(first, first + 45)), e
@@ -114,19 +117,31 @@ def _thrown_block(scene, T=0.2, rate=500.0):
     hit = None
     for k, t in enumerate(times):
         qpos[k, bi] = np.asarray(sc.block_position_m) + np.asarray(sc.block_velocity_m_s) * (
-            t if hit is None else hit)
+            t if hit is None else hit
+        )
         d.qpos[:] = qpos[k]
         mujoco.mj_forward(m, d)
-        touching = any(scene.block_geom in (c.geom1, c.geom2) and
-                       scene.floor_geom not in (c.geom1, c.geom2) for c in d.contact[:d.ncon])
+        touching = any(
+            scene.block_geom in (c.geom1, c.geom2) and scene.floor_geom not in (c.geom1, c.geom2)
+            for c in d.contact[: d.ncon]
+        )
         if touching and hit is None:
             hit = t
     assert hit is not None and 0.05 < hit < 0.12, hit
     Ev = SimpleNamespace
-    events = (Ev(time_s=hit + 0.004, foot="left", part="heel", kind="lift_off"),
-              Ev(time_s=hit + 0.06, foot="left", part="heel", kind="touch_down"))
-    return SimpleNamespace(times=times, qpos=qpos, events=events, block_contact_time_s=hit,
-                           fall_time_s=None, fall_reason=None, scenario=sc)
+    events = (
+        Ev(time_s=hit + 0.004, foot="left", part="heel", kind="lift_off"),
+        Ev(time_s=hit + 0.06, foot="left", part="heel", kind="touch_down"),
+    )
+    return SimpleNamespace(
+        times=times,
+        qpos=qpos,
+        events=events,
+        block_contact_time_s=hit,
+        fall_time_s=None,
+        fall_reason=None,
+        scenario=sc,
+    )
 
 
 @pytest.fixture(scope="module")
@@ -145,8 +160,7 @@ def _mujoco_projection(model, qpos, cam_kw, aspect):
     cam = mujoco.MjvCamera()
     cam.type = mujoco.mjtCamera.mjCAMERA_FREE
     cam.lookat[:] = cam_kw["lookat"]
-    cam.distance, cam.azimuth, cam.elevation = (cam_kw["distance"], cam_kw["azimuth"],
-                                                cam_kw["elevation"])
+    cam.distance, cam.azimuth, cam.elevation = (cam_kw["distance"], cam_kw["azimuth"], cam_kw["elevation"])
     scn = mujoco.MjvScene(model, maxgeom=1000)
     mujoco.mjv_updateScene(model, d, mujoco.MjvOption(), None, cam, mujoco.mjtCatBit.mjCAT_ALL, scn)
     gc = scn.camera[0]
@@ -161,8 +175,10 @@ def _mujoco_projection(model, qpos, cam_kw, aspect):
         assert np.all(z > gc.frustum_near) and np.all(z < gc.frustum_far)
         x = (rel @ right) * gc.frustum_near / z
         y = (rel @ up) * gc.frustum_near / z
-        return np.column_stack([(x - gc.frustum_center) / half_w,
-                                (y - 0.5 * (gc.frustum_top + gc.frustum_bottom)) / half_h])
+        return np.column_stack(
+            [(x - gc.frustum_center) / half_w, (y - 0.5 * (gc.frustum_top + gc.frustum_bottom)) / half_h]
+        )
+
     return d, project
 
 
@@ -188,16 +204,16 @@ def test_the_camera_frustum_holds_the_block_and_both_feet_at_impact(push_scene):
     assert np.any(np.abs(project_off(_corners(d, m, m.geom("block").id))) > 1)
 
 
-def test_push_video_is_1280x720_slowed_around_the_hit_and_shows_the_block(push_scene, gl,
-                                                                        tmp_path):
+def test_push_video_is_1280x720_slowed_around_the_hit_and_shows_the_block(push_scene, gl, tmp_path):
     import imageio.v3 as iio
 
     fake = _thrown_block(push_scene)
     hit = fake.block_contact_time_s
-    fps = 10                                          # few frames: the CPU is shared
+    fps = 10  # few frames: the CPU is shared
     seen = []
-    res = render_push_video(push_scene.model, fake, tmp_path / "push.mp4", fps=fps,
-                            progress=lambda n, N: seen.append((n, N)))
+    res = render_push_video(
+        push_scene.model, fake, tmp_path / "push.mp4", fps=fps, progress=lambda n, N: seen.append((n, N))
+    )
     assert res.reason is None, res.reason
     # the documented window: 0.05 s before the hit until 0.1 s after the last foot event, at
     # least 0.3 s after the hit (clipped to the run's end)
@@ -213,9 +229,9 @@ def test_push_video_is_1280x720_slowed_around_the_hit_and_shows_the_block(push_s
     k_hit = next(k for k in range(n) if _sim_time_of_frame(k, fps, 0.0, a, b, 0.25) >= hit - 1e-12)
     f = frames[k_hit].astype(int)
     r, g, b = f[..., 0], f[..., 1], f[..., 2]
-    orange = (r > 70) & (g > 0.5 * r) & (g < 0.85 * r) & (b < 0.25 * r)   # trunk: b ~ 0.36 r
+    orange = (r > 70) & (g > 0.5 * r) & (g < 0.85 * r) & (b < 0.25 * r)  # trunk: b ~ 0.36 r
     assert orange.sum() > 400, orange.sum()
-    f0 = frames[0].astype(int)              # t = 0: the block is in the air, 0.4 m behind
+    f0 = frames[0].astype(int)  # t = 0: the block is in the air, 0.4 m behind
     assert (orange & ((f0[..., 2] < 0.25 * f0[..., 0]) & (f0[..., 0] > 70))).sum() < 50
     # the event caption (bottom left) changes on that frame and not on the one before
     box = (slice(560, 720), slice(0, 520))
@@ -229,9 +245,14 @@ def test_slow_motion_window_of_a_run(push_scene):
     hit = fake.block_contact_time_s
     w = push_slow_motion(fake)
     assert (w.start_s, w.speed) == (pytest.approx(hit - 0.05), 0.25)
-    assert w.end_s == pytest.approx(hit + 0.3)          # events end before hit + 0.2 s
-    late = SimpleNamespace(**{**vars(fake), "events": fake.events + (
-        SimpleNamespace(time_s=hit + 0.5, foot="right", part="toe", kind="touch_down"),)})
+    assert w.end_s == pytest.approx(hit + 0.3)  # events end before hit + 0.2 s
+    late = SimpleNamespace(
+        **{
+            **vars(fake),
+            "events": fake.events
+            + (SimpleNamespace(time_s=hit + 0.5, foot="right", part="toe", kind="touch_down"),),
+        }
+    )
     assert push_slow_motion(late).end_s == pytest.approx(hit + 0.6)
     missed = SimpleNamespace(**{**vars(fake), "block_contact_time_s": None})
     assert push_slow_motion(missed) is None
@@ -242,7 +263,7 @@ def _horizon_streaks(frame):
     f = frame.astype(int)
     lit = np.flatnonzero(f.max(axis=(1, 2)) > 40)
     top = lit[0]
-    band = f[top:top + 60]
+    band = f[top : top + 60]
     grey = (np.ptp(band, axis=-1) < 14) & (band.max(axis=-1) < 150) & (band.min(axis=-1) > 30)
     return int(grey.sum())
 
@@ -255,22 +276,29 @@ def test_walk_video_has_no_shadow_streaks_near_the_horizon(gl, tmp_path):
     from biped.spatial import rot_to_quat
 
     motion = demo().sample(50.0)
-    model = mujoco.MjModel.from_xml_string(
-        figure_mjcf(motion.dims, motion.plan.terrain.boxes(width=1.2)))
-    k = round(14.0 * 50)           # 14 s in, 12 m from the light: streaks on the far floor
+    model = mujoco.MjModel.from_xml_string(figure_mjcf(motion.dims, motion.plan.terrain.boxes(width=1.2)))
+    k = round(14.0 * 50)  # 14 s in, 12 m from the light: streaks on the far floor
     # two frames, 0.04 s apart, as in the video: MuJoCo draws the first frame after its context
     # is made without the streaks; every later frame of a video shows them
     ks = (k - 2, k)
     q = np.zeros((2, model.nq))
     root = model.joint("pelvis").qposadr[0]
     for i, kk in enumerate(ks):
-        q[i, root:root + 3] = motion.pelvis_pos[kk]
-        q[i, root + 3:root + 7] = rot_to_quat(np.ascontiguousarray(motion.pelvis_rot[kk]))
+        q[i, root : root + 3] = motion.pelvis_pos[kk]
+        q[i, root + 3 : root + 7] = rot_to_quat(np.ascontiguousarray(motion.pelvis_rot[kk]))
         for j, name in enumerate(JOINT_NAMES):
             q[i, model.joint(name).qposadr[0]] = motion.angles[kk, j]
     t = [13.96, 14.0]
-    kw = {"track_body": "pelvis", "distance": 4.0, "azimuth": -125.0, "elevation": -15.0,
-          "fps": 25, "width": 480, "height": 360, "overlay": False}
+    kw = {
+        "track_body": "pelvis",
+        "distance": 4.0,
+        "azimuth": -125.0,
+        "elevation": -15.0,
+        "fps": 25,
+        "width": 480,
+        "height": 360,
+        "overlay": False,
+    }
     fixed = render_video(model, t, q, tmp_path / "fixed.mp4", shadows="fixed", **kw)
     follow = render_video(model, t, q, tmp_path / "follow.mp4", **kw)
     a = iio.imread(fixed.path, plugin="FFMPEG")[-1]
@@ -278,8 +306,9 @@ def test_walk_video_has_no_shadow_streaks_near_the_horizon(gl, tmp_path):
     assert _horizon_streaks(a) > 150, "the counterfactual should show MuJoCo's streaks"
     assert _horizon_streaks(b) < 20
     # the shadows under the figure are still there: the frame is not simply shadowless
-    off = iio.imread(render_video(model, t, q, tmp_path / "off.mp4", shadows="off",
-                                  **kw).path, plugin="FFMPEG")[-1]
+    off = iio.imread(
+        render_video(model, t, q, tmp_path / "off.mp4", shadows="off", **kw).path, plugin="FFMPEG"
+    )[-1]
     assert np.abs(b.astype(int) - off).mean() > 0.5
 
 
@@ -292,12 +321,12 @@ def test_biped_push_outputs_write_the_slow_motion_video_and_say_its_progress(gl,
     from biped.outputs.push import write_outputs
     from biped.sim import Scenario, simulate
 
-    r = simulate(Scenario(duration_s=0.12))    # the hit at ~0.08 s, few frames: shared CPU
+    r = simulate(Scenario(duration_s=0.12))  # the hit at ~0.08 s, few frames: shared CPU
     hit = r.block_contact_time_s
     assert hit is not None and 0.05 < hit < 0.12
     lines = []
     paths = write_outputs(r, tmp_path, figures=False, replay=False, log=lines.append)
-    a, b = hit - 0.05, float(r.times[-1])        # the window is cut at the run's end
+    a, b = hit - 0.05, float(r.times[-1])  # the window is cut at the run's end
     n, _ = _expected_frames(0.0, b, 30, [(a, b, 0.25)])
     frames = iio.imread(paths["video"], plugin="FFMPEG")
     assert frames.shape == (n, 720, 1280, 3)

@@ -47,15 +47,22 @@ def biped_replay(wendlandt_mj):
     q = _moving_qpos(wendlandt_mj)
     times = np.arange(q.shape[0]) / 60.0
     return replay_from_mujoco(
-        wendlandt_mj, times, q, title="W's biped, keyframe 0",
+        wendlandt_mj,
+        times,
+        q,
+        title="W's biped, keyframe 0",
         info={"recovered": True, "final_com_error_m": 0.00123, "frames": 4},
-        markers=[{"time_s": 0.02, "label": "block hit"},
-                 {"time_s": 0.04, "foot": "left", "part": "heel", "kind": "lift_off"}])
+        markers=[
+            {"time_s": 0.02, "label": "block hit"},
+            {"time_s": 0.04, "foot": "left", "part": "heel", "kind": "lift_off"},
+        ],
+    )
 
 
 # ------------------------------------------------------------------------------------------
 # Geometry recorded from MuJoCo
 # ------------------------------------------------------------------------------------------
+
 
 def test_soles_flat_5mm_above_floor_in_initial_posture(biped_replay):
     """The model was built so that W's posture puts both soles flat, 0.005 m above the floor."""
@@ -65,16 +72,21 @@ def test_soles_flat_5mm_above_floor_in_initial_posture(biped_replay):
         g = names.index(name)
         h = np.array(biped_replay.geoms[g].size)
         R = _rot(biped_replay.quat[0, g])
-        corners = [biped_replay.pos[0, g] + R @ (h * np.array([sx, sy, sz]))
-                   for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]
+        corners = [
+            biped_replay.pos[0, g] + R @ (h * np.array([sx, sy, sz]))
+            for sx in (-1, 1)
+            for sy in (-1, 1)
+            for sz in (-1, 1)
+        ]
         z = np.sort([c[2] for c in corners])
         bottoms.append(z[:4])
     bottoms = np.array(bottoms)
     np.testing.assert_allclose(bottoms, 0.005, atol=2e-5)
 
 
-def test_capsules_lie_along_local_z_between_the_mjcf_fromto_points(wendlandt_mj, wendlandt_path,
-                                                                   biped_replay):
+def test_capsules_lie_along_local_z_between_the_mjcf_fromto_points(
+    wendlandt_mj, wendlandt_path, biped_replay
+):
     """Capsule centre +- half_length * (local z) = the MJCF's ``fromto`` endpoints, mapped to the
     world with MuJoCo's *body* poses (so the check is independent of the geom poses recorded)."""
     m = wendlandt_mj
@@ -102,7 +114,7 @@ def test_capsules_lie_along_local_z_between_the_mjcf_fromto_points(wendlandt_mj,
                 np.testing.assert_allclose(mine, ends, atol=1e-9)
                 assert biped_replay.geoms[g].size[0] == pytest.approx(float(geom.attrib["size"]))
                 checked += 1
-    assert checked == 2 * 6   # two arms, two thighs, two shanks, at two frames
+    assert checked == 2 * 6  # two arms, two thighs, two shanks, at two frames
 
 
 def test_replay_records_every_visible_geom_with_mjcf_names_and_colours(wendlandt_mj, biped_replay):
@@ -142,9 +154,9 @@ def test_a_checkered_floor_gets_its_average_colour_and_invisible_geoms_are_left_
 
 def test_a_500_hz_trajectory_becomes_a_100_frames_per_second_replay(wendlandt_mj):
     m = wendlandt_mj
-    times = np.arange(1501) / 500.0 + 0.25           # 3 s at the control rate
+    times = np.arange(1501) / 500.0 + 0.25  # 3 s at the control rate
     q = np.tile(m.key_qpos[0], (times.size, 1))
-    q[:, 0] = times                                   # the root moves 1 m/s in x
+    q[:, 0] = times  # the root moves 1 m/s in x
     r = replay_from_mujoco(m, times, q)
     np.testing.assert_allclose(r.times, 0.25 + np.arange(301) / 100.0, atol=1e-12)
     trunk = [g.name for g in r.geoms].index("trunk")
@@ -191,23 +203,30 @@ def test_three_s_at_100_hz_of_25_geoms_fits_in_a_few_mb(tmp_path):
 # The HTML page: escaping and no network, read as text
 # ------------------------------------------------------------------------------------------
 
+
 def _evil_replay(biped_replay) -> Replay:
     """The biped plus one shape of each kind, with hostile strings in every embedded name."""
     T = biped_replay.times.size
-    extra = (ReplayGeom(EVIL, "ellipsoid", (0.05, 0.1, 0.15), (0.6, 0.6, 0.6, 1)),
-             ReplayGeom(EVIL_IMG, "cylinder", (0.05, 0.12), (0.6, 0.6, 0.6, 1)),
-             ReplayGeom("sphere", "sphere", (0.07,), (0.6, 0.6, 0.6, 1)),
-             ReplayGeom("plate", "plane", (0.2, 0.1), (0.6, 0.6, 0.6, 0.5)))
+    extra = (
+        ReplayGeom(EVIL, "ellipsoid", (0.05, 0.1, 0.15), (0.6, 0.6, 0.6, 1)),
+        ReplayGeom(EVIL_IMG, "cylinder", (0.05, 0.12), (0.6, 0.6, 0.6, 1)),
+        ReplayGeom("sphere", "sphere", (0.07,), (0.6, 0.6, 0.6, 1)),
+        ReplayGeom("plate", "plane", (0.2, 0.1), (0.6, 0.6, 0.6, 0.5)),
+    )
     rng = np.random.default_rng(1)
     q = rng.normal(size=(T, len(extra), 4))
     q /= np.linalg.norm(q, axis=-1, keepdims=True)
     p = np.array([0.0, 1.2, 0.5]) + 0.3 * rng.normal(size=(T, len(extra), 3))
     return dataclasses.replace(
-        biped_replay, geoms=biped_replay.geoms + extra,
+        biped_replay,
+        geoms=biped_replay.geoms + extra,
         pos=np.concatenate([biped_replay.pos, p], axis=1),
         quat=np.concatenate([biped_replay.quat, q], axis=1),
-        title=EVIL, info={EVIL: EVIL_IMG, "ok": 1.5},
-        markers=({"time_s": 0.03, "label": EVIL},), follow="trunk")
+        title=EVIL,
+        info={EVIL: EVIL_IMG, "ok": 1.5},
+        markers=({"time_s": 0.03, "label": EVIL},),
+        follow="trunk",
+    )
 
 
 def _data_element(page: str) -> dict:
@@ -218,8 +237,8 @@ def _data_element(page: str) -> dict:
 def test_page_escapes_every_embedded_string(biped_replay, tmp_path):
     page = write_replay(_evil_replay(biped_replay), tmp_path / "evil.html").read_text()
     assert EVIL not in page and "<img" not in page
-    assert len(re.findall(r"<script\b", page, re.IGNORECASE)) == 5   # the template's own, nothing more
-    data = _data_element(page)   # the JSON decodes back to the exact strings
+    assert len(re.findall(r"<script\b", page, re.IGNORECASE)) == 5  # the template's own, nothing more
+    data = _data_element(page)  # the JSON decodes back to the exact strings
     assert data["title"] == EVIL and data["info"][0] == [EVIL, EVIL_IMG]
     assert data["markers"][0]["label"] == EVIL
     assert [g["name"] for g in data["geoms"]][-4:-2] == [EVIL, EVIL_IMG]
@@ -234,8 +253,13 @@ def test_page_loads_nothing_from_the_network(biped_replay, tmp_path):
     csp = re.search(r'Content-Security-Policy" content="([^"]*)"', page).group(1)
     assert "http" not in csp and "*" not in csp
     # outside the inlined, vendored three.js, the page names no http(s) URL at all
-    ours = re.sub(r'<script type="text/plain" id="(three-core|three-module|orbit-controls)">'
-                  r".*?</script>", "", page, flags=re.DOTALL)
+    ours = re.sub(
+        r'<script type="text/plain" id="(three-core|three-module|orbit-controls)">'
+        r".*?</script>",
+        "",
+        page,
+        flags=re.DOTALL,
+    )
     assert not re.search(r"https?://", ours)
     assert not re.search(r"<(link|iframe|img|object|embed)\b|\bsrc\s*=|@import|\burl\(", ours, re.IGNORECASE)
 
@@ -243,6 +267,7 @@ def test_page_loads_nothing_from_the_network(biped_replay, tmp_path):
 # ------------------------------------------------------------------------------------------
 # In headless Chromium
 # ------------------------------------------------------------------------------------------
+
 
 def _chromium():
     for name in ("chromium", "chromium-browser", "google-chrome"):
@@ -253,11 +278,25 @@ def _chromium():
 
 
 def _run_chromium(tmp_path, *args, url):
-    cmd = [_chromium(), "--headless", "--no-sandbox", "--disable-gpu",
-           "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
-           "--disable-background-networking", "--disable-component-update", "--disable-sync",
-           "--no-first-run", "--disable-extensions", f"--user-data-dir={tmp_path / 'profile'}",
-           "--window-size=800,600", "--virtual-time-budget=8000", "--hide-scrollbars", *args, url]
+    cmd = [
+        _chromium(),
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--use-angle=swiftshader",
+        "--enable-unsafe-swiftshader",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--no-first-run",
+        "--disable-extensions",
+        f"--user-data-dir={tmp_path / 'profile'}",
+        "--window-size=800,600",
+        "--virtual-time-budget=8000",
+        "--hide-scrollbars",
+        *args,
+        url,
+    ]
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=90, check=False)
     assert proc.returncode == 0, proc.stderr[-2000:]
     return proc.stdout
@@ -276,7 +315,7 @@ def _world_aabb(geom: ReplayGeom, pos, quat):
     elif geom.kind == "cylinder":
         h = A[:, 2] * s[1] + s[0] * np.sqrt(np.clip(1 - R[:, 2] ** 2, 0, 1))
     elif geom.kind == "ellipsoid":
-        h = np.sqrt((R ** 2) @ (s ** 2))
+        h = np.sqrt((R**2) @ (s**2))
     else:  # plane: a rectangle in the local xy plane
         h = A[:, :2] @ s
     return pos - h, pos + h
@@ -295,7 +334,7 @@ def test_chromium_builds_each_shape_where_mujoco_puts_it(biped_replay, tmp_path)
     t = float(rep.times[1] + rep.times[2]) / 2
     dom = _run_chromium(tmp_path, "--dump-dom", url=f"{f.as_uri()}#t={t!r}&probe=1")
     assert 'data-ready="1"' in dom, dom[-3000:]
-    assert "<img" not in dom and "&lt;img src=x" in dom   # the name shows as text only
+    assert "<img" not in dom and "&lt;img src=x" in dom  # the name shows as text only
     assert len(re.findall(r"<script\b", dom, re.IGNORECASE)) == 5
     probe = re.search(r'<pre id="probe" style="[^"]*">(.*?)</pre>', dom, re.DOTALL)[1]
     probe = json.loads(html.unescape(probe))
@@ -305,7 +344,7 @@ def test_chromium_builds_each_shape_where_mujoco_puts_it(biped_replay, tmp_path)
     assert [b["name"] for b in probe["boxes"]] == [g.name for g in rep.geoms]
     for g, (geom, box) in enumerate(zip(rep.geoms, probe["boxes"], strict=True)):
         pos = (rep.pos[1, g] + rep.pos[2, g]) / 2
-        q12 = rep.quat[1:3, g][:, [1, 2, 3, 0]]                   # scipy wants (x, y, z, w)
+        q12 = rep.quat[1:3, g][:, [1, 2, 3, 0]]  # scipy wants (x, y, z, w)
         quat = Slerp([0.0, 1.0], Rotation.from_quat(q12))(0.5).as_quat()[[3, 0, 1, 2]]
         lo, hi = _world_aabb(geom, pos, quat)
         round_ = geom.kind in ("sphere", "capsule", "cylinder", "ellipsoid")
@@ -324,10 +363,10 @@ def test_chromium_screenshot_shows_the_biped(biped_replay, tmp_path):
     _run_chromium(tmp_path, f"--screenshot={png}", url=f.as_uri())
     img = np.asarray(Image.open(png).convert("RGB"), dtype=float)
     assert img.shape == (600, 800, 3)
-    img = img[:530]   # above the control bar (its blue ticks and checkboxes)
+    img = img[:530]  # above the control bar (its blue ticks and checkboxes)
     r, g, b = img[..., 0], img[..., 1], img[..., 2]
-    trunk = (r > 80) & (r > 1.6 * g) & (r > 1.6 * b)      # rgba 0.8 0.35 0.3, shaded
-    legs = (b > 60) & (b > 1.25 * r) & (b > g)             # rgba 0.35 0.45 0.65, shaded
+    trunk = (r > 80) & (r > 1.6 * g) & (r > 1.6 * b)  # rgba 0.8 0.35 0.3, shaded
+    legs = (b > 60) & (b > 1.25 * r) & (b > g)  # rgba 0.35 0.45 0.65, shaded
     assert trunk.sum() > 1500, f"only {trunk.sum()} trunk-coloured pixels: is the biped drawn?"
     assert legs.sum() > 1000, f"only {legs.sum()} leg-coloured pixels"
     ys_trunk, ys_legs = np.nonzero(trunk)[0], np.nonzero(legs)[0]
@@ -338,16 +377,22 @@ def test_chromium_screenshot_shows_the_biped(biped_replay, tmp_path):
 def test_chromium_lists_events_in_time_order(biped_replay, tmp_path):
     """Events given out of order (as a push run lists them: block hit, then each foot's events)
     appear in the page's event list sorted by time, read back from the DOM Chromium built."""
-    given = [{"time_s": 0.05, "label": "block hits the body"},
-             {"time_s": 0.048, "label": "right toe lift off"},
-             {"time_s": 0.01, "label": "left heel lift off"},
-             {"time_s": 0.05, "label": "left heel touch down"}]   # same time: given order kept
+    given = [
+        {"time_s": 0.05, "label": "block hits the body"},
+        {"time_s": 0.048, "label": "right toe lift off"},
+        {"time_s": 0.01, "label": "left heel lift off"},
+        {"time_s": 0.05, "label": "left heel touch down"},
+    ]  # same time: given order kept
     rep = dataclasses.replace(biped_replay, markers=tuple(given))
     f = write_replay(rep, tmp_path / "events.html")
     dom = _run_chromium(tmp_path, "--dump-dom", url=f"{f.as_uri()}#probe=1")
     assert 'data-ready="1"' in dom, dom[-3000:]
-    box = dom[dom.index('id="events"'):]
-    box = box[:box.index("</div></div>") + 6]            # the list: rows of plain text divs
+    box = dom[dom.index('id="events"') :]
+    box = box[: box.index("</div></div>") + 6]  # the list: rows of plain text divs
     rows = [html.unescape(r) for r in re.findall(r"<div[^>]*>([^<]*)</div>", box)]
-    assert rows == ["0.010 s  left heel lift off", "0.048 s  right toe lift off",
-                    "0.050 s  block hits the body", "0.050 s  left heel touch down"], rows
+    assert rows == [
+        "0.010 s  left heel lift off",
+        "0.048 s  right toe lift off",
+        "0.050 s  block hits the body",
+        "0.050 s  left heel touch down",
+    ], rows

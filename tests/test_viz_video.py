@@ -43,9 +43,9 @@ def gl():
 
 
 def test_frame_indices_hold_the_last_sample_at_or_before_each_frame_time():
-    times = np.arange(501) / 500.0           # 1 s at 500 Hz
+    times = np.arange(501) / 500.0  # 1 s at 500 Hz
     idx = frame_indices(times, 30)
-    assert len(idx) == 31                      # 0, 1/30, ..., 30/30 s
+    assert len(idx) == 31  # 0, 1/30, ..., 30/30 s
     k = np.arange(31)
     np.testing.assert_array_equal(idx, np.floor(k * 500 / 30 + 1e-9).astype(int))
     assert np.all(times[idx] <= k / 30 + 1e-12)
@@ -80,14 +80,12 @@ def test_video_decodes_and_the_tracking_camera_follows_the_biped(wendlandt_mj, g
     assert abs(cx[-1] - cx[0]) < 6, cx
 
     # counterfactual: a fixed camera sees the same motion sweep across the image
-    fixed = render_video(wendlandt_mj, t, q, tmp_path / "fixed.mp4", width=320, height=240,
-                         track_body=None)
+    fixed = render_video(wendlandt_mj, t, q, tmp_path / "fixed.mp4", width=320, height=240, track_body=None)
     xs = [np.nonzero(_trunk_pixels(f))[1].mean() for f in _decode(fixed.path)[[0, -1]]]
     assert abs(xs[1] - xs[0]) > 40, xs
 
 
-def test_without_opengl_it_returns_a_one_line_reason_instead_of_raising(wendlandt_mj, tmp_path,
-                                                                       monkeypatch):
+def test_without_opengl_it_returns_a_one_line_reason_instead_of_raising(wendlandt_mj, tmp_path, monkeypatch):
     monkeypatch.setenv("MUJOCO_GL", "disable")
     gl_available.cache_clear()
     try:

@@ -108,8 +108,10 @@ def _load(source):
     if isinstance(source, mujoco.MjModel):
         return source, "<MjModel>"
     if isinstance(source, (str, PathLike)) and not str(source).strip():
-        raise ModelError(f"empty model source {str(source)!r}: expected an MJCF file path, MJCF XML "
-                         f"text or a mujoco.MjModel")
+        raise ModelError(
+            f"empty model source {str(source)!r}: expected an MJCF file path, MJCF XML "
+            f"text or a mujoco.MjModel"
+        )
     if isinstance(source, (str, PathLike)) and not str(source).lstrip().startswith("<"):
         path = Path(source)
         if path.is_dir():
@@ -141,7 +143,8 @@ def _build(model: mujoco.MjModel, feet: tuple[str, str], label: str) -> TreeMode
         raise ModelError(
             f"expected exactly one floating tree (one body with a free joint under the world), found "
             f"{len(roots)}: {[body_names_all[b] for b in roots]}; give the controller the biped's own "
-            f"model, without floors' free objects")
+            f"model, without floors' free objects"
+        )
     root = roots[0]
     bodies = [b for b in range(1, nb) if model.body_rootid[b] == root]
     fixed = [b for b in range(1, nb) if model.body_rootid[b] != root and model.body_jntnum[b] == 0]
@@ -153,13 +156,15 @@ def _build(model: mujoco.MjModel, feet: tuple[str, str], label: str) -> TreeMode
         if b == root:
             if types != ["free"]:
                 raise ModelError(
-                    f"root body {body_names_all[b]!r} must have exactly one free joint, has {types}")
+                    f"root body {body_names_all[b]!r} must have exactly one free joint, has {types}"
+                )
             continue
         if nj != 1 or types[0] != "hinge":
             raise ModelError(
                 f"body {body_names_all[b]!r} has joints {types}; every body below the root must have "
                 f"exactly one hinge joint (valid: one 'hinge'; model ball joints as three hinges "
-                f"with massless intermediate bodies, as W does, and fold welded bodies into their parent)")
+                f"with massless intermediate bodies, as W does, and fold welded bodies into their parent)"
+            )
     # --- feet
     names = [body_names_all[b] for b in bodies]
     for f in feet:
@@ -169,8 +174,10 @@ def _build(model: mujoco.MjModel, feet: tuple[str, str], label: str) -> TreeMode
         raise ModelError(f"need two different feet (left, right), got {feet}")
     for f in feet:
         if f == names[0]:
-            raise ModelError(f"foot {f!r} is the floating root (the central body); the feet must be "
-                             f"bodies below it, one at the end of each leg")
+            raise ModelError(
+                f"foot {f!r} is the floating root (the central body); the feet must be "
+                f"bodies below it, one at the end of each leg"
+            )
     index = {b: i for i, b in enumerate(bodies)}
     n = len(bodies)
     parent = np.full(n, -1, dtype=np.int64)
@@ -184,7 +191,8 @@ def _build(model: mujoco.MjModel, feet: tuple[str, str], label: str) -> TreeMode
             if leg[k] >= 0:
                 raise ModelError(
                     f"feet {feet[0]!r} and {feet[1]!r} share the link {names[k]!r}: each foot must end "
-                    f"its own leg")
+                    f"its own leg"
+                )
             leg[k] = side
             k = parent[k]
     beyond = np.zeros(n, dtype=bool)
@@ -197,7 +205,9 @@ def _build(model: mujoco.MjModel, feet: tuple[str, str], label: str) -> TreeMode
             f"bodies {off_legs} are on neither leg ({names[0]!r} to {feet[0]!r}, {names[0]!r} to "
             f"{feet[1]!r}) nor beyond a foot: W's controller actuates only the two legs, so their "
             f"joints would get no torque; valid models have two legs (a third leg or arms are not "
-            f"supported: weld them into the central body)")
+            f"supported: weld them into the central body)"
+        )
+
     # --- geometry and inertia (MuJoCo body frames -> inertial frames)
     def body_to_inertial(b):
         return transform(quat_to_rot(model.body_iquat[b]), model.body_ipos[b])
@@ -226,10 +236,23 @@ def _build(model: mujoco.MjModel, feet: tuple[str, str], label: str) -> TreeMode
         H[i] = adjoint(g_ib[:3, :3], g_ib[:3, 3]) @ xi_body
         qref[i] = model.qpos0[qadr[i]]
     return TreeModel(
-        body_names=tuple(names), joint_names=tuple(joint_names), parent=parent, H=H, G0=G0,
-        mass=model.body_mass[bodies].copy(), inertia=model.body_inertia[bodies].copy(),
-        qpos_adr=qadr, dof_adr=dadr, qpos_ref=qref, feet=foot_idx, leg=leg, beyond_foot=beyond,
-        gravity=model.opt.gravity.copy(), nq=model.nq, nv=model.nv, source=label,
+        body_names=tuple(names),
+        joint_names=tuple(joint_names),
+        parent=parent,
+        H=H,
+        G0=G0,
+        mass=model.body_mass[bodies].copy(),
+        inertia=model.body_inertia[bodies].copy(),
+        qpos_adr=qadr,
+        dof_adr=dadr,
+        qpos_ref=qref,
+        feet=foot_idx,
+        leg=leg,
+        beyond_foot=beyond,
+        gravity=model.opt.gravity.copy(),
+        nq=model.nq,
+        nv=model.nv,
+        source=label,
     )
 
 
@@ -258,19 +281,27 @@ def sole_rectangles(source: Any, feet: tuple[str, str] = DEFAULT_FEET) -> tuple[
         try:
             b = model.body(foot).id
         except KeyError:
-            raise ModelError(unknown_name("foot body", foot, [model.body(i).name
-                                                             for i in range(model.nbody)])) from None
-        boxes = [g for g in range(model.ngeom)
-                 if model.geom_bodyid[g] == b and model.geom_type[g] == mujoco.mjtGeom.mjGEOM_BOX]
+            raise ModelError(
+                unknown_name("foot body", foot, [model.body(i).name for i in range(model.nbody)])
+            ) from None
+        boxes = [
+            g
+            for g in range(model.ngeom)
+            if model.geom_bodyid[g] == b and model.geom_type[g] == mujoco.mjtGeom.mjGEOM_BOX
+        ]
         if not boxes:
-            raise ModelError(f"foot body {foot!r} has no box geoms: the sole rectangle is read from "
-                             f"them (give each foot one or more axis-aligned box geoms)")
+            raise ModelError(
+                f"foot body {foot!r} has no box geoms: the sole rectangle is read from "
+                f"them (give each foot one or more axis-aligned box geoms)"
+            )
         corners = []
         for g in boxes:
             R = quat_to_rot(model.geom_quat[g])
             if not np.allclose(np.abs(R), np.eye(3), atol=1e-9):
-                raise ModelError(f"sole geom {_name(model, mujoco.mjtObj.mjOBJ_GEOM, g)!r} is not "
-                                 f"axis-aligned with the foot body {foot!r}")
+                raise ModelError(
+                    f"sole geom {_name(model, mujoco.mjtObj.mjOBJ_GEOM, g)!r} is not "
+                    f"axis-aligned with the foot body {foot!r}"
+                )
             s = model.geom_size[g]
             lo, hi = model.geom_pos[g] - np.abs(R) @ s, model.geom_pos[g] + np.abs(R) @ s
             corners.append((lo, hi))
@@ -280,6 +311,7 @@ def sole_rectangles(source: Any, feet: tuple[str, str] = DEFAULT_FEET) -> tuple[
         y0, y1 = min(lo[1] for lo, _ in bottom), max(hi[1] for _, hi in bottom)
         g_body_sole = transform(np.eye(3), np.array([(x0 + x1) / 2, (y0 + y1) / 2, z]))
         g_body_inertial = transform(quat_to_rot(model.body_iquat[b]), model.body_ipos[b])
-        out.append(SoleRectangle(inverse(g_body_inertial) @ g_body_sole, float(x1 - x0) / 2,
-                                float(y1 - y0) / 2))
+        out.append(
+            SoleRectangle(inverse(g_body_inertial) @ g_body_sole, float(x1 - x0) / 2, float(y1 - y0) / 2)
+        )
     return out[0], out[1]

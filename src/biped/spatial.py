@@ -247,17 +247,21 @@ def cross(a: Vec3, b: Vec3) -> tuple[float, float, float]:
 @njit(cache=True, inline="always")
 def rot_mul(R: np.ndarray, x: Vec3) -> tuple[float, float, float]:
     """``R x`` for a (3, 3) matrix and a 3-vector, returned as a tuple."""
-    return (R[0, 0] * x[0] + R[0, 1] * x[1] + R[0, 2] * x[2],
-            R[1, 0] * x[0] + R[1, 1] * x[1] + R[1, 2] * x[2],
-            R[2, 0] * x[0] + R[2, 1] * x[1] + R[2, 2] * x[2])
+    return (
+        R[0, 0] * x[0] + R[0, 1] * x[1] + R[0, 2] * x[2],
+        R[1, 0] * x[0] + R[1, 1] * x[1] + R[1, 2] * x[2],
+        R[2, 0] * x[0] + R[2, 1] * x[1] + R[2, 2] * x[2],
+    )
 
 
 @njit(cache=True, inline="always")
 def rot_T_mul(R: np.ndarray, x: Vec3) -> tuple[float, float, float]:
     """``R^T x`` for a (3, 3) matrix and a 3-vector, returned as a tuple."""
-    return (R[0, 0] * x[0] + R[1, 0] * x[1] + R[2, 0] * x[2],
-            R[0, 1] * x[0] + R[1, 1] * x[1] + R[2, 1] * x[2],
-            R[0, 2] * x[0] + R[1, 2] * x[1] + R[2, 2] * x[2])
+    return (
+        R[0, 0] * x[0] + R[1, 0] * x[1] + R[2, 0] * x[2],
+        R[0, 1] * x[0] + R[1, 1] * x[1] + R[2, 1] * x[2],
+        R[0, 2] * x[0] + R[1, 2] * x[1] + R[2, 2] * x[2],
+    )
 
 
 @njit(cache=True, inline="always")
@@ -315,8 +319,9 @@ def adjoint_inv_T_mul(R: np.ndarray, p: np.ndarray, F: np.ndarray, out: np.ndarr
 
 
 @njit(cache=True, inline="always")
-def adjoint_inv_congruence_add(R: np.ndarray, p: np.ndarray, M: np.ndarray, out: np.ndarray, Q: np.ndarray,
-                               S: np.ndarray) -> None:
+def adjoint_inv_congruence_add(
+    R: np.ndarray, p: np.ndarray, M: np.ndarray, out: np.ndarray, Q: np.ndarray, S: np.ndarray
+) -> None:
     """``out += Ad_g^-T M Ad_g^-1`` for ``g = (R, p)`` and a symmetric (6, 6) ``M``: the inertia
     ``M`` of frame K added in frame J when ``g = g_{j,k}`` (``A^T M A`` with ``A = Ad_{g_{k,j}}``,
     W Alg. 3). Scratch ``Q`` (6, 6) and ``S`` (3, 3).

@@ -13,5 +13,14 @@ from biped.analysis.feet_in_place import (
     support_polygon,
 )
 
-__all__ = ["Envelope", "FeetInPlaceBound", "envelope", "feet_in_place_bound", "hof_bound",
-           "ray_to_polygon_edge", "support_polygon", "survived", "sweep_data"]
+__all__ = [
+    "Envelope",
+    "FeetInPlaceBound",
+    "envelope",
+    "feet_in_place_bound",
+    "hof_bound",
+    "ray_to_polygon_edge",
+    "support_polygon",
+    "survived",
+    "sweep_data",
+]

@@ -59,14 +59,14 @@ def _columns(table_or_data: Any) -> dict:
     return {name: table.column(name).to_pylist() for name in table.column_names}
 
 
-def envelope(table_or_data: Any, by: str = "speed_m_s", criterion: str = "survived",
-             bin_deg: float | None = None) -> Envelope:
+def envelope(
+    table_or_data: Any, by: str = "speed_m_s", criterion: str = "survived", bin_deg: float | None = None
+) -> Envelope:
     """The recovery envelope of a sweep (see :class:`Envelope`); ``by`` is ``"speed_m_s"`` or
     ``"impulse_n_s"`` (rows without a measured impulse are left out). ``bin_deg`` groups the
     directions of a random sample into bins of that width (a grid needs none)."""
     if by not in ("speed_m_s", "impulse_n_s", "impulse_horizontal_n_s"):
-        raise ScenarioError(f"by must be 'speed_m_s', 'impulse_n_s' or 'impulse_horizontal_n_s'; "
-                            f"got {by!r}")
+        raise ScenarioError(f"by must be 'speed_m_s', 'impulse_n_s' or 'impulse_horizontal_n_s'; got {by!r}")
     cols = _columns(table_or_data)
     ok = survived(cols, criterion)
     direction = np.mod(np.array(cols["direction_deg"], dtype=float), 360.0)

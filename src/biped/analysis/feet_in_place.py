@@ -77,16 +77,30 @@ def ray_to_polygon_edge(point: Any, direction_deg: float, polygon: Any) -> float
     return float(max(best, 0.0))
 
 
-def hof_bound(directions_deg: Any, mass_kg: float, com_height_m: float, com_xy: Any,
-              polygon_xy: Any, gravity: float = GRAVITY) -> FeetInPlaceBound:
+def hof_bound(
+    directions_deg: Any,
+    mass_kg: float,
+    com_height_m: float,
+    com_xy: Any,
+    polygon_xy: Any,
+    gravity: float = GRAVITY,
+) -> FeetInPlaceBound:
     """:class:`FeetInPlaceBound` for given body numbers (closed form, no model)."""
     if not (mass_kg > 0 and com_height_m > 0):
         raise ScenarioError("mass_kg and com_height_m must be > 0")
     dirs = np.asarray(directions_deg, dtype=float)
     omega0 = math.sqrt(gravity / com_height_m)
     d = np.array([ray_to_polygon_edge(com_xy, a, polygon_xy) for a in dirs])
-    return FeetInPlaceBound(dirs, d, mass_kg * omega0 * d, float(mass_kg), float(com_height_m),
-                            omega0, np.asarray(com_xy, float), np.asarray(polygon_xy, float))
+    return FeetInPlaceBound(
+        dirs,
+        d,
+        mass_kg * omega0 * d,
+        float(mass_kg),
+        float(com_height_m),
+        omega0,
+        np.asarray(com_xy, float),
+        np.asarray(polygon_xy, float),
+    )
 
 
 @functools.lru_cache(maxsize=8)
@@ -116,8 +130,7 @@ def _support_polygon(scenario: Scenario) -> tuple[np.ndarray, float, float, np.n
     return com[:2].copy(), float(com[2] - z_sole), mass, polygon
 
 
-def support_polygon(scenario: Scenario | None = None
-                    ) -> tuple[np.ndarray, float, float, np.ndarray]:
+def support_polygon(scenario: Scenario | None = None) -> tuple[np.ndarray, float, float, np.ndarray]:
     """(com_xy (2,), com height above the soles [m], biped mass [kg], polygon (p, 2)) of the
     biped at the scenario's initial state: whole-body COM from MuJoCo (``subtree_com`` of the
     central body) and the convex hull of the bottom corners of the four sole boxes."""
@@ -131,5 +144,4 @@ def feet_in_place_bound(directions_deg: Any, scenario: Scenario | None = None) -
     return hof_bound(directions_deg, mass, h, com_xy, polygon)
 
 
-__all__ = ["FeetInPlaceBound", "feet_in_place_bound", "hof_bound", "ray_to_polygon_edge",
-           "support_polygon"]
+__all__ = ["FeetInPlaceBound", "feet_in_place_bound", "hof_bound", "ray_to_polygon_edge", "support_polygon"]

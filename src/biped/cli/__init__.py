@@ -32,8 +32,7 @@ EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_TERMINATED = 0, 1, 
 
 #: Negative numbers as values, e.g. ``--block-velocity -1e6 0 0`` (argparse's own pattern misses
 #: exponents, infinities and NaN, so such values were read as unknown options).
-_NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$",
-                              re.IGNORECASE)
+_NEGATIVE_NUMBER = re.compile(r"^-(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
 
 
 class Parser(argparse.ArgumentParser):
@@ -98,12 +97,13 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{prog}: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_BAD_INPUT
     except KeyboardInterrupt:
-        print(f"{prog}: {'terminated (SIGTERM)' if terminated['by'] else 'interrupted'}",
-              file=sys.stderr)
+        print(f"{prog}: {'terminated (SIGTERM)' if terminated['by'] else 'interrupted'}", file=sys.stderr)
         return EXIT_TERMINATED if terminated["by"] else EXIT_INTERRUPTED
     except MemoryError:
-        print(f"{prog}: error: out of memory; use a smaller problem (see --help for the bounds)",
-              file=sys.stderr)
+        print(
+            f"{prog}: error: out of memory; use a smaller problem (see --help for the bounds)",
+            file=sys.stderr,
+        )
         return EXIT_FAILED
     except OSError as exc:
         where = f" {exc.filename!r}" if getattr(exc, "filename", None) else ""

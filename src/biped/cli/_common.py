@@ -34,10 +34,25 @@ MANIFEST = ".biped-run.json"
 
 #: Files and folders the commands write (for folders of runs made before manifests existed).
 KNOWN_OUTPUTS = (
-    "summary.json", "trajectory.csv", "figures", "video.mp4", "replay.html", "inverse_dynamics.csv",
-    "columns.json", "animation.gif", "animation.mp4", "attitude.png", "body_attitude.png",
-    "leg_angle.png", "comparison.json", "comparison.png", "gains.json", "stability_map.npz",
-    "stability_map.png", "run.log", "mujoco.log",
+    "summary.json",
+    "trajectory.csv",
+    "figures",
+    "video.mp4",
+    "replay.html",
+    "inverse_dynamics.csv",
+    "columns.json",
+    "animation.gif",
+    "animation.mp4",
+    "attitude.png",
+    "body_attitude.png",
+    "leg_angle.png",
+    "comparison.json",
+    "comparison.png",
+    "gains.json",
+    "stability_map.npz",
+    "stability_map.png",
+    "run.log",
+    "mujoco.log",
 )
 #: A folder holds a run (of a version without manifests) if it has one of these.
 _RUN_MARKERS = (MANIFEST, "summary.json", "gains.json")
@@ -67,8 +82,11 @@ def _previous_run_files(path: Path, entries: set[str]) -> set[str]:
         files.add(MANIFEST)
         try:
             listed = json.loads((path / MANIFEST).read_text(encoding="utf-8")).get("files", [])
-            files |= {Path(f).parts[0] for f in listed if isinstance(f, str) and f and
-                      not Path(f).is_absolute() and ".." not in Path(f).parts}
+            files |= {
+                Path(f).parts[0]
+                for f in listed
+                if isinstance(f, str) and f and not Path(f).is_absolute() and ".." not in Path(f).parts
+            }
         except (OSError, ValueError, AttributeError):
             pass
     files |= entries & set(KNOWN_OUTPUTS)
@@ -79,8 +97,10 @@ def _check_writable(path: Path, flag: str, shown: Path | None = None) -> Path | 
     """Raise if nothing can be written at ``path``; return the nearest existing ancestor. Messages
     name ``shown`` (default ``path``)."""
     if shown is None and path.exists() and not path.is_dir():
-        raise ScenarioError(f"{flag} {str(path)!r} is an existing file; give a folder (new, empty, or "
-                            f"one that holds a previous run, with --overwrite)")
+        raise ScenarioError(
+            f"{flag} {str(path)!r} is an existing file; give a folder (new, empty, or "
+            f"one that holds a previous run, with --overwrite)"
+        )
     probe = path
     while not probe.exists():
         if probe.parent == probe:
@@ -94,8 +114,10 @@ def _check_writable(path: Path, flag: str, shown: Path | None = None) -> Path | 
         os.close(fd)
         os.unlink(tmp)
     except OSError as exc:
-        raise ScenarioError(f"{flag} {str(shown)!r}: cannot write in {str(probe)!r} "
-                            f"({exc.strerror or exc}); choose a writable folder") from None
+        raise ScenarioError(
+            f"{flag} {str(shown)!r}: cannot write in {str(probe)!r} "
+            f"({exc.strerror or exc}); choose a writable folder"
+        ) from None
     return probe
 
 
@@ -109,8 +131,9 @@ def check_file_writable(path: str | os.PathLike, flag: str = "--out") -> Path:
     return path
 
 
-def run_dir(out: str | os.PathLike | None, prefix: str, *, overwrite: bool = False,
-            flag: str = "--out") -> Path:
+def run_dir(
+    out: str | os.PathLike | None, prefix: str, *, overwrite: bool = False, flag: str = "--out"
+) -> Path:
     """The output folder of a run, checked before any work: ``out`` if given (see the module's
     rule), else a new ``runs/<prefix>-<date>-<time>[-k]``. Creates the folder (removed again if the
     command fails and leaves it empty); with ``overwrite`` removes the previous run's files."""
@@ -135,11 +158,15 @@ def run_dir(out: str | os.PathLike | None, prefix: str, *, overwrite: bool = Fal
                 what += f" of 'biped {kind}'"
         else:
             shown = sorted(entries)[:3]
-            what = (f"is not empty ({', '.join(shown)}{', ...' if len(entries) > 3 else ''}) and "
-                    f"holds no biped run")
-        raise ScenarioError(f"{flag} {str(path)!r} {what}; choose a new or empty folder, or pass "
-                            f"--overwrite (removes the previous run's files, keeps files biped did "
-                            f"not write)")
+            what = (
+                f"is not empty ({', '.join(shown)}{', ...' if len(entries) > 3 else ''}) and "
+                f"holds no biped run"
+            )
+        raise ScenarioError(
+            f"{flag} {str(path)!r} {what}; choose a new or empty folder, or pass "
+            f"--overwrite (removes the previous run's files, keeps files biped did "
+            f"not write)"
+        )
     folder = _RunFolder(path, prefix, foreign)
     missing = []
     p = path
@@ -149,8 +176,9 @@ def run_dir(out: str | os.PathLike | None, prefix: str, *, overwrite: bool = Fal
     try:
         path.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise ScenarioError(f"{flag} {str(path)!r}: cannot create the folder "
-                            f"({exc.strerror or exc})") from None
+        raise ScenarioError(
+            f"{flag} {str(path)!r}: cannot create the folder ({exc.strerror or exc})"
+        ) from None
     folder.created = missing[::-1]
     for name in previous:  # --overwrite: nothing of the previous run survives
         target = path / name
@@ -160,8 +188,9 @@ def run_dir(out: str | os.PathLike | None, prefix: str, *, overwrite: bool = Fal
             else:
                 target.unlink()
         except OSError as exc:
-            raise ScenarioError(f"--overwrite: cannot remove {str(target)!r} "
-                                f"({exc.strerror or exc})") from None
+            raise ScenarioError(
+                f"--overwrite: cannot remove {str(target)!r} ({exc.strerror or exc})"
+            ) from None
     _OPEN.append(folder)
     return path
 
@@ -180,13 +209,17 @@ def finish_runs(ok: bool, command: str = "") -> None:
         folder = _OPEN.pop()
         if ok:
             files = sorted(
-                str(p.relative_to(folder.path)) for p in folder.path.rglob("*")
-                if p.is_file() and p.relative_to(folder.path).parts[0] not in folder.foreign
-                and p.name != MANIFEST)
+                str(p.relative_to(folder.path))
+                for p in folder.path.rglob("*")
+                if p.is_file()
+                and p.relative_to(folder.path).parts[0] not in folder.foreign
+                and p.name != MANIFEST
+            )
             try:
-                (folder.path / MANIFEST).write_text(json.dumps(
-                    {"command": command or folder.command, "files": files}, indent=1) + "\n",
-                    encoding="utf-8")
+                (folder.path / MANIFEST).write_text(
+                    json.dumps({"command": command or folder.command, "files": files}, indent=1) + "\n",
+                    encoding="utf-8",
+                )
             except OSError:
                 pass
         else:
@@ -197,8 +230,7 @@ def finish_runs(ok: bool, command: str = "") -> None:
                     break
 
 
-def check_range(flag: str, value: float, lo: float, hi: float, what: str, *,
-                lo_open: bool = False) -> float:
+def check_range(flag: str, value: float, lo: float, hi: float, what: str, *, lo_open: bool = False) -> float:
     """``value`` if finite and within [lo, hi] (``(lo, hi]`` with ``lo_open``), else a ScenarioError
     naming ``flag``, the valid range and why it is bounded (``what``)."""
     ok = math.isfinite(value) and (value > lo if lo_open else value >= lo) and value <= hi

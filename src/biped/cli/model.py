@@ -19,17 +19,32 @@ def register(subparsers) -> None:
     from biped.models.anthropometry import MASS_RANGE_KG, STATURE_RANGE_M
 
     p = subparsers.add_parser(
-        "model", help="write W's biped for a subject of given stature, mass and sex (de Leva 1996)",
+        "model",
+        help="write W's biped for a subject of given stature, mass and sex (de Leva 1996)",
         description="Write W's 13-body, 18-DOF biped as an MJCF file with de Leva's (1996) segment "
-                    "parameters for a subject; run it with --model FILE on push, sweep and walk. "
-                    "See docs/model.md.")
-    p.add_argument("--stature", type=float, required=True, metavar="M",
-                   help=f"standing height [m], {STATURE_RANGE_M[0]:g} to {STATURE_RANGE_M[1]:g}")
-    p.add_argument("--mass", type=float, required=True, metavar="KG",
-                   help=f"body mass [kg], {MASS_RANGE_KG[0]:g} to {MASS_RANGE_KG[1]:g} (the "
-                        f"model's total mass)")
-    p.add_argument("--sex", choices=("male", "female"), required=True,
-                   help="which of de Leva's tables (Table 4, males or females)")
+        "parameters for a subject; run it with --model FILE on push, sweep and walk. "
+        "See docs/model.md.",
+    )
+    p.add_argument(
+        "--stature",
+        type=float,
+        required=True,
+        metavar="M",
+        help=f"standing height [m], {STATURE_RANGE_M[0]:g} to {STATURE_RANGE_M[1]:g}",
+    )
+    p.add_argument(
+        "--mass",
+        type=float,
+        required=True,
+        metavar="KG",
+        help=f"body mass [kg], {MASS_RANGE_KG[0]:g} to {MASS_RANGE_KG[1]:g} (the model's total mass)",
+    )
+    p.add_argument(
+        "--sex",
+        choices=("male", "female"),
+        required=True,
+        help="which of de Leva's tables (Table 4, males or females)",
+    )
     p.add_argument("--out", required=True, metavar="FILE.xml", help="MJCF file to write")
     p.add_argument("--overwrite", action="store_true", help="replace an existing FILE.xml")
     p.set_defaults(func=run)
@@ -64,12 +79,19 @@ def run(args) -> int:
 
     m = mujoco.MjModel.from_xml_path(str(out))
     z0 = a.initial_com_height(subject)
-    rows = [("subject", (f"{args.sex}, {args.stature:g} m, {args.mass:g} kg "
-                         f"(de Leva 1996 Table 4, {args.sex}s, scale {subject.scale:.4f})")),
-            ("total mass (MuJoCo)", f"{float(m.body_mass.sum()):.4f} kg"),
-            ("initial central-body COM", f"{z0:.4f} m (W's posture, soles 5 mm up; W's biped: 1.035 m)"),
-            ("written", str(out)),
-            ("use it", f"biped push --model {out}")]
+    rows = [
+        (
+            "subject",
+            (
+                f"{args.sex}, {args.stature:g} m, {args.mass:g} kg "
+                f"(de Leva 1996 Table 4, {args.sex}s, scale {subject.scale:.4f})"
+            ),
+        ),
+        ("total mass (MuJoCo)", f"{float(m.body_mass.sum()):.4f} kg"),
+        ("initial central-body COM", f"{z0:.4f} m (W's posture, soles 5 mm up; W's biped: 1.035 m)"),
+        ("written", str(out)),
+        ("use it", f"biped push --model {out}"),
+    ]
     w = max(len(k) for k, _ in rows)
     print("\n".join(f"  {k:<{w}}  {v}" for k, v in rows))
     return 0

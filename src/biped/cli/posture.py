@@ -57,11 +57,14 @@ def register(subparsers) -> None:
                        help="re-evaluate the torques in every integrator stage "
                             "(default: held over each step, as B's code)")  # fmt: skip
         p.add_argument("--no-animation", action="store_true", help="skip the GIF")
-        p.add_argument("--out", metavar="DIR",
-                       help=f"output folder (default: a new runs/{out}-<date>-<time>)")
-        p.add_argument("--overwrite", action="store_true",
-                       help="allow writing into a folder that already holds a run (its files "
-                            "are removed first)")
+        p.add_argument(
+            "--out", metavar="DIR", help=f"output folder (default: a new runs/{out}-<date>-<time>)"
+        )
+        p.add_argument(
+            "--overwrite",
+            action="store_true",
+            help="allow writing into a folder that already holds a run (its files are removed first)",
+        )
 
     pp = sub.add_parser("pendulum", help="single-link inverted pendulum (B Fig. 25)")
     common(pp, pd.PENDULUM_METHODS, "newton-euler", "euler", 0.02, 20.0, 2, runs.PENDULUM_GAINS,
@@ -78,8 +81,7 @@ def register(subparsers) -> None:
 
     pg = sub.add_parser("gains", help="linear analysis, pole placement, LQR, best local gains, map")
     pg.add_argument(
-        "--grid", type=int, default=81,
-        help=f"stability map points per axis, 2..{MAX_GRID} (default 81)"
+        "--grid", type=int, default=81, help=f"stability map points per axis, 2..{MAX_GRID} (default 81)"
     )
     pg.add_argument("--k1-max", type=float, default=60000.0, help="map K_theta1 range end")
     pg.add_argument("--k2-max", type=float, default=60000.0, help="map K_theta2 range end")
@@ -89,11 +91,14 @@ def register(subparsers) -> None:
                     help="real closed-loop poles for pole placement [1/s], each value at most "
                          "twice (rank of B) (default: those of the best local gains)")  # fmt: skip
     pg.add_argument("--param", action="append", default=[], metavar="NAME=VALUE")
-    pg.add_argument("--out", metavar="DIR",
-                    help="output folder (default: a new runs/posture-gains-<date>-<time>)")
-    pg.add_argument("--overwrite", action="store_true",
-                    help="allow writing into a folder that already holds a run (its files are "
-                         "removed first)")
+    pg.add_argument(
+        "--out", metavar="DIR", help="output folder (default: a new runs/posture-gains-<date>-<time>)"
+    )
+    pg.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="allow writing into a folder that already holds a run (its files are removed first)",
+    )
     pg.set_defaults(func=run)
 
 
@@ -122,10 +127,21 @@ def _run_model(args) -> int:
     cls = pd.PendulumParams if args.model == "pendulum" else bl.BodyLegParams
     params = _params(cls, args.param)
     out = run_dir(args.out, f"posture-{args.model}", overwrite=args.overwrite)
-    traj, lin = run_model(args.model, params, args.method, args.gains, args.x0, args.alpha,
-                          out=out, dt=args.dt, duration=args.duration, integrator=args.integrator,
-                          hold=not args.continuous, compare=getattr(args, "compare", False),
-                          animation=not args.no_animation)
+    traj, lin = run_model(
+        args.model,
+        params,
+        args.method,
+        args.gains,
+        args.x0,
+        args.alpha,
+        out=out,
+        dt=args.dt,
+        duration=args.duration,
+        integrator=args.integrator,
+        hold=not args.continuous,
+        compare=getattr(args, "compare", False),
+        animation=not args.no_animation,
+    )
     print(f"{traj.model} {traj.method} ({traj.integrator}, dt {traj.dt:g} s): "
           f"final state {np.array2string(traj.states[-1], precision=5)}; linearized closed loop "
           f"{'stable' if lin.stable else 'UNSTABLE'} (margin {lin.margin:.4g} 1/s); "
@@ -138,8 +154,10 @@ def _run_gains(args) -> int:
     from biped.planar import body_leg as bl
 
     if not 2 <= args.grid <= MAX_GRID:
-        raise ScenarioError(f"--grid must be in [2, {MAX_GRID}] points per axis (bounds the "
-                            f"work: {MAX_GRID}^2 eigenvalue problems); got {args.grid}")
+        raise ScenarioError(
+            f"--grid must be in [2, {MAX_GRID}] points per axis (bounds the "
+            f"work: {MAX_GRID}^2 eigenvalue problems); got {args.grid}"
+        )
     for flag, v in (("--k1-max", args.k1_max), ("--k2-max", args.k2_max)):
         check_range(flag, v, 0.0, 1e12, "map range end, lb ft^2/s^2 per rad", lo_open=True)
     for i, v in enumerate(args.rate_gains):
@@ -150,8 +168,15 @@ def _run_gains(args) -> int:
 
         _check_poles(args.poles, np.linalg.matrix_rank(analysis.ab_matrices(params)[1]))
     out = run_dir(args.out, "posture-gains", overwrite=args.overwrite)
-    result, best = run_gains(params, out=out, grid=args.grid, k1_max=args.k1_max,
-                             k2_max=args.k2_max, rate_gains=args.rate_gains, poles=args.poles)
+    result, best = run_gains(
+        params,
+        out=out,
+        grid=args.grid,
+        k1_max=args.k1_max,
+        k2_max=args.k2_max,
+        rate_gains=args.rate_gains,
+        poles=args.poles,
+    )
     print(f"best local gains {np.array2string(best.gains, precision=1)} margin {best.margin:.3f} 1/s "
           f"(B's: {result['bediz_gains']['B eq. 5.5-5.8 (K2 = 40000)']['stability_margin']:.3f}); "
           f"wrote {out}/")  # fmt: skip
@@ -167,7 +192,8 @@ def _check_steps(args) -> None:
     if steps > MAX_STEPS:
         raise ScenarioError(
             f"--duration / --dt = {steps:.4g} steps, more than the limit of {MAX_STEPS:,} (bounds "
-            f"the run's time and memory); use a larger --dt or a shorter --duration")
+            f"the run's time and memory); use a larger --dt or a shorter --duration"
+        )
 
 
 def _check_poles(poles, rank: int) -> None:
@@ -178,7 +204,8 @@ def _check_poles(poles, rank: int) -> None:
     if counts.max() > rank:
         raise ScenarioError(
             f"--poles: {values[counts.argmax()]:g} is given {counts.max()} times; with {rank} "
-            f"inputs (rank of B) a pole may be repeated at most {rank} times")
+            f"inputs (rank of B) a pole may be repeated at most {rank} times"
+        )
 
 
 def run(args) -> int:

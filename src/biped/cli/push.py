@@ -17,38 +17,72 @@ from biped.cli._common import run_dir
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
-        "push", help="W's push-recovery experiment: a thrown block vs the workspace controller",
+        "push",
+        help="W's push-recovery experiment: a thrown block vs the workspace controller",
         description="Simulate W section 4 on MuJoCo: the biped rises to its set point while a "
-                    "1.8 kg block hits it. Every parameter defaults to W's; see docs/push.md.")
+        "1.8 kg block hits it. Every parameter defaults to W's; see docs/push.md.",
+    )
     p.add_argument("--scenario", metavar="FILE.toml", help="scenario file (top-level key = value)")
-    p.add_argument("--model", metavar="FILE.xml",
-                   help="the biped: an MJCF file with W's structure (e.g. from `biped model`); W's "
-                        "initial state, set point and block height move onto it (docs/model.md)")
+    p.add_argument(
+        "--model",
+        metavar="FILE.xml",
+        help="the biped: an MJCF file with W's structure (e.g. from `biped model`); W's "
+        "initial state, set point and block height move onto it (docs/model.md)",
+    )
     p.add_argument("--duration", type=float, metavar="S", help="simulated time [s] (W: 3)")
-    p.add_argument("--block-position", type=float, nargs=3, metavar=("X", "Y", "Z"),
-                   help="block start [m] (W: 0.5 0.1 1.2)")
-    p.add_argument("--block-velocity", type=float, nargs=3, metavar=("VX", "VY", "VZ"),
-                   help="block velocity [m/s] (W: -4.5 0 0.2)")
+    p.add_argument(
+        "--block-position",
+        type=float,
+        nargs=3,
+        metavar=("X", "Y", "Z"),
+        help="block start [m] (W: 0.5 0.1 1.2)",
+    )
+    p.add_argument(
+        "--block-velocity",
+        type=float,
+        nargs=3,
+        metavar=("VX", "VY", "VZ"),
+        help="block velocity [m/s] (W: -4.5 0 0.2)",
+    )
     p.add_argument("--block-mass", type=float, metavar="KG", help="block mass [kg] (W: 1.8)")
-    p.add_argument("--controller", choices=("workspace", "joint-pd"),
-                   help="W's workspace controller (default) or the joint-PD baseline")
-    p.add_argument("--physics", choices=("faithful", "fast"),
-                   help="physics preset: faithful (default: 0.5 ms step, 5 ms contacts) or fast "
-                        "(1 ms, 7.5 ms, sleep; checked against faithful in docs/sweep.md)")
-    p.add_argument("--distribution", choices=("statics", "printed", "qp"),
-                   help="the workspace controller's wrench distribution: W's min-norm split "
-                        "(statics, default), W's printed subscripts, or the contact-feasible QP")
-    p.add_argument("--stepping", action="store_true", default=None,
-                   help="take capture-point steps when the feet cannot hold the push (not in W; "
-                        "docs/controller.md, 'Stepping')")
+    p.add_argument(
+        "--controller",
+        choices=("workspace", "joint-pd"),
+        help="W's workspace controller (default) or the joint-PD baseline",
+    )
+    p.add_argument(
+        "--physics",
+        choices=("faithful", "fast"),
+        help="physics preset: faithful (default: 0.5 ms step, 5 ms contacts) or fast "
+        "(1 ms, 7.5 ms, sleep; checked against faithful in docs/sweep.md)",
+    )
+    p.add_argument(
+        "--distribution",
+        choices=("statics", "printed", "qp"),
+        help="the workspace controller's wrench distribution: W's min-norm split "
+        "(statics, default), W's printed subscripts, or the contact-feasible QP",
+    )
+    p.add_argument(
+        "--stepping",
+        action="store_true",
+        default=None,
+        help="take capture-point steps when the feet cannot hold the push (not in W; "
+        "docs/controller.md, 'Stepping')",
+    )
     p.add_argument("--timestep", type=float, metavar="S", help="physics step [s], <= 0.001")
     p.add_argument("--seed", type=int, help="seed of the initial-state noise (joint_noise_deg)")
-    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="any scenario key, TOML value syntax (repeatable), e.g. "
-                        "--set 'kp_com=[60, 60, 200]' --set target_axis='\"-x\"'")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="any scenario key, TOML value syntax (repeatable), e.g. "
+        "--set 'kp_com=[60, 60, 200]' --set target_axis='\"-x\"'",
+    )
     p.add_argument("--out", metavar="DIR", help="output folder (default: a new one under runs/)")
-    p.add_argument("--overwrite", action="store_true",
-                   help="allow writing into a folder that already holds a run")
+    p.add_argument(
+        "--overwrite", action="store_true", help="allow writing into a folder that already holds a run"
+    )
     p.add_argument("--no-video", action="store_true", help="skip video.mp4")
     p.add_argument("--no-replay", action="store_true", help="skip replay.html")
     p.add_argument("--no-figures", action="store_true", help="skip figures/")
@@ -64,11 +98,18 @@ def build_scenario(args):
 
     values = toml_values(args.scenario) if args.scenario else {}
     values.update(parse_assignment(a) for a in args.set)
-    named = {"duration_s": args.duration, "block_position_m": args.block_position,
-             "block_velocity_m_s": args.block_velocity, "block_mass_kg": args.block_mass,
-             "controller": args.controller, "physics": args.physics,
-             "physics_timestep_s": args.timestep, "distribution": args.distribution,
-             "seed": args.seed, "stepping": getattr(args, "stepping", None)}
+    named = {
+        "duration_s": args.duration,
+        "block_position_m": args.block_position,
+        "block_velocity_m_s": args.block_velocity,
+        "block_mass_kg": args.block_mass,
+        "controller": args.controller,
+        "physics": args.physics,
+        "physics_timestep_s": args.timestep,
+        "distribution": args.distribution,
+        "seed": args.seed,
+        "stepping": getattr(args, "stepping", None),
+    }
     values.update({k: v for k, v in named.items() if v is not None})
     model = getattr(args, "model", None) or values.pop("model", None)
     values.pop("model", None)
@@ -119,29 +160,58 @@ def _table(result, out: Path, paths: dict, times: dict | None = None) -> str:
 
     s = result.scenario
     judged = judged_set_point(result)
-    status = ("recovered" if judged["recovered"] else "fell" if result.fell
-              else "diverged" if result.diverged else "interrupted" if result.interrupted
-              else "controller error" if result.controller_error else "not recovered")
+    status = (
+        "recovered"
+        if judged["recovered"]
+        else "fell"
+        if result.fell
+        else "diverged"
+        if result.diverged
+        else "interrupted"
+        if result.interrupted
+        else "controller error"
+        if result.controller_error
+        else "not recovered"
+    )
     own = s.controller == "joint-pd"
     if own:  # the baseline holds its initial posture: judged against that, said on the line
         status += " (joint-pd judged against its own set point, the initial state it holds)"
     com_err, ori_err = judged["final_com_error_m"], judged["final_orientation_error_deg"]
     rows = [
         ("result", status),
-        ("final COM error", (f"{f(None if com_err is None else com_err * 1e3, '.3f')} mm "
-                            f"(tolerance {s.recovery_com_tol_m * 1e3:g} mm)")),
-        ("final orientation error", (f"{f(ori_err, '.3f')} deg "
-                                    f"(tolerance {s.recovery_orientation_tol_deg:g} deg)")),
+        (
+            "final COM error",
+            (
+                f"{f(None if com_err is None else com_err * 1e3, '.3f')} mm "
+                f"(tolerance {s.recovery_com_tol_m * 1e3:g} mm)"
+            ),
+        ),
+        (
+            "final orientation error",
+            (f"{f(ori_err, '.3f')} deg (tolerance {s.recovery_orientation_tol_deg:g} deg)"),
+        ),
         ("block hits the body", f"{f(result.block_contact_time_s, '.3f')} s"),
         ("simulated", f"{result.times[-1] if len(result.times) else 0:.3f} of {s.duration_s:g} s"),
-        ("simulation time", (f"{result.wall_time_s:.2f} s ({result.realtime_factor:.1f}x real time, "
-                            f"physics {s.physics} {s.physics_timestep_s * 1e3:g} ms, control "
-                            f"{s.control_rate_hz:g} Hz)")),
+        (
+            "simulation time",
+            (
+                f"{result.wall_time_s:.2f} s ({result.realtime_factor:.1f}x real time, "
+                f"physics {s.physics} {s.physics_timestep_s * 1e3:g} ms, control "
+                f"{s.control_rate_hz:g} Hz)"
+            ),
+        ),
     ]
     if own:
-        rows.insert(3, ("W's set point", (
-            f"{'reached' if result.recovered else 'not reached'} (COM error "
-            f"{f(result.final_com_error_m * 1e3, '.1f')} mm; joint-pd does not try to reach it)")))
+        rows.insert(
+            3,
+            (
+                "W's set point",
+                (
+                    f"{'reached' if result.recovered else 'not reached'} (COM error "
+                    f"{f(result.final_com_error_m * 1e3, '.1f')} mm; joint-pd does not try to reach it)"
+                ),
+            ),
+        )
     if result.fell:
         rows.append(("fall", f"{result.fall_time_s:.3f} s: {result.fall_reason}"))
     if result.diverged:
@@ -160,13 +230,24 @@ def _table(result, out: Path, paths: dict, times: dict | None = None) -> str:
                 rows.append((f"{foot} foot back down", f"{downs[-1].time_s:.3f} s ({downs[-1].part})"))
     for k, st in enumerate(result.extra.get("steps", ()), 1):
         pos = st.get("position_m")
-        where = "no touchdown" if pos is None else f"lands {st['touch_down_s']:.3f} s at ({pos[0]:.3f}, {pos[1]:.3f}) m"
+        where = (
+            "no touchdown"
+            if pos is None
+            else f"lands {st['touch_down_s']:.3f} s at ({pos[0]:.3f}, {pos[1]:.3f}) m"
+        )
         rows.append((f"step {k}", f"{st['foot']} foot, lifts {f(st.get('lift_off_s'), '.3f')} s, {where}"))
     rows.append(("outputs", str(out)))
     if times:
-        rows.append(("wall time", (f"{times['total']:.1f} s, the whole command (simulation "
-                                   f"{result.wall_time_s:.1f} s, writing outputs "
-                                   f"{times['write']:.1f} s)")))
+        rows.append(
+            (
+                "wall time",
+                (
+                    f"{times['total']:.1f} s, the whole command (simulation "
+                    f"{result.wall_time_s:.1f} s, writing outputs "
+                    f"{times['write']:.1f} s)"
+                ),
+            )
+        )
     w = max(len(k) for k, _ in rows)
     return "\n".join(f"  {k:<{w}}  {v}" for k, v in rows)
 
@@ -205,10 +286,12 @@ def _writer_progress(quiet: bool):
 
     def on_stage(name):
         close()
-        what = {"trajectory.csv": "trajectory.csv, columns.json, summary.json (contact forces "
-                                  "from MuJoCo)",
-                "figures": "figures/ (W's Figs. 3-6)", "video.mp4": "video.mp4",
-                "replay.html": "replay.html"}.get(name, name)
+        what = {
+            "trajectory.csv": "trajectory.csv, columns.json, summary.json (contact forces from MuJoCo)",
+            "figures": "figures/ (W's Figs. 3-6)",
+            "video.mp4": "video.mp4",
+            "replay.html": "replay.html",
+        }.get(name, name)
         print(f"writing {what} ...", flush=True)
 
     def on_frame(done, total=None, *_):
@@ -247,15 +330,21 @@ def _run(args) -> int:
     out = _out_dir(args)
     route_to(out / "mujoco.log")  # MuJoCo's warnings, if any, go to the run's folder
     scene = build_scene(scenario)
-    warm_up(kernels_for(scenario.controller, scenario.distribution), log=lambda line: print(line, file=sys.stderr))
+    warm_up(
+        kernels_for(scenario.controller, scenario.distribution), log=lambda line: print(line, file=sys.stderr)
+    )
     on_step, close = _viewer(args.viewer)
     bar = None
     progress = None
     if not args.quiet:
         from tqdm import tqdm
 
-        bar = tqdm(total=round(scenario.duration_s, 6), unit="s sim", desc="biped push",
-                   bar_format="{l_bar}{bar}| {n:.2f}/{total:.2f} s sim [{elapsed}<{remaining}]")
+        bar = tqdm(
+            total=round(scenario.duration_s, 6),
+            unit="s sim",
+            desc="biped push",
+            bar_format="{l_bar}{bar}| {n:.2f}/{total:.2f} s sim [{elapsed}<{remaining}]",
+        )
 
         def progress(t):
             bar.update(max(0.0, t - bar.n))
@@ -270,9 +359,16 @@ def _run(args) -> int:
     t_write = time.perf_counter()
     on_stage, on_frame, close_bar = _writer_progress(args.quiet)
     try:
-        paths = write_outputs(result, out, figures=not args.no_figures, video=not args.no_video,
-                              replay=not args.no_replay, scene=scene, on_stage=on_stage,
-                              on_frame=on_frame)
+        paths = write_outputs(
+            result,
+            out,
+            figures=not args.no_figures,
+            video=not args.no_video,
+            replay=not args.no_replay,
+            scene=scene,
+            on_stage=on_stage,
+            on_frame=on_frame,
+        )
     finally:
         close_bar()
     t_end = time.perf_counter()

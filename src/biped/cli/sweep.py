@@ -13,67 +13,120 @@ from pathlib import Path
 from biped.cli._common import check_file_writable
 from biped.errors import ScenarioError
 
-_AXIS_OPTIONS = (("speed", "speed_m_s", "block speed [m/s]"),
-                 ("direction", "direction_deg", "direction of travel [deg], 0 = +x, 90 = +y"),
-                 ("mass", "block_mass_kg", "block mass [kg]"),
-                 ("height", "height_m", "aim height [m]"),
-                 ("gain_scale", "gain_scale", "gain factor (kp * s, kv * sqrt(s))"))
+_AXIS_OPTIONS = (
+    ("speed", "speed_m_s", "block speed [m/s]"),
+    ("direction", "direction_deg", "direction of travel [deg], 0 = +x, 90 = +y"),
+    ("mass", "block_mass_kg", "block mass [kg]"),
+    ("height", "height_m", "aim height [m]"),
+    ("gain_scale", "gain_scale", "gain factor (kp * s, kv * sqrt(s))"),
+)
 
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
-        "sweep", help="push-recovery envelopes: a grid of pushes on all cores or a Dask cluster",
+        "sweep",
+        help="push-recovery envelopes: a grid of pushes on all cores or a Dask cluster",
         description="Run a grid (or random sample) of push trials and write one Parquet file, a row "
-                    "per trial. Axis values: a number, a list 1,2,4 or START:STOP:NUM (ends "
-                    "included). Interrupted? Run the same command again: finished trials are "
-                    "kept and skipped. See docs/sweep.md.")
-    p.add_argument("--grid", metavar="FILE.toml",
-                   help="sweep file ([grid] axes, [scenario] keys, samples, seed, torque_limits); "
-                        "command-line options override it")
+        "per trial. Axis values: a number, a list 1,2,4 or START:STOP:NUM (ends "
+        "included). Interrupted? Run the same command again: finished trials are "
+        "kept and skipped. See docs/sweep.md.",
+    )
+    p.add_argument(
+        "--grid",
+        metavar="FILE.toml",
+        help="sweep file ([grid] axes, [scenario] keys, samples, seed, torque_limits); "
+        "command-line options override it",
+    )
     for opt, _, what in _AXIS_OPTIONS:
         p.add_argument(f"--{opt.replace('_', '-')}", metavar="VALUES", dest=opt, help=what)
-    p.add_argument("--samples", type=int, metavar="N",
-                   help="N random trials, uniform between each axis's smallest and largest value")
+    p.add_argument(
+        "--samples",
+        type=int,
+        metavar="N",
+        help="N random trials, uniform between each axis's smallest and largest value",
+    )
     p.add_argument("--seed", type=int, metavar="S", help="seed of --samples (default 0)")
-    p.add_argument("--task", choices=("hold", "wendlandt"), default=None,
-                   help="hold: keep the initial posture (set point = initial state; default, the "
-                        "same task for both controllers); wendlandt: rise to W's set point")
-    p.add_argument("--controller", choices=("workspace", "joint-pd"), default=None,
-                   help="W's workspace controller (default) or the joint-space PD baseline")
-    p.add_argument("--distribution", choices=("statics", "printed", "qp"), default=None,
-                   help="the workspace controller's wrench distribution: W's min-norm split "
-                        "(statics, default) or the contact-feasible QP (docs/controller.md)")
-    p.add_argument("--stepping", action="store_true", default=None,
-                   help="capture-point steps when the feet cannot hold (not in W; docs/controller.md)")
-    p.add_argument("--torque-limits", choices=("none", "human"), default=None,
-                   help="joint torque limits: none (W) or human-like (docs/sweep.md)")
-    p.add_argument("--model", metavar="FILE.xml",
-                   help="the biped: an MJCF file with W's structure (e.g. from `biped model`); W's "
-                        "initial state, set point and aim height move onto it (docs/model.md)")
+    p.add_argument(
+        "--task",
+        choices=("hold", "wendlandt"),
+        default=None,
+        help="hold: keep the initial posture (set point = initial state; default, the "
+        "same task for both controllers); wendlandt: rise to W's set point",
+    )
+    p.add_argument(
+        "--controller",
+        choices=("workspace", "joint-pd"),
+        default=None,
+        help="W's workspace controller (default) or the joint-space PD baseline",
+    )
+    p.add_argument(
+        "--distribution",
+        choices=("statics", "printed", "qp"),
+        default=None,
+        help="the workspace controller's wrench distribution: W's min-norm split "
+        "(statics, default) or the contact-feasible QP (docs/controller.md)",
+    )
+    p.add_argument(
+        "--stepping",
+        action="store_true",
+        default=None,
+        help="capture-point steps when the feet cannot hold (not in W; docs/controller.md)",
+    )
+    p.add_argument(
+        "--torque-limits",
+        choices=("none", "human"),
+        default=None,
+        help="joint torque limits: none (W) or human-like (docs/sweep.md)",
+    )
+    p.add_argument(
+        "--model",
+        metavar="FILE.xml",
+        help="the biped: an MJCF file with W's structure (e.g. from `biped model`); W's "
+        "initial state, set point and aim height move onto it (docs/model.md)",
+    )
     p.add_argument("--duration", type=float, metavar="S", help="simulated time per trial [s] (3)")
-    p.add_argument("--physics", choices=("faithful", "fast"), default=None,
-                   help="physics preset (default fast: 1 ms step, 7.5 ms contacts, sleep; its "
-                        "envelopes are within one grid step of faithful's, docs/sweep.md), unless "
-                        "the grid file or --set gives physics or the step/contact keys")
-    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                   help="any scenario key (TOML value syntax), repeatable")
+    p.add_argument(
+        "--physics",
+        choices=("faithful", "fast"),
+        default=None,
+        help="physics preset (default fast: 1 ms step, 7.5 ms contacts, sleep; its "
+        "envelopes are within one grid step of faithful's, docs/sweep.md), unless "
+        "the grid file or --set gives physics or the step/contact keys",
+    )
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="any scenario key (TOML value syntax), repeatable",
+    )
     p.add_argument("--workers", type=int, metavar="N", help="local processes (default: all cores)")
-    p.add_argument("--scheduler", metavar="ADDRESS",
-                   help="run on a Dask cluster instead, e.g. tcp://10.0.0.5:8786")
+    p.add_argument(
+        "--scheduler", metavar="ADDRESS", help="run on a Dask cluster instead, e.g. tcp://10.0.0.5:8786"
+    )
     p.add_argument("--batch", type=int, default=1, metavar="N", help="trials per task (1)")
-    p.add_argument("--out", metavar="FILE.parquet",
-                   help="results (default runs/sweep-<controller>-<limits>.parquet)")
+    p.add_argument(
+        "--out", metavar="FILE.parquet", help="results (default runs/sweep-<controller>-<limits>.parquet)"
+    )
     p.add_argument("--retry-failed", action="store_true", help="rerun trials that raised")
-    p.add_argument("--overwrite", action="store_true",
-                   help="replace an --out file that holds a different sweep")
+    p.add_argument(
+        "--overwrite", action="store_true", help="replace an --out file that holds a different sweep"
+    )
     p.add_argument("--plot", metavar="FILE.png", help="draw the polar envelope when done")
-    p.add_argument("--compare", metavar="OTHER.parquet", action="append", default=[],
-                   help="with --plot: draw these finished sweeps side by side (repeatable)")
-    p.add_argument("--by", choices=("speed_m_s", "impulse_n_s"), default="speed_m_s",
-                   help="radius of the polar plot")
+    p.add_argument(
+        "--compare",
+        metavar="OTHER.parquet",
+        action="append",
+        default=[],
+        help="with --plot: draw these finished sweeps side by side (repeatable)",
+    )
+    p.add_argument(
+        "--by", choices=("speed_m_s", "impulse_n_s"), default="speed_m_s", help="radius of the polar plot"
+    )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    p.add_argument("--dry-run", action="store_true",
-                   help="check everything and say what would run, run nothing")
+    p.add_argument(
+        "--dry-run", action="store_true", help="check everything and say what would run, run nothing"
+    )
     p.set_defaults(func=run)
 
 
@@ -98,8 +151,11 @@ def build_spec(args):
     spec = SweepSpec.from_toml(args.grid) if args.grid else None
     base = spec.base if spec else Scenario()
     overrides = dict(parse_assignment(a) for a in args.set)
-    model = getattr(args, "model", None) or overrides.pop("model", None) or (
-        base.model if base.model != "wendlandt" else None)
+    model = (
+        getattr(args, "model", None)
+        or overrides.pop("model", None)
+        or (base.model if base.model != "wendlandt" else None)
+    )
     overrides.pop("model", None)
     if model:  # W's scenario moved onto the model, then the grid file's [scenario] keys
         base = Scenario.for_model(model, **_grid_file(args.grid)[0])
@@ -132,12 +188,20 @@ def build_spec(args):
     samples = args.samples if args.samples is not None else (spec.samples if spec else None)
     seed = args.seed if args.seed is not None else (spec.seed if spec else 0)
     limits = args.torque_limits or (spec.torque_limits if spec else "none")
-    return SweepSpec(axes=axes, base=base, samples=samples, seed=seed, torque_limits=limits,
-                     launch_distance_m=spec.launch_distance_m if spec else 0.5)
+    return SweepSpec(
+        axes=axes,
+        base=base,
+        samples=samples,
+        seed=seed,
+        torque_limits=limits,
+        launch_distance_m=spec.launch_distance_m if spec else 0.5,
+    )
 
 
 def _qp_suffix(base) -> str:
-    return f"-{base.distribution}" if base.controller == "workspace" and base.distribution != "statics" else ""
+    return (
+        f"-{base.distribution}" if base.controller == "workspace" and base.distribution != "statics" else ""
+    )
 
 
 def _grid_file(grid) -> tuple[dict, dict]:
@@ -163,8 +227,10 @@ def _check_plot(path: str | None, compare: list[str]) -> None:
     kinds = matplotlib.figure.Figure().canvas.get_supported_filetypes()
     suffix = Path(path).suffix.lstrip(".").lower()
     if suffix not in kinds:
-        raise ScenarioError(f"--plot {path!r}: unknown image type {suffix or '(none)'!r}; "
-                            f"valid: {', '.join('.' + k for k in sorted(kinds))}")
+        raise ScenarioError(
+            f"--plot {path!r}: unknown image type {suffix or '(none)'!r}; "
+            f"valid: {', '.join('.' + k for k in sorted(kinds))}"
+        )
     for other in compare:
         if Path(other).suffix != ".parquet" or not Path(other).is_file():
             raise ScenarioError(f"--compare {other!r}: no finished sweep file (.parquet) there")
@@ -187,49 +253,73 @@ def _run(args) -> int:
 
     _check_plot(args.plot, args.compare)
     spec = build_spec(args)
-    out = Path(args.out) if args.out else Path("runs") / (
-        f"sweep-{spec.base.controller}{_qp_suffix(spec.base)}-{spec.torque_limits}.parquet")
+    out = (
+        Path(args.out)
+        if args.out
+        else Path("runs")
+        / (f"sweep-{spec.base.controller}{_qp_suffix(spec.base)}-{spec.torque_limits}.parquet")
+    )
     n = spec.n_trials
     where = args.scheduler or f"{args.workers or 'all'} local worker(s)"
     check_run_args(out, workers=args.workers, batch=args.batch, scheduler=args.scheduler)
     check_file_writable(out)  # a probe file, not os.access (which says yes to root everywhere)
     if args.dry_run:
-        print(f"biped sweep (dry run): {n} trials of {spec.base.duration_s:g} s, controller "
-              f"{spec.base.controller}, torque limits {spec.torque_limits}, on {where} -> {out}")
+        print(
+            f"biped sweep (dry run): {n} trials of {spec.base.duration_s:g} s, controller "
+            f"{spec.base.controller}, torque limits {spec.torque_limits}, on {where} -> {out}"
+        )
         return 0
     from biped.sim.mjlog import route_to
 
     route_to(out.with_suffix(".mujoco.log"))  # MuJoCo's warnings (workers too) beside the results
-    print(f"biped sweep: {n} trials of {spec.base.duration_s:g} s, controller "
-          f"{spec.base.controller}, torque limits {spec.torque_limits}, physics "
-          f"{spec.base.physics}, on {where} -> {out}",
-          file=sys.stderr)
+    print(
+        f"biped sweep: {n} trials of {spec.base.duration_s:g} s, controller "
+        f"{spec.base.controller}, torque limits {spec.torque_limits}, physics "
+        f"{spec.base.physics}, on {where} -> {out}",
+        file=sys.stderr,
+    )
     if args.scheduler is None:  # compile before the local workers start: they load the cache
         from biped.sim.jit import kernels_for, warm_up
 
-        warm_up(kernels_for(spec.base.controller, spec.base.distribution),
-                log=lambda line: print(line, file=sys.stderr))
+        warm_up(
+            kernels_for(spec.base.controller, spec.base.distribution),
+            log=lambda line: print(line, file=sys.stderr),
+        )
     try:
-        summary = run_sweep(spec, out, workers=args.workers, scheduler=args.scheduler,
-                            progress=not args.quiet, retry_failed=args.retry_failed,
-                            overwrite=args.overwrite, batch=args.batch)
+        summary = run_sweep(
+            spec,
+            out,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            progress=not args.quiet,
+            retry_failed=args.retry_failed,
+            overwrite=args.overwrite,
+            batch=args.batch,
+        )
     except KeyboardInterrupt as exc:
         what = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
-        print(f"biped sweep: {what}; every finished trial is kept in {parts_dir(out)}/. Run the "
-              f"same command again to finish.", file=sys.stderr)
+        print(
+            f"biped sweep: {what}; every finished trial is kept in {parts_dir(out)}/. Run the "
+            f"same command again to finish.",
+            file=sys.stderr,
+        )
         return 143 if isinstance(exc, Terminated) else 130
     rate = summary.ran / summary.wall_time_s if summary.wall_time_s > 0 else float("nan")
-    print(f"ran {summary.ran} (skipped {summary.skipped} already done), failed {summary.failed}, "
-          f"wall {summary.wall_time_s:.1f} s, {rate:.2f} trials/s ({summary.backend})")
+    print(
+        f"ran {summary.ran} (skipped {summary.skipped} already done), failed {summary.failed}, "
+        f"wall {summary.wall_time_s:.1f} s, {rate:.2f} trials/s ({summary.backend})"
+    )
     if not summary.complete:
-        print(f"biped sweep: {summary.lost} trials were lost to a dead worker; the "
-              f"{summary.skipped + summary.ran} finished ones are kept in "
-              f"{out.name}.parts/. Run the same command again to finish.", file=sys.stderr)
+        print(
+            f"biped sweep: {summary.lost} trials were lost to a dead worker; the "
+            f"{summary.skipped + summary.ran} finished ones are kept in "
+            f"{out.name}.parts/. Run the same command again to finish.",
+            file=sys.stderr,
+        )
         return 1
     data = load(out)
     ok = survived(data.table)
-    print(f"{out}: {data.table.num_rows} trials, survived {int(ok.sum())}, "
-          f"did not {int((~ok).sum())}")
+    print(f"{out}: {data.table.num_rows} trials, survived {int(ok.sum())}, did not {int((~ok).sum())}")
     if args.plot:
         from biped.viz.envelope import plot_comparison
 

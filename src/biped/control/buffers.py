@@ -18,28 +18,62 @@ from numba import njit
 # methods alike) cuts the buffers into these named views, in this order.
 _FIELDS: dict[str, tuple[tuple[str, tuple[int | str, ...]], ...]] = {
     "ints": (  # int64: the tree (biped.model.TreeModel) and options
-        ("n", (1,)), ("feet", (2,)), ("mode", (1,)),  # links; left/right foot links; Alg. 5 mode
-        ("parent", ("n",)), ("qadr", ("n",)), ("dadr", ("n",)),  # inboard link; qpos and qvel addresses
-        ("leg", ("n",)), ("beyond", ("n",))),  # 0 left, 1 right, -1 neither; 1 outboard of a foot
+        ("n", (1,)),
+        ("feet", (2,)),
+        ("mode", (1,)),  # links; left/right foot links; Alg. 5 mode
+        ("parent", ("n",)),
+        ("qadr", ("n",)),
+        ("dadr", ("n",)),  # inboard link; qpos and qvel addresses
+        ("leg", ("n",)),
+        ("beyond", ("n",)),
+    ),  # 0 left, 1 right, -1 neither; 1 outboard of a foot
     "model": (  # float64, constant
-        ("H", ("n", 6)), ("G0", ("n", 4, 4)),  # joint twists H_k; g_{k.i,k.o}(theta = qref)
-        ("mass", ("n",)), ("inertia", ("n", 3)), ("qref", ("n",)),  # m_k; diag I_k; MJCF qpos0
-        ("gravity", (3,)), ("root_qbi", (4,)), ("big_base", (1,))),  # world; body->COM frame; Alg. 3
+        ("H", ("n", 6)),
+        ("G0", ("n", 4, 4)),  # joint twists H_k; g_{k.i,k.o}(theta = qref)
+        ("mass", ("n",)),
+        ("inertia", ("n", 3)),
+        ("qref", ("n",)),  # m_k; diag I_k; MJCF qpos0
+        ("gravity", (3,)),
+        ("root_qbi", (4,)),
+        ("big_base", (1,)),
+    ),  # world; body->COM frame; Alg. 3
     "work": (  # float64, overwritten by every call
-        ("g", ("n", 4, 4)), ("gl", ("n", 4, 4)),  # g_{0,k}; g_{k.i,k.o}(theta_k) (Alg. 2)
-        ("V", ("n", 6)), ("a", ("n", 6)), ("b", ("n", 6)),  # V_k^b, a_k, b_k (Alg. 1-2)
-        ("P", ("n", 6, 6)), ("z", ("n", 6)), ("F", ("n", 6)),  # P_k, z_k (Alg. 3); F_k (Alg. 6)
-        ("q_root", (4,)), ("q01", (4,)),  # root joint quaternion; q_{0,1} of the COM frame (Alg. 1)
+        ("g", ("n", 4, 4)),
+        ("gl", ("n", 4, 4)),  # g_{0,k}; g_{k.i,k.o}(theta_k) (Alg. 2)
+        ("V", ("n", 6)),
+        ("a", ("n", 6)),
+        ("b", ("n", 6)),  # V_k^b, a_k, b_k (Alg. 1-2)
+        ("P", ("n", 6, 6)),
+        ("z", ("n", 6)),
+        ("F", ("n", 6)),  # P_k, z_k (Alg. 3); F_k (Alg. 6)
+        ("q_root", (4,)),
+        ("q01", (4,)),  # root joint quaternion; q_{0,1} of the COM frame (Alg. 1)
         ("E", (4, 4)),  # exp(H_k^ theta_k) (Alg. 2)
-        ("PH", (6,)), ("c", (6,)), ("c_in", (6,)),  # P H; projected P a + z; it in frame k.i (Alg. 3)
-        ("Pa", (6, 6)), ("Q", (6, 6)), ("S", (3, 3)),  # projected P; congruence scratch (Alg. 3)
-        ("qd_conj", (4,)), ("Re", (3, 3)),  # conj(q_{0,d}); R(q_e) (Alg. 4)
-        ("dist_vecs", (3, 6)), ("dist_mats", (2, 6, 6)), ("R_foot", (2, 3, 3))),  # Alg. 5 scratch
+        ("PH", (6,)),
+        ("c", (6,)),
+        ("c_in", (6,)),  # P H; projected P a + z; it in frame k.i (Alg. 3)
+        ("Pa", (6, 6)),
+        ("Q", (6, 6)),
+        ("S", (3, 3)),  # projected P; congruence scratch (Alg. 3)
+        ("qd_conj", (4,)),
+        ("Re", (3, 3)),  # conj(q_{0,d}); R(q_e) (Alg. 4)
+        ("dist_vecs", (3, 6)),
+        ("dist_mats", (2, 6, 6)),
+        ("R_foot", (2, 3, 3)),
+    ),  # Alg. 5 scratch
     "out": (  # float64, the results (ControllerOutput)
-        ("tau", ("n-1",)), ("P1", (6, 6)), ("z1", (6,)), ("Fd", (6,)), ("Fl_tilde", (6,)),
-        ("Fr_tilde", (6,)), ("Fl", (6,)), ("Fr", (6,)), ("X", (6,)), ("qe", (4,))),
+        ("tau", ("n-1",)),
+        ("P1", (6, 6)),
+        ("z1", (6,)),
+        ("Fd", (6,)),
+        ("Fl_tilde", (6,)),
+        ("Fr_tilde", (6,)),
+        ("Fl", (6,)),
+        ("Fr", (6,)),
+        ("X", (6,)),
+        ("qe", (4,)),
+    ),
 }
-
 
 
 def _record(name: str, buf: str) -> Any:
@@ -72,17 +106,17 @@ def layout(n: int) -> dict[str, dict[str, tuple[int, tuple[int, ...]]]]:
 
 @njit(cache=True, inline="always")
 def _take1(buf, o, d0):
-    return buf[o:o + d0], o + d0
+    return buf[o : o + d0], o + d0
 
 
 @njit(cache=True, inline="always")
 def _take2(buf, o, d0, d1):
-    return buf[o:o + d0 * d1].reshape((d0, d1)), o + d0 * d1
+    return buf[o : o + d0 * d1].reshape((d0, d1)), o + d0 * d1
 
 
 @njit(cache=True, inline="always")
 def _take3(buf, o, d0, d1, d2):
-    return buf[o:o + d0 * d1 * d2].reshape((d0, d1, d2)), o + d0 * d1 * d2
+    return buf[o : o + d0 * d1 * d2].reshape((d0, d1, d2)), o + d0 * d1 * d2
 
 
 @njit(cache=True, inline="always")
@@ -134,8 +168,30 @@ def unpack(mi, mf, work, out):
     dist_vecs, o = _take2(work, o, 3, 6)
     dist_mats, o = _take3(work, o, 2, 6, 6)
     R_foot, o = _take3(work, o, 2, 3, 3)
-    wk = Work(g, gl, V, a, b, P, z, F, q_root, q01, E, PH, c, c_in, Pa, Q, S, qd_conj, Re, dist_vecs,
-              dist_mats, R_foot)
+    wk = Work(
+        g,
+        gl,
+        V,
+        a,
+        b,
+        P,
+        z,
+        F,
+        q_root,
+        q01,
+        E,
+        PH,
+        c,
+        c_in,
+        Pa,
+        Q,
+        S,
+        qd_conj,
+        Re,
+        dist_vecs,
+        dist_mats,
+        R_foot,
+    )
     o = 0
     tau, o = _take1(out, o, n - 1)
     P1, o = _take2(out, o, 6, 6)

@@ -48,8 +48,9 @@ __all__ = [
 def omega0(com_height_m: float, gravity: float = 9.81) -> float:
     """``omega_0 = sqrt(g / h)`` [1/s] of the LIPM, h the COM height above the floor [m]."""
     if not (com_height_m > 0 and gravity > 0):
-        raise ScenarioError(f"the LIPM needs a COM height > 0 and gravity > 0; got h = {com_height_m} m, "
-                            f"g = {gravity} m/s^2")
+        raise ScenarioError(
+            f"the LIPM needs a COM height > 0 and gravity > 0; got h = {com_height_m} m, g = {gravity} m/s^2"
+        )
     return math.sqrt(gravity / com_height_m)
 
 
@@ -209,13 +210,21 @@ def clamp_step(target_xy, stance_xy, side: float, limits: StepLimits = StepLimit
     rel = np.array([fwd, side * lat])
     r = np.linalg.norm(rel)
     if r > limits.max_step:  # shorten along x first, keep the lateral gap
-        fwd_max = math.sqrt(max(limits.max_step ** 2 - lat ** 2, 0.0))
+        fwd_max = math.sqrt(max(limits.max_step**2 - lat**2, 0.0))
         rel[0] = math.copysign(min(abs(rel[0]), fwd_max), rel[0])
     return np.asarray(stance_xy, dtype=float)[:2] + rel
 
 
-def step_target(xi, cop, omega: float, t_remaining: float, stance_xy, side: float,
-                offset_m: float = 0.03, limits: StepLimits = StepLimits()) -> np.ndarray:
+def step_target(
+    xi,
+    cop,
+    omega: float,
+    t_remaining: float,
+    stance_xy,
+    side: float,
+    offset_m: float = 0.03,
+    limits: StepLimits = StepLimits(),
+) -> np.ndarray:
     """Landing point of the swing sole's centre: ``xi_td = p + (xi - p) e^{omega_0 T}`` (the
     capture point when the foot lands, T = t_remaining, CoP p held), moved ``offset_m`` further
     along ``xi_td - p`` so that the capture point lands inside the new support polygon by that

@@ -84,8 +84,16 @@ class QPWeights:
     array: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
-        for name in ("force", "moment", "reg_force", "reg_moment", "friction", "friction_scale",
-                     "max_normal_n", "cop_scale"):
+        for name in (
+            "force",
+            "moment",
+            "reg_force",
+            "reg_moment",
+            "friction",
+            "friction_scale",
+            "max_normal_n",
+            "cop_scale",
+        ):
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
                 raise ScenarioError(f"QP weight {name} must be a finite number > 0; got {v!r}")
@@ -93,12 +101,23 @@ class QPWeights:
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
                 raise ScenarioError(f"QP weight {name} must be a finite number >= 0; got {v!r}")
-        arr = np.array([self.force, self.moment, self.reg_force, self.reg_moment, self.split,
-                        self.min_normal_n, self.friction * self.friction_scale,
-                        self.max_normal_n], dtype=float)
+        arr = np.array(
+            [
+                self.force,
+                self.moment,
+                self.reg_force,
+                self.reg_moment,
+                self.split,
+                self.min_normal_n,
+                self.friction * self.friction_scale,
+                self.max_normal_n,
+            ],
+            dtype=float,
+        )
         if self.max_normal_n <= self.min_normal_n:
-            raise ScenarioError(f"QP max_normal_n ({self.max_normal_n} N) must exceed min_normal_n "
-                                f"({self.min_normal_n} N)")
+            raise ScenarioError(
+                f"QP max_normal_n ({self.max_normal_n} N) must exceed min_normal_n ({self.min_normal_n} N)"
+            )
         object.__setattr__(self, "array", arr)
 
 
@@ -181,8 +200,32 @@ def cone_rows(X, Y, mu, fmin, fmax, o, Ct, b, m):
 
 
 @njit(cache=True)
-def qp_build(g, gl, parent, H, leg, beyond, feet, contact, Fd, soles, dims, prm, lo, hi, nlim,
-             A, T, F, tau_tmp, col, Gq, av, Ct, b):
+def qp_build(
+    g,
+    gl,
+    parent,
+    H,
+    leg,
+    beyond,
+    feet,
+    contact,
+    Fd,
+    soles,
+    dims,
+    prm,
+    lo,
+    hi,
+    nlim,
+    A,
+    T,
+    F,
+    tau_tmp,
+    col,
+    Gq,
+    av,
+    Ct,
+    b,
+):
     """Fill the QP (quadprog's form: minimize 1/2 x^T Gq x - av^T x s.t. Ct x >= b, the first
     ``meq`` rows equalities) from the kernel's poses ``g`` and joint transforms ``gl`` and the
     desired wrench ``Fd``; also the maps ``A[f] = Ad^T_{g_{sole_f,1}}`` (6, 6) and the torque
@@ -258,8 +301,7 @@ def qp_build(g, gl, parent, H, leg, beyond, feet, contact, Fd, soles, dims, prm,
 
 
 @njit(cache=True)
-def qp_finish(x, contact, A, T, soles, tau, Fl_tilde, Fr_tilde, Fl, Fr, parent, H, leg, beyond, gl,
-              F, nlim):
+def qp_finish(x, contact, A, T, soles, tau, Fl_tilde, Fr_tilde, Fl, Fr, parent, H, leg, beyond, gl, F, nlim):
     """From the foot wrenches x (12,) (sole frames): the legs' shares F~ = A_f x_f (central-body
     frame), joint torques (tau = T x with the torque map of the limit rows, else W Alg. 6 of the
     shares: the same linear map) and the feet's wrenches in their COM frames. A foot not in
@@ -287,7 +329,7 @@ def qp_finish(x, contact, A, T, soles, tau, Fl_tilde, Fr_tilde, Fl, Fr, parent, 
         # foot COM frame: F_foot = Ad^T_{g_{sole,foot}} w, g_{sole,foot} = (R^T, -R^T p) of g_{foot,sole}
         # = [R f; R tau + p x (R f)] with (R, p) = g_{foot,sole}
         gfs = soles[f]
-        w = x[6 * f:6 * f + 6]
+        w = x[6 * f : 6 * f + 6]
         ff = Fl if f == 0 else Fr
         for i in range(3):
             ff[i] = gfs[i, 0] * w[0] + gfs[i, 1] * w[1] + gfs[i, 2] * w[2]
@@ -311,8 +353,9 @@ class ContactQP:
     ``solver``: "daqp" (default) or "quadprog" (the same problem; for the comparison).
     """
 
-    def __init__(self, tree, soles, weights: QPWeights | None = None, lower=None, upper=None,
-                 solver: str = "daqp"):
+    def __init__(
+        self, tree, soles, weights: QPWeights | None = None, lower=None, upper=None, solver: str = "daqp"
+    ):
         if solver not in ("quadprog", "daqp"):
             raise ScenarioError(f"unknown QP solver {solver!r}; valid: 'quadprog', 'daqp'")
         self.weights = weights or QPWeights()
@@ -322,16 +365,18 @@ class ContactQP:
         self._beyond = tree.beyond_foot.astype(np.int64)
         self.soles = soles
         self._soles = np.ascontiguousarray(np.stack([s.g_foot_sole for s in soles]), dtype=float)
-        self._dims = self.weights.cop_scale * np.array([[s.half_length, s.half_width] for s in soles],
-                                                       dtype=float)
+        self._dims = self.weights.cop_scale * np.array(
+            [[s.half_length, s.half_width] for s in soles], dtype=float
+        )
         if (lower is None) != (upper is None):
             raise ScenarioError("torque limits for the QP need both lower and upper bounds, or neither")
         self.limited = lower is not None
         self._lo = np.zeros(nj) if lower is None else np.asarray(lower, dtype=float).copy()
         self._hi = np.zeros(nj) if upper is None else np.asarray(upper, dtype=float).copy()
         if self._lo.shape != (nj,) or self._hi.shape != (nj,):
-            raise ScenarioError(f"QP torque limits need {nj} lower and upper bounds; got "
-                                f"{self._lo.shape}, {self._hi.shape}")
+            raise ScenarioError(
+                f"QP torque limits need {nj} lower and upper bounds; got {self._lo.shape}, {self._hi.shape}"
+            )
         n_lim = sum(1 for j in range(nj) if tree.leg[j + 1] >= 0 and not tree.beyond_foot[j + 1])
         rows = 2 * _ROWS_PER_FOOT + (2 * n_lim if self.limited else 0)
         self.A = np.zeros((2, 6, 6))
@@ -366,10 +411,32 @@ class ContactQP:
     def build(self, g, gl, contact, Fd):
         """Fill the QP for one state (the kernel's work buffers ``g``, ``gl`` and ``F_1^bd``)."""
         t = self._tree
-        meq, used, f0, f1 = qp_build(g, gl, t.parent, t.H, t.leg, self._beyond, t.feet, contact, Fd,
-                                     self._soles, self._dims, self._prm, self._lo, self._hi,
-                                     self.limited, self.A, self.T, self._F, self._tau, self._col,
-                                     self.Gq, self.av, self.Ct, self.b)
+        meq, used, f0, f1 = qp_build(
+            g,
+            gl,
+            t.parent,
+            t.H,
+            t.leg,
+            self._beyond,
+            t.feet,
+            contact,
+            Fd,
+            self._soles,
+            self._dims,
+            self._prm,
+            self._lo,
+            self._hi,
+            self.limited,
+            self.A,
+            self.T,
+            self._F,
+            self._tau,
+            self._col,
+            self.Gq,
+            self.av,
+            self.Ct,
+            self.b,
+        )
         self.meq, self.rows, self.first = meq, used, (f0, f1)
         self._gl = gl
 
@@ -378,10 +445,10 @@ class ContactQP:
             return self._quadprog(self.Gq, self.av, self.Ct.T, self.b, self.meq)[0]
         if self.meq != self._meq_sense:
             self._sense[:] = 0
-            self._sense[:self.meq] = 5  # daqp: ACTIVE + IMMUTABLE, an equality row
+            self._sense[: self.meq] = 5  # daqp: ACTIVE + IMMUTABLE, an equality row
             self._upper[:] = 1e30
             self._meq_sense = self.meq
-        self._upper[:self.meq] = self.b[:self.meq]  # an equality row is b <= C x <= b
+        self._upper[: self.meq] = self.b[: self.meq]  # an equality row is b <= C x <= b
         np.negative(self.av, out=self._f)
         x, _, flag, _ = self._daqp(self.Gq, self._f, self.Ct, self._upper, self.b, self._sense)
         if flag < 1:
@@ -415,5 +482,22 @@ class ContactQP:
     def finish(self, contact, tau, Fl_tilde, Fr_tilde, Fl, Fr):
         """Write the torques and wrenches implied by ``self.x`` into the given buffers."""
         t = self._tree
-        qp_finish(self.x, contact, self.A, self.T, self._soles, tau, Fl_tilde, Fr_tilde, Fl, Fr,
-                  t.parent, t.H, t.leg, self._beyond, self._gl, self._F, self.limited)
+        qp_finish(
+            self.x,
+            contact,
+            self.A,
+            self.T,
+            self._soles,
+            tau,
+            Fl_tilde,
+            Fr_tilde,
+            Fl,
+            Fr,
+            t.parent,
+            t.H,
+            t.leg,
+            self._beyond,
+            self._gl,
+            self._F,
+            self.limited,
+        )

@@ -62,7 +62,7 @@ from biped.model import DEFAULT_FEET, TreeModel
 from biped.models import W_INITIAL_ANGLES_DEG
 
 OMEGA = math.sqrt(50.0)  # [rad/s], W's K_c^p = 50
-ZETA = 0.5               # W's K_c^v = 7.07 = 2 * 0.5 * sqrt(50)
+ZETA = 0.5  # W's K_c^v = 7.07 = 2 * 0.5 * sqrt(50)
 
 
 @dataclass(frozen=True)
@@ -98,15 +98,22 @@ def whole_body_com_height(model: mujoco.MjModel, qpos: np.ndarray) -> tuple[floa
     return float(np.sum(model.body_mass)), float(d.subtree_com[0][2])
 
 
-def default_gains(tree: TreeModel, mass_kg: float, com_height_m: float,
-                  omega: float = OMEGA, zeta: float = ZETA, *, apparent_inertia=None,
-                  control_period_s: float = 0.002) -> JointPDGains:
+def default_gains(
+    tree: TreeModel,
+    mass_kg: float,
+    com_height_m: float,
+    omega: float = OMEGA,
+    zeta: float = ZETA,
+    *,
+    apparent_inertia=None,
+    control_period_s: float = 0.002,
+) -> JointPDGains:
     """The documented gains (module docstring) for every joint of ``tree``, with the vertical
     gravity of its model; with ``apparent_inertia`` (12,) [kg m^2] the sampled-data caps for
     ``control_period_s``."""
-    inertia = mass_kg * com_height_m ** 2
+    inertia = mass_kg * com_height_m**2
     g = -float(tree.gravity[2])  # [m/s^2]
-    kp = 0.5 * (inertia * omega ** 2 + mass_kg * g * com_height_m)
+    kp = 0.5 * (inertia * omega**2 + mass_kg * g * com_height_m)
     kd = 2.0 * zeta * omega * 0.5 * inertia
     scale = np.array([0.25 if name.endswith("hip_rotation") else 1.0 for name in tree.joint_names])
     gains = JointPDGains(kp * scale, kd * scale)
@@ -131,13 +138,16 @@ class JointPDController:
     :class:`~biped.control.WorkspaceController`: ``compute(qpos, qvel).torques`` (12,) ordered as
     ``joint_names``, MuJoCo's qpos (19,) / qvel (18,) of the biped's own model."""
 
-    def __init__(self, tree: TreeModel, q_ref: np.ndarray, gains: JointPDGains, *,
-                 gravity_compensation: bool = False):
+    def __init__(
+        self, tree: TreeModel, q_ref: np.ndarray, gains: JointPDGains, *, gravity_compensation: bool = False
+    ):
         n = tree.n_links - 1
         q_ref = np.asarray(q_ref, dtype=float)
         if q_ref.shape != (n,) or not np.all(np.isfinite(q_ref)):
-            raise ScenarioError(f"q_ref must be {n} finite joint angles [rad] "
-                                f"({', '.join(tree.joint_names)}); got shape {q_ref.shape}")
+            raise ScenarioError(
+                f"q_ref must be {n} finite joint angles [rad] "
+                f"({', '.join(tree.joint_names)}); got shape {q_ref.shape}"
+            )
         kp, kd = np.asarray(gains.kp, float), np.asarray(gains.kd, float)
         if kp.shape != (n,) or kd.shape != (n,) or np.any(kp < 0) or np.any(kd < 0):
             raise ScenarioError(f"joint PD gains must be {n} non-negative kp and kd values")
@@ -157,10 +167,17 @@ class JointPDController:
             self._zero_v = np.zeros(tree.nv)
 
     @classmethod
-    def from_mjcf(cls, source: str | PathLike, *, q_ref_deg=W_INITIAL_ANGLES_DEG,
-                  gains: JointPDGains | None = None, gain_scale: float = 1.0,
-                  gravity_compensation: bool = False, control_period_s: float = 0.002,
-                  feet: tuple[str, str] = DEFAULT_FEET) -> JointPDController:
+    def from_mjcf(
+        cls,
+        source: str | PathLike,
+        *,
+        q_ref_deg=W_INITIAL_ANGLES_DEG,
+        gains: JointPDGains | None = None,
+        gain_scale: float = 1.0,
+        gravity_compensation: bool = False,
+        control_period_s: float = 0.002,
+        feet: tuple[str, str] = DEFAULT_FEET,
+    ) -> JointPDController:
         """PD for the biped of an MJCF file holding ``q_ref_deg`` (12 angles in the model's joint
         order, default W's initial posture) with :func:`default_gains` (times ``gain_scale`` on
         kp, ``sqrt(gain_scale)`` on kd, capped for ``control_period_s``) unless ``gains`` is
@@ -191,8 +208,10 @@ class JointPDController:
         qpos = np.ascontiguousarray(qpos, dtype=float)
         qvel = np.ascontiguousarray(qvel, dtype=float)
         if qpos.shape != (self.tree.nq,) or qvel.shape != (self.tree.nv,):
-            raise StateError(f"qpos must have shape ({self.tree.nq},) and qvel ({self.tree.nv},); "
-                             f"got {qpos.shape} and {qvel.shape}")
+            raise StateError(
+                f"qpos must have shape ({self.tree.nq},) and qvel ({self.tree.nv},); "
+                f"got {qpos.shape} and {qvel.shape}"
+            )
         q = qpos[self._qadr] - self._qoff
         qd = qvel[self._vadr]
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
@@ -211,7 +230,7 @@ class JointPDController:
 
 
 def _capped(gains: JointPDGains, i_out: np.ndarray, T: float) -> JointPDGains:
-    return JointPDGains(np.minimum(gains.kp, i_out / T ** 2), np.minimum(gains.kd, 0.5 * i_out / T))
+    return JointPDGains(np.minimum(gains.kp, i_out / T**2), np.minimum(gains.kd, 0.5 * i_out / T))
 
 
 def _lowest_sole(model: mujoco.MjModel, qpos: np.ndarray) -> float:

@@ -77,8 +77,10 @@ class TorqueLimits:
             lo, hi = np.asarray(self.lower, float), np.asarray(self.upper, float)
             n = len(self.joint_names)
             if lo.shape != (n,) or hi.shape != (n,):
-                raise ScenarioError(f"torque limits need {n} lower and upper bounds "
-                                    f"({', '.join(self.joint_names)}); got {lo.shape}, {hi.shape}")
+                raise ScenarioError(
+                    f"torque limits need {n} lower and upper bounds "
+                    f"({', '.join(self.joint_names)}); got {lo.shape}, {hi.shape}"
+                )
             if np.any(lo > 0) or np.any(hi < 0) or not np.all(np.isfinite(lo) & np.isfinite(hi)):
                 raise ScenarioError("torque limits must satisfy finite lower <= 0 <= upper [N m]")
             object.__setattr__(self, "lower", lo)
@@ -125,8 +127,9 @@ def clip_torques(tau: np.ndarray, limits: TorqueLimits) -> np.ndarray:
         return tau.copy()
     assert limits.lower is not None and limits.upper is not None  # not unlimited
     if tau.shape != limits.lower.shape:
-        raise ScenarioError(f"torques must have shape {limits.lower.shape} "
-                            f"({', '.join(limits.joint_names)}); got {tau.shape}")
+        raise ScenarioError(
+            f"torques must have shape {limits.lower.shape} ({', '.join(limits.joint_names)}); got {tau.shape}"
+        )
     return np.minimum(np.maximum(tau, limits.lower), limits.upper)
 
 

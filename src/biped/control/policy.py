@@ -108,8 +108,9 @@ def _model_path(config: PolicyConfig):
     return biped.models.path("wendlandt")
 
 
-def make_policy(config: PolicyConfig | None = None, joint_order=None, *,
-                tree: TreeModel | None = None) -> Policy:
+def make_policy(
+    config: PolicyConfig | None = None, joint_order=None, *, tree: TreeModel | None = None
+) -> Policy:
     """The policy of ``config`` (W's controller if None), its torques in ``joint_order`` (default
     the controller's own, i.e. the model's joint order), clipped by ``config.torque_limits``.
 
@@ -121,9 +122,13 @@ def make_policy(config: PolicyConfig | None = None, joint_order=None, *,
         qp: dict[str, Any] = {}
         if config.distribution == "qp":
             qp = {"qp_weights": config.qp_weights, "torque_limits": config.torque_limits}
-        ws = WorkspaceController(tree or TreeModel.from_mjcf(_model_path(config)),
-                                 target=config.target, gains=config.gains,
-                                 distribution=config.distribution, **qp)
+        ws = WorkspaceController(
+            tree or TreeModel.from_mjcf(_model_path(config)),
+            target=config.target,
+            gains=config.gains,
+            distribution=config.distribution,
+            **qp,
+        )
         # the QP distributes over the contacts that exist: with W's fixed support it kept loading
         # a foot that had left the floor, and 15 of 64 sweep trials diverged (0 with the sensed
         # contacts; docs/controller.md), so "qp" always takes the sensed feet
@@ -133,9 +138,12 @@ def make_policy(config: PolicyConfig | None = None, joint_order=None, *,
             raw = lambda q, v, feet: ws.torques(q, v)
         ctrl: WorkspaceController | JointPDController = ws
     else:
-        pd = JointPDController.from_mjcf(_model_path(config), q_ref_deg=config.q_ref_deg,
-                                         gain_scale=config.gain_scale,
-                                         control_period_s=config.control_period_s)
+        pd = JointPDController.from_mjcf(
+            _model_path(config),
+            q_ref_deg=config.q_ref_deg,
+            gain_scale=config.gain_scale,
+            control_period_s=config.control_period_s,
+        )
         raw = lambda q, v, feet: pd.compute(q, v).torques
         ctrl = pd
     names = tuple(ctrl.joint_names)
@@ -162,5 +170,3 @@ def symmetric_limits(value, joint_names=JOINT_NAMES) -> TorqueLimits:
     """``|tau_j| <= value_j`` [N m]: one positive number for every joint or one per joint."""
     upper = np.broadcast_to(np.asarray(value, dtype=float), (len(joint_names),)).copy()
     return TorqueLimits("symmetric", tuple(joint_names), -upper, upper)
-
-

@@ -122,8 +122,11 @@ def _revolute_exp(H, theta, g):
     x2 = w0 * H[1] - w1 * H[0]
     wv = w0 * H[0] + w1 * H[1] + w2 * H[2]
     for i in range(3):
-        g[i, 3] = (x0 if i == 0 else (x1 if i == 1 else x2)) - (R[i, 0] * x0 + R[i, 1] * x1 + R[i, 2] * x2) \
+        g[i, 3] = (
+            (x0 if i == 0 else (x1 if i == 1 else x2))
+            - (R[i, 0] * x0 + R[i, 1] * x1 + R[i, 2] * x2)
             + H[3 + i] * wv * theta
+        )
         g[3, i] = 0.0
     g[3, 3] = 1.0
 
@@ -151,10 +154,23 @@ def _mat4_mul(A, B, C):
 
 
 @njit(cache=True)
-def alg1_initialize(qpos: np.ndarray, qvel: np.ndarray, root_qadr: int, root_dadr: int,
-                    G0root: np.ndarray, root_qbi: np.ndarray, mass: np.ndarray, inertia: np.ndarray,
-                    gravity: np.ndarray, g: np.ndarray, V: np.ndarray, a: np.ndarray, b: np.ndarray,
-                    q_root: np.ndarray, q01: np.ndarray) -> None:
+def alg1_initialize(
+    qpos: np.ndarray,
+    qvel: np.ndarray,
+    root_qadr: int,
+    root_dadr: int,
+    G0root: np.ndarray,
+    root_qbi: np.ndarray,
+    mass: np.ndarray,
+    inertia: np.ndarray,
+    gravity: np.ndarray,
+    g: np.ndarray,
+    V: np.ndarray,
+    a: np.ndarray,
+    b: np.ndarray,
+    q_root: np.ndarray,
+    q01: np.ndarray,
+) -> None:
     """W Alg. 1 (controller initialization): pose ``g_{0,1}``, body velocity ``V_1^b``,
     ``a_1 = 0`` and ``b_1 = -F_1^be + Omega_1 M_1 V_1`` of the central body.
 
@@ -201,11 +217,25 @@ def alg1_initialize(qpos: np.ndarray, qvel: np.ndarray, root_qadr: int, root_dad
 
 
 @njit(cache=True)
-def alg2_velocity_propagation(qpos: np.ndarray, qvel: np.ndarray, parent: np.ndarray, qadr: np.ndarray,
-                              dadr: np.ndarray, H: np.ndarray, G0: np.ndarray, qref: np.ndarray,
-                              mass: np.ndarray, inertia: np.ndarray, gravity: np.ndarray, g: np.ndarray,
-                              gl: np.ndarray, V: np.ndarray, a: np.ndarray, b: np.ndarray,
-                              E: np.ndarray) -> None:
+def alg2_velocity_propagation(
+    qpos: np.ndarray,
+    qvel: np.ndarray,
+    parent: np.ndarray,
+    qadr: np.ndarray,
+    dadr: np.ndarray,
+    H: np.ndarray,
+    G0: np.ndarray,
+    qref: np.ndarray,
+    mass: np.ndarray,
+    inertia: np.ndarray,
+    gravity: np.ndarray,
+    g: np.ndarray,
+    gl: np.ndarray,
+    V: np.ndarray,
+    a: np.ndarray,
+    b: np.ndarray,
+    E: np.ndarray,
+) -> None:
     """W Alg. 2 (forward kinematics, outboard): for each joint k = link k's joint,
     ``g_{k.o,0}``, ``A = Ad_{g_{k.o,k.i}}``, ``V_{k.o} = A V_{k.i} + H_k thetadot_k``,
     ``a_k = ad_{V_{k.o}} H_k thetadot_k``, ``b_{k.o} = -F^be + Omega M V``.
@@ -228,11 +258,27 @@ def alg2_velocity_propagation(qpos: np.ndarray, qvel: np.ndarray, parent: np.nda
 
 
 @njit(cache=True)
-def alg3_workspace_dynamics(parent: np.ndarray, H: np.ndarray, mass: np.ndarray, inertia: np.ndarray,
-                            feet: np.ndarray, contact: np.ndarray, beyond: np.ndarray, big_base: float,
-                            gl: np.ndarray, a: np.ndarray, b: np.ndarray, P: np.ndarray, z: np.ndarray,
-                            PH: np.ndarray, c: np.ndarray, c_in: np.ndarray, Pa: np.ndarray, Q: np.ndarray,
-                            S: np.ndarray) -> None:
+def alg3_workspace_dynamics(
+    parent: np.ndarray,
+    H: np.ndarray,
+    mass: np.ndarray,
+    inertia: np.ndarray,
+    feet: np.ndarray,
+    contact: np.ndarray,
+    beyond: np.ndarray,
+    big_base: float,
+    gl: np.ndarray,
+    a: np.ndarray,
+    b: np.ndarray,
+    P: np.ndarray,
+    z: np.ndarray,
+    PH: np.ndarray,
+    c: np.ndarray,
+    c_in: np.ndarray,
+    Pa: np.ndarray,
+    Q: np.ndarray,
+    S: np.ndarray,
+) -> None:
     """W Alg. 3 (workspace dynamics, inboard): articulated-body inertias ``P_k`` and biases
     ``z_k`` from the feet to the central body with the big-base approximation
     ``P_foot = big_base * M_1``, ``z_foot = 0``. Result: ``P[0] = P_1``, ``z[0] = z_1`` with
@@ -273,9 +319,20 @@ def alg3_workspace_dynamics(parent: np.ndarray, H: np.ndarray, mass: np.ndarray,
 
 
 @njit(cache=True)
-def alg4_desired_wrench(g: np.ndarray, V: np.ndarray, P: np.ndarray, z: np.ndarray, target: np.ndarray,
-                        gains: np.ndarray, q01: np.ndarray, qd_conj: np.ndarray, Re: np.ndarray,
-                        X: np.ndarray, qe: np.ndarray, Fd: np.ndarray) -> None:
+def alg4_desired_wrench(
+    g: np.ndarray,
+    V: np.ndarray,
+    P: np.ndarray,
+    z: np.ndarray,
+    target: np.ndarray,
+    gains: np.ndarray,
+    q01: np.ndarray,
+    qd_conj: np.ndarray,
+    Re: np.ndarray,
+    X: np.ndarray,
+    qe: np.ndarray,
+    Fd: np.ndarray,
+) -> None:
     """W Alg. 4 (desired wrench): PD on the central body's COM position (space frame) and on the
     unit-quaternion orientation error ``q_et = q_{0,1} * conj(q_{0,d})`` with the sign chosen so that
     its scalar part is >= 0; ``F_1^bd = P_1 X^b + z_1`` (W eq. 3.10).
@@ -314,10 +371,20 @@ def alg4_desired_wrench(g: np.ndarray, V: np.ndarray, P: np.ndarray, z: np.ndarr
 
 
 @njit(cache=True)
-def alg5_wrench_distribution(g: np.ndarray, feet: np.ndarray, contact: np.ndarray, Fd: np.ndarray,
-                             vecs: np.ndarray, mats: np.ndarray, R_foot: np.ndarray, Fl: np.ndarray,
-                             Fr: np.ndarray, Fl_tilde: np.ndarray, Fr_tilde: np.ndarray,
-                             printed: bool = False) -> bool:
+def alg5_wrench_distribution(
+    g: np.ndarray,
+    feet: np.ndarray,
+    contact: np.ndarray,
+    Fd: np.ndarray,
+    vecs: np.ndarray,
+    mats: np.ndarray,
+    R_foot: np.ndarray,
+    Fl: np.ndarray,
+    Fr: np.ndarray,
+    Fl_tilde: np.ndarray,
+    Fr_tilde: np.ndarray,
+    printed: bool = False,
+) -> bool:
     """W Alg. 5 (desired wrench distribution, eq. 3.11-3.14): ``F_1^bd = G [F_l; F_r]`` with
     ``G = [Ad^T_{g_{7,1}}  Ad^T_{g_{13,1}}]`` (each foot's wrench moved to the central body),
     ``[F_l; F_r] = G^T (G G^T)^-1 F_1^bd`` (minimum norm), ``F~_2 = Ad^T_{g_{7,1}} F_l``,
@@ -358,14 +425,20 @@ def alg5_wrench_distribution(g: np.ndarray, feet: np.ndarray, contact: np.ndarra
             for i in range(3):
                 for j in range(3):
                     R[i, j] = R0[0, i] * g[k, 0, j] + R0[1, i] * g[k, 1, j] + R0[2, i] * g[k, 2, j]
-                pp[i] = (R0[0, i] * (g[k, 0, 3] - g[0, 0, 3]) + R0[1, i] * (g[k, 1, 3] - g[0, 1, 3])
-                         + R0[2, i] * (g[k, 2, 3] - g[0, 2, 3]))
+                pp[i] = (
+                    R0[0, i] * (g[k, 0, 3] - g[0, 0, 3])
+                    + R0[1, i] * (g[k, 1, 3] - g[0, 1, 3])
+                    + R0[2, i] * (g[k, 2, 3] - g[0, 2, 3])
+                )
         else:  # g_{foot,1} = g_{0,foot}^-1 g_{0,1}: R = R_f^T R_0, p = R_f^T (p_0 - p_f)
             for i in range(3):
                 for j in range(3):
                     R[i, j] = g[k, 0, i] * R0[0, j] + g[k, 1, i] * R0[1, j] + g[k, 2, i] * R0[2, j]
-                pp[i] = (g[k, 0, i] * (g[0, 0, 3] - g[k, 0, 3]) + g[k, 1, i] * (g[0, 1, 3] - g[k, 1, 3])
-                         + g[k, 2, i] * (g[0, 2, 3] - g[k, 2, 3]))
+                pp[i] = (
+                    g[k, 0, i] * (g[0, 0, 3] - g[k, 0, 3])
+                    + g[k, 1, i] * (g[0, 1, 3] - g[k, 1, 3])
+                    + g[k, 2, i] * (g[0, 2, 3] - g[k, 2, 3])
+                )
         if contact[f] == 0:
             continue
         adjoint_into(R, pp, Afoot)  # G G^T += Ad^T Ad, this foot's block of G (eq. 3.11)
@@ -395,8 +468,17 @@ def alg5_wrench_distribution(g: np.ndarray, feet: np.ndarray, contact: np.ndarra
 
 
 @njit(cache=True)
-def alg6_torques(parent: np.ndarray, H: np.ndarray, leg: np.ndarray, beyond: np.ndarray, gl: np.ndarray,
-                 Fl_tilde: np.ndarray, Fr_tilde: np.ndarray, F: np.ndarray, tau: np.ndarray) -> None:
+def alg6_torques(
+    parent: np.ndarray,
+    H: np.ndarray,
+    leg: np.ndarray,
+    beyond: np.ndarray,
+    gl: np.ndarray,
+    Fl_tilde: np.ndarray,
+    Fr_tilde: np.ndarray,
+    F: np.ndarray,
+    tau: np.ndarray,
+) -> None:
     """W Alg. 6 (torque calculation, outboard): ``F_k = -Ad^{-T}_{g_{k.o,k.i}} F~_k`` (equal and
     opposite wrenches across joint k), ``tau_k = H_k^T F_k``, ``F~_{k+1} = -F_k`` (link k.o in
     equilibrium). Equivalent to ``tau = J^T F~`` with J the leg's body Jacobian, foot fixed.
@@ -425,9 +507,17 @@ def alg6_torques(parent: np.ndarray, H: np.ndarray, leg: np.ndarray, beyond: np.
 
 
 @njit(cache=True)
-def compute_kernel(qpos: np.ndarray, qvel: np.ndarray, target: np.ndarray, gains: np.ndarray,
-                   contact: np.ndarray, mi: np.ndarray, mf: np.ndarray, work: np.ndarray,
-                   out: np.ndarray) -> int:
+def compute_kernel(
+    qpos: np.ndarray,
+    qvel: np.ndarray,
+    target: np.ndarray,
+    gains: np.ndarray,
+    contact: np.ndarray,
+    mi: np.ndarray,
+    mf: np.ndarray,
+    work: np.ndarray,
+    out: np.ndarray,
+) -> int:
     """One controller call: W Alg. 1-6 on flat buffers (see :func:`layout` and :func:`unpack`);
     ``contact`` (2,) int flags the (left, right) feet taken as fixed to the ground (W: both).
     Returns a status code (0 ok, 1 non-finite state, 2 non-finite result, 3 singular wrench
@@ -443,18 +533,81 @@ def compute_kernel(qpos: np.ndarray, qvel: np.ndarray, target: np.ndarray, gains
     if qpos[r + 3] ** 2 + qpos[r + 4] ** 2 + qpos[r + 5] ** 2 + qpos[r + 6] ** 2 < 1e-20:
         return ZERO_QUATERNION
 
-    alg1_initialize(qpos, qvel, t.qadr[0], t.dadr[0], m.G0[0], m.root_qbi, m.mass, m.inertia,
-                    m.gravity, w.g, w.V, w.a, w.b, w.q_root, w.q01)
-    alg2_velocity_propagation(qpos, qvel, t.parent, t.qadr, t.dadr, m.H, m.G0, m.qref, m.mass,
-                              m.inertia, m.gravity, w.g, w.gl, w.V, w.a, w.b, w.E)
-    alg3_workspace_dynamics(t.parent, m.H, m.mass, m.inertia, t.feet, contact, t.beyond, m.big_base[0],
-                            w.gl, w.a, w.b, w.P, w.z, w.PH, w.c, w.c_in, w.Pa, w.Q, w.S)
+    alg1_initialize(
+        qpos,
+        qvel,
+        t.qadr[0],
+        t.dadr[0],
+        m.G0[0],
+        m.root_qbi,
+        m.mass,
+        m.inertia,
+        m.gravity,
+        w.g,
+        w.V,
+        w.a,
+        w.b,
+        w.q_root,
+        w.q01,
+    )
+    alg2_velocity_propagation(
+        qpos,
+        qvel,
+        t.parent,
+        t.qadr,
+        t.dadr,
+        m.H,
+        m.G0,
+        m.qref,
+        m.mass,
+        m.inertia,
+        m.gravity,
+        w.g,
+        w.gl,
+        w.V,
+        w.a,
+        w.b,
+        w.E,
+    )
+    alg3_workspace_dynamics(
+        t.parent,
+        m.H,
+        m.mass,
+        m.inertia,
+        t.feet,
+        contact,
+        t.beyond,
+        m.big_base[0],
+        w.gl,
+        w.a,
+        w.b,
+        w.P,
+        w.z,
+        w.PH,
+        w.c,
+        w.c_in,
+        w.Pa,
+        w.Q,
+        w.S,
+    )
     o.z1[:] = w.z[0]
     o.P1[:, :] = w.P[0]
     alg4_desired_wrench(w.g, w.V, w.P, w.z, target, gains, w.q01, w.qd_conj, w.Re, o.X, o.qe, o.Fd)
     if t.mode[0] != STOP_AFTER_ALG4:  # else the caller distributes F_1^bd (biped.control.distribution)
-        if not alg5_wrench_distribution(w.g, t.feet, contact, o.Fd, w.dist_vecs, w.dist_mats,
-                                        w.R_foot, o.Fl, o.Fr, o.Fl_tilde, o.Fr_tilde, t.mode[0] == 1):
+        if not alg5_wrench_distribution(
+            w.g,
+            t.feet,
+            contact,
+            o.Fd,
+            w.dist_vecs,
+            w.dist_mats,
+            w.R_foot,
+            o.Fl,
+            o.Fr,
+            o.Fl_tilde,
+            o.Fr_tilde,
+            t.mode[0] == 1,
+        ):
             return SINGULAR_DISTRIBUTION
         alg6_torques(t.parent, m.H, t.leg, t.beyond, w.gl, o.Fl_tilde, o.Fr_tilde, w.F, o.tau)
     for i in range(out.shape[0]):

@@ -126,8 +126,7 @@ def _min_jerk(s: float) -> tuple[float, float, float]:
         return 0.0, 0.0, 0.0
     if s >= 1.0:
         return 1.0, 0.0, 0.0
-    return (s ** 3 * (10 - 15 * s + 6 * s * s), 30 * s * s * (1 - s) ** 2,
-            60 * s * (1 - s) * (1 - 2 * s))
+    return (s**3 * (10 - 15 * s + 6 * s * s), 30 * s * s * (1 - s) ** 2, 60 * s * (1 - s) * (1 - 2 * s))
 
 
 def _bump(s: float) -> tuple[float, float, float]:
@@ -136,8 +135,11 @@ def _bump(s: float) -> tuple[float, float, float]:
     if s <= 0.0 or s >= 1.0:
         return 0.0, 0.0, 0.0
     u = 1 - s
-    return (64 * s ** 3 * u ** 3, 192 * s * s * u * u * (u - s),
-            192 * (2 * s * u ** 3 - 6 * s * s * u * u + 2 * s ** 3 * u))
+    return (
+        64 * s**3 * u**3,
+        192 * s * s * u * u * (u - s),
+        192 * (2 * s * u**3 - 6 * s * s * u * u + 2 * s**3 * u),
+    )
 
 
 class SteppingController:
@@ -145,8 +147,14 @@ class SteppingController:
     (12,)`` in ``joint_order`` (default the model's). ``config`` is the underlying
     :class:`~biped.control.policy.PolicyConfig` (must be the workspace controller)."""
 
-    def __init__(self, config: PolicyConfig, stepping: SteppingConfig | None = None,
-                 joint_order=None, *, tree: TreeModel | None = None):
+    def __init__(
+        self,
+        config: PolicyConfig,
+        stepping: SteppingConfig | None = None,
+        joint_order=None,
+        *,
+        tree: TreeModel | None = None,
+    ):
         if config.controller != "workspace":
             raise ScenarioError("stepping needs the workspace controller (controller = 'workspace')")
         self.config = config
@@ -158,14 +166,18 @@ class SteppingController:
         if config.distribution == "qp" and self.stepping.qp_moment_weight is not None:
             from biped.control.distribution import QPWeights
 
-            inner = replace(inner, qp_weights=replace(config.qp_weights or QPWeights(),
-                                                      moment=self.stepping.qp_moment_weight))
+            inner = replace(
+                inner,
+                qp_weights=replace(config.qp_weights or QPWeights(), moment=self.stepping.qp_moment_weight),
+            )
         self._inner = make_policy(inner, tree=tree)
         self.ctrl = self._inner.controller
         names = tuple(self.ctrl.joint_names)
         self.joint_names = tuple(joint_order) if joint_order is not None else names
         if sorted(self.joint_names) != sorted(names):
-            raise ScenarioError(f"controller joints {names} differ from the requested order {self.joint_names}")
+            raise ScenarioError(
+                f"controller joints {names} differ from the requested order {self.joint_names}"
+            )
         self._order = np.array([names.index(n) for n in self.joint_names])
         self.limits = None
         if config.torque_limits is not None and not config.torque_limits.unlimited:
@@ -174,8 +186,9 @@ class SteppingController:
         self._foot = [m.body(b).id for b in FOOT_BODIES]
         self._hip = [m.body(f"{side}_thigh").id for side in FEET]
         self._shank = [m.body(f"{side}_shank").id for side in FEET]
-        self._inv_sign = [float(np.sign(m.jnt_axis[m.joint(f"{side}_ankle_inversion").id][0]))
-                          for side in FEET]
+        self._inv_sign = [
+            float(np.sign(m.jnt_axis[m.joint(f"{side}_ankle_inversion").id][0])) for side in FEET
+        ]
         soles = sole_rectangles(m, FOOT_BODIES)
         self._sole = []  # (sole centre in the foot body frame (3,), half length, half width)
         for b, s in zip(self._foot, soles, strict=True):
@@ -194,10 +207,12 @@ class SteppingController:
         self.base_target: Target = config.target
         self.gains: Gains = config.gains
         k = self.stepping.swing_rot_gain_scale
-        self._swing_gains = Gains(kp_com=(0.0, 0.0, self.gains.kp_com[2]),
-                                  kv_com=(0.0, 0.0, self.gains.kv_com[2]),
-                                  kp_rot=tuple(k * x for x in self.gains.kp_rot),
-                                  kv_rot=tuple(math.sqrt(k) * x for x in self.gains.kv_rot))
+        self._swing_gains = Gains(
+            kp_com=(0.0, 0.0, self.gains.kp_com[2]),
+            kv_com=(0.0, 0.0, self.gains.kv_com[2]),
+            kp_rot=tuple(k * x for x in self.gains.kp_rot),
+            kv_rot=tuple(math.sqrt(k) * x for x in self.gains.kv_rot),
+        )
         self.reset()
 
     # ------------------------------------------------------------------ state
@@ -254,14 +269,18 @@ class SteppingController:
         if self._mid0 is None:
             self._mid0 = 0.5 * (self._sole_pose(0)[0] + self._sole_pose(1)[0])
         left, right = bool(feet[0]), bool(feet[1])
-        if (self.phase == "double" and len(self.steps) < s.max_steps
-                and t - self._last_td >= s.refractory_s
-                and self.trigger.update(self._polygon((left, right)), xi)):
+        if (
+            self.phase == "double"
+            and len(self.steps) < s.max_steps
+            and t - self._last_td >= s.refractory_s
+            and self.trigger.update(self._polygon((left, right)), xi)
+        ):
             self._start_step(t, xi, (left, right))
         if self.phase == "swing":
             return self._swing_call(t, qpos, qvel, xi, omega, (left, right))
-        tau = self.ctrl.torques(qpos, qvel, target=self.target, gains=self.gains,
-                                feet_in_contact=self._flags(left, right))
+        tau = self.ctrl.torques(
+            qpos, qvel, target=self.target, gains=self.gains, feet_in_contact=self._flags(left, right)
+        )
         return self._out(tau)
 
     def _flags(self, left, right):
@@ -286,8 +305,16 @@ class SteppingController:
         self._t_start = t
         self._p0 = self.data.xpos[self._foot[swing]].copy()
         self._landing = None
-        self.steps.append({"foot": FEET[swing], "start_s": t, "lift_off_s": None,
-                           "touch_down_s": None, "position_m": None, "target_m": None})
+        self.steps.append(
+            {
+                "foot": FEET[swing],
+                "start_s": t,
+                "lift_off_s": None,
+                "touch_down_s": None,
+                "position_m": None,
+                "target_m": None,
+            }
+        )
 
     def _swing_call(self, t, qpos, qvel, xi, omega, feet):
         s = self.stepping
@@ -309,8 +336,9 @@ class SteppingController:
         cop = stance_c[:2] + np.array([c * loc[0] - sn * loc[1], sn * loc[0] + c * loc[1]])
         side = 1.0 if i == 1 else -1.0
         if self._landing is None or el < s.retarget_until * s.swing_time_s:
-            self._landing = cp.step_target(xi, cop, omega, s.swing_time_s - el, stance_c[:2], side,
-                                           s.offset_m, s.limits)
+            self._landing = cp.step_target(
+                xi, cop, omega, s.swing_time_s - el, stance_c[:2], side, s.offset_m, s.limits
+            )
         land = self._landing
         step["target_m"] = [float(land[0]), float(land[1]), 0.0]
         # ankle path: the sole centre lands on `land`, flat, zero yaw
@@ -323,10 +351,10 @@ class SteppingController:
         p0 = self._p0
         pd = p0 + (ankle_land - p0) * h
         vd = (ankle_land - p0) * hd / T
-        ad = (ankle_land - p0) * hdd / T ** 2
+        ad = (ankle_land - p0) * hdd / T**2
         pd[2] += s.apex_m * b
         vd[2] += s.apex_m * bd / T
-        ad[2] += s.apex_m * bdd / T ** 2
+        ad[2] += s.apex_m * bdd / T**2
         if sc >= 1.0:
             pd[2] = ankle_land[2] - s.descent_m_s * (el - T)
             vd[2] = -s.descent_m_s
@@ -337,13 +365,14 @@ class SteppingController:
         # stance: W's recursions with the swing foot off (one big base, single-sole QP)
         flags = (i == 1, i == 0)
         # the COM falls freely over the stance sole: the LIPM's acceleration as feed-forward
-        acc = omega ** 2 * (self.data.subtree_com[0][:2] - cop)
+        acc = omega**2 * (self.data.subtree_com[0][:2] - cop)
         com = np.array(self.target.com)
         com[2] -= s.swing_height_drop_m
         target = Target.wendlandt(com=tuple(com), tilt_deg=s.swing_tilt_deg)
         target = replace(target, com_acc=(float(acc[0]), float(acc[1]), 0.0))
-        tau = np.array(self.ctrl.torques(qpos, qvel, target=target, gains=self._swing_gains,
-                                         feet_in_contact=flags))
+        tau = np.array(
+            self.ctrl.torques(qpos, qvel, target=target, gains=self._swing_gains, feet_in_contact=flags)
+        )
         tau[self._leg_tau[i]] = self._swing_torques(i, pd, vd, ad)
         return self._out(tau)
 
@@ -369,8 +398,11 @@ class SteppingController:
         qdd = np.zeros(6)
         for k, qk in ((2, 0.0), (4, inv), (5, dors)):
             qdd[k] = s.kp_rot * (qk - q[k]) - s.kv_rot * qd[k]
-        a = ad + s.kp_pos * (pd - d.xpos[b]) + s.kv_pos * (vd - jp[:, dofs] @ qd - jp @ d.qvel
-                                                           + jp[:, dofs] @ qd)
+        a = (
+            ad
+            + s.kp_pos * (pd - d.xpos[b])
+            + s.kv_pos * (vd - jp[:, dofs] @ qd - jp @ d.qvel + jp[:, dofs] @ qd)
+        )
         a = a - Jl[:, [2, 4, 5]] @ qdd[[2, 4, 5]]
         J3 = Jl[:, [0, 1, 3]]
         qdd[[0, 1, 3]] = J3.T @ np.linalg.solve(J3 @ J3.T + 1e-4 * np.eye(3), a)
@@ -404,14 +436,19 @@ class SteppingController:
         self.target = replace(self.base_target, com=tuple(com))
         g = self.config.gains
         sp = self.stepping
-        self.gains = Gains(kp_com=(sp.post_step_kp_xy, sp.post_step_kp_xy, g.kp_com[2]),
-                           kv_com=(sp.post_step_kv_xy, sp.post_step_kv_xy, g.kv_com[2]),
-                           kp_rot=g.kp_rot, kv_rot=g.kv_rot)
+        self.gains = Gains(
+            kp_com=(sp.post_step_kp_xy, sp.post_step_kp_xy, g.kp_com[2]),
+            kv_com=(sp.post_step_kv_xy, sp.post_step_kv_xy, g.kv_com[2]),
+            kp_rot=g.kp_rot,
+            kv_rot=g.kv_rot,
+        )
         self.phase = "double"
         self.swing = None
         self._last_td = t
-        self.trigger = cp.CaptureTrigger(self.stepping.margin_m, self.stepping.rearm_margin_m,
-                                         self.stepping.hold)
-        tau = self.ctrl.torques(qpos, qvel, target=self.target, gains=self.gains,
-                                feet_in_contact=self._flags(*feet))
+        self.trigger = cp.CaptureTrigger(
+            self.stepping.margin_m, self.stepping.rearm_margin_m, self.stepping.hold
+        )
+        tau = self.ctrl.torques(
+            qpos, qvel, target=self.target, gains=self.gains, feet_in_contact=self._flags(*feet)
+        )
         return self._out(tau)

@@ -33,8 +33,17 @@ from biped.spatial import axis_angle_quat, rot_to_quat
 if TYPE_CHECKING:
     from biped.control.distribution import ContactQP
 
-__all__ = ["DISTRIBUTIONS", "TARGET_AXES", "W_TARGET_AXIS", "W_TARGET_COM_M", "W_TARGET_TILT_DEG",
-           "ControllerOutput", "Gains", "Target", "WorkspaceController"]
+__all__ = [
+    "DISTRIBUTIONS",
+    "TARGET_AXES",
+    "W_TARGET_AXIS",
+    "W_TARGET_COM_M",
+    "W_TARGET_TILT_DEG",
+    "ControllerOutput",
+    "Gains",
+    "Target",
+    "WorkspaceController",
+]
 
 _AXES = {"-y": (0.0, -1.0, 0.0), "-x": (-1.0, 0.0, 0.0)}
 #: Axes of the desired tilt: "-y" is W's text, "-x" the quaternion W prints (docs/controller.md).
@@ -82,16 +91,25 @@ class Target:
     def __post_init__(self):
         q = _vec("target quat", self.quat, 4)
         if abs(np.linalg.norm(q) - 1.0) > 1e-6:
-            raise ScenarioError(f"target quat must be a unit quaternion (w, x, y, z), norm is {np.linalg.norm(q)}")
-        arr = np.concatenate([_vec("target com", self.com, 3), _vec("target com_vel", self.com_vel, 3),
-                              _vec("target com_acc", self.com_acc, 3), q,
-                              _vec("target ang_vel", self.ang_vel, 3),
-                              _vec("target ang_acc", self.ang_acc, 3)])
+            raise ScenarioError(
+                f"target quat must be a unit quaternion (w, x, y, z), norm is {np.linalg.norm(q)}"
+            )
+        arr = np.concatenate(
+            [
+                _vec("target com", self.com, 3),
+                _vec("target com_vel", self.com_vel, 3),
+                _vec("target com_acc", self.com_acc, 3),
+                q,
+                _vec("target ang_vel", self.ang_vel, 3),
+                _vec("target ang_acc", self.ang_acc, 3),
+            ]
+        )
         object.__setattr__(self, "array", arr)
 
     @classmethod
-    def wendlandt(cls, com=W_TARGET_COM_M, tilt_deg: float = W_TARGET_TILT_DEG,
-                  axis: str = W_TARGET_AXIS) -> Target:
+    def wendlandt(
+        cls, com=W_TARGET_COM_M, tilt_deg: float = W_TARGET_TILT_DEG, axis: str = W_TARGET_AXIS
+    ) -> Target:
         """W's set point: COM (-1, 0, 114) cm, 15 deg about -y (text) or -x (the printed quaternion
         (0.99144486, -0.13052619, 0, 0)); see docs/controller.md."""
         if axis not in _AXES:
@@ -110,8 +128,9 @@ class Gains:
     array: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
-        arr = np.concatenate([_vec(f"gains {n}", getattr(self, n), 3)
-                              for n in ("kp_com", "kv_com", "kp_rot", "kv_rot")])
+        arr = np.concatenate(
+            [_vec(f"gains {n}", getattr(self, n), 3) for n in ("kp_com", "kv_com", "kp_rot", "kv_rot")]
+        )
         object.__setattr__(self, "array", arr)
 
     @classmethod
@@ -169,9 +188,19 @@ class WorkspaceController:
     :class:`~biped.control.distribution.ContactQP` (its ``status`` and ``fallbacks``).
     """
 
-    def __init__(self, tree: TreeModel, *, big_base: float = 1e6, target: Target | None = None,
-                 gains: Gains | None = None, distribution: str = "statics", qp_weights=None,
-                 torque_limits=None, soles=None, qp_solver: str = "daqp"):
+    def __init__(
+        self,
+        tree: TreeModel,
+        *,
+        big_base: float = 1e6,
+        target: Target | None = None,
+        gains: Gains | None = None,
+        distribution: str = "statics",
+        qp_weights=None,
+        torque_limits=None,
+        soles=None,
+        qp_solver: str = "daqp",
+    ):
         if not (np.isfinite(big_base) and big_base > 0):
             raise ScenarioError(f"big_base must be a positive finite factor, got {big_base}")
         if distribution not in DISTRIBUTIONS:
@@ -186,19 +215,29 @@ class WorkspaceController:
         lay = layout(n)
         self._layout = lay
         values = {
-            "n": [n], "feet": tree.feet, "mode": [_MODE[distribution]],
-            "parent": tree.parent, "qadr": tree.qpos_adr, "dadr": tree.dof_adr, "leg": tree.leg,
+            "n": [n],
+            "feet": tree.feet,
+            "mode": [_MODE[distribution]],
+            "parent": tree.parent,
+            "qadr": tree.qpos_adr,
+            "dadr": tree.dof_adr,
+            "leg": tree.leg,
             "beyond": tree.beyond_foot,
-            "H": tree.H, "G0": tree.G0, "mass": tree.mass, "inertia": tree.inertia,
-            "qref": tree.qpos_ref, "gravity": tree.gravity,
-            "root_qbi": rot_to_quat(np.ascontiguousarray(tree.G0[0][:3, :3])), "big_base": [self.big_base],
+            "H": tree.H,
+            "G0": tree.G0,
+            "mass": tree.mass,
+            "inertia": tree.inertia,
+            "qref": tree.qpos_ref,
+            "gravity": tree.gravity,
+            "root_qbi": rot_to_quat(np.ascontiguousarray(tree.G0[0][:3, :3])),
+            "big_base": [self.big_base],
         }
         self._mi = np.zeros(lay["ints"]["_size"][0], dtype=np.int64)
         self._mf = np.zeros(lay["model"]["_size"][0])
         for buf, name in ((self._mi, "ints"), (self._mf, "model")):
             for key, (off, shape) in lay[name].items():
                 if key != "_size":
-                    buf[off:off + int(np.prod(shape))] = np.asarray(values[key]).reshape(-1)
+                    buf[off : off + int(np.prod(shape))] = np.asarray(values[key]).reshape(-1)
         self._both = np.ones(2, dtype=np.int64)
         self._contact_buf = np.ones(2, dtype=np.int64)
         self._work = np.zeros(lay["work"]["_size"][0])
@@ -207,8 +246,13 @@ class WorkspaceController:
         # (not the hot path)
         _, self._m, self._w, _ = unpack(self._mi, self._mf, self._work, self._out)
         # (slice, shape or None for 1-d) of each output field, in ControllerOutput's order
-        self._fields = tuple((slice(o, o + int(np.prod(sh))), sh if len(sh) > 1 else None) for o, sh in (
-            lay["out"][k] for k in ("tau", "P1", "z1", "X", "Fd", "Fl_tilde", "Fr_tilde", "Fl", "Fr", "qe")))
+        self._fields = tuple(
+            (slice(o, o + int(np.prod(sh))), sh if len(sh) > 1 else None)
+            for o, sh in (
+                lay["out"][k]
+                for k in ("tau", "P1", "z1", "X", "Fd", "Fl_tilde", "Fr_tilde", "Fl", "Fr", "qe")
+            )
+        )
         self.qp: ContactQP | None = None
         if distribution == "qp":
             self._init_qp(qp_weights, torque_limits, soles, qp_solver)
@@ -223,7 +267,8 @@ class WorkspaceController:
             except BipedError:
                 raise ScenarioError(
                     f"distribution 'qp' needs the soles: the tree's source {tree.source!r} is not "
-                    f"a model file; pass soles=biped.model.sole_rectangles(model)") from None
+                    f"a model file; pass soles=biped.model.sole_rectangles(model)"
+                ) from None
         lower: np.ndarray | None = None
         upper: np.ndarray | None = None
         if limits is not None and not limits.unlimited:
@@ -231,13 +276,24 @@ class WorkspaceController:
             lower, upper = lim.lower, lim.upper
         self.qp = ContactQP(tree, soles, weights, lower, upper, solver)
         out, lay = self._out, self._layout
-        v = {k: out[o:o + int(np.prod(sh))].reshape(sh) for k, (o, sh) in lay["out"].items() if k != "_size"}
-        self._qp_views = (self._w.g, self._w.gl, v["Fd"], v["tau"], v["Fl_tilde"],
-                          v["Fr_tilde"], v["Fl"], v["Fr"])
+        v = {
+            k: out[o : o + int(np.prod(sh))].reshape(sh) for k, (o, sh) in lay["out"].items() if k != "_size"
+        }
+        self._qp_views = (
+            self._w.g,
+            self._w.gl,
+            v["Fd"],
+            v["tau"],
+            v["Fl_tilde"],
+            v["Fr_tilde"],
+            v["Fl"],
+            v["Fr"],
+        )
 
     @classmethod
-    def from_mjcf(cls, source: str | PathLike, feet: tuple[str, str] = DEFAULT_FEET, **kwargs
-                  ) -> WorkspaceController:
+    def from_mjcf(
+        cls, source: str | PathLike, feet: tuple[str, str] = DEFAULT_FEET, **kwargs
+    ) -> WorkspaceController:
         """Controller for the biped in an MJCF file (path, XML text or ``mujoco.MjModel``)."""
         return cls(TreeModel.from_mjcf(source, feet=feet), **kwargs)
 
@@ -253,8 +309,9 @@ class WorkspaceController:
         try:
             left, right = feet_in_contact
         except (TypeError, ValueError):
-            raise StateError(f"feet_in_contact must be a pair of booleans (left, right), got "
-                             f"{feet_in_contact!r}") from None
+            raise StateError(
+                f"feet_in_contact must be a pair of booleans (left, right), got {feet_in_contact!r}"
+            ) from None
         c[0] = 1 if left else 0
         c[1] = 1 if right else 0
         return c
@@ -265,22 +322,25 @@ class WorkspaceController:
         if qpos.shape != (self.tree.nq,) or qvel.shape != (self.tree.nv,):
             raise StateError(
                 f"qpos must have shape ({self.tree.nq},) and qvel ({self.tree.nv},) (MuJoCo layout of "
-                f"{self.tree.source}), got {qpos.shape} and {qvel.shape}")
+                f"{self.tree.source}), got {qpos.shape} and {qvel.shape}"
+            )
         bad = [f"qpos[{i}]" for i in np.flatnonzero(~np.isfinite(qpos))]
         bad += [f"qvel[{i}]" for i in np.flatnonzero(~np.isfinite(qvel))]
         if bad:
             raise StateError(f"non-finite state entries: {', '.join(bad)}; qpos and qvel must be finite")
         a = self.tree.qpos_adr[0] + 3
-        if not np.any(qpos[a:a + 4]):
-            raise StateError(f"the root quaternion qpos[{a}:{a + 4}] is zero; it must be a "
-                             f"(w, x, y, z) quaternion of nonzero norm (it is normalized)")
+        if not np.any(qpos[a : a + 4]):
+            raise StateError(
+                f"the root quaternion qpos[{a}:{a + 4}] is zero; it must be a "
+                f"(w, x, y, z) quaternion of nonzero norm (it is normalized)"
+            )
 
     def _unit_quaternion(self, qpos):
         """A copy of qpos with its root quaternion normalized without overflow or underflow (the
         kernel normalizes by sqrt(q.q), which fails beyond ~1e154 or below ~1e-154), or None if the
         quaternion is zero or non-finite, or already of unit norm."""
         a = self.tree.qpos_adr[0] + 3
-        q = qpos[a:a + 4]
+        q = qpos[a : a + 4]
         m = float(np.max(np.abs(q))) if q.size == 4 else 0.0
         if not np.isfinite(m) or m == 0.0:
             return None
@@ -289,7 +349,7 @@ class WorkspaceController:
         if np.allclose(u, q, rtol=0.0, atol=1e-12):
             return None
         out = qpos.copy()
-        out[a:a + 4] = u
+        out[a : a + 4] = u
         return out
 
     def _run(self, qpos, qvel, target, gains, feet_in_contact=None):
@@ -298,8 +358,9 @@ class WorkspaceController:
         t = (target or self.target).array
         k = (gains or self.gains).array
         try:
-            status = compute_kernel(qpos, qvel, t, k, self._contact(feet_in_contact), self._mi,
-                                    self._mf, self._work, self._out)
+            status = compute_kernel(
+                qpos, qvel, t, k, self._contact(feet_in_contact), self._mi, self._mf, self._work, self._out
+            )
         except ZeroDivisionError:  # numba's float division: a quaternion of overflowing norm
             status = NONFINITE_RESULT
         if status in (ZERO_QUATERNION, NONFINITE_RESULT):
@@ -310,17 +371,21 @@ class WorkspaceController:
             if status in (NONFINITE_STATE, ZERO_QUATERNION):
                 self._check_state(qpos, qvel)
                 a = self.tree.qpos_adr[0] + 3
-                raise StateError(f"the root quaternion qpos[{a}:{a + 4}] = {qpos[a:a + 4].tolist()} "
-                                 f"cannot be normalized in double precision")
+                raise StateError(
+                    f"the root quaternion qpos[{a}:{a + 4}] = {qpos[a : a + 4].tolist()} "
+                    f"cannot be normalized in double precision"
+                )
             if status == SINGULAR_DISTRIBUTION:
                 raise SingularityError(
                     "wrench distribution: G G^T is singular to working precision (W Alg. 5); it is the "
                     "sum of two positive-definite matrices, so this means feet absurdly far from the "
-                    "central body for double precision")
+                    "central body for double precision"
+                )
             if status == NONFINITE_RESULT:
                 raise SingularityError(
                     "the controller produced non-finite values at this state: velocities too large for "
-                    "double precision, or a joint axis with zero articulated inertia (W Alg. 3)")
+                    "double precision, or a joint axis with zero articulated inertia (W Alg. 3)"
+                )
         if self.qp is not None:
             g, gl, Fd, tau, Flt, Frt, Fl, Fr = self._qp_views
             c = self._contact(feet_in_contact)
@@ -331,8 +396,14 @@ class WorkspaceController:
                 self.qp.solve()
             self.qp.finish(c, tau, Flt, Frt, Fl, Fr)
 
-    def compute(self, qpos, qvel, target: Target | None = None, gains: Gains | None = None,
-                feet_in_contact: tuple[bool, bool] | None = None) -> ControllerOutput:
+    def compute(
+        self,
+        qpos,
+        qvel,
+        target: Target | None = None,
+        gains: Gains | None = None,
+        feet_in_contact: tuple[bool, bool] | None = None,
+    ) -> ControllerOutput:
         """Run W Alg. 1-6 at state (qpos, qvel) (MuJoCo layout of the biped's own model).
 
         Returns a :class:`ControllerOutput` of fresh arrays. ``target`` and ``gains`` default to
@@ -351,8 +422,13 @@ class WorkspaceController:
         self._run(qpos, qvel, target, gains, feet_in_contact)
         buf = self._out.copy()  # one fresh buffer; the fields are views of it
         out = object.__new__(ControllerOutput)  # skips the frozen __init__'s 10 setattr calls (3 us)
-        out.__dict__.update(zip(_OUTPUT_FIELDS, [buf[sl] if sh is None else buf[sl].reshape(sh)
-                                                 for sl, sh in self._fields], strict=True))
+        out.__dict__.update(
+            zip(
+                _OUTPUT_FIELDS,
+                [buf[sl] if sh is None else buf[sl].reshape(sh) for sl, sh in self._fields],
+                strict=True,
+            )
+        )
         return out
 
     # ------------------------------------------------------------------ debugging / checking
@@ -367,10 +443,42 @@ class WorkspaceController:
     def _kinematics(self, qpos, qvel):
         """W Alg. 1 and Alg. 2 alone (the kernel's own functions) into the work buffer."""
         t, m, w = self.tree, self._m, self._w
-        alg1_initialize(qpos, qvel, t.qpos_adr[0], t.dof_adr[0], m.G0[0], m.root_qbi, m.mass, m.inertia,
-                        m.gravity, w.g, w.V, w.a, w.b, w.q_root, w.q01)
-        alg2_velocity_propagation(qpos, qvel, t.parent, t.qpos_adr, t.dof_adr, m.H, m.G0, m.qref, m.mass,
-                                  m.inertia, m.gravity, w.g, w.gl, w.V, w.a, w.b, w.E)
+        alg1_initialize(
+            qpos,
+            qvel,
+            t.qpos_adr[0],
+            t.dof_adr[0],
+            m.G0[0],
+            m.root_qbi,
+            m.mass,
+            m.inertia,
+            m.gravity,
+            w.g,
+            w.V,
+            w.a,
+            w.b,
+            w.q_root,
+            w.q01,
+        )
+        alg2_velocity_propagation(
+            qpos,
+            qvel,
+            t.parent,
+            t.qpos_adr,
+            t.dof_adr,
+            m.H,
+            m.G0,
+            m.qref,
+            m.mass,
+            m.inertia,
+            m.gravity,
+            w.g,
+            w.gl,
+            w.V,
+            w.a,
+            w.b,
+            w.E,
+        )
 
     def link_poses(self, qpos) -> np.ndarray:
         """(n_links, 4, 4) world poses ``g_{0,k}`` of every link's COM principal frame (MuJoCo's
@@ -394,18 +502,23 @@ class WorkspaceController:
         recursion against a Jacobian and for Jacobian-transpose control; allocates."""
         qpos, qvel = self._state(qpos, None)
         t = self.tree
-        fl, fr = (np.array(_vec(n, v, 6)) for n, v in (("wrench_left", wrench_left),
-                                                       ("wrench_right", wrench_right)))
+        fl, fr = (
+            np.array(_vec(n, v, 6)) for n, v in (("wrench_left", wrench_left), ("wrench_right", wrench_right))
+        )
         self._kinematics(qpos, qvel)  # the joint transforms g_{k.i,k.o}
         F = np.zeros((t.n_links, 6))
         tau = np.zeros(t.n_links - 1)
-        alg6_torques(t.parent, self._m.H, t.leg, t.beyond_foot.astype(np.int64), self._w.gl, fl, fr, F,
-                     tau)
+        alg6_torques(t.parent, self._m.H, t.leg, t.beyond_foot.astype(np.int64), self._w.gl, fl, fr, F, tau)
         return tau
 
-    def torques(self, qpos: np.ndarray, qvel: np.ndarray, target: Target | None = None,
-                gains: Gains | None = None, feet_in_contact: tuple[bool, bool] | None = None
-                ) -> np.ndarray:
+    def torques(
+        self,
+        qpos: np.ndarray,
+        qvel: np.ndarray,
+        target: Target | None = None,
+        gains: Gains | None = None,
+        feet_in_contact: tuple[bool, bool] | None = None,
+    ) -> np.ndarray:
         """Joint torques (n_joints,) [N m] as a VIEW OF THE CONTROLLER'S REUSED OUTPUT BUFFER: the
         next :meth:`torques` or :meth:`compute` call overwrites it; copy it to keep it.
 
@@ -424,5 +537,7 @@ def _check_feet(tree: TreeModel) -> None:
         raise ModelError(f"the tree must name two different feet, got link indices {feet}")
     for f in feet:
         if f == 0:
-            raise ModelError(f"foot {tree.body_names[0]!r} is the floating root (the central body); "
-                             f"the feet must be bodies below it, one at the end of each leg")
+            raise ModelError(
+                f"foot {tree.body_names[0]!r} is the floating root (the central body); "
+                f"the feet must be bodies below it, one at the end of each leg"
+            )

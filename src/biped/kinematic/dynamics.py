@@ -35,7 +35,14 @@ from biped.spatial import rot_to_quat
 __all__ = ["BIPED_JOINTS", "FRICTION", "InverseDynamics", "biped_qpos", "inverse_dynamics", "load_biped"]
 
 #: The biped's hinge joints, per side, in W's order.
-BIPED_JOINTS = ("hip_abduction", "hip_flexion", "hip_rotation", "knee", "ankle_inversion", "ankle_dorsiflexion")
+BIPED_JOINTS = (
+    "hip_abduction",
+    "hip_flexion",
+    "hip_rotation",
+    "knee",
+    "ankle_inversion",
+    "ankle_dorsiflexion",
+)
 _FROM_FIGURE = {"hip_flexion": "hip_flexion", "knee": "knee", "ankle_dorsiflexion": "ankle_dorsiflexion"}
 #: W's friction coefficient (W section 4), to judge the friction the gait needs.
 FRICTION = 0.3
@@ -107,9 +114,11 @@ def _check_dims(model, names: _Names, dims) -> None:
     }
     for k, (b, f) in pairs.items():
         if abs(b - f) > 1e-4:
-            raise ModelError(f"figure {k} = {f:.6g} m differs from the biped's {b:.6g} m; build the figure "
-                             f"with FigureDims.from_anthropometry() (FigureDims.from_mjcf(path) for another "
-                             f"model) to run it on the biped")
+            raise ModelError(
+                f"figure {k} = {f:.6g} m differs from the biped's {b:.6g} m; build the figure "
+                f"with FigureDims.from_anthropometry() (FigureDims.from_mjcf(path) for another "
+                f"model) to run it on the biped"
+            )
 
 
 def biped_qpos(model, motion_or_arrays, names: _Names | None = None) -> np.ndarray:
@@ -123,13 +132,13 @@ def biped_qpos(model, motion_or_arrays, names: _Names | None = None) -> np.ndarr
     T = pelvis_pos.shape[0]
     q = np.zeros((T, model.nq))
     Rb = pelvis_rot @ _RZ_PI
-    q[:, names.root_q:names.root_q + 3] = pelvis_pos + Rb[:, :, 2] * names.com_above_hips
+    q[:, names.root_q : names.root_q + 3] = pelvis_pos + Rb[:, :, 2] * names.com_above_hips
     prev = None
     for t in range(T):
         qt = rot_to_quat(np.ascontiguousarray(Rb[t]))
         if prev is not None and float(qt @ prev) < 0:
             qt = -qt  # keep the quaternion on one hemisphere along the motion
-        q[t, names.root_q + 3:names.root_q + 7] = qt
+        q[t, names.root_q + 3 : names.root_q + 7] = qt
         prev = qt
     for sd in SIDES:
         for bj, fj in _FROM_FIGURE.items():
@@ -200,8 +209,11 @@ class InverseDynamics:
         flight = ~np.any(st, axis=1)
         out = {
             "mass_kg": self.mass,
-            "peak_torque_Nm": {n: float(np.max(np.abs(self.torques[:, i]))) for i, n in enumerate(self.joint_names)
-                               if np.any(self.torques[:, i] != 0)},
+            "peak_torque_Nm": {
+                n: float(np.max(np.abs(self.torques[:, i])))
+                for i, n in enumerate(self.joint_names)
+                if np.any(self.torques[:, i] != 0)
+            },
             "peak_grf_z_N": float(np.nanmax(fz)) if np.any(st) else 0.0,
             "peak_grf_z_body_weights": float(np.nanmax(fz) / mg) if np.any(st) else 0.0,
             "min_grf_z_N": float(np.min(fz[st])) if np.any(st) else 0.0,
@@ -213,9 +225,11 @@ class InverseDynamics:
             "fraction_cop_outside_sole": float(np.sum(outside) / n_st),
             "flight_frames": int(np.sum(flight)),
             "peak_flight_residual_force_N": float(np.max(np.linalg.norm(self.residual[flight, :3], axis=1)))
-            if np.any(flight) else 0.0,
+            if np.any(flight)
+            else 0.0,
             "peak_flight_residual_torque_Nm": float(np.max(np.linalg.norm(self.residual[flight, 3:], axis=1)))
-            if np.any(flight) else 0.0,
+            if np.any(flight)
+            else 0.0,
         }
         return out
 
@@ -301,17 +315,31 @@ def inverse_dynamics(motion: Motion, model=None, h: float = 1e-3) -> InverseDyna
                 cols.append((j, jacp.copy(), jacr.copy()))
                 pts[j] = p
         if cols:
-            A = np.hstack([np.vstack([jp, jr]).T[r0:r0 + 6] for _, jp, jr in cols])  # 6 x 6k
-            w = np.linalg.lstsq(A, qf[r0:r0 + 6], rcond=None)[0]
+            A = np.hstack([np.vstack([jp, jr]).T[r0 : r0 + 6] for _, jp, jr in cols])  # 6 x 6k
+            w = np.linalg.lstsq(A, qf[r0 : r0 + 6], rcond=None)[0]
             for k, (j, jp, jr) in enumerate(cols):
-                f, m = w[6 * k:6 * k + 3], w[6 * k + 3:6 * k + 6]
+                f, m = w[6 * k : 6 * k + 3], w[6 * k + 3 : 6 * k + 6]
                 grf[t, j], grm[t, j] = f, m
                 qf -= jp.T @ f + jr.T @ m
                 if f[2] > 0:
                     # centre of pressure on the horizontal sole plane through p
                     cop[t, j] = pts[j] + np.array([-m[1] / f[2], m[0] / f[2], 0.0])
-        residual[t] = qf[r0:r0 + 6]
+        residual[t] = qf[r0 : r0 + 6]
         torques[t] = qf[vidx]
-    return InverseDynamics(times, tuple(names.hinges), torques, grf, grm, cop, centres, stance, residual,
-                           float(np.sum(model.body_mass)), -float(model.opt.gravity[2]), qpos, qvel,
-                           qacc, names.sole_half)
+    return InverseDynamics(
+        times,
+        tuple(names.hinges),
+        torques,
+        grf,
+        grm,
+        cop,
+        centres,
+        stance,
+        residual,
+        float(np.sum(model.body_mass)),
+        -float(model.opt.gravity[2]),
+        qpos,
+        qvel,
+        qacc,
+        names.sole_half,
+    )

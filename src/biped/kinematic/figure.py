@@ -55,11 +55,18 @@ __all__ = [
 
 #: The 12 joint angles that drive the hierarchy, in the column order of every angle array.
 JOINT_NAMES = (
-    "torso_roll", "torso_pitch",
-    "left_hip_flexion", "left_knee", "left_ankle_dorsiflexion",
-    "right_hip_flexion", "right_knee", "right_ankle_dorsiflexion",
-    "left_shoulder_flexion", "left_elbow_flexion",
-    "right_shoulder_flexion", "right_elbow_flexion",
+    "torso_roll",
+    "torso_pitch",
+    "left_hip_flexion",
+    "left_knee",
+    "left_ankle_dorsiflexion",
+    "right_hip_flexion",
+    "right_knee",
+    "right_ankle_dorsiflexion",
+    "left_shoulder_flexion",
+    "left_elbow_flexion",
+    "right_shoulder_flexion",
+    "right_elbow_flexion",
 )
 _J = {n: i for i, n in enumerate(JOINT_NAMES)}
 
@@ -129,14 +136,23 @@ class FigureDims:
         _, _, _, d = a.central_body(s, A["body_mass_kg"])
         L = {k: v[0] * s for k, v in a.DE_LEVA_MALE.items()}
         return cls(
-            thigh=L["thigh"], shank=L["shank"], foot=L["foot"],
+            thigh=L["thigh"],
+            shank=L["shank"],
+            foot=L["foot"],
             heel_back=A["heel_to_ankle_fraction_of_foot"] * L["foot"],
             ankle_height=A["ankle_height_fraction_of_stature"] * H,
             foot_width=0.055 * H,
             hip_half_width=A["hip_half_width_fraction_of_stature"] * H,
-            lumbar=0.15 * d["trunk"], trunk=d["trunk"], head=d["head"],
-            shoulder_height=d["shoulder_z"], shoulder_half_width=d["shoulder_y"],
-            upper_arm=d["upper_arm"], forearm=d["forearm"], hand=d["hand"], scale=s)
+            lumbar=0.15 * d["trunk"],
+            trunk=d["trunk"],
+            head=d["head"],
+            shoulder_height=d["shoulder_z"],
+            shoulder_half_width=d["shoulder_y"],
+            upper_arm=d["upper_arm"],
+            forearm=d["forearm"],
+            hand=d["hand"],
+            scale=s,
+        )
 
     @classmethod
     def from_mjcf(cls, model: Any) -> FigureDims:
@@ -158,12 +174,23 @@ class FigureDims:
         d = cls.from_anthropometry()
         k = (thigh + shank) / d.leg
         return cls(
-            thigh=thigh, shank=shank, foot=xb - xf, heel_back=xb,
-            ankle_height=-float(heel.pos[2] - heel.size[2]), foot_width=2.0 * float(heel.size[1]),
+            thigh=thigh,
+            shank=shank,
+            foot=xb - xf,
+            heel_back=xb,
+            ankle_height=-float(heel.pos[2] - heel.size[2]),
+            foot_width=2.0 * float(heel.size[1]),
             hip_half_width=-float(m.body("left_hip_1").pos[1]),
-            lumbar=d.lumbar * k, trunk=d.trunk * k, head=d.head * k,
-            shoulder_height=d.shoulder_height * k, shoulder_half_width=d.shoulder_half_width * k,
-            upper_arm=d.upper_arm * k, forearm=d.forearm * k, hand=d.hand * k, scale=d.scale * k)
+            lumbar=d.lumbar * k,
+            trunk=d.trunk * k,
+            head=d.head * k,
+            shoulder_height=d.shoulder_height * k,
+            shoulder_half_width=d.shoulder_half_width * k,
+            upper_arm=d.upper_arm * k,
+            forearm=d.forearm * k,
+            hand=d.hand * k,
+            scale=d.scale * k,
+        )
 
 
 @dataclass(frozen=True)
@@ -185,18 +212,30 @@ _SHOE = (0.2, 0.2, 0.2, 1.0)
 #: The 15 parts in tree order (a parent before its children).
 PARTS = (
     Part("pelvis", None, (), "box", _TROUSERS),
-    Part("torso", "pelvis", (("torso_roll", (1.0, 0.0, 0.0)), ("torso_pitch", (0.0, 1.0, 0.0))), "box", _SHIRT),
+    Part(
+        "torso", "pelvis", (("torso_roll", (1.0, 0.0, 0.0)), ("torso_pitch", (0.0, 1.0, 0.0))), "box", _SHIRT
+    ),
     Part("head", "torso", (), "sphere", _SKIN),
-    *(p for side in ("left", "right") for p in (
-        Part(f"{side}_thigh", "pelvis", ((f"{side}_hip_flexion", _MY),), "capsule", _TROUSERS),
-        Part(f"{side}_shank", f"{side}_thigh", ((f"{side}_knee", _MY),), "capsule", _TROUSERS),
-        Part(f"{side}_foot", f"{side}_shank", ((f"{side}_ankle_dorsiflexion", _MY),), "box", _SHOE),
-    )),
-    *(p for side in ("left", "right") for p in (
-        Part(f"{side}_upper_arm", "torso", ((f"{side}_shoulder_flexion", _MY),), "capsule", _SHIRT),
-        Part(f"{side}_lower_arm", f"{side}_upper_arm", ((f"{side}_elbow_flexion", _MY),), "capsule", _SKIN),
-        Part(f"{side}_hand", f"{side}_lower_arm", (), "ellipsoid", _SKIN),
-    )),
+    *(
+        p
+        for side in ("left", "right")
+        for p in (
+            Part(f"{side}_thigh", "pelvis", ((f"{side}_hip_flexion", _MY),), "capsule", _TROUSERS),
+            Part(f"{side}_shank", f"{side}_thigh", ((f"{side}_knee", _MY),), "capsule", _TROUSERS),
+            Part(f"{side}_foot", f"{side}_shank", ((f"{side}_ankle_dorsiflexion", _MY),), "box", _SHOE),
+        )
+    ),
+    *(
+        p
+        for side in ("left", "right")
+        for p in (
+            Part(f"{side}_upper_arm", "torso", ((f"{side}_shoulder_flexion", _MY),), "capsule", _SHIRT),
+            Part(
+                f"{side}_lower_arm", f"{side}_upper_arm", ((f"{side}_elbow_flexion", _MY),), "capsule", _SKIN
+            ),
+            Part(f"{side}_hand", f"{side}_lower_arm", (), "ellipsoid", _SKIN),
+        )
+    ),
 )
 _P = {p.name: i for i, p in enumerate(PARTS)}
 
@@ -206,17 +245,20 @@ def _offset(dims: FigureDims, name: str) -> np.ndarray:
     d = dims
     sgn = 1.0 if name.startswith("left") else -1.0
     base = name.split("_", 1)[1] if name.startswith(("left_", "right_")) else name
-    return np.array({
-        "pelvis": (0.0, 0.0, 0.0),
-        "torso": (0.0, 0.0, d.lumbar),
-        "head": (0.0, 0.0, d.trunk - d.lumbar),
-        "thigh": (0.0, sgn * d.hip_half_width, 0.0),
-        "shank": (0.0, 0.0, -d.thigh),
-        "foot": (0.0, 0.0, -d.shank),
-        "upper_arm": (0.0, sgn * d.shoulder_half_width, d.shoulder_height - d.lumbar),
-        "lower_arm": (0.0, 0.0, -d.upper_arm),
-        "hand": (0.0, 0.0, -d.forearm),
-    }[base], dtype=float)
+    return np.array(
+        {
+            "pelvis": (0.0, 0.0, 0.0),
+            "torso": (0.0, 0.0, d.lumbar),
+            "head": (0.0, 0.0, d.trunk - d.lumbar),
+            "thigh": (0.0, sgn * d.hip_half_width, 0.0),
+            "shank": (0.0, 0.0, -d.thigh),
+            "foot": (0.0, 0.0, -d.shank),
+            "upper_arm": (0.0, sgn * d.shoulder_half_width, d.shoulder_height - d.lumbar),
+            "lower_arm": (0.0, 0.0, -d.upper_arm),
+            "hand": (0.0, 0.0, -d.forearm),
+        }[base],
+        dtype=float,
+    )
 
 
 def part_geoms(dims: FigureDims) -> dict:
@@ -227,8 +269,11 @@ def part_geoms(dims: FigureDims) -> dict:
     def capsule(length, r):
         return "capsule", (r, max(length / 2 - r, 1e-3)), (0.0, 0.0, -length / 2)
 
-    out["pelvis"] = ("box", (0.09 * s, d.hip_half_width + 0.04 * s, (d.lumbar + 0.08 * s) / 2),
-                     (0.0, 0.0, (d.lumbar - 0.08 * s) / 2))
+    out["pelvis"] = (
+        "box",
+        (0.09 * s, d.hip_half_width + 0.04 * s, (d.lumbar + 0.08 * s) / 2),
+        (0.0, 0.0, (d.lumbar - 0.08 * s) / 2),
+    )
     torso_len = d.trunk - d.lumbar
     out["torso"] = ("box", (0.1 * s, 0.17 * s, torso_len / 2), (0.0, 0.0, torso_len / 2))
     out["head"] = ("sphere", (0.1 * s,), (0.0, 0.0, 0.5 * d.head))
@@ -236,8 +281,11 @@ def part_geoms(dims: FigureDims) -> dict:
     for side in ("left", "right"):
         out[f"{side}_thigh"] = capsule(d.thigh, 0.065 * s)
         out[f"{side}_shank"] = capsule(d.shank, 0.048 * s)
-        out[f"{side}_foot"] = ("box", (d.foot / 2, d.foot_width / 2, hz),
-                               (d.foot / 2 - d.heel_back, 0.0, -d.ankle_height + hz))
+        out[f"{side}_foot"] = (
+            "box",
+            (d.foot / 2, d.foot_width / 2, hz),
+            (d.foot / 2 - d.heel_back, 0.0, -d.ankle_height + hz),
+        )
         out[f"{side}_upper_arm"] = capsule(d.upper_arm, 0.045 * s)
         out[f"{side}_lower_arm"] = capsule(d.forearm, 0.038 * s)
         out[f"{side}_hand"] = ("ellipsoid", (0.025 * s, 0.045 * s, d.hand / 2), (0.0, 0.0, -d.hand / 2))
@@ -272,7 +320,9 @@ class FigurePoses:
         return self.pos[:, i], self.rot[:, i]
 
 
-def part_poses(dims: FigureDims, pelvis_pos: ArrayLike, pelvis_rot: ArrayLike, angles: ArrayLike) -> FigurePoses:
+def part_poses(
+    dims: FigureDims, pelvis_pos: ArrayLike, pelvis_rot: ArrayLike, angles: ArrayLike
+) -> FigurePoses:
     """Forward kinematics of the DCS tree: the world frame of every part (B IV-B-2).
 
     Args:
@@ -291,7 +341,8 @@ def part_poses(dims: FigureDims, pelvis_pos: ArrayLike, pelvis_rot: ArrayLike, a
     if pelvis_pos.shape != (T, 3) or pelvis_rot.shape != (T, 3, 3) or angles.shape != (T, len(JOINT_NAMES)):
         raise StateError(
             f"need pelvis_pos (T, 3), pelvis_rot (T, 3, 3) and angles (T, {len(JOINT_NAMES)}); got "
-            f"{pelvis_pos.shape}, {pelvis_rot.shape}, {angles.shape}")
+            f"{pelvis_pos.shape}, {pelvis_rot.shape}, {angles.shape}"
+        )
     pos = np.empty((T, len(PARTS), 3))
     rot = np.empty((T, len(PARTS), 3, 3))
     for i, p in enumerate(PARTS):
@@ -348,8 +399,10 @@ def figure_mjcf(dims: FigureDims, terrain_boxes: Iterable = (), floor: bool = Tr
             lines.append(f'{indent}  <freejoint name="pelvis"/>')
         for jname, axis in p.joints:
             lines.append(f'{indent}  <joint name="{jname}" type="hinge" axis="{_f(axis)}"/>')
-        lines.append(f'{indent}  <geom name="{p.name}" type="{kind}" size="{_f(size)}" pos="{_f(centre)}" '
-                     f'rgba="{_f(p.rgba)}" mass="1"/>')
+        lines.append(
+            f'{indent}  <geom name="{p.name}" type="{kind}" size="{_f(size)}" pos="{_f(centre)}" '
+            f'rgba="{_f(p.rgba)}" mass="1"/>'
+        )
         for c in children[p.name]:
             lines.append(body(c, indent + "  "))
         lines.append(f"{indent}</body>")
@@ -359,7 +412,9 @@ def figure_mjcf(dims: FigureDims, terrain_boxes: Iterable = (), floor: bool = Tr
     if floor:
         world.append('    <geom name="floor" type="plane" size="0 0 0.05" material="grid"/>')
     for k, (c, h) in enumerate(terrain_boxes):
-        world.append(f'    <geom name="stair{k}" type="box" pos="{_f(c)}" size="{_f(h)}" rgba="0.6 0.6 0.55 1"/>')
+        world.append(
+            f'    <geom name="stair{k}" type="box" pos="{_f(c)}" size="{_f(h)}" rgba="0.6 0.6 0.55 1"/>'
+        )
     return f"""<mujoco model="dynaman">
   <compiler angle="radian"/>
   <option gravity="0 0 -9.81">

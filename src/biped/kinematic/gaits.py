@@ -133,7 +133,13 @@ class GaitParams:
             raise ScenarioError(f"swing_factor must be in [0.5, 1), got {self.swing_factor!r}")
         if not 0.0 < self.alpha_down < 45.0:
             raise ScenarioError(f"alpha_down must be in (0, 45) deg, got {self.alpha_down!r}")
-        for k in ("stand_fraction", "crouch_fraction", "takeoff_fraction", "tuck_fraction", "touchdown_fraction"):
+        for k in (
+            "stand_fraction",
+            "crouch_fraction",
+            "takeoff_fraction",
+            "tuck_fraction",
+            "touchdown_fraction",
+        ):
             v = getattr(self, k)
             if not 0.3 <= v < 1.0:
                 raise ScenarioError(f"{k} must be in [0.3, 1) of the leg length, got {v!r}")
@@ -144,6 +150,7 @@ class GaitParams:
 # ------------------------------------------------------------------------------------------
 # gait builders
 # ------------------------------------------------------------------------------------------
+
 
 def _step_time(dims, params, speed):
     if not (isinstance(speed, (int, float)) and math.isfinite(speed) and speed > 0):
@@ -190,16 +197,31 @@ def _walk(dims, params, footholds, a_trail, a_lead, T, lean, label, bump=True):
         target = F[min(i, N)]
         land = np.array([target[0], _hip_y(dims, swing), target[2] + ha])
         regular = 1 < i < N + 1
-        segs.append(_HalfStep(T, stance, feet[stance].copy(), feet[swing].copy(), land, D[i - 1], V[i - 1],
-                              D[i], V[i], A if regular else 0.0,
-                              lean if i > 1 else 0.0, lean if i < N + 1 else 0.0, label,
-                              "in" if i == 1 else "out" if i == N + 1 else ""))
+        segs.append(
+            _HalfStep(
+                T,
+                stance,
+                feet[stance].copy(),
+                feet[swing].copy(),
+                land,
+                D[i - 1],
+                V[i - 1],
+                D[i],
+                V[i],
+                A if regular else 0.0,
+                lean if i > 1 else 0.0,
+                lean if i < N + 1 else 0.0,
+                label,
+                "in" if i == 1 else "out" if i == N + 1 else "",
+            )
+        )
         feet[swing] = land
     return segs
 
 
-def stair_geometry(dims: FigureDims, params: GaitParams, rise: float | None = None,
-                   run: float | None = None) -> tuple[float, float, float]:
+def stair_geometry(
+    dims: FigureDims, params: GaitParams, rise: float | None = None, run: float | None = None
+) -> tuple[float, float, float]:
     """Rise, run and leading-leg angle of B's stair step (B IV-B-3b).
 
     The trailing leg at double support is B's bar at ``alpha_down`` (eq. 4.20): the hip is
@@ -227,13 +249,15 @@ def stair_geometry(dims: FigureDims, params: GaitParams, rise: float | None = No
     if not (math.isfinite(run) and run >= min_run):
         raise ScenarioError(
             f"stair run must be at least {min_run:.3f} m (the foot, {dims.foot:.3f} m, plus 2 cm, and "
-            f"more than the trailing leg's {H * math.tan(ad):.3f} m at {params.alpha_down} deg), got {run!r}")
+            f"more than the trailing leg's {H * math.tan(ad):.3f} m at {params.alpha_down} deg), got {run!r}"
+        )
     a_up = math.atan2(run - H * math.tan(ad), H - rise)
     d_lead = math.hypot(run - H * math.tan(ad), H - rise)
     if d_lead > 0.995 * P1 or a_up > 60 * DEG:
         raise ScenarioError(
             f"stair rise {rise:.3f} m and run {run:.3f} m put the leading foot {d_lead:.3f} m from the hip at "
-            f"{a_up / DEG:.1f} deg; the leg reaches {P1:.3f} m: use a shorter run or rise")
+            f"{a_up / DEG:.1f} deg; the leg reaches {P1:.3f} m: use a shorter run or rise"
+        )
     return rise, run, a_up
 
 
@@ -247,9 +271,15 @@ def _markers(segs, t0=0.0):
     return out
 
 
-def step_forward(dims: FigureDims | None = None, steps: int = 6, speed: float = 1.0,
-                 params: GaitParams | None = None, start_x: float = 0.0, ground_z: float = 0.0,
-                 terrain: Terrain = FLAT) -> Plan:
+def step_forward(
+    dims: FigureDims | None = None,
+    steps: int = 6,
+    speed: float = 1.0,
+    params: GaitParams | None = None,
+    start_x: float = 0.0,
+    ground_z: float = 0.0,
+    terrain: Terrain = FLAT,
+) -> Plan:
     """B's stepping-forward algorithm (B IV-B-3a): ``steps`` footfalls of length
     ``L = P1 sin(2 alpha)`` from standing at ``start_x`` to standing, at ``speed`` m/s."""
     dims = dims or FigureDims.from_anthropometry()
@@ -263,9 +293,17 @@ def step_forward(dims: FigureDims | None = None, steps: int = 6, speed: float = 
     return Plan(dims, params, tuple(segs), terrain, tuple(_markers(segs)), distance=steps * L, climbed=0.0)
 
 
-def step_upward(dims: FigureDims | None = None, steps: int = 5, speed: float = 1.0,
-                params: GaitParams | None = None, rise: float | None = None, run: float | None = None,
-                start_x: float = 0.0, ground_z: float = 0.0, top_run: float | None = None) -> Plan:
+def step_upward(
+    dims: FigureDims | None = None,
+    steps: int = 5,
+    speed: float = 1.0,
+    params: GaitParams | None = None,
+    rise: float | None = None,
+    run: float | None = None,
+    start_x: float = 0.0,
+    ground_z: float = 0.0,
+    top_run: float | None = None,
+) -> Plan:
     """B's stepping-upward algorithm (B IV-B-3b): from standing at ``start_x`` before a flight of
     ``steps`` stairs, one tread per footfall, to standing on the top tread (see
     :func:`stair_geometry` for rise and run)."""
@@ -279,15 +317,32 @@ def step_upward(dims: FigureDims | None = None, steps: int = 5, speed: float = 1
     terrain = Terrain.stairs(x_stair, rise, run, steps, top_run)
     terrain = Terrain(tuple((x0, x1, top + ground_z) for x0, x1, top in terrain.blocks))
     footholds = [(start_x + i * run, ground_z + i * rise) for i in range(steps + 1)]
-    segs = _walk(dims, params, footholds, params.alpha_down * DEG, a_up, T, params.stair_lean * DEG, "upstairs",
-                 bump=False)
-    return Plan(dims, params, tuple(segs), terrain, tuple(_markers(segs)), distance=steps * run,
-                climbed=steps * rise)
+    segs = _walk(
+        dims,
+        params,
+        footholds,
+        params.alpha_down * DEG,
+        a_up,
+        T,
+        params.stair_lean * DEG,
+        "upstairs",
+        bump=False,
+    )
+    return Plan(
+        dims, params, tuple(segs), terrain, tuple(_markers(segs)), distance=steps * run, climbed=steps * rise
+    )
 
 
-def jump(dims: FigureDims | None = None, speed: float = 1.0, params: GaitParams | None = None,
-         start_x: float = 0.0, ground_z: float = 0.0, land_z: float | None = None,
-         distance: float | None = None, terrain: Terrain = FLAT) -> Plan:
+def jump(
+    dims: FigureDims | None = None,
+    speed: float = 1.0,
+    params: GaitParams | None = None,
+    start_x: float = 0.0,
+    ground_z: float = 0.0,
+    land_z: float | None = None,
+    distance: float | None = None,
+    terrain: Terrain = FLAT,
+) -> Plan:
     """B's jump (``jump`` in Appendix B): crouch, straight up, along a semicircle (somersault if
     ``params.somersault``), straight down onto ``land_z``, absorb, back up to standing.
 
@@ -317,10 +372,30 @@ def jump(dims: FigureDims | None = None, speed: float = 1.0, params: GaitParams 
     segs = (
         _Squat(100 * f, feet0, stand0, crouch, 0.0, lean, 0.0, 1.0, "jump: crouch"),
         _Squat(20 * f, feet0, crouch, take, lean, lean, 1.0, 1.0, "jump: up"),
-        _Flight(100 * f, "arc", take, top, params.takeoff_fraction * P1, params.tuck_fraction * P1,
-                params.tuck_fraction * P1, turn, lean, "jump: semicircle"),
-        _Flight(33 * f, "drop", top, touch, params.tuck_fraction * P1, params.tuck_fraction * P1,
-                params.touchdown_fraction * P1, 0.0, lean, "jump: down"),
+        _Flight(
+            100 * f,
+            "arc",
+            take,
+            top,
+            params.takeoff_fraction * P1,
+            params.tuck_fraction * P1,
+            params.tuck_fraction * P1,
+            turn,
+            lean,
+            "jump: semicircle",
+        ),
+        _Flight(
+            33 * f,
+            "drop",
+            top,
+            touch,
+            params.tuck_fraction * P1,
+            params.tuck_fraction * P1,
+            params.touchdown_fraction * P1,
+            0.0,
+            lean,
+            "jump: down",
+        ),
         _Squat(20 * f, feet1, touch, absorb, lean, lean, 1.0, 1.0, "jump: absorb"),
         _Squat(40 * f, feet1, absorb, stand1, lean, 0.0, 1.0, 0.0, "jump: back up"),
         _Stand(50 * f, stand1, feet1, label="jump: stand"),
@@ -340,13 +415,27 @@ def chain(*plans: Plan, terrain: Terrain | None = None) -> Plan:
         markers.extend({"time_s": m["time_s"] + t, "label": m["label"]} for m in p.markers)
         t += p.duration
     blocks = sorted({b for p in plans for b in p.terrain.blocks})
-    return Plan(plans[0].dims, plans[0].params, tuple(segs), terrain or Terrain(tuple(blocks)), tuple(markers),
-                distance=sum(p.distance for p in plans), climbed=sum(max(p.climbed, 0.0) for p in plans))
+    return Plan(
+        plans[0].dims,
+        plans[0].params,
+        tuple(segs),
+        terrain or Terrain(tuple(blocks)),
+        tuple(markers),
+        distance=sum(p.distance for p in plans),
+        climbed=sum(max(p.climbed, 0.0) for p in plans),
+    )
 
 
-def demo(dims: FigureDims | None = None, speed: float = 1.0, params: GaitParams | None = None,
-         forward_steps: int = 6, up_steps: int = 5, final_steps: int = 4, rise: float | None = None,
-         run: float | None = None) -> Plan:
+def demo(
+    dims: FigureDims | None = None,
+    speed: float = 1.0,
+    params: GaitParams | None = None,
+    forward_steps: int = 6,
+    up_steps: int = 5,
+    final_steps: int = 4,
+    rise: float | None = None,
+    run: float | None = None,
+) -> Plan:
     """B's demonstration (``main`` in Appendix B): 6 steps forward, 5 up the stairs, a jump off
     the top tread down to the floor, 4 steps forward."""
     dims = dims or FigureDims.from_anthropometry()

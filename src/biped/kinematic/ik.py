@@ -51,8 +51,9 @@ class LegAngles:
     theta3: np.ndarray
 
 
-def leg_fk(theta1: ArrayLike, theta2: ArrayLike, theta3: ArrayLike, l1: float,
-           l2: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def leg_fk(
+    theta1: ArrayLike, theta2: ArrayLike, theta3: ArrayLike, l1: float, l2: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Forward kinematics of the planar leg, B eq. 4.6 (= 4.8-4.11).
 
     Args:
@@ -75,8 +76,9 @@ def _check_lengths(l1: float, l2: float) -> None:
         raise ScenarioError(f"leg link lengths must be finite and positive (m), got l1={l1!r}, l2={l2!r}")
 
 
-def leg_ik(x: ArrayLike, y: ArrayLike, phi: ArrayLike, l1: float, l2: float, knee: str = "human",
-           tol: float = 1e-12) -> LegAngles:
+def leg_ik(
+    x: ArrayLike, y: ArrayLike, phi: ArrayLike, l1: float, l2: float, knee: str = "human", tol: float = 1e-12
+) -> LegAngles:
     """Inverse kinematics of the 3-link planar leg, B eq. 4.12-4.19.
 
     eq. 4.12-4.13: ``cos theta2 = (x^2 + y^2 - l1^2 - l2^2) / (2 l1 l2)``, with the knee-bend
@@ -102,7 +104,9 @@ def leg_ik(x: ArrayLike, y: ArrayLike, phi: ArrayLike, l1: float, l2: float, kne
     """
     _check_lengths(l1, l2)
     if knee not in KNEE_BRANCHES:
-        raise ScenarioError(f"unknown knee branch {knee!r}; valid branches: {', '.join(map(repr, KNEE_BRANCHES))}")
+        raise ScenarioError(
+            f"unknown knee branch {knee!r}; valid branches: {', '.join(map(repr, KNEE_BRANCHES))}"
+        )
     x, y, phi = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (x, y, phi)))
     if not (np.all(np.isfinite(x)) and np.all(np.isfinite(y)) and np.all(np.isfinite(phi))):
         raise ReachError("inverse kinematics target contains NaN or infinite entries")
@@ -114,7 +118,8 @@ def leg_ik(x: ArrayLike, y: ArrayLike, phi: ArrayLike, l1: float, l2: float, kne
         where = f" (target index {tuple(int(i) for i in k)})" if bad.ndim else ""
         raise ReachError(
             f"leg target ({x[k]:.6g}, {y[k]:.6g}) m is {d[k]:.6g} m from the hip{where}; the leg "
-            f"(l1={l1:.6g} m, l2={l2:.6g} m) reaches distances in [{reach_min:.6g}, {reach_max:.6g}] m")
+            f"(l1={l1:.6g} m, l2={l2:.6g} m) reaches distances in [{reach_min:.6g}, {reach_max:.6g}] m"
+        )
     c2 = np.clip((x * x + y * y - l1 * l1 - l2 * l2) / (2.0 * l1 * l2), -1.0, 1.0)  # eq. 4.13
     theta2 = KNEE_BRANCHES[knee] * np.arccos(c2)
     k1 = l1 + l2 * np.cos(theta2)  # eq. 4.16

@@ -19,6 +19,7 @@ if TYPE_CHECKING:
 # what B's code does not guarantee
 # ------------------------------------------------------------------------------------------
 
+
 @dataclass(frozen=True)
 class WalkMetrics:
     """Checks of a motion against the ground (m, rad).
@@ -78,10 +79,12 @@ def walk_metrics(motion: Motion, lm: dict | None = None) -> WalkMetrics:
         if np.any(mid):
             clear = min(clear, float(np.min(gap[mid])))
     return WalkMetrics(
-        max_penetration_m=pen, max_stance_slip_m=slip,
+        max_penetration_m=pen,
+        max_stance_slip_m=slip,
         min_swing_clearance_m=clear if math.isfinite(clear) else float("nan"),
         max_swing_penetration_m=swing_pen,
         max_joint_step_rad=float(np.max(np.abs(np.diff(motion.angles, axis=0)), initial=0.0)),
         distance_m=float(motion.pelvis_pos[-1, 0] - motion.pelvis_pos[0, 0]),
         height_climbed_m=float(motion.plan.climbed),
-        duration_s=float(motion.times[-1] - motion.times[0]))
+        duration_s=float(motion.times[-1] - motion.times[0]),
+    )

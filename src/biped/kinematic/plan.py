@@ -26,6 +26,7 @@ _J = {n: i for i, n in enumerate(JOINT_NAMES)}
 # plans and motions
 # ------------------------------------------------------------------------------------------
 
+
 @dataclass(frozen=True)
 class Plan:
     """A gait as a sequence of segments; evaluate it at any times with :meth:`evaluate`.

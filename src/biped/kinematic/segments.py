@@ -21,6 +21,7 @@ STAIR_CLEARANCE = 0.03
 # time profiles
 # ------------------------------------------------------------------------------------------
 
+
 def _smooth(s):
     """Minimum-jerk step 10 s^3 - 15 s^4 + 6 s^5 on [0, 1] (zero velocity and acceleration at
     both ends), clipped outside."""
@@ -32,8 +33,7 @@ def _hermite(p0, p1, m0, m1, s):
     """Cubic Hermite between points p0, p1 (3,) with tangents m0, m1 (per unit s); s (n,) -> (n, 3)."""
     s = s[:, None]
     s2, s3 = s * s, s * s * s
-    return ((2 * s3 - 3 * s2 + 1) * p0 + (s3 - 2 * s2 + s) * m0 + (-2 * s3 + 3 * s2) * p1
-            + (s3 - s2) * m1)
+    return (2 * s3 - 3 * s2 + 1) * p0 + (s3 - 2 * s2 + s) * m0 + (-2 * s3 + 3 * s2) * p1 + (s3 - s2) * m1
 
 
 def _lerp(a, b, w):
@@ -43,6 +43,7 @@ def _lerp(a, b, w):
 # ------------------------------------------------------------------------------------------
 # segments: each maps a phase s in [0, 1] to pelvis, torso, arm blend and foot targets
 # ------------------------------------------------------------------------------------------
+
 
 @dataclass(frozen=True)
 class _Frame:
@@ -75,9 +76,16 @@ class _Stand:
     def evaluate(self, dims, params, s):
         n = s.size
         z = np.zeros(n)
-        return _Frame(np.tile(self.pelvis, (n, 1)), z + self.pitch, z, z + self.lean, z + self.arm_w,
-                      {sd: ("world", np.tile(self.ankles[sd], (n, 1))) for sd in SIDES},
-                      {sd: np.ones(n, bool) for sd in SIDES}, {sd: np.full(n, np.nan) for sd in SIDES})
+        return _Frame(
+            np.tile(self.pelvis, (n, 1)),
+            z + self.pitch,
+            z,
+            z + self.lean,
+            z + self.arm_w,
+            {sd: ("world", np.tile(self.ankles[sd], (n, 1))) for sd in SIDES},
+            {sd: np.ones(n, bool) for sd in SIDES},
+            {sd: np.full(n, np.nan) for sd in SIDES},
+        )
 
 
 @dataclass(frozen=True)
@@ -113,8 +121,7 @@ class _HalfStep:
             # then sets down (the foot clears the nosing whatever the run)
             c = STAIR_CLEARANCE
             g[:, 0] = _lerp(self.lift[0], self.land[0], _smooth((s - 0.25) / 0.6))
-            g[:, 2] = (_lerp(self.lift[2], self.land[2] + c, _smooth(s / 0.4))
-                       - c * _smooth((s - 0.8) / 0.2))
+            g[:, 2] = _lerp(self.lift[2], self.land[2] + c, _smooth(s / 0.4)) - c * _smooth((s - 0.8) / 0.2)
         else:
             w = _smooth(s)
             g[:, 0] = _lerp(self.lift[0], self.land[0], w)
@@ -128,10 +135,16 @@ class _HalfStep:
         lean = _lerp(self.lean0, self.lean1, _smooth(s))
         z = np.zeros(n)
         swinging = (s > 0.0) & (s < 1.0)
-        return _Frame(pelvis, z, roll, lean, z,
-                      {self.stance_side: ("world", np.tile(self.p_stance, (n, 1))), sw: ("world", foot)},
-                      {self.stance_side: np.ones(n, bool), sw: ~swinging},
-                      {self.stance_side: np.full(n, np.nan), sw: np.where(swinging, s, np.nan)})
+        return _Frame(
+            pelvis,
+            z,
+            roll,
+            lean,
+            z,
+            {self.stance_side: ("world", np.tile(self.p_stance, (n, 1))), sw: ("world", foot)},
+            {self.stance_side: np.ones(n, bool), sw: ~swinging},
+            {self.stance_side: np.full(n, np.nan), sw: np.where(swinging, s, np.nan)},
+        )
 
 
 @dataclass(frozen=True)
@@ -152,10 +165,16 @@ class _Squat:
         n = s.size
         w = _smooth(s)
         z = np.zeros(n)
-        return _Frame(self.P0 + (self.P1 - self.P0) * w[:, None], z, z, _lerp(self.lean0, self.lean1, w),
-                      _lerp(self.w0, self.w1, w),
-                      {sd: ("world", np.tile(self.ankles[sd], (n, 1))) for sd in SIDES},
-                      {sd: np.ones(n, bool) for sd in SIDES}, {sd: np.full(n, np.nan) for sd in SIDES})
+        return _Frame(
+            self.P0 + (self.P1 - self.P0) * w[:, None],
+            z,
+            z,
+            _lerp(self.lean0, self.lean1, w),
+            _lerp(self.w0, self.w1, w),
+            {sd: ("world", np.tile(self.ankles[sd], (n, 1))) for sd in SIDES},
+            {sd: np.ones(n, bool) for sd in SIDES},
+            {sd: np.full(n, np.nan) for sd in SIDES},
+        )
 
 
 @dataclass(frozen=True)
@@ -187,14 +206,24 @@ class _Flight:
             pelvis[:, 0] += r * np.cos(psi)
             pelvis[:, 2] += r * np.sin(psi)
             # tuck during the first 40 %, hold, re-extend to depth1 during the last 30 %
-            depth = np.where(s < 0.4, _lerp(self.depth0, self.depth_mid, _smooth(s / 0.4)),
-                             _lerp(self.depth_mid, self.depth1, _smooth((s - 0.7) / 0.3)))
+            depth = np.where(
+                s < 0.4,
+                _lerp(self.depth0, self.depth_mid, _smooth(s / 0.4)),
+                _lerp(self.depth_mid, self.depth1, _smooth((s - 0.7) / 0.3)),
+            )
         else:
             pelvis = self.P0 + (self.P1 - self.P0) * w[:, None]
             depth = _lerp(self.depth0, self.depth1, w)
         z = np.zeros(n)
         # the feet leave the ground as the arc starts and touch it as the drop ends
         air = s > 0.0 if self.kind == "arc" else s < 1.0
-        return _Frame(pelvis, self.turn * w, z, z + self.lean, z + 1.0,
-                      {sd: ("hip", depth) for sd in SIDES},
-                      {sd: ~air for sd in SIDES}, {sd: np.where(air, s, np.nan) for sd in SIDES})
+        return _Frame(
+            pelvis,
+            self.turn * w,
+            z,
+            z + self.lean,
+            z + 1.0,
+            {sd: ("hip", depth) for sd in SIDES},
+            {sd: ~air for sd in SIDES},
+            {sd: np.where(air, s, np.nan) for sd in SIDES},
+        )

@@ -26,7 +26,9 @@ class Terrain:
         blocks = tuple(tuple(float(v) for v in b) for b in self.blocks)
         for b in blocks:
             if len(b) != 3 or not all(np.isfinite(b)) or b[1] <= b[0] or b[2] <= 0:
-                raise ScenarioError(f"a terrain block is (x0, x1, top) with x1 > x0 and top > 0 (m), got {b!r}")
+                raise ScenarioError(
+                    f"a terrain block is (x0, x1, top) with x1 > x0 and top > 0 (m), got {b!r}"
+                )
         object.__setattr__(self, "blocks", blocks)
 
     @classmethod
@@ -35,7 +37,9 @@ class Terrain:
         ``x_start + (i - 1) run``; the top tread is ``top_run`` long (default ``run``) and ends in a
         vertical drop back to the floor."""
         if not (rise > 0 and run > 0 and n >= 1):
-            raise ScenarioError(f"stairs need rise > 0 m, run > 0 m and n >= 1 steps, got {rise!r}, {run!r}, {n!r}")
+            raise ScenarioError(
+                f"stairs need rise > 0 m, run > 0 m and n >= 1 steps, got {rise!r}, {run!r}, {n!r}"
+            )
         top_run = run if top_run is None else top_run
         blocks = []
         for i in range(1, n + 1):
@@ -77,10 +81,14 @@ class Terrain:
             gap = np.where(over, np.minimum(gap, g), gap)
         return gap
 
-    def boxes(self, width: float = 2.0) -> tuple[tuple[tuple[float, float, float], tuple[float, float, float]], ...]:
+    def boxes(
+        self, width: float = 2.0
+    ) -> tuple[tuple[tuple[float, float, float], tuple[float, float, float]], ...]:
         """The blocks as MuJoCo boxes ``(centre (3,), half sizes (3,))`` [m], ``width`` wide."""
-        return tuple(((0.5 * (x0 + x1), 0.0, 0.5 * top), (0.5 * (x1 - x0), 0.5 * width, 0.5 * top))
-                     for x0, x1, top in self.blocks)
+        return tuple(
+            ((0.5 * (x0 + x1), 0.0, 0.5 * top), (0.5 * (x1 - x0), 0.5 * width, 0.5 * top))
+            for x0, x1, top in self.blocks
+        )
 
 
 FLAT = Terrain()

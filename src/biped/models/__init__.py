@@ -28,8 +28,7 @@ _HERE = Path(__file__).resolve().parent
 
 #: W's joint order within a leg (theta_2..theta_7 left, theta_8..theta_13 right): the shipped
 #: model's hinge names without the side prefix.
-LEG_JOINTS = ("hip_abduction", "hip_flexion", "hip_rotation", "knee", "ankle_inversion",
-              "ankle_dorsiflexion")
+LEG_JOINTS = ("hip_abduction", "hip_flexion", "hip_rotation", "knee", "ankle_inversion", "ankle_dorsiflexion")
 #: The 12 hinges of W's biped in W's order theta_2..theta_13: left leg, then right leg.
 JOINT_NAMES = tuple(f"{side}_{j}" for side in ("left", "right") for j in LEG_JOINTS)
 
@@ -69,5 +68,14 @@ def total_mass_kg(name: str = "wendlandt") -> float:
     return float(np.sum(_compiled(name).body_mass))
 
 
-__all__ = ["JOINT_NAMES", "LEG_JOINTS", "W_INITIAL_ANGLES_DEG", "W_INITIAL_COM_M", "W_INITIAL_TILT_DEG",
-           "gravity", "names", "path", "total_mass_kg"]
+__all__ = [
+    "JOINT_NAMES",
+    "LEG_JOINTS",
+    "W_INITIAL_ANGLES_DEG",
+    "W_INITIAL_COM_M",
+    "W_INITIAL_TILT_DEG",
+    "gravity",
+    "names",
+    "path",
+    "total_mass_kg",
+]

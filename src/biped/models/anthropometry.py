@@ -64,8 +64,7 @@ DE_LEVA = {"male": DE_LEVA_MALE, "female": DE_LEVA_FEMALE}
 DE_LEVA_SAMPLE = {"male": (1.741, 73.0), "female": (1.735, 61.9)}
 SEXES = ("male", "female")
 #: Segments of the whole body: each arm and leg segment counts twice.
-_COUNT = {"head": 1, "trunk": 1, "upper_arm": 2, "forearm": 2, "hand": 2, "thigh": 2, "shank": 2,
-          "foot": 2}
+_COUNT = {"head": 1, "trunk": 1, "upper_arm": 2, "forearm": 2, "hand": 2, "thigh": 2, "shank": 2, "foot": 2}
 
 
 def mass_fractions(sex: str = "male") -> dict[str, float]:
@@ -76,6 +75,7 @@ def mass_fractions(sex: str = "male") -> dict[str, float]:
     if sex == "male":
         return {k: v[1] for k, v in table.items()}  # sums to 1.0 exactly in floating point
     return {k: v[1] / total for k, v in table.items()}
+
 
 ASSUMPTIONS = {
     "body_mass_kg": 73.0,  # de Leva's male sample mean
@@ -123,8 +123,7 @@ class Segment:
     inertia: np.ndarray  # principal moments about x, y, z at the COM [kg m^2]
 
 
-def _seg(name: str, scale: float, mass_total: float, axis: int, sign: float = -1.0,
-         sex: str = "male"):
+def _seg(name: str, scale: float, mass_total: float, axis: int, sign: float = -1.0, sex: str = "male"):
     """A de Leva segment along body axis ``axis`` (pointing ``sign``) from its proximal end."""
     L0, _, cm, r_sag, r_tr, r_long = DE_LEVA[sex][name]
     L = L0 * scale
@@ -166,8 +165,15 @@ def central_body(scale: float, mass_total: float, sex: str = "male"):
         sjc = np.array([0.0, side * sj_y, sj_z])
         parts += [(uarm, sjc), (farm, sjc - [0, 0, L_ua]), (hand, sjc - [0, 0, L_ua + L_fa])]
     m, c, inertia = _combine(parts)
-    dims = {"trunk": L_tr, "head": L_hd, "upper_arm": L_ua, "forearm": L_fa, "hand": L_ha,
-            "shoulder_z": sj_z, "shoulder_y": sj_y}
+    dims = {
+        "trunk": L_tr,
+        "head": L_hd,
+        "upper_arm": L_ua,
+        "forearm": L_fa,
+        "hand": L_ha,
+        "shoulder_z": sj_z,
+        "shoulder_y": sj_y,
+    }
     return m, c, inertia, dims
 
 
@@ -230,18 +236,29 @@ class Subject:
         from biped.errors import ModelError
 
         if self.sex not in SEXES:
-            raise ModelError(f"sex must be one of {', '.join(map(repr, SEXES))} (de Leva 1996 "
-                             f"Table 4); got {self.sex!r}")
-        for name, v, (lo, hi), unit in (("stature", self.stature_m, STATURE_RANGE_M, "m"),
-                                        ("mass", self.mass_kg, MASS_RANGE_KG, "kg")):
-            if not isinstance(v, (int, float)) or isinstance(v, bool) or not math.isfinite(v) \
-                    or not lo <= v <= hi:
-                raise ModelError(f"{name} must be in [{lo:g}, {hi:g}] {unit} (adult humans, the "
-                                 f"range de Leva's parameters are scaled over); got {v!r}")
-        bmi = self.mass_kg / self.stature_m ** 2
+            raise ModelError(
+                f"sex must be one of {', '.join(map(repr, SEXES))} (de Leva 1996 Table 4); got {self.sex!r}"
+            )
+        for name, v, (lo, hi), unit in (
+            ("stature", self.stature_m, STATURE_RANGE_M, "m"),
+            ("mass", self.mass_kg, MASS_RANGE_KG, "kg"),
+        ):
+            if (
+                not isinstance(v, (int, float))
+                or isinstance(v, bool)
+                or not math.isfinite(v)
+                or not lo <= v <= hi
+            ):
+                raise ModelError(
+                    f"{name} must be in [{lo:g}, {hi:g}] {unit} (adult humans, the "
+                    f"range de Leva's parameters are scaled over); got {v!r}"
+                )
+        bmi = self.mass_kg / self.stature_m**2
         if not BMI_RANGE[0] <= bmi <= BMI_RANGE[1]:
-            raise ModelError(f"mass / stature^2 = {bmi:.1f} kg/m^2 is outside [{BMI_RANGE[0]:g}, "
-                             f"{BMI_RANGE[1]:g}] kg/m^2 (adult body mass index range accepted)")
+            raise ModelError(
+                f"mass / stature^2 = {bmi:.1f} kg/m^2 is outside [{BMI_RANGE[0]:g}, "
+                f"{BMI_RANGE[1]:g}] kg/m^2 (adult body mass index range accepted)"
+            )
 
     @property
     def scale(self) -> float:
@@ -259,8 +276,11 @@ def w_subject() -> Subject:
     soles 5 mm above the floor with the central-body COM at W's 1.035 m (:func:`solve_scale`),
     de Leva's 73.0 kg male mean plus the six 0.01 kg intermediate bodies."""
     A = ASSUMPTIONS
-    return Subject(DE_LEVA_STATURE * solve_scale(),
-                   A["body_mass_kg"] + N_INTERMEDIATE * A["intermediate_body_mass_kg"], "male")
+    return Subject(
+        DE_LEVA_STATURE * solve_scale(),
+        A["body_mass_kg"] + N_INTERMEDIATE * A["intermediate_body_mass_kg"],
+        "male",
+    )
 
 
 def initial_com_height(subject: Subject) -> float:
@@ -274,8 +294,13 @@ def initial_com_height(subject: Subject) -> float:
     L1 = DE_LEVA[sex]["thigh"][0] * s
     L2 = DE_LEVA[sex]["shank"][0] * s
     h_a = A["ankle_height_fraction_of_stature"] * subject.stature_m
-    return (A["sole_clearance_m"] + h_a + L2 * math.cos(-tilt + th[1] + th[3])
-            + L1 * math.cos(-tilt + th[1]) + c[2] * math.cos(tilt))
+    return (
+        A["sole_clearance_m"]
+        + h_a
+        + L2 * math.cos(-tilt + th[1] + th[3])
+        + L1 * math.cos(-tilt + th[1])
+        + c[2] * math.cos(tilt)
+    )
 
 
 def build_xml(subject: Subject | None = None) -> str:
@@ -306,35 +331,41 @@ def build_xml(subject: Subject | None = None) -> str:
     sole_t = 0.02
     foot_w = 0.055 * H  # Winter's foot breadth
     split_x = heel_x - 0.35 * Lf  # heel box: rear 35 % of the foot
-    q0 = [math.cos(math.radians(INITIAL_TILT_DEG) / 2), 0.0,
-          -math.sin(math.radians(INITIAL_TILT_DEG) / 2), 0.0]
+    q0 = [
+        math.cos(math.radians(INITIAL_TILT_DEG) / 2),
+        0.0,
+        -math.sin(math.radians(INITIAL_TILT_DEG) / 2),
+        0.0,
+    ]
 
     def leg(side: str, y: float) -> str:
-        ax = {n: (tuple(-a for a in axis) if (side == "right" and n in MIRRORED) else axis)
-              for n, axis in JOINTS}
+        ax = {
+            n: (tuple(-a for a in axis) if (side == "right" and n in MIRRORED) else axis)
+            for n, axis in JOINTS
+        }
         inter = f'<inertial pos="0 0 0" mass="{mi}" diaginertia="{Ii} {Ii} {Ii}"/>'
         r_th, r_sh = 0.065 * s, 0.048 * s
         return f"""
     <body name="{side}_hip_1" pos="0 {y:.6g} {-c1[2]:.6g}">
       {inter}
-      <joint name="{side}_hip_abduction" axis="{_f(ax['hip_abduction'])}"/>
+      <joint name="{side}_hip_abduction" axis="{_f(ax["hip_abduction"])}"/>
       <body name="{side}_hip_2">
         {inter}
-        <joint name="{side}_hip_flexion" axis="{_f(ax['hip_flexion'])}"/>
+        <joint name="{side}_hip_flexion" axis="{_f(ax["hip_flexion"])}"/>
         <body name="{side}_thigh">
           <inertial pos="{_f(thigh.com)}" mass="{thigh.mass:.6g}" diaginertia="{_f(thigh.inertia)}"/>
-          <joint name="{side}_hip_rotation" axis="{_f(ax['hip_rotation'])}"/>
+          <joint name="{side}_hip_rotation" axis="{_f(ax["hip_rotation"])}"/>
           <geom name="{side}_thigh" type="capsule" fromto="0 0 -{r_th:.4g} 0 0 {-L1 + r_th:.6g}" size="{r_th:.4g}" rgba="0.35 0.45 0.65 1"/>
           <body name="{side}_shank" pos="0 0 {-L1:.6g}">
             <inertial pos="{_f(shank.com)}" mass="{shank.mass:.6g}" diaginertia="{_f(shank.inertia)}"/>
-            <joint name="{side}_knee" axis="{_f(ax['knee'])}"/>
+            <joint name="{side}_knee" axis="{_f(ax["knee"])}"/>
             <geom name="{side}_shank" type="capsule" fromto="0 0 -{r_sh:.4g} 0 0 {-L2 + r_sh:.6g}" size="{r_sh:.4g}" rgba="0.35 0.45 0.65 1"/>
             <body name="{side}_ankle_1" pos="0 0 {-L2:.6g}">
               {inter}
-              <joint name="{side}_ankle_inversion" axis="{_f(ax['ankle_inversion'])}"/>
+              <joint name="{side}_ankle_inversion" axis="{_f(ax["ankle_inversion"])}"/>
               <body name="{side}_foot">
                 <inertial pos="{_f(foot_com)}" mass="{foot.mass:.6g}" diaginertia="{_f(foot.inertia)}"/>
-                <joint name="{side}_ankle_dorsiflexion" axis="{_f(ax['ankle_dorsiflexion'])}"/>
+                <joint name="{side}_ankle_dorsiflexion" axis="{_f(ax["ankle_dorsiflexion"])}"/>
                 <geom name="{side}_heel" class="sole" pos="{(heel_x + split_x) / 2:.6g} 0 {-h_a + sole_t / 2:.6g}" size="{(heel_x - split_x) / 2:.6g} {foot_w / 2:.6g} {sole_t / 2}"/>
                 <geom name="{side}_toe" class="sole" pos="{(split_x + toe_x) / 2:.6g} 0 {-h_a + sole_t / 2:.6g}" size="{(split_x - toe_x) / 2:.6g} {foot_w / 2:.6g} {sole_t / 2}"/>
               </body>
@@ -351,22 +382,25 @@ def build_xml(subject: Subject | None = None) -> str:
         y = sgn * dims["shoulder_y"]
         zs = z0 + dims["shoulder_z"]
         za = dims["upper_arm"] + dims["forearm"] + dims["hand"]
-        arms += (f'\n    <geom name="{side}_arm" type="capsule" fromto="0 {y:.6g} {zs - 0.04 * s:.6g} '
-                 f'0 {y:.6g} {zs - za:.6g}" size="{0.04 * s:.4g}" rgba="0.8 0.65 0.55 1"/>')
+        arms += (
+            f'\n    <geom name="{side}_arm" type="capsule" fromto="0 {y:.6g} {zs - 0.04 * s:.6g} '
+            f'0 {y:.6g} {zs - za:.6g}" size="{0.04 * s:.4g}" rgba="0.8 0.65 0.55 1"/>'
+        )
     angles = " ".join(f"{a:.6g}" for a in INITIAL_ANGLES_DEG * 2)
     angles_rad = " ".join(f"{math.radians(a):.10g}" for a in INITIAL_ANGLES_DEG * 2)
     actuators = "\n".join(
-        f'    <motor name="{side}_{n}" joint="{side}_{n}"/>' for side in ("left", "right") for n, _ in JOINTS)
+        f'    <motor name="{side}_{n}" joint="{side}_{n}"/>' for side in ("left", "right") for n, _ in JOINTS
+    )
     return f"""<!--
   Wendlandt (1997) biped: 13 rigid bodies, 18 DOF. Generated by biped.models.anthropometry; do not edit.
   Segment parameters: P. de Leva, J. Biomech. 29(9):1223-1230, 1996, Table 4 ({sex}s), scaled to a
   stature of {H:.4f} m (scale {s:.5f} of de Leva's {DE_LEVA_SAMPLE[sex][0]} m) and a body mass of {round(M, 9)} kg, so that W's
   initial posture (joint angles {angles} deg, central body tilted {INITIAL_TILT_DEG} deg about -y,
-  its COM at {com0[2]:.6g} m) puts both soles flat and {A['sole_clearance_m']} m above the floor.
+  its COM at {com0[2]:.6g} m) puts both soles flat and {A["sole_clearance_m"]} m above the floor.
   Central body (link 1) = head + arms + trunk of de Leva. Intermediate hip/ankle bodies: {mi} kg.
-  Other assumptions: ankle height {A['ankle_height_fraction_of_stature']} H and foot breadth 0.055 H
-  (Winter 2009); the ankle {A['heel_to_ankle_fraction_of_foot']} of the foot length from the heel;
-  hip joint centres {2 * hip_y:.4f} m apart; passive hinge damping {A['joint_damping_Nms_per_rad']} N m s/rad
+  Other assumptions: ankle height {A["ankle_height_fraction_of_stature"]} H and foot breadth 0.055 H
+  (Winter 2009); the ankle {A["heel_to_ankle_fraction_of_foot"]} of the foot length from the heel;
+  hip joint centres {2 * hip_y:.4f} m apart; passive hinge damping {A["joint_damping_Nms_per_rad"]} N m s/rad
   (a plant property the controller does not model). The biped faces -x; its left leg is on -y.
   W's joint numbers: left 2..7 and right 8..13 = hip_abduction, hip_flexion, hip_rotation, knee,
   ankle_inversion, ankle_dorsiflexion. Body frames of the central body sit at its COM.
@@ -376,7 +410,7 @@ def build_xml(subject: Subject | None = None) -> str:
   <option timestep="0.0005" gravity="0 0 -9.81"/>
   <default>
     <geom contype="2" conaffinity="1" friction="0.3 0.005 0.0001" condim="3"/>
-    <joint type="hinge" limited="false" damping="{A['joint_damping_Nms_per_rad']}"/>
+    <joint type="hinge" limited="false" damping="{A["joint_damping_Nms_per_rad"]}"/>
     <default class="sole">
       <geom type="box" rgba="0.25 0.25 0.25 1"/>
     </default>

@@ -39,16 +39,17 @@ import numpy as np
 from biped.errors import ModelError
 
 SIDES = ("left", "right")
-LEG_JOINTS = ("hip_abduction", "hip_flexion", "hip_rotation", "knee", "ankle_inversion",
-              "ankle_dorsiflexion")
+LEG_JOINTS = ("hip_abduction", "hip_flexion", "hip_rotation", "knee", "ankle_inversion", "ankle_dorsiflexion")
 HINGES = tuple(f"{side}_{j}" for side in SIDES for j in LEG_JOINTS)
 SOLES = ("heel", "toe")
 DEFAULT = "wendlandt"
 
-EXPECTED = ("W's biped structure as `biped model` writes it: body 'central_body' on a free joint "
-            "'root'; per leg (left_, right_) one hinge per body in the chain hip_abduction -> "
-            "hip_flexion -> hip_rotation -> knee -> ankle_inversion -> ankle_dorsiflexion ending at "
-            "body '<side>_foot' with box geoms '<side>_heel' and '<side>_toe'; a motor per hinge")
+EXPECTED = (
+    "W's biped structure as `biped model` writes it: body 'central_body' on a free joint "
+    "'root'; per leg (left_, right_) one hinge per body in the chain hip_abduction -> "
+    "hip_flexion -> hip_rotation -> knee -> ankle_inversion -> ankle_dorsiflexion ending at "
+    "body '<side>_foot' with box geoms '<side>_heel' and '<side>_toe'; a motor per hinge"
+)
 
 
 def _shipped() -> list[str]:
@@ -86,14 +87,15 @@ def check_biped(model: str | Path):
     path = Path(model)
     shipped = ", ".join(map(repr, _shipped()))
     if not path.exists():
-        raise ModelError(f"model file {str(path)!r} not found; give a shipped model ({shipped}) or "
-                         f"the path of an MJCF file (e.g. written by `biped model`)")
+        raise ModelError(
+            f"model file {str(path)!r} not found; give a shipped model ({shipped}) or "
+            f"the path of an MJCF file (e.g. written by `biped model`)"
+        )
     if not path.is_file():
         raise ModelError(f"model {str(path)!r} is a folder, not an MJCF file")
     problem = _xml_problem(path)
     if problem:
-        raise ModelError(f"model file {str(path)!r} {problem}; expected an MJCF file with "
-                         f"{EXPECTED}")
+        raise ModelError(f"model file {str(path)!r} {problem}; expected an MJCF file with {EXPECTED}")
     try:
         m = mujoco.MjModel.from_xml_path(str(path))
     except ValueError as exc:
@@ -119,11 +121,12 @@ def check_biped(model: str | Path):
         fail("the frame of 'central_body' must sit at its centre of mass (W's body frame)")
     hinges = [m.joint(j).name for j in range(m.njnt) if int(m.jnt_type[j]) == HINGE]
     extra = sorted(set(hinges) - set(HINGES))
-    others = [m.joint(j).name for j in range(m.njnt)
-              if int(m.jnt_type[j]) not in (HINGE, FREE)]
+    others = [m.joint(j).name for j in range(m.njnt) if int(m.jnt_type[j]) not in (HINGE, FREE)]
     if extra or others or m.njnt != 13:
-        fail(f"joints {extra + others or [m.joint(j).name for j in range(m.njnt)]} are not W's "
-             f"13 (root + 12 hinges)")
+        fail(
+            f"joints {extra + others or [m.joint(j).name for j in range(m.njnt)]} are not W's "
+            f"13 (root + 12 hinges)"
+        )
     for side in SIDES:
         parent = root_body
         for j in LEG_JOINTS:
@@ -133,8 +136,10 @@ def check_biped(model: str | Path):
             if int(m.jnt_type[jt]) != HINGE:
                 fail(f"joint {name!r} is not a hinge")
             if m.body_parentid[b] != parent or m.body_jntnum[b] != 1:
-                fail(f"hinge {name!r} is not the only joint of a child of the body of the previous "
-                     f"joint in the chain")
+                fail(
+                    f"hinge {name!r} is not the only joint of a child of the body of the previous "
+                    f"joint in the chain"
+                )
             parent = b
         if m.body(parent).name != f"{side}_foot":
             fail(f"the {side} chain ends at body {m.body(parent).name!r}, not '{side}_foot'")
@@ -142,8 +147,11 @@ def check_biped(model: str | Path):
             g = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, f"{side}_{part}")
             if g < 0 or m.geom_bodyid[g] != parent or int(m.geom_type[g]) != int(mujoco.mjtGeom.mjGEOM_BOX):
                 fail(f"no box geom '{side}_{part}' on body '{side}_foot'")
-    driven = {m.joint(int(m.actuator_trnid[a, 0])).name for a in range(m.nu)
-              if int(m.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT)}
+    driven = {
+        m.joint(int(m.actuator_trnid[a, 0])).name
+        for a in range(m.nu)
+        if int(m.actuator_trntype[a]) == int(mujoco.mjtTrn.mjTRN_JOINT)
+    }
     missing = [h for h in HINGES if h not in driven]
     if missing:
         fail(f"hinges without a motor: {missing}")
@@ -171,9 +179,9 @@ class _Poser:
 
     def pose(self, com, tilt_deg: float, angles_deg) -> None:
         q = self.m.qpos0.copy()
-        q[self.root:self.root + 3] = com
+        q[self.root : self.root + 3] = com
         h = math.radians(tilt_deg) / 2  # rotation of tilt_deg about -y
-        q[self.root + 3:self.root + 7] = (math.cos(h), 0.0, -math.sin(h), 0.0)
+        q[self.root + 3 : self.root + 7] = (math.cos(h), 0.0, -math.sin(h), 0.0)
         for name, a in zip(HINGES, angles_deg, strict=True):
             q[self.qadr[name]] = math.radians(a)
         self.d.qpos[:] = q
@@ -223,9 +231,17 @@ def _initial(poser: _Poser, tilt_deg: float, angles_deg, clearance_m: float) -> 
     return np.array([0.0, 0.0, clearance_m - poser.lowest_sole()])
 
 
-def subject_state(path: str | Path, *, initial_tilt_deg: float, joint_angles_deg,
-                  target_com_m, target_tilt_deg: float, reference_com_m,
-                  clearance_m: float = 0.005, reference: str | Path | None = None) -> SubjectState:
+def subject_state(
+    path: str | Path,
+    *,
+    initial_tilt_deg: float,
+    joint_angles_deg,
+    target_com_m,
+    target_tilt_deg: float,
+    reference_com_m,
+    clearance_m: float = 0.005,
+    reference: str | Path | None = None,
+) -> SubjectState:
     """W's initial state and set point on the biped ``path`` (see the module docstring).
 
     ``reference_com_m`` and ``target_com_m`` are W's initial and set-point central-body COM on the
@@ -257,8 +273,10 @@ def subject_state(path: str | Path, *, initial_tilt_deg: float, joint_angles_deg
             J[:, i] = (residual(x + e) - residual(x - e)) / 2e-6
         x = x - np.linalg.lstsq(J, r, rcond=None)[0]
     if np.max(np.abs(residual(x))) > 1e-9:
-        raise ModelError(f"W's set point (COM {tuple(target_com_m)} m, tilt {target_tilt_deg} deg) "
-                         f"is out of reach of the reference biped's legs")
+        raise ModelError(
+            f"W's set point (COM {tuple(target_com_m)} m, tilt {target_tilt_deg} deg) "
+            f"is out of reach of the reference biped's legs"
+        )
     angles_set = _sagittal(joint_angles_deg, *x)
 
     sub = _Poser(Path(path))
@@ -268,14 +286,19 @@ def subject_state(path: str | Path, *, initial_tilt_deg: float, joint_angles_deg
     sub.pose((0.0, 0.0, 0.0), target_tilt_deg, angles_set)
     at_zero = sub.foot_xz_pitch()
     if abs(at_zero[2] - foot_s[2]) > 1e-6:
-        raise ModelError("the subject's feet are not flat at W's set-point joint angles; its legs "
-                         "do not have W's sagittal joint axes")
+        raise ModelError(
+            "the subject's feet are not flat at W's set-point joint angles; its legs "
+            "do not have W's sagittal joint axes"
+        )
     target = (float(foot_s[0] - at_zero[0]), float(target_com_m[1]), float(foot_s[1] - at_zero[1]))
     ref_com0 = _initial(ref, initial_tilt_deg, joint_angles_deg, clearance_m)
-    return SubjectState(initial_com_m=tuple(float(v) for v in com0), target_com_m=target,
-                        target_joint_angles_deg=tuple(float(v) for v in x),
-                        height_ratio=float(com0[2] / ref_com0[2]),
-                        mass_ratio=float(sub.m.body_mass.sum() / ref.m.body_mass.sum()))
+    return SubjectState(
+        initial_com_m=tuple(float(v) for v in com0),
+        target_com_m=target,
+        target_joint_angles_deg=tuple(float(v) for v in x),
+        height_ratio=float(com0[2] / ref_com0[2]),
+        mass_ratio=float(sub.m.body_mass.sum() / ref.m.body_mass.sum()),
+    )
 
 
 __all__ = ["EXPECTED", "HINGES", "SubjectState", "check_biped", "resolve", "subject_state"]

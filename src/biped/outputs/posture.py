@@ -48,7 +48,6 @@ def _write_json(path: Path, obj) -> None:
     write_json(path, obj)  # strict JSON: NaN / Infinity become null
 
 
-
 def write_trajectory_csv(traj, path: Path) -> None:
     """trajectory.csv: time, the states, the torques (M or M1, M2) and the forces of ``traj``."""
     names = list(traj.state_names)
@@ -85,9 +84,22 @@ def summary_dict(traj, lin) -> dict:
     }  # fmt: skip
 
 
-def run_model(model: str, params, method: str, gains, x0, alpha, *, out: Path, dt: float,
-              duration: float, integrator: str, hold: bool = True, compare: bool = False,
-              animation: bool = True):
+def run_model(
+    model: str,
+    params,
+    method: str,
+    gains,
+    x0,
+    alpha,
+    *,
+    out: Path,
+    dt: float,
+    duration: float,
+    integrator: str,
+    hold: bool = True,
+    compare: bool = False,
+    animation: bool = True,
+):
     """Simulate B's ``model`` ("pendulum" or "body-leg") and write summary.json, trajectory.csv,
     its figures, animation.gif (unless ``animation`` is False) and, with ``compare``, the
     comparison of B's forms (:func:`compare_forms`) into ``out``. Returns ``(traj, lin)``."""
@@ -131,15 +143,16 @@ def compare_forms(params, gains, x0, alpha, common: dict, out: Path) -> dict:
     for name, tr in trajs.items():
         if ref is not None and name != "lagrange":
             d = np.abs(tr.states - ref.states).max(axis=0)
-            result["max_abs_difference_vs_lagrange"][name] = dict(zip(tr.state_names, d.tolist(), strict=True))
+            result["max_abs_difference_vs_lagrange"][name] = dict(
+                zip(tr.state_names, d.tolist(), strict=True)
+            )
         result.setdefault("wall_time_s", {})[name] = tr.wall_time
     viz.comparison_figure(trajs).savefig(out / "comparison.png")
     _write_json(out / "comparison.json", result)
     return result
 
 
-def run_gains(params, *, out: Path, grid: int, k1_max: float, k2_max: float, rate_gains,
-              poles=None):
+def run_gains(params, *, out: Path, grid: int, k1_max: float, k2_max: float, rate_gains, poles=None):
     """B's gain design for the body-leg model ``params``: the linearized A, B; B's two gain sets;
     the best local gains; pole placement (``poles`` [1/s], default from the best gains' margin);
     LQR; the stability map over (K_theta1, K_theta2) on a ``grid`` x ``grid`` mesh with
@@ -165,11 +178,7 @@ def run_gains(params, *, out: Path, grid: int, k1_max: float, k2_max: float, rat
         "gains": best.gains, "bounds": best.bounds, "stability_margin": best.margin,
         "eigenvalues": best_lin.eigenvalue_pairs(),
     }  # fmt: skip
-    poles = (
-        np.array(poles)
-        if poles
-        else np.array([-best.margin * f for f in (1.0, 1.1, 1.2, 1.3)])
-    )
+    poles = np.array(poles) if poles else np.array([-best.margin * f for f in (1.0, 1.1, 1.2, 1.3)])
     K_pp = analysis.place_poles_gains(A, B, poles)
     result["pole_placement"] = {
         "poles": poles, "K": K_pp,

@@ -48,35 +48,65 @@ def column_dictionary(joint_names) -> dict[str, dict[str, str]]:
     frame: z up, the biped faces -x at the start; every row at exactly its ``time``)."""
     cols: list[tuple[str, str, str]] = [("time", "s", "time of the row (one row per control period)")]
     xyz = "xyz"
-    cols += [(f"central_body_com_{a}", "m", (f"central body's COM (head, arms and trunk: W's body "
-              f"1, the controlled body), world {a}")) for a in xyz]
+    cols += [
+        (
+            f"central_body_com_{a}",
+            "m",
+            (f"central body's COM (head, arms and trunk: W's body 1, the controlled body), world {a}"),
+        )
+        for a in xyz
+    ]
     cols += [(f"central_body_vel_{a}", "m/s", f"central body's COM velocity, world {a}") for a in xyz]
-    cols += [(f"central_body_angvel_{a}", "rad/s", f"central body's angular velocity, world {a}")
-             for a in xyz]
-    cols += [(f"quat_{a}", "1", f"central body's orientation quaternion (w, x, y, z), {a}")
-             for a in "wxyz"]
-    cols += [(f"whole_body_com_{a}", "m", f"the biped's whole-body COM (block excluded), world {a}")
-             for a in xyz]
+    cols += [
+        (f"central_body_angvel_{a}", "rad/s", f"central body's angular velocity, world {a}") for a in xyz
+    ]
+    cols += [(f"quat_{a}", "1", f"central body's orientation quaternion (w, x, y, z), {a}") for a in "wxyz"]
+    cols += [
+        (f"whole_body_com_{a}", "m", f"the biped's whole-body COM (block excluded), world {a}") for a in xyz
+    ]
     cols += [(f"whole_body_com_vel_{a}", "m/s", f"whole-body COM velocity, world {a}") for a in xyz]
     cols += [(f"q_{n}", "rad", f"joint angle {n}") for n in joint_names]
     cols += [(f"tau_{n}", "N m", f"torque at {n}, held from this row to the next") for n in joint_names]
     for foot in FEET:
-        cols += [(f"{foot}_foot_{a}", "m", f"{foot} foot frame origin (the ankle), world {a}")
-                 for a in xyz]
-        cols += [(f"{foot}_foot_quat_{a}", "1", f"{foot} foot orientation quaternion (w, x, y, z), {a}")
-                 for a in "wxyz"]
+        cols += [(f"{foot}_foot_{a}", "m", f"{foot} foot frame origin (the ankle), world {a}") for a in xyz]
+        cols += [
+            (f"{foot}_foot_quat_{a}", "1", f"{foot} foot orientation quaternion (w, x, y, z), {a}")
+            for a in "wxyz"
+        ]
     for foot in FEET:
-        cols += [(f"{foot}_grf_{a}", "N", (f"force of the floor on the {foot} foot (sum of MuJoCo's "
-                  f"contact forces, mj_contactForce), world {a}")) for a in xyz]
-        cols += [(f"{foot}_cop_{a}", "m", (f"{foot} foot's centre of pressure on the floor plane, "
-                  f"world {a} (empty when the foot carries no load)")) for a in "xy"]
+        cols += [
+            (
+                f"{foot}_grf_{a}",
+                "N",
+                (
+                    f"force of the floor on the {foot} foot (sum of MuJoCo's "
+                    f"contact forces, mj_contactForce), world {a}"
+                ),
+            )
+            for a in xyz
+        ]
+        cols += [
+            (
+                f"{foot}_cop_{a}",
+                "m",
+                (
+                    f"{foot} foot's centre of pressure on the floor plane, "
+                    f"world {a} (empty when the foot carries no load)"
+                ),
+            )
+            for a in "xy"
+        ]
     cols += [(f"block_{a}", "m", f"block centre, world {a}") for a in xyz]
     cols += [(f"block_vel_{a}", "m/s", f"block velocity, world {a}") for a in xyz]
     cols += [("block_contact", "0/1", "the block touches the biped")]
-    cols += [("left_contact", "0/1", "the left heel or toe touches the floor"),
-             ("right_contact", "0/1", "the right heel or toe touches the floor")]
-    cols += [(f"{foot}_{part}_contact", "0/1", f"the {foot} {part} box touches the floor")
-             for foot, part in SOLE_GEOMS]
+    cols += [
+        ("left_contact", "0/1", "the left heel or toe touches the floor"),
+        ("right_contact", "0/1", "the right heel or toe touches the floor"),
+    ]
+    cols += [
+        (f"{foot}_{part}_contact", "0/1", f"the {foot} {part} box touches the floor")
+        for foot, part in SOLE_GEOMS
+    ]
     return {name: {"unit": unit, "meaning": meaning} for name, unit, meaning in cols}
 
 
@@ -85,8 +115,9 @@ def trajectory_columns(joint_names) -> list[str]:
     return list(column_dictionary(joint_names))
 
 
-def write_trajectory_csv(result: PushResult, path: str | Path, *,
-                         rows: RowMeasurements | None = None, scene: Scene | None = None) -> Path:
+def write_trajectory_csv(
+    result: PushResult, path: str | Path, *, rows: RowMeasurements | None = None, scene: Scene | None = None
+) -> Path:
     """``trajectory.csv``: one row per control period, the columns of :func:`column_dictionary`
     (SI units, world frame). The per-row whole-body and contact quantities come from
     :func:`biped.sim.measure.measure_rows` (``rows``; computed on ``scene`` when not given).
@@ -102,18 +133,29 @@ def write_trajectory_csv(result: PushResult, path: str | Path, *,
     feet_quat = result.feet_quat if result.feet_quat is not None else np.full((n, 2, 4), np.nan)
     bvel = result.block_velocity if result.block_velocity is not None else np.full((n, 3), np.nan)
     for k in range(n):
-        vals = [_fmt(result.times[k]), *map(_fmt, rows.central_body_com[k]),
-                *map(_fmt, rows.central_body_com_vel[k]), *map(_fmt, rows.central_body_angvel[k]),
-                *map(_fmt, result.quat[k]), *map(_fmt, rows.whole_body_com[k]),
-                *map(_fmt, rows.whole_body_com_vel[k]),
-                *map(_fmt, result.joint_angles[k]), *map(_fmt, result.torques[k])]
+        vals = [
+            _fmt(result.times[k]),
+            *map(_fmt, rows.central_body_com[k]),
+            *map(_fmt, rows.central_body_com_vel[k]),
+            *map(_fmt, rows.central_body_angvel[k]),
+            *map(_fmt, result.quat[k]),
+            *map(_fmt, rows.whole_body_com[k]),
+            *map(_fmt, rows.whole_body_com_vel[k]),
+            *map(_fmt, result.joint_angles[k]),
+            *map(_fmt, result.torques[k]),
+        ]
         for i in range(2):
             vals += [*map(_fmt, feet_pos[k, i]), *map(_fmt, feet_quat[k, i])]
         for i in range(2):
             vals += [*map(_fmt, rows.grf[k, i]), *map(_fmt, rows.cop[k, i])]
-        vals += [*map(_fmt, result.block[k]), *map(_fmt, bvel[k]),
-                 str(int(rows.block_touches_biped[k])), str(int(lc[k])), str(int(rc[k])),
-                 *(str(int(c)) for c in result.contacts[k])]
+        vals += [
+            *map(_fmt, result.block[k]),
+            *map(_fmt, bvel[k]),
+            str(int(rows.block_touches_biped[k])),
+            str(int(lc[k])),
+            str(int(rc[k])),
+            *(str(int(c)) for c in result.contacts[k]),
+        ]
         lines.append(",".join(vals))
     tmp = path.with_suffix(".csv.part")
     tmp.write_text("\n".join(lines) + "\n")
@@ -139,25 +181,38 @@ def judged_set_point(result: PushResult) -> dict:
     not fall and ends within ``recovery_com_tol_m`` and ``recovery_orientation_tol_deg``."""
     s = result.scenario
     if s.controller != "joint-pd":
-        return {"controller": s.controller, "set_point": "the scenario's (W's) set point",
-                "com_m": result.target_com.tolist(), "quat": result.target_quat.tolist(),
-                "final_com_error_m": _num(result.final_com_error_m),
-                "final_orientation_error_deg": _num(result.final_orientation_error_deg),
-                "recovered": bool(result.recovered)}
+        return {
+            "controller": s.controller,
+            "set_point": "the scenario's (W's) set point",
+            "com_m": result.target_com.tolist(),
+            "quat": result.target_quat.tolist(),
+            "final_com_error_m": _num(result.final_com_error_m),
+            "final_orientation_error_deg": _num(result.final_orientation_error_deg),
+            "recovered": bool(result.recovered),
+        }
     com = np.array(s.initial_com_m, dtype=float)
     quat = tilt_quat("-y", s.initial_tilt_deg)
     n = len(result.times)
     com_err = float(np.linalg.norm(result.com[-1] - com)) if n else float("nan")
     ori_err = orientation_error_deg(result.quat[-1], quat) if n else float("nan")
-    complete = (n == s.control_steps + 1 and not result.interrupted and not result.fell
-                and result.controller_error is None and result.diverged is None)
-    ok = bool(complete and com_err < s.recovery_com_tol_m
-              and ori_err < s.recovery_orientation_tol_deg)
-    return {"controller": s.controller,
-            "set_point": "its own: the initial state it holds (initial_com_m, initial_tilt_deg "
-                         "about -y), not W's set point",
-            "com_m": com.tolist(), "quat": quat.tolist(), "final_com_error_m": _num(com_err),
-            "final_orientation_error_deg": _num(ori_err), "recovered": ok}
+    complete = (
+        n == s.control_steps + 1
+        and not result.interrupted
+        and not result.fell
+        and result.controller_error is None
+        and result.diverged is None
+    )
+    ok = bool(complete and com_err < s.recovery_com_tol_m and ori_err < s.recovery_orientation_tol_deg)
+    return {
+        "controller": s.controller,
+        "set_point": "its own: the initial state it holds (initial_com_m, initial_tilt_deg "
+        "about -y), not W's set point",
+        "com_m": com.tolist(),
+        "quat": quat.tolist(),
+        "final_com_error_m": _num(com_err),
+        "final_orientation_error_deg": _num(ori_err),
+        "recovered": ok,
+    }
 
 
 def summary_dict(result: PushResult, rows: RowMeasurements | None = None) -> dict:
@@ -166,8 +221,11 @@ def summary_dict(result: PushResult, rows: RowMeasurements | None = None) -> dic
     s = result.scenario
     judged = judged_set_point(result)
     sep = block_separation(result, rows) if rows is not None else None
-    p_end = (s.block_mass_kg * result.block_velocity[-1] if result.block_velocity is not None
-             and len(result.times) else result.block_momentum_after)
+    p_end = (
+        s.block_mass_kg * result.block_velocity[-1]
+        if result.block_velocity is not None and len(result.times)
+        else result.block_momentum_after
+    )
     return {
         "recovered": judged["recovered"],
         "judged_against": judged,
@@ -202,8 +260,9 @@ def summary_dict(result: PushResult, rows: RowMeasurements | None = None) -> dic
     }
 
 
-def write_summary(result: PushResult, path: str | Path, extra: dict | None = None, *,
-                  rows: RowMeasurements | None = None) -> Path:
+def write_summary(
+    result: PushResult, path: str | Path, extra: dict | None = None, *, rows: RowMeasurements | None = None
+) -> Path:
     """``summary.json`` (:func:`summary_dict`, plus ``extra``): strict JSON, atomic."""
     data = summary_dict(result, rows)
     if extra:
@@ -221,8 +280,12 @@ def _markers(result: PushResult) -> list[dict]:
         out.append({"time_s": st["start_s"], "label": f"step: {st['foot']} foot swings"})
         if st.get("touch_down_s") is not None:
             p = st["position_m"]
-            out.append({"time_s": st["touch_down_s"],
-                        "label": f"step: {st['foot']} foot lands at ({p[0]:.2f}, {p[1]:.2f}) m"})
+            out.append(
+                {
+                    "time_s": st["touch_down_s"],
+                    "label": f"step: {st['foot']} foot lands at ({p[0]:.2f}, {p[1]:.2f}) m",
+                }
+            )
     if result.fall_time_s is not None:
         out.append({"time_s": result.fall_time_s, "label": f"fall: {result.fall_reason}"})
     return out
@@ -244,14 +307,22 @@ def _frame_log(log: Callable[[str], None], step: float = 0.25):
         if n == 0 or n == total or frac >= said[0] + step:
             said[0] = frac
             log(f"video.mp4: rendering {n}/{total} frames")
+
     return progress
 
 
-def write_outputs(result: PushResult, out_dir: str | Path, *, figures: bool = True,
-                  video: bool = True, replay: bool = True, scene: Scene | None = None,
-                  log: Callable[[str], None] = print,
-                  on_stage: Callable[[str], None] | None = None,
-                  on_frame: Callable[..., None] | None = None) -> dict:
+def write_outputs(
+    result: PushResult,
+    out_dir: str | Path,
+    *,
+    figures: bool = True,
+    video: bool = True,
+    replay: bool = True,
+    scene: Scene | None = None,
+    log: Callable[[str], None] = print,
+    on_stage: Callable[[str], None] | None = None,
+    on_frame: Callable[..., None] | None = None,
+) -> dict:
     """Write every output of a run into ``out_dir`` (created if needed); returns ``{name: path}``.
 
     Order: ``trajectory.csv`` and ``summary.json`` first (atomic writes), then ``scenario.toml``,
@@ -261,6 +332,7 @@ def write_outputs(result: PushResult, out_dir: str | Path, *, figures: bool = Tr
     "replay.html"); ``on_frame(done, total)`` while the video renders (when the renderer reports
     frames).
     """
+
     def stage(name: str) -> None:
         if on_stage is not None:
             on_stage(name)
@@ -270,9 +342,11 @@ def write_outputs(result: PushResult, out_dir: str | Path, *, figures: bool = Tr
     stage("trajectory.csv")
     scene = scene or build_scene(result.scenario)
     rows = measure_rows(scene, result)
-    written: dict[str, Any] = {"trajectory": write_trajectory_csv(result, out / "trajectory.csv", rows=rows),
-               "columns": write_json(out / "columns.json", column_dictionary(result.joint_names)),
-               "summary": write_summary(result, out / "summary.json", rows=rows)}
+    written: dict[str, Any] = {
+        "trajectory": write_trajectory_csv(result, out / "trajectory.csv", rows=rows),
+        "columns": write_json(out / "columns.json", column_dictionary(result.joint_names)),
+        "summary": write_summary(result, out / "summary.json", rows=rows),
+    }
     (out / "scenario.toml").write_text(result.scenario.to_toml())
     written["scenario"] = out / "scenario.toml"
     if figures:
@@ -284,8 +358,9 @@ def write_outputs(result: PushResult, out_dir: str | Path, *, figures: bool = Tr
     if video:
         stage("video.mp4")
         try:
-            res = _render_video(scene, result, out / "video.mp4",
-                                on_frame if on_frame is not None else _frame_log(log))
+            res = _render_video(
+                scene, result, out / "video.mp4", on_frame if on_frame is not None else _frame_log(log)
+            )
             if res.path:
                 written["video"] = Path(res.path)
             else:
@@ -295,12 +370,21 @@ def write_outputs(result: PushResult, out_dir: str | Path, *, figures: bool = Tr
     if replay:
         stage("replay.html")
         try:
-            info = {"recovered": judged_set_point(result)["recovered"], "fell": result.fell,
-                    "final COM error [mm]": 1000 * result.final_com_error_m,   # 4 significant digits
-                    "final orientation error [deg]": round(result.final_orientation_error_deg, 3)}
-            rp = replay_from_mujoco(scene.model, result.times, result.qpos,
-                                    title="W section 4: push recovery", info=info,
-                                    markers=_markers(result), follow="trunk")
+            info = {
+                "recovered": judged_set_point(result)["recovered"],
+                "fell": result.fell,
+                "final COM error [mm]": 1000 * result.final_com_error_m,  # 4 significant digits
+                "final orientation error [deg]": round(result.final_orientation_error_deg, 3),
+            }
+            rp = replay_from_mujoco(
+                scene.model,
+                result.times,
+                result.qpos,
+                title="W section 4: push recovery",
+                info=info,
+                markers=_markers(result),
+                follow="trunk",
+            )
             written["replay"] = write_replay(rp, out / "replay.html") or out / "replay.html"
         except Exception as exc:  # noqa: BLE001
             log(f"replay: not written ({type(exc).__name__}: {exc})")

@@ -50,8 +50,13 @@ __all__ = [
 _POINTS = ("left_heel", "left_toe", "right_heel", "right_toe")
 #: Columns of trajectory.csv: time [s], the 12 joint angles [rad], the pelvis (mid-hip point) and
 #: the sole points [m, world], and whether each foot bears weight (0/1).
-CSV_COLUMNS = (("time",) + JOINT_NAMES + ("pelvis_x", "pelvis_y", "pelvis_z")
-               + tuple(f"{p}_{a}" for p in _POINTS for a in "xyz") + ("left_stance", "right_stance"))
+CSV_COLUMNS = (
+    ("time",)
+    + JOINT_NAMES
+    + ("pelvis_x", "pelvis_y", "pelvis_z")
+    + tuple(f"{p}_{a}" for p in _POINTS for a in "xyz")
+    + ("left_stance", "right_stance")
+)
 
 
 def trajectory_column_units() -> dict[str, dict[str, str]]:
@@ -66,8 +71,7 @@ def trajectory_column_units() -> dict[str, dict[str, str]]:
             out[name] = {"unit": "m", "meaning": f"mid-hip point, world {name[-1]}"}
         else:
             point = name[:-2].replace("_", " ")
-            out[name] = {"unit": "m", "meaning": f"{point} (end of the sole's centre line), "
-                                                 f"world {name[-1]}"}
+            out[name] = {"unit": "m", "meaning": f"{point} (end of the sole's centre line), world {name[-1]}"}
     return out
 
 
@@ -90,20 +94,37 @@ def write_trajectory_csv(motion, landmarks: dict, path) -> Path:
 def inverse_dynamics_columns(joint_names) -> list[tuple[str, str, str]]:
     """(name, unit, meaning) of each column of inverse_dynamics.csv."""
     cols = [("time", "s", "time of the sample")]
-    cols += [(f"tau_{j}", "N m", f"joint torque the motion needs at {j} (mj_inverse)")
-             for j in joint_names]
+    cols += [(f"tau_{j}", "N m", f"joint torque the motion needs at {j} (mj_inverse)") for j in joint_names]
     for side in ("left", "right"):
         cols += [(f"{side}_stance", "0/1", f"the {side} foot bears weight")]
-        cols += [(f"{side}_grf_{a}", "N", (f"ground force on the {side} sole, world {a} "
-                  f"(min-norm split with two feet down)")) for a in "xyz"]
-        cols += [(f"{side}_grm_{a}", "N m", (f"ground moment on the {side} sole about its centre, "
-                  f"world {a}")) for a in "xyz"]
-        cols += [(f"{side}_cop_{a}", "m", (f"{side} centre of pressure, world {a} (empty when "
-                  f"the foot carries no load)")) for a in "xyz"]
-    cols += [(f"residual_{a}", "N", "root force no foot can supply (flight), world frame")
-             for a in ("fx", "fy", "fz")]
-    cols += [(f"residual_{a}", "N m", ("root torque no foot can supply (flight), central-body "
-              "frame")) for a in ("mx", "my", "mz")]
+        cols += [
+            (
+                f"{side}_grf_{a}",
+                "N",
+                (f"ground force on the {side} sole, world {a} (min-norm split with two feet down)"),
+            )
+            for a in "xyz"
+        ]
+        cols += [
+            (f"{side}_grm_{a}", "N m", (f"ground moment on the {side} sole about its centre, world {a}"))
+            for a in "xyz"
+        ]
+        cols += [
+            (
+                f"{side}_cop_{a}",
+                "m",
+                (f"{side} centre of pressure, world {a} (empty when the foot carries no load)"),
+            )
+            for a in "xyz"
+        ]
+    cols += [
+        (f"residual_{a}", "N", "root force no foot can supply (flight), world frame")
+        for a in ("fx", "fy", "fz")
+    ]
+    cols += [
+        (f"residual_{a}", "N m", ("root torque no foot can supply (flight), central-body frame"))
+        for a in ("mx", "my", "mz")
+    ]
     return cols
 
 
@@ -115,8 +136,12 @@ def write_inverse_dynamics_csv(idyn, path) -> Path:
     path = Path(path)
     cols = [idyn.times[:, None], idyn.torques]
     for j in range(2):
-        cols += [idyn.stance[:, j:j + 1].astype(float), idyn.grf[:, j], idyn.grf_moment[:, j],
-                 idyn.cop[:, j]]
+        cols += [
+            idyn.stance[:, j : j + 1].astype(float),
+            idyn.grf[:, j],
+            idyn.grf_moment[:, j],
+            idyn.cop[:, j],
+        ]
     cols.append(idyn.residual)
     table = np.hstack(cols)
     with path.open("w", newline="") as fh:
@@ -164,8 +189,15 @@ def build_replay(motion, title: str, info: dict | None = None, rate: float = 60.
     T = idx.size
     pos = np.concatenate([pos, np.broadcast_to(np.array(spos), (T, len(spos), 3))], axis=1)
     quat = np.concatenate([quat, np.broadcast_to(np.array(squat), (T, len(squat), 4))], axis=1)
-    return Replay(geoms=tuple(geoms) + tuple(statics), times=t[idx], pos=pos, quat=quat, title=title,
-                  info=dict(info or {}), markers=tuple(motion.plan.markers))
+    return Replay(
+        geoms=tuple(geoms) + tuple(statics),
+        times=t[idx],
+        pos=pos,
+        quat=quat,
+        title=title,
+        info=dict(info or {}),
+        markers=tuple(motion.plan.markers),
+    )
 
 
 def figure_model(motion):
@@ -178,13 +210,13 @@ def figure_qpos(model, motion) -> np.ndarray:
     T = motion.times.size
     q = np.zeros((T, model.nq))
     root = model.joint("pelvis").qposadr[0]
-    q[:, root:root + 3] = motion.pelvis_pos
+    q[:, root : root + 3] = motion.pelvis_pos
     prev = None
     for t in range(T):
         qt = rot_to_quat(np.ascontiguousarray(motion.pelvis_rot[t]))
         if prev is not None and float(qt @ prev) < 0:
             qt = -qt
-        q[t, root + 3:root + 7] = prev = qt
+        q[t, root + 3 : root + 7] = prev = qt
     for j, name in enumerate(JOINT_NAMES):
         q[:, model.joint(name).qposadr[0]] = motion.angles[:, j]
     return q
@@ -203,20 +235,36 @@ class WalkRun:
     notes: dict
 
 
-def walk_stages(*, dynamics: bool = True, figures: bool = True, replay: bool = True,
-                video: bool = True) -> list[str]:
+def walk_stages(
+    *, dynamics: bool = True, figures: bool = True, replay: bool = True, video: bool = True
+) -> list[str]:
     """The stages :func:`write_walk` runs, in order."""
-    return (["motion", "trajectory.csv"] + (["dynamics"] if dynamics else [])
-            + (["figures"] if figures else []) + (["replay.html"] if replay else [])
-            + (["video.mp4"] if video else []))
+    return (
+        ["motion", "trajectory.csv"]
+        + (["dynamics"] if dynamics else [])
+        + (["figures"] if figures else [])
+        + (["replay.html"] if replay else [])
+        + (["video.mp4"] if video else [])
+    )
 
 
-def write_walk(plan, out: Path, *, gait: str, speed: float, rate: float,
-               stair_rise: float | None = None, stair_run: float | None = None,
-               dynamics: bool = True, figures: bool = True, replay: bool = True,
-               video: bool = True, on_stage: Callable[[str], None] | None = None,
-               model: str | Path | None = None,
-               on_frame: Callable[..., None] | None = None) -> WalkRun:
+def write_walk(
+    plan,
+    out: Path,
+    *,
+    gait: str,
+    speed: float,
+    rate: float,
+    stair_rise: float | None = None,
+    stair_run: float | None = None,
+    dynamics: bool = True,
+    figures: bool = True,
+    replay: bool = True,
+    video: bool = True,
+    on_stage: Callable[[str], None] | None = None,
+    model: str | Path | None = None,
+    on_frame: Callable[..., None] | None = None,
+) -> WalkRun:
     """Sample ``plan`` at ``rate`` [Hz] and write the walk's files into ``out`` (created):
     trajectory.csv, then (unless switched off) the inverse dynamics, figures/, replay.html,
     video.mp4, and summary.json last. ``on_stage(name)`` is called before each of
@@ -241,19 +289,25 @@ def write_walk(plan, out: Path, *, gait: str, speed: float, rate: float,
             paths["trajectory"] = str(write_trajectory_csv(motion, lm, out / "trajectory.csv"))
         elif stage == "dynamics":
             idyn = inverse_dynamics(motion, load_biped(model) if model else None)
-            paths["inverse_dynamics"] = str(write_inverse_dynamics_csv(
-                idyn, out / "inverse_dynamics.csv"))
+            paths["inverse_dynamics"] = str(write_inverse_dynamics_csv(idyn, out / "inverse_dynamics.csv"))
         elif stage == "figures":
-            figs = [plot_joint_angles(motion, out / "figures" / "joint_angles.png"),
-                    plot_feet(motion, lm, out / "figures" / "feet.png")]
+            figs = [
+                plot_joint_angles(motion, out / "figures" / "joint_angles.png"),
+                plot_feet(motion, lm, out / "figures" / "feet.png"),
+            ]
             if idyn is not None:
-                figs.append(plot_inverse_dynamics(idyn, plan.markers, out / "figures" / "inverse_dynamics.png"))
+                figs.append(
+                    plot_inverse_dynamics(idyn, plan.markers, out / "figures" / "inverse_dynamics.png")
+                )
             paths["figures"] = [str(f) for f in figs]
         elif stage == "replay.html":
-            info = {"gait": gait, "distance_m": metrics.distance_m,
-                    "height_climbed_m": metrics.height_climbed_m,
-                    "max_stance_slip_m": metrics.max_stance_slip_m,
-                    "min_swing_clearance_m": metrics.min_swing_clearance_m}
+            info = {
+                "gait": gait,
+                "distance_m": metrics.distance_m,
+                "height_climbed_m": metrics.height_climbed_m,
+                "max_stance_slip_m": metrics.max_stance_slip_m,
+                "min_swing_clearance_m": metrics.min_swing_clearance_m,
+            }
             rep = build_replay(motion, f"biped walk --gait {gait} (Bediz's kinematic figure)", info)
             paths["replay"] = str(write_replay(rep, out / "replay.html"))
         elif stage == "video.mp4":
@@ -261,9 +315,20 @@ def write_walk(plan, out: Path, *, gait: str, speed: float, rate: float,
             kwargs = {}
             if on_frame is not None and "progress" in inspect.signature(render_video).parameters:
                 kwargs["progress"] = on_frame
-            res = render_video(fig_model, motion.times, figure_qpos(fig_model, motion), out / "video.mp4",
-                               track_body="pelvis", distance=4.0, azimuth=-125.0, elevation=-15.0,
-                               fps=25, width=480, height=360, **kwargs)
+            res = render_video(
+                fig_model,
+                motion.times,
+                figure_qpos(fig_model, motion),
+                out / "video.mp4",
+                track_body="pelvis",
+                distance=4.0,
+                azimuth=-125.0,
+                elevation=-15.0,
+                fps=25,
+                width=480,
+                height=360,
+                **kwargs,
+            )
             if res.path is None:
                 notes["video"] = res.reason
             else:
@@ -279,13 +344,18 @@ def write_walk(plan, out: Path, *, gait: str, speed: float, rate: float,
     }
     if gait in ("upstairs", "demo"):
         rise, run_, a_up = stair_geometry(plan.dims, plan.params, stair_rise, stair_run)
-        summary["stairs"] = {"rise_m": rise, "run_m": run_, "alpha_up_deg": math.degrees(a_up),
-                             "alpha_down_deg": plan.params.alpha_down}
+        summary["stairs"] = {
+            "rise_m": rise,
+            "run_m": run_,
+            "alpha_up_deg": math.degrees(a_up),
+            "alpha_down_deg": plan.params.alpha_down,
+        }
     if idyn is not None:
         summary["inverse_dynamics"] = idyn.summary()
         summary["inverse_dynamics_columns"] = {
             name: {"unit": unit, "meaning": meaning}
-            for name, unit, meaning in inverse_dynamics_columns(idyn.joint_names)}
+            for name, unit, meaning in inverse_dynamics_columns(idyn.joint_names)
+        }
     summary["trajectory_columns"] = trajectory_column_units()
     summary["model"] = str(Path(model).resolve()) if model else "wendlandt"
     summary["outputs"] = paths

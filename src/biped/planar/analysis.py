@@ -45,9 +45,7 @@ def ab_matrices(p: bl.BodyLegParams) -> tuple[np.ndarray, np.ndarray]:
             [-l * m * g * r / (I * r), 0.0, m * g * l * r / (I * r), 0.0],
         ]
     )
-    B = np.array(
-        [[0.0, 0.0], [J / D, -(l * m * r + J) / D], [0.0, 0.0], [-l / (I * r), (r + l) / (I * r)]]
-    )
+    B = np.array([[0.0, 0.0], [J / D, -(l * m * r + J) / D], [0.0, 0.0], [-l / (I * r), (r + l) / (I * r)]])
     return A, B
 
 
@@ -60,8 +58,9 @@ def ab_matrices_as_printed(p: bl.BodyLegParams) -> tuple[np.ndarray, np.ndarray]
     return A, B
 
 
-def linearize(accel: Callable[[np.ndarray, np.ndarray], ArrayLike], nq: int, nu: int, eps: float = 1e-6,
-              du: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+def linearize(
+    accel: Callable[[np.ndarray, np.ndarray], ArrayLike], nq: int, nu: int, eps: float = 1e-6, du: float = 1.0
+) -> tuple[np.ndarray, np.ndarray]:
     """Central finite-difference Jacobians of x_dot = f(x, u) at x = 0, u = 0.
 
     accel(x, u) -> the nq accelerations (first nq entries of a form's result); states interleave
@@ -226,8 +225,9 @@ def lqr(A: np.ndarray, B: np.ndarray, Q: np.ndarray, R: np.ndarray) -> LqrResult
     return LqrResult(K, P, np.linalg.eigvals(A + B @ K))
 
 
-def bryson_weights(max_angle: float = 0.1, max_rate: float = 1.0,
-                   max_torque: float = 5000.0) -> tuple[np.ndarray, np.ndarray]:
+def bryson_weights(
+    max_angle: float = 0.1, max_rate: float = 1.0, max_torque: float = 5000.0
+) -> tuple[np.ndarray, np.ndarray]:
     """Bryson's rule weights for the body-leg: Q = diag(1/x_max^2), R = diag(1/u_max^2)."""
     q = np.array([max_angle, max_rate, max_angle, max_rate], dtype=float) ** -2
     return np.diag(q), np.eye(2) / max_torque**2
@@ -247,8 +247,9 @@ class LocalGainSearch:
 DEFAULT_LOCAL_BOUNDS = np.array([[0.0, 50000.0], [0.0, 5000.0], [0.0, 50000.0], [0.0, 5000.0]])
 
 
-def best_local_gains(p: bl.BodyLegParams, bounds: ArrayLike | None = None, *, seed: int = 0,
-                     maxiter: int = 200) -> LocalGainSearch:
+def best_local_gains(
+    p: bl.BodyLegParams, bounds: ArrayLike | None = None, *, seed: int = 0, maxiter: int = 200
+) -> LocalGainSearch:
     """Maximize the stability margin -max Re(lambda(A + B K_local)) over the local gains of eq.
     3.60 inside a box (default: 0..50000 for K1, K2 and 0..5000 for the rate gains, which holds
     both of B's sets). Differential evolution (scipy) then Nelder-Mead polish."""

@@ -125,8 +125,9 @@ def leg_reaction(p: BodyLegParams, M1: float, M2: float) -> float:
     return (M1 - M2) / p.r
 
 
-def newton_euler_system(p: BodyLegParams, x: Vector, u: Vector, *,
-                        as_printed: bool = False) -> tuple[np.ndarray, np.ndarray]:
+def newton_euler_system(
+    p: BodyLegParams, x: Vector, u: Vector, *, as_printed: bool = False
+) -> tuple[np.ndarray, np.ndarray]:
     """The 3x3 matrix and right-hand side of eq. 3.42 in the unknowns (t1dd, t2dd, F).
 
     Rows: body rotation (eq. 3.31 with F_r of eq. 3.28), body y and z translation (eq. 3.40,
@@ -193,9 +194,5 @@ def energy(p: BodyLegParams, x: Vector) -> float:
     """Kinetic plus potential energy (eq. 3.10, 3.11) [lb ft^2/s^2]."""
     t1, t1d, t2, t2d = (float(v) for v in x)
     m, I, r, l, g = p.m, p.I, p.r, p.l, p.g
-    T = (
-        0.5
-        * m
-        * (r * r * t1d * t1d + l * l * t2d * t2d + 2 * r * l * t1d * t2d * math.cos(t1 - t2))
-    )
+    T = 0.5 * m * (r * r * t1d * t1d + l * l * t2d * t2d + 2 * r * l * t1d * t2d * math.cos(t1 - t2))
     return T + 0.5 * I * t2d * t2d + m * g * (r * math.cos(t1) + l * math.cos(t2))

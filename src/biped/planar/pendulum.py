@@ -97,9 +97,7 @@ def newton_euler_3x3(p: PendulumParams, theta: float, theta_dot: float, M: float
     return PendulumAccel(float(y[0]), float(y[1]), float(y[2]))
 
 
-def newton_euler_pitch(
-    p: PendulumParams, theta: float, theta_dot: float, M: float
-) -> PendulumAccel:
+def newton_euler_pitch(p: PendulumParams, theta: float, theta_dot: float, M: float) -> PendulumAccel:
     """B's Lisp form: the 3x3 system of eq. 4.30 in the Euler pitch angle (earth z down).
 
     Unknowns (theta_dd, E_Fx, E_Fz) with E_Fz the vertical force positive *down*; returned as

@@ -71,9 +71,7 @@ def body_rate_to_euler_rate_matrix(phi: float, theta: float) -> np.ndarray:
     [[1, tan th sin ph, tan th cos ph], [0, cos ph, -sin ph], [0, sin ph / cos th, cos ph / cos th]]
     SingularityError within GIMBAL_TOLERANCE of theta = +-90 deg (gimbal lock).
     """
-    if abs(abs(theta) - math.pi / 2) < GIMBAL_TOLERANCE or abs(math.cos(theta)) < math.sin(
-        GIMBAL_TOLERANCE
-    ):
+    if abs(abs(theta) - math.pi / 2) < GIMBAL_TOLERANCE or abs(math.cos(theta)) < math.sin(GIMBAL_TOLERANCE):
         raise SingularityError(
             f"Euler pitch theta = {math.degrees(theta):.4f} deg is within "
             f"{math.degrees(GIMBAL_TOLERANCE):.3f} deg of +-90 deg, where the body-rate to "
@@ -85,8 +83,9 @@ def body_rate_to_euler_rate_matrix(phi: float, theta: float) -> np.ndarray:
     return np.array([[1.0, tth * sph, tth * cph], [0.0, cph, -sph], [0.0, sph / cth, cph / cth]])
 
 
-def velocity_growth_rate(p: RigidBodyParams, posture: Vector, velocity: Vector, force: Vector,
-                         torque: Vector) -> np.ndarray:
+def velocity_growth_rate(
+    p: RigidBodyParams, posture: Vector, velocity: Vector, force: Vector, torque: Vector
+) -> np.ndarray:
     """(u_dot, v_dot, w_dot, p_dot, q_dot, r_dot), eq. 4.24 and 4.25 (Frank and McGhee).
 
     u_dot = r v - q w + f_x / m - g sin theta
@@ -126,9 +125,7 @@ def state_derivative(p: RigidBodyParams, state: Vector, wrench: Vector) -> np.nd
     (biped.spatial's [f; tau] order)."""
     s = check_state(state, 12, "rigid-body state (x, y, z, phi, theta, psi, u, v, w, p, q, r)")
     w = check_state(wrench, 6, "body wrench (f_x, f_y, f_z, L, M, N)")
-    return np.concatenate(
-        [earth_velocity(s[:6], s[6:]), velocity_growth_rate(p, s[:6], s[6:], w[:3], w[3:])]
-    )
+    return np.concatenate([earth_velocity(s[:6], s[6:]), velocity_growth_rate(p, s[:6], s[6:], w[:3], w[3:])])
 
 
 def update_rigid_body(p: RigidBodyParams, state: Vector, wrench: Vector, dt: float) -> np.ndarray:

@@ -84,8 +84,9 @@ def measure_drop_restitution(model, data, dampratio: float, phase: float, speed:
 
 
 @functools.lru_cache(maxsize=32)
-def dampratio_for_restitution(restitution: float, timeconst: float, timestep: float,
-                              phases: int = 8) -> float:
+def dampratio_for_restitution(
+    restitution: float, timeconst: float, timestep: float, phases: int = 8
+) -> float:
     """MuJoCo ``solref`` dampratio giving coefficient of restitution ``restitution`` (bisection
     on :func:`measure_drop_restitution`, averaged over ``phases`` contact phases).
 
@@ -100,8 +101,10 @@ def dampratio_for_restitution(restitution: float, timeconst: float, timestep: fl
 
     lo, hi = 0.05, 20.0  # e decreases with the damping ratio
     if restitution >= e_of(lo):
-        raise ValueError(f"restitution {restitution} is above what timeconst {timeconst} s at "
-                         f"timestep {timestep} s can give ({e_of(lo):.3f})")
+        raise ValueError(
+            f"restitution {restitution} is above what timeconst {timeconst} s at "
+            f"timestep {timestep} s can give ({e_of(lo):.3f})"
+        )
     target = max(restitution, 1e-3)
     for _ in range(40):
         mid = math.sqrt(lo * hi)
@@ -116,8 +119,10 @@ def dampratio_for_restitution(restitution: float, timeconst: float, timestep: fl
 
 def contact_solref(restitution: float, timeconst: float, timestep: float) -> tuple[float, float]:
     """``solref = (timeconst, dampratio)`` for the wanted restitution (see the module docstring)."""
-    return (float(timeconst), dampratio_for_restitution(float(restitution), float(timeconst),
-                                                        float(timestep)))
+    return (
+        float(timeconst),
+        dampratio_for_restitution(float(restitution), float(timeconst), float(timestep)),
+    )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -149,15 +154,14 @@ def heel_timeline(events, block_contact_time_s: float | None) -> dict[str, float
         out[f"{foot} heel rises"] = out[f"{foot} heel back"] = None
         if block_contact_time_s is None:
             continue
-        heel = [e for e in events if e.foot == foot and e.part == "heel"
-                and e.time_s >= block_contact_time_s]
+        heel = [e for e in events if e.foot == foot and e.part == "heel" and e.time_s >= block_contact_time_s]
         longest = -1.0
         for i, e in enumerate(heel):
             if e.kind != "lift_off":
                 continue
             if out[f"{foot} heel rises"] is None:
                 out[f"{foot} heel rises"] = e.time_s
-            down = next((x.time_s for x in heel[i + 1:] if x.kind == "touch_down"), None)
+            down = next((x.time_s for x in heel[i + 1 :] if x.kind == "touch_down"), None)
             length = math.inf if down is None else down - e.time_s
             if length > longest:
                 longest, out[f"{foot} heel back"] = length, down
@@ -225,8 +229,17 @@ class ContactMonitor:
     microseconds, next to ~20 us per MuJoCo step) and does Python work only when something changes.
     """
 
-    def __init__(self, model, *, floor_geom: int, block_geom: int, sole_geoms, biped_geoms,
-                 central_body: int, fall_height_m: float):
+    def __init__(
+        self,
+        model,
+        *,
+        floor_geom: int,
+        block_geom: int,
+        sole_geoms,
+        biped_geoms,
+        central_body: int,
+        fall_height_m: float,
+    ):
         ng = model.ngeom
         biped = np.zeros(ng, dtype=bool)
         biped[list(biped_geoms)] = True
@@ -261,7 +274,7 @@ class ContactMonitor:
     def _lying_geom(self, data) -> str:
         """Name of the biped geom (not a sole) of the first contact, in MuJoCo's order, that
         touches the floor."""
-        g = np.asarray(data.contact.geom[:data.ncon])
+        g = np.asarray(data.contact.geom[: data.ncon])
         a, b = g[:, 0], g[:, 1]
         hit = ((a == self._floor) & self._plain[b]) | ((b == self._floor) & self._plain[a])
         j = int(np.flatnonzero(hit)[0])
@@ -283,8 +296,9 @@ class ContactMonitor:
                 for i in range(len(SOLE_GEOMS)):
                     if changed >> i & 1:
                         foot, part = SOLE_GEOMS[i]
-                        self.events.append(ContactEvent(t, foot, part, "touch_down" if bits >> i & 1
-                                                        else "lift_off"))
+                        self.events.append(
+                            ContactEvent(t, foot, part, "touch_down" if bits >> i & 1 else "lift_off")
+                        )
             self.flags = _FLAGS[bits & _SOLE_MASK]
             self.feet = _FEET[bits & _SOLE_MASK]
         self._started = True

@@ -26,9 +26,11 @@ from collections.abc import Callable
 
 #: Kernel names for :func:`cold_kernels` / :func:`warm_up`: what they are and about how long
 #: they take to compile [s] on an idle 2-core x86_64 machine (several times that under load).
-KERNELS = {"controller": ("W's controller", 15),
-           "qp": ("the contact QP", 5),
-           "contact": ("the contact monitor", 1)}
+KERNELS = {
+    "controller": ("W's controller", 15),
+    "qp": ("the contact QP", 5),
+    "contact": ("the contact monitor", 1),
+}
 
 
 def kernels_for(controller: str, distribution: str = "statics") -> tuple[str, ...]:

@@ -30,8 +30,16 @@ import numpy as np
 
 from biped.sim.scene import Scene
 
-__all__ = ["FEET", "BlockSeparation", "RowMeasurements", "block_separation", "centre_of_pressure",
-           "foot_bodies", "foot_drift", "measure_rows"]
+__all__ = [
+    "FEET",
+    "BlockSeparation",
+    "RowMeasurements",
+    "block_separation",
+    "centre_of_pressure",
+    "foot_bodies",
+    "foot_drift",
+    "measure_rows",
+]
 
 #: The two feet, in the order of every (n, 2, ...) array.
 FEET = ("left", "right")
@@ -161,11 +169,18 @@ def measure_rows(scene: Scene, result) -> RowMeasurements:
             if sel.any():
                 grf[k, i], cop[k, i] = centre_of_pressure(pos[sel], f_world[sel])
     biped_mass = float(m.body_subtreemass[cb])
-    return RowMeasurements(central_body_com=com, central_body_com_vel=com_vel,
-                           central_body_angvel=angvel, whole_body_com=wcom,
-                           whole_body_com_vel=wcom_vel, grf=grf, cop=cop,
-                           block_touches_biped=touch, biped_mass_kg=biped_mass,
-                           gravity=np.array(m.opt.gravity))
+    return RowMeasurements(
+        central_body_com=com,
+        central_body_com_vel=com_vel,
+        central_body_angvel=angvel,
+        whole_body_com=wcom,
+        whole_body_com_vel=wcom_vel,
+        grf=grf,
+        cop=cop,
+        block_touches_biped=touch,
+        biped_mass_kg=biped_mass,
+        gravity=np.array(m.opt.gravity),
+    )
 
 
 @dataclass(frozen=True)
@@ -182,8 +197,7 @@ class BlockSeparation:
     row: int | None
 
 
-def block_separation(result, rows: RowMeasurements, block_mass_kg: float | None = None
-                     ) -> BlockSeparation:
+def block_separation(result, rows: RowMeasurements, block_mass_kg: float | None = None) -> BlockSeparation:
     """When the block leaves the body after its first hit, and its momentum then: the first row
     after the first block-biped contact (``rows.block_touches_biped``, MuJoCo's contacts at the
     row's state) with no such contact. ``block_mass_kg`` defaults to the scenario's."""
@@ -219,5 +233,8 @@ def foot_drift(result) -> dict | None:
             return None
         k = int(flat[0])
     d = result.feet_pos[-1] - result.feet_pos[k]
-    return {"from_s": float(result.times[k]), "to_s": float(result.times[-1]),
-            **{foot: d[i].tolist() for i, foot in enumerate(FEET)}}
+    return {
+        "from_s": float(result.times[k]),
+        "to_s": float(result.times[-1]),
+        **{foot: d[i].tolist() for i, foot in enumerate(FEET)},
+    }

@@ -132,31 +132,46 @@ def scenario_limits(scenario: Scenario) -> TorqueLimits | None:
     return symmetric_limits(scenario.torque_limits)
 
 
-def policy_config(scenario: Scenario, *, gain_scale: float = 1.0,
-                  torque_limits: TorqueLimits | None = None) -> PolicyConfig:
+def policy_config(
+    scenario: Scenario, *, gain_scale: float = 1.0, torque_limits: TorqueLimits | None = None
+) -> PolicyConfig:
     """The :class:`~biped.control.policy.PolicyConfig` of ``scenario``: its controller, W's set
     point and gains as the scenario gives them, its support mode, the joint-PD holding the initial
     joint angles, its control period, and ``torque_limits`` (default: the scenario's own)."""
-    target = Target.wendlandt(com=scenario.target_com_m, tilt_deg=scenario.target_tilt_deg,
-                              axis=scenario.target_axis)
-    gains = Gains(kp_com=scenario.kp_com, kv_com=scenario.kv_com, kp_rot=scenario.kp_rot,
-                  kv_rot=scenario.kv_rot)
+    target = Target.wendlandt(
+        com=scenario.target_com_m, tilt_deg=scenario.target_tilt_deg, axis=scenario.target_axis
+    )
+    gains = Gains(
+        kp_com=scenario.kp_com, kv_com=scenario.kv_com, kp_rot=scenario.kp_rot, kv_rot=scenario.kv_rot
+    )
     if torque_limits is None:
         torque_limits = scenario_limits(scenario)
     elif scenario.torque_limits != "none":
-        raise ScenarioError("give torque limits once: the scenario's torque_limits or the "
-                            "torque_limits argument, not both")
+        raise ScenarioError(
+            "give torque limits once: the scenario's torque_limits or the torque_limits argument, not both"
+        )
     qp_weights = None
     if scenario.distribution == "qp":
-        qp_weights = QPWeights(moment=scenario.qp_moment_weight, friction=scenario.friction,
-                               min_normal_n=scenario.qp_min_normal_n,
-                               cop_scale=scenario.qp_cop_scale)
+        qp_weights = QPWeights(
+            moment=scenario.qp_moment_weight,
+            friction=scenario.friction,
+            min_normal_n=scenario.qp_min_normal_n,
+            cop_scale=scenario.qp_cop_scale,
+        )
     model_path = None if scenario.model == subject.DEFAULT else subject.resolve(scenario.model)
-    return PolicyConfig(controller=scenario.controller, target=target, gains=gains,
-                        support=scenario.support, q_ref_deg=tuple(scenario.initial_joint_angles_deg),
-                        control_period_s=1.0 / scenario.control_rate_hz, gain_scale=gain_scale,
-                        torque_limits=torque_limits, distribution=scenario.distribution,
-                        qp_weights=qp_weights, model_path=model_path)
+    return PolicyConfig(
+        controller=scenario.controller,
+        target=target,
+        gains=gains,
+        support=scenario.support,
+        q_ref_deg=tuple(scenario.initial_joint_angles_deg),
+        control_period_s=1.0 / scenario.control_rate_hz,
+        gain_scale=gain_scale,
+        torque_limits=torque_limits,
+        distribution=scenario.distribution,
+        qp_weights=qp_weights,
+        model_path=model_path,
+    )
 
 
 class ControllerPolicy:
@@ -173,17 +188,23 @@ class ControllerPolicy:
         return self.policy(qpos, qvel, feet)
 
 
-def controller_policy(scenario: Scenario, scene: Scene, *, gain_scale: float = 1.0,
-                      torque_limits: TorqueLimits | None = None, tree=None
-                      ) -> Callable[[float, np.ndarray, np.ndarray, tuple[bool, bool]], np.ndarray]:
+def controller_policy(
+    scenario: Scenario,
+    scene: Scene,
+    *,
+    gain_scale: float = 1.0,
+    torque_limits: TorqueLimits | None = None,
+    tree=None,
+) -> Callable[[float, np.ndarray, np.ndarray, tuple[bool, bool]], np.ndarray]:
     """The loop policy of ``scenario``'s controller (:func:`policy_config`), torques in
     ``scene.joint_names`` order. ``tree``: a cached :class:`~biped.model.TreeModel` of the biped."""
     config = policy_config(scenario, gain_scale=gain_scale, torque_limits=torque_limits)
     if scenario.stepping:  # not in W: capture-point steps around W's controller
         from biped.control.stepping import SteppingConfig, SteppingController
 
-        return SteppingController(config, SteppingConfig(max_steps=scenario.max_steps),
-                                  scene.joint_names, tree=tree)
+        return SteppingController(
+            config, SteppingConfig(max_steps=scenario.max_steps), scene.joint_names, tree=tree
+        )
     return ControllerPolicy(make_policy(config, scene.joint_names, tree=tree))
 
 
@@ -231,8 +252,9 @@ def _feet_poses(scene: Scene, qpos: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     return pos, quat
 
 
-def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
-                    progress: Callable[[float], None] | None = None, on_step=None) -> PushResult:
+def run_closed_loop(
+    scenario: Scenario, scene: Scene, policy, *, progress: Callable[[float], None] | None = None, on_step=None
+) -> PushResult:
     """Run ``policy`` (see the module docstring) on ``scene`` from ``scenario``'s initial state
     for ``scenario.duration_s`` and return the :class:`PushResult`.
 
@@ -248,9 +270,15 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
     d.qpos[:] = qpos0
     d.qvel[:] = qvel0
     mujoco.mj_forward(m, d)
-    monitor = ContactMonitor(m, floor_geom=scene.floor_geom, block_geom=scene.block_geom,
-                             sole_geoms=scene.sole_geoms, biped_geoms=scene.biped_geoms,
-                             central_body=scene.central_body, fall_height_m=scenario.fall_height_m)
+    monitor = ContactMonitor(
+        m,
+        floor_geom=scene.floor_geom,
+        block_geom=scene.block_geom,
+        sole_geoms=scene.sole_geoms,
+        biped_geoms=scene.biped_geoms,
+        central_body=scene.central_body,
+        fall_height_m=scenario.fall_height_m,
+    )
     n_ctrl = scenario.control_steps
     sub = scenario.control_substeps
     period = 1.0 / scenario.control_rate_hz
@@ -318,8 +346,10 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
                 mujoco.mj_step(m, d, sub - 1)  # = mj_step(m, d, sub): MuJoCo loops the same way
             if warnings[_BADQACC]:  # MuJoCo reset the state: the integration diverged
                 feet_rows = k  # (a reset in the first step left the reset state's kinematics)
-                diverged = (f"MuJoCo's integration diverged (non-finite accelerations) between "
-                            f"t = {t:.4f} s and {t + period:.4f} s")
+                diverged = (
+                    f"MuJoCo's integration diverged (non-finite accelerations) between "
+                    f"t = {t:.4f} s and {t + period:.4f} s"
+                )
                 break
             if on_step is not None:
                 on_step(m, d)
@@ -345,24 +375,47 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
         com_err = ori_err = float("nan")
     fell = monitor.fall_time_s is not None
     complete = rows == n and not interrupted and controller_error is None and diverged is None
-    recovered = bool(complete and not fell and com_err < scenario.recovery_com_tol_m
-                     and ori_err < scenario.recovery_orientation_tol_deg)
+    recovered = bool(
+        complete
+        and not fell
+        and com_err < scenario.recovery_com_tol_m
+        and ori_err < scenario.recovery_orientation_tol_deg
+    )
     sim_time = max(rows - 1, 0) * period
     if feet_rows < rows:  # the last row (no step after it) and any row a stop left unread
         feet_pos[feet_rows:rows], feet_quat[feet_rows:rows] = _feet_poses(scene, qpos[feet_rows:rows])
     result = PushResult(
-        scenario=scenario, joint_names=scene.joint_names, times=times[sl], qpos=qpos[sl],
-        com=com[sl], quat=quat[sl], joint_angles=angles[sl], torques=torques[sl],
-        block=block[sl], contacts=contacts[sl], events=tuple(monitor.events),
+        scenario=scenario,
+        joint_names=scene.joint_names,
+        times=times[sl],
+        qpos=qpos[sl],
+        com=com[sl],
+        quat=quat[sl],
+        joint_angles=angles[sl],
+        torques=torques[sl],
+        block=block[sl],
+        contacts=contacts[sl],
+        events=tuple(monitor.events),
         block_contact_time_s=monitor.block_contact_time_s,
         block_momentum_before=p_before,
         block_momentum_after=mass_block * d.qvel[bv].copy(),
-        fell=fell, fall_time_s=monitor.fall_time_s, fall_reason=monitor.fall_reason,
-        interrupted=interrupted, target_com=target_com, target_quat=target_quat,
-        final_com_error_m=com_err, final_orientation_error_deg=ori_err, recovered=recovered,
-        wall_time_s=wall, realtime_factor=sim_time / wall if wall > 0 else float("inf"),
-        controller_error=controller_error, diverged=diverged, qvel=qvel[sl],
-        block_velocity=block_vel[sl], feet_pos=feet_pos[sl], feet_quat=feet_quat[sl],
+        fell=fell,
+        fall_time_s=monitor.fall_time_s,
+        fall_reason=monitor.fall_reason,
+        interrupted=interrupted,
+        target_com=target_com,
+        target_quat=target_quat,
+        final_com_error_m=com_err,
+        final_orientation_error_deg=ori_err,
+        recovered=recovered,
+        wall_time_s=wall,
+        realtime_factor=sim_time / wall if wall > 0 else float("inf"),
+        controller_error=controller_error,
+        diverged=diverged,
+        qvel=qvel[sl],
+        block_velocity=block_vel[sl],
+        feet_pos=feet_pos[sl],
+        feet_quat=feet_quat[sl],
     )
     if hasattr(policy, "steps"):  # a stepping policy: its steps and its own recovered rule
         from biped.sim.stepping import stepping_outcome
@@ -371,14 +424,20 @@ def run_closed_loop(scenario: Scenario, scene: Scene, policy, *,
     return result
 
 
-def simulate(scenario: Scenario | None = None, *, progress: Callable[[float], None] | None = None,
-             scene: Scene | None = None, on_step=None) -> PushResult:
+def simulate(
+    scenario: Scenario | None = None,
+    *,
+    progress: Callable[[float], None] | None = None,
+    scene: Scene | None = None,
+    on_step=None,
+) -> PushResult:
     """Run ``scenario`` (W's defaults if None) closed loop with its controller
     (:func:`controller_policy`) and return its :class:`PushResult`; see :func:`run_closed_loop`."""
     scenario = scenario or Scenario()
     scene = scene or build_scene(scenario)
-    return run_closed_loop(scenario, scene, controller_policy(scenario, scene),
-                           progress=progress, on_step=on_step)
+    return run_closed_loop(
+        scenario, scene, controller_policy(scenario, scene), progress=progress, on_step=on_step
+    )
 
 
 def replay_torques(result: PushResult, *, scene: Scene | None = None) -> PushResult:

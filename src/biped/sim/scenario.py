@@ -114,8 +114,9 @@ class Scenario:
     def __post_init__(self):
         preset = PHYSICS_PRESETS.get(self.physics) if isinstance(self.physics, str) else None
         if preset is None:
-            raise ScenarioError(f"physics must be one of {', '.join(map(repr, PHYSICS))}; "
-                                f"got {self.physics!r}")
+            raise ScenarioError(
+                f"physics must be one of {', '.join(map(repr, PHYSICS))}; got {self.physics!r}"
+            )
         for key in _PRESET_KEYS:
             if getattr(self, key) is None:
                 object.__setattr__(self, key, preset[key])
@@ -147,21 +148,30 @@ class Scenario:
         from biped.models import subject
 
         if not isinstance(model, (str, Path)) or not str(model).strip():
-            raise ScenarioError(f"model must be a shipped model's name ('wendlandt') or the path "
-                                f"of an MJCF file; got {model!r}")
+            raise ScenarioError(
+                f"model must be a shipped model's name ('wendlandt') or the path "
+                f"of an MJCF file; got {model!r}"
+            )
         path = subject.resolve(str(model) if isinstance(model, Path) else model)
         if isinstance(model, str) and model == subject.DEFAULT:
             return cls.from_dict({**values, "model": model})
         w = cls()
         st = subject.subject_state(
-            path, initial_tilt_deg=w.initial_tilt_deg, joint_angles_deg=w.initial_joint_angles_deg,
-            target_com_m=w.target_com_m, target_tilt_deg=w.target_tilt_deg,
-            reference_com_m=w.initial_com_m)
+            path,
+            initial_tilt_deg=w.initial_tilt_deg,
+            joint_angles_deg=w.initial_joint_angles_deg,
+            target_com_m=w.target_com_m,
+            target_tilt_deg=w.target_tilt_deg,
+            reference_com_m=w.initial_com_m,
+        )
         bx, by, bz = w.block_position_m
-        scaled = {"initial_com_m": st.initial_com_m, "target_com_m": st.target_com_m,
-                  "block_position_m": (bx, by, bz * st.height_ratio),
-                  "block_mass_kg": w.block_mass_kg * st.mass_ratio,
-                  "fall_height_m": w.fall_height_m * st.height_ratio}
+        scaled = {
+            "initial_com_m": st.initial_com_m,
+            "target_com_m": st.target_com_m,
+            "block_position_m": (bx, by, bz * st.height_ratio),
+            "block_mass_kg": w.block_mass_kg * st.mass_ratio,
+            "fall_height_m": w.fall_height_m * st.height_ratio,
+        }
         return cls.from_dict({**scaled, **values, "model": str(path.resolve())})
 
     def with_overrides(self, **values) -> Scenario:
@@ -217,9 +227,11 @@ def toml_values(path: str | Path) -> dict:
     except OSError as exc:
         raise ScenarioError(f"cannot read scenario file {str(path)!r}: {exc.strerror}") from None
     except UnicodeDecodeError as exc:
-        raise ScenarioError(f"scenario file {str(path)!r} is not UTF-8 text (byte "
-                            f"0x{exc.object[exc.start]:02x} at offset {exc.start}); TOML files "
-                            f"must be UTF-8") from None
+        raise ScenarioError(
+            f"scenario file {str(path)!r} is not UTF-8 text (byte "
+            f"0x{exc.object[exc.start]:02x} at offset {exc.start}); TOML files "
+            f"must be UTF-8"
+        ) from None
     try:
         values = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -228,7 +240,8 @@ def toml_values(path: str | Path) -> dict:
         if isinstance(v, dict):
             raise ScenarioError(
                 f"scenario file {str(path)!r}: tables such as [{k}] are not used; write "
-                f"top-level 'key = value' lines with keys from: {', '.join(keys())}")
+                f"top-level 'key = value' lines with keys from: {', '.join(keys())}"
+            )
     _check_keys(values)
     return values
 
@@ -248,8 +261,13 @@ _VECTORS = {
     "kp_rot": (3, "diagonal gains (x, y, z) [1/s^2]"),
     "kv_rot": (3, "diagonal gains (x, y, z) [1/s]"),
 }
-_STRINGS = {"target_axis": TARGET_AXES, "controller": CONTROLLERS, "support": SUPPORTS,
-            "physics": PHYSICS, "distribution": DISTRIBUTIONS}
+_STRINGS = {
+    "target_axis": TARGET_AXES,
+    "controller": CONTROLLERS,
+    "support": SUPPORTS,
+    "physics": PHYSICS,
+    "distribution": DISTRIBUTIONS,
+}
 _INTS = {"seed", "max_steps"}
 
 #: Physical ranges [lo, hi] of the numbers (docs/push.md, "Valid ranges"). They keep a run's work
@@ -259,9 +277,13 @@ RANGES = {
     "physics_timestep_s": (1e-5, 0.001, "physics step in s"),
     "control_rate_hz": (1.0, 100_000.0, "controller calls per second"),
     "block_mass_kg": (0.01, 100.0, "block mass in kg, MuJoCo needs it well above zero"),
-    "block_speed_m_s": (0.0, 100.0, "block speed |block_velocity_m_s| in m/s at its start: a "
-                                    "thrown, swung or launched object (a sweep's slow hits from "
-                                    "metres away start fast)"),
+    "block_speed_m_s": (
+        0.0,
+        100.0,
+        "block speed |block_velocity_m_s| in m/s at its start: a "
+        "thrown, swung or launched object (a sweep's slow hits from "
+        "metres away start fast)",
+    ),
     "block_size_m": (0.005, 1.0, "edge length in m"),
     "position_m": (-10.0, 10.0, "world coordinate in m, the scene is a few metres wide"),
     "gain": (0.0, 1e6, "PD gain"),
@@ -343,8 +365,9 @@ def validate(s: Scenario) -> None:
         v = getattr(s, key)
         if not isinstance(v, tuple) or len(v) != n:
             got = len(v) if isinstance(v, tuple) else repr(v)
-            raise ScenarioError(f"{key} must be {n} numbers, {what}; got {got}"
-                                + (" numbers" if isinstance(v, tuple) else ""))
+            raise ScenarioError(
+                f"{key} must be {n} numbers, {what}; got {got}" + (" numbers" if isinstance(v, tuple) else "")
+            )
         for i, x in enumerate(v):
             _finite(f"{key}[{i}]", x, what)
     for key in ("block_size_m",):
@@ -365,8 +388,9 @@ def validate(s: Scenario) -> None:
     _in_range("duration_s", _positive(s, "duration_s", "simulated time in s"), lo_open=True)
     dt = _positive(s, "physics_timestep_s", "physics step in s, at most 0.001")
     if dt > 0.001:
-        raise ScenarioError(f"physics_timestep_s must be <= 0.001 s (this project's bound, "
-                            f"docs/push.md); got {dt}")
+        raise ScenarioError(
+            f"physics_timestep_s must be <= 0.001 s (this project's bound, docs/push.md); got {dt}"
+        )
     _in_range("physics_timestep_s", dt)
     rate = _positive(s, "control_rate_hz", "controller calls per second")
     _in_range("control_rate_hz", rate)
@@ -374,24 +398,27 @@ def validate(s: Scenario) -> None:
     if ratio < 1 - 1e-9 or abs(ratio - round(ratio)) > 1e-6:
         raise ScenarioError(
             f"control_rate_hz must make the control period a whole number of physics steps "
-            f"(physics_timestep_s = {dt} s); got {rate} Hz, i.e. {ratio:.6g} steps")
+            f"(physics_timestep_s = {dt} s); got {rate} Hz, i.e. {ratio:.6g} steps"
+        )
     _in_range("block_mass_kg", _positive(s, "block_mass_kg", "block mass in kg"))
     speed = math.sqrt(sum(x * x for x in s.block_velocity_m_s))
     if not speed <= RANGES["block_speed_m_s"][1]:
-        raise ScenarioError(f"block_velocity_m_s: the block's speed must be at most "
-                            f"{RANGES['block_speed_m_s'][1]:g} m/s ({RANGES['block_speed_m_s'][2]}); "
-                            f"got {speed:g} m/s")
+        raise ScenarioError(
+            f"block_velocity_m_s: the block's speed must be at most "
+            f"{RANGES['block_speed_m_s'][1]:g} m/s ({RANGES['block_speed_m_s'][2]}); "
+            f"got {speed:g} m/s"
+        )
     if speed * dt > min(s.block_size_m) / 2:
         raise ScenarioError(
             f"block_velocity_m_s: at {speed:g} m/s the block moves {speed * dt * 1e3:.3g} mm per "
             f"physics step, more than half its smallest edge ({min(s.block_size_m) * 500:g} mm), so it "
-            f"could pass through the body unseen; use a smaller physics_timestep_s or speed")
-    _in_range("joint_noise_deg", _positive(s, "joint_noise_deg", "standard deviation in deg",
-                                           zero_ok=True))
-    _in_range("initial_tilt_deg", _finite("initial_tilt_deg", s.initial_tilt_deg, "deg about -y"),
-              "tilt_deg")
-    _in_range("target_tilt_deg", _finite("target_tilt_deg", s.target_tilt_deg,
-                                         "deg about target_axis"), "tilt_deg")
+            f"could pass through the body unseen; use a smaller physics_timestep_s or speed"
+        )
+    _in_range("joint_noise_deg", _positive(s, "joint_noise_deg", "standard deviation in deg", zero_ok=True))
+    _in_range("initial_tilt_deg", _finite("initial_tilt_deg", s.initial_tilt_deg, "deg about -y"), "tilt_deg")
+    _in_range(
+        "target_tilt_deg", _finite("target_tilt_deg", s.target_tilt_deg, "deg about target_axis"), "tilt_deg"
+    )
     for key, valid in _STRINGS.items():
         v = getattr(s, key)
         if v not in valid:
@@ -399,14 +426,17 @@ def validate(s: Scenario) -> None:
     tl = s.torque_limits
     if isinstance(tl, tuple):
         if len(tl) != 12:
-            raise ScenarioError(f"torque_limits must be 'none', one number or 12 numbers "
-                                f"({', '.join(JOINT_NAMES)}) in N m; got {len(tl)} numbers")
+            raise ScenarioError(
+                f"torque_limits must be 'none', one number or 12 numbers "
+                f"({', '.join(JOINT_NAMES)}) in N m; got {len(tl)} numbers"
+            )
         for i, x in enumerate(tl):
             if _finite(f"torque_limits[{i}]", x, "N m") <= 0:
                 raise ScenarioError(f"torque_limits[{i}] must be > 0 N m; got {x!r}")
     elif tl != "none" and (not _is_number(tl) or not math.isfinite(tl) or tl <= 0):
-        raise ScenarioError(f"torque_limits must be 'none', one positive number or 12 of "
-                            f"them in N m; got {tl!r}")
+        raise ScenarioError(
+            f"torque_limits must be 'none', one positive number or 12 of them in N m; got {tl!r}"
+        )
     _in_range("friction", _positive(s, "friction", "Coulomb coefficient", zero_ok=True))
     e = _finite("restitution", s.restitution, "coefficient of restitution")
     if not 0.0 <= e <= 0.8:
@@ -414,13 +444,18 @@ def validate(s: Scenario) -> None:
     tc = _positive(s, "contact_timeconst_s", "MuJoCo solref time constant in s")
     _in_range("contact_timeconst_s", tc)
     if tc < 2 * dt:
-        raise ScenarioError(f"contact_timeconst_s must be >= 2 physics_timestep_s = {2 * dt} s "
-                            f"(MuJoCo's stability rule); got {tc}")
+        raise ScenarioError(
+            f"contact_timeconst_s must be >= 2 physics_timestep_s = {2 * dt} s "
+            f"(MuJoCo's stability rule); got {tc}"
+        )
     _in_range("fall_height_m", _positive(s, "fall_height_m", "central-body COM height in m"))
-    _in_range("joint_damping_n_m_s", _positive(s, "joint_damping_n_m_s",
-                                               "passive hinge damping in N m s/rad", zero_ok=True))
-    _in_range("qp_moment_weight", _positive(s, "qp_moment_weight",
-                                            "weight of the QP's moment rows, force rows 1"))
+    _in_range(
+        "joint_damping_n_m_s",
+        _positive(s, "joint_damping_n_m_s", "passive hinge damping in N m s/rad", zero_ok=True),
+    )
+    _in_range(
+        "qp_moment_weight", _positive(s, "qp_moment_weight", "weight of the QP's moment rows, force rows 1")
+    )
     _in_range("qp_min_normal_n", _positive(s, "qp_min_normal_n", "N", zero_ok=True))
     c = _positive(s, "qp_cop_scale", "fraction of the sole the CoP may use, in (0, 1]")
     if c > 1:
@@ -434,11 +469,13 @@ def validate(s: Scenario) -> None:
     if not isinstance(s.max_steps, int) or isinstance(s.max_steps, bool) or not 0 <= s.max_steps <= 20:
         raise ScenarioError(f"max_steps must be an integer in [0, 20]; got {s.max_steps!r}")
     if s.stepping and s.controller != "workspace":
-        raise ScenarioError("stepping = true needs controller = 'workspace' (the stepping policy "
-                            "wraps W's controller)")
+        raise ScenarioError(
+            "stepping = true needs controller = 'workspace' (the stepping policy wraps W's controller)"
+        )
     if not isinstance(s.model, str) or not s.model.strip():
-        raise ScenarioError(f"model must be a shipped model's name ('wendlandt') or the path of an "
-                            f"MJCF file; got {s.model!r}")
+        raise ScenarioError(
+            f"model must be a shipped model's name ('wendlandt') or the path of an MJCF file; got {s.model!r}"
+        )
 
 
 def _toml_value(v) -> str:
@@ -457,8 +494,7 @@ def parse_assignment(text: str) -> tuple[str, Any]:
     """``"key=value"`` (value in TOML syntax, e.g. ``block_mass_kg=2.5`` or
     ``kp_com=[60, 60, 200]``) -> ``(key, value)``; for the command line's ``--set``."""
     if "=" not in text or not text.split("=", 1)[0].strip():
-        raise ScenarioError(f"--set expects KEY=VALUE with a key from: {', '.join(keys())}; "
-                            f"got {text!r}")
+        raise ScenarioError(f"--set expects KEY=VALUE with a key from: {', '.join(keys())}; got {text!r}")
     key, raw = (p.strip() for p in text.split("=", 1))
     _check_keys({key: None})
     try:

@@ -29,10 +29,18 @@ CENTRAL_BODY = "central_body"
 ROOT_JOINT = "root"
 FLOOR, BLOCK, BLOCK_JOINT = "floor", "block", "block_root"
 
-_NQ = {int(mujoco.mjtJoint.mjJNT_FREE): 7, int(mujoco.mjtJoint.mjJNT_BALL): 4,
-       int(mujoco.mjtJoint.mjJNT_SLIDE): 1, int(mujoco.mjtJoint.mjJNT_HINGE): 1}
-_NV = {int(mujoco.mjtJoint.mjJNT_FREE): 6, int(mujoco.mjtJoint.mjJNT_BALL): 3,
-       int(mujoco.mjtJoint.mjJNT_SLIDE): 1, int(mujoco.mjtJoint.mjJNT_HINGE): 1}
+_NQ = {
+    int(mujoco.mjtJoint.mjJNT_FREE): 7,
+    int(mujoco.mjtJoint.mjJNT_BALL): 4,
+    int(mujoco.mjtJoint.mjJNT_SLIDE): 1,
+    int(mujoco.mjtJoint.mjJNT_HINGE): 1,
+}
+_NV = {
+    int(mujoco.mjtJoint.mjJNT_FREE): 6,
+    int(mujoco.mjtJoint.mjJNT_BALL): 3,
+    int(mujoco.mjtJoint.mjJNT_SLIDE): 1,
+    int(mujoco.mjtJoint.mjJNT_HINGE): 1,
+}
 
 
 @dataclass(frozen=True, eq=False)
@@ -87,22 +95,39 @@ def scene_spec(scenario: Scenario) -> mujoco.MjSpec:
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
     if scenario.sleep:
         spec.option.enableflags |= int(mujoco.mjtEnableBit.mjENBL_SLEEP)
-    solref = contact_solref(scenario.restitution, scenario.contact_timeconst_s,
-                            scenario.physics_timestep_s)
+    solref = contact_solref(scenario.restitution, scenario.contact_timeconst_s, scenario.physics_timestep_s)
 
-    tex = spec.add_texture(name="grid", type=mujoco.mjtTexture.mjTEXTURE_2D,
-                           builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER, width=300, height=300,
-                           rgb1=[0.82, 0.84, 0.86], rgb2=[0.62, 0.65, 0.68])
+    tex = spec.add_texture(
+        name="grid",
+        type=mujoco.mjtTexture.mjTEXTURE_2D,
+        builtin=mujoco.mjtBuiltin.mjBUILTIN_CHECKER,
+        width=300,
+        height=300,
+        rgb1=[0.82, 0.84, 0.86],
+        rgb2=[0.62, 0.65, 0.68],
+    )
     mat = spec.add_material(name="grid", texrepeat=[10, 10], reflectance=0.05)
     mat.textures[mujoco.mjtTextureRole.mjTEXROLE_RGB] = tex.name
     spec.worldbody.add_light(name="sun", pos=[0, 0, 4], dir=[0, 0, -1], diffuse=[0.7, 0.7, 0.7])
-    spec.worldbody.add_geom(name=FLOOR, type=mujoco.mjtGeom.mjGEOM_PLANE, size=[10, 10, 0.1],
-                            material="grid", contype=1, conaffinity=1)
+    spec.worldbody.add_geom(
+        name=FLOOR,
+        type=mujoco.mjtGeom.mjGEOM_PLANE,
+        size=[10, 10, 0.1],
+        material="grid",
+        contype=1,
+        conaffinity=1,
+    )
     block = spec.worldbody.add_body(name=BLOCK, pos=list(scenario.block_position_m))
     block.add_freejoint(name=BLOCK_JOINT)
-    block.add_geom(name=BLOCK, type=mujoco.mjtGeom.mjGEOM_BOX,
-                   size=[s / 2 for s in scenario.block_size_m], mass=scenario.block_mass_kg,
-                   rgba=[0.9, 0.6, 0.1, 1.0], contype=1, conaffinity=1)
+    block.add_geom(
+        name=BLOCK,
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[s / 2 for s in scenario.block_size_m],
+        mass=scenario.block_mass_kg,
+        rgba=[0.9, 0.6, 0.1, 1.0],
+        contype=1,
+        conaffinity=1,
+    )
     for j in spec.joints:  # the plant's passive damping (the controller does not model it)
         if j.type == mujoco.mjtJoint.mjJNT_HINGE:
             j.damping = [scenario.joint_damping_n_m_s, *list(j.damping)[1:]]
@@ -134,10 +159,12 @@ def build_scene(scenario: Scenario) -> Scene:
         sj = _index_of(model, "joint", name, "joint")
         if model.jnt_type[sj] != jtype:
             raise ModelError(f"joint {name!r} changed type between the biped and the scene")
-        qpos_index[bm.jnt_qposadr[j]:bm.jnt_qposadr[j] + _NQ[jtype]] = (
-            model.jnt_qposadr[sj] + np.arange(_NQ[jtype]))
-        qvel_index[bm.jnt_dofadr[j]:bm.jnt_dofadr[j] + _NV[jtype]] = (
-            model.jnt_dofadr[sj] + np.arange(_NV[jtype]))
+        qpos_index[bm.jnt_qposadr[j] : bm.jnt_qposadr[j] + _NQ[jtype]] = model.jnt_qposadr[sj] + np.arange(
+            _NQ[jtype]
+        )
+        qvel_index[bm.jnt_dofadr[j] : bm.jnt_dofadr[j] + _NV[jtype]] = model.jnt_dofadr[sj] + np.arange(
+            _NV[jtype]
+        )
     assert (qpos_index >= 0).all() and (qvel_index >= 0).all()
     hinges = [bm.joint(j).name for j in range(bm.njnt) if bm.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE]
     if sorted(hinges) != sorted(JOINT_NAMES):
@@ -148,28 +175,35 @@ def build_scene(scenario: Scenario) -> Scene:
     if missing:
         raise ModelError(f"joints without a motor in the biped model: {missing}")
     actuator_index = np.array([act_of_joint[n] for n in joint_names], dtype=np.int64)
-    joint_qpos_index = np.array([model.jnt_qposadr[_index_of(model, "joint", n, "joint")]
-                                 for n in joint_names], dtype=np.int64)
+    joint_qpos_index = np.array(
+        [model.jnt_qposadr[_index_of(model, "joint", n, "joint")] for n in joint_names], dtype=np.int64
+    )
     bj = _index_of(model, "joint", BLOCK_JOINT, "joint")
     central = _index_of(model, "body", CENTRAL_BODY, "body")
     if np.any(np.abs(model.body_ipos[central]) > 1e-12):
         raise ModelError(f"{CENTRAL_BODY!r} frame origin must be its COM (W's body frame)")
     block_body = _index_of(model, "body", BLOCK, "body")
     biped_bodies = {bm.body(b).name for b in range(1, bm.nbody)}
-    biped_geoms = tuple(g for g in range(model.ngeom)
-                        if model.body(model.geom_bodyid[g]).name in biped_bodies)
-    sole_geoms = tuple(_index_of(model, "geom", f"{foot}_{part}", "geom")
-                       for foot, part in SOLE_GEOMS)
+    biped_geoms = tuple(
+        g for g in range(model.ngeom) if model.body(model.geom_bodyid[g]).name in biped_bodies
+    )
+    sole_geoms = tuple(_index_of(model, "geom", f"{foot}_{part}", "geom") for foot, part in SOLE_GEOMS)
     return Scene(
-        model=model, biped_model=bm, joint_names=joint_names,
-        biped_qpos_index=qpos_index, biped_qvel_index=qvel_index,
-        actuator_index=actuator_index, joint_qpos_index=joint_qpos_index,
+        model=model,
+        biped_model=bm,
+        joint_names=joint_names,
+        biped_qpos_index=qpos_index,
+        biped_qvel_index=qvel_index,
+        actuator_index=actuator_index,
+        joint_qpos_index=joint_qpos_index,
         block_qpos_index=model.jnt_qposadr[bj] + np.arange(7),
         block_qvel_index=model.jnt_dofadr[bj] + np.arange(6),
-        central_body=central, block_body=block_body,
+        central_body=central,
+        block_body=block_body,
         floor_geom=_index_of(model, "geom", FLOOR, "geom"),
         block_geom=_index_of(model, "geom", BLOCK, "geom"),
-        sole_geoms=sole_geoms, biped_geoms=biped_geoms,
+        sole_geoms=sole_geoms,
+        biped_geoms=biped_geoms,
         solref=tuple(float(x) for x in model.geom_solref[0]),
     )
 

@@ -32,9 +32,14 @@ def stepping_outcome(result, policy, *, complete: bool):
     else:
         com_err = speed = float("nan")
     s = result.scenario
-    recovered = bool(complete and not result.fell and com_err < s.recovery_com_tol_m
-                     and speed < RECOVERY_SPEED_M_S
-                     and result.final_orientation_error_deg < s.recovery_orientation_tol_deg)
+    recovered = bool(
+        complete
+        and not result.fell
+        and com_err < s.recovery_com_tol_m
+        and speed < RECOVERY_SPEED_M_S
+        and result.final_orientation_error_deg < s.recovery_orientation_tol_deg
+    )
     extra = {**result.extra, "steps": steps, "final_com_speed_m_s": speed}
-    return dataclasses.replace(result, target_com=target, final_com_error_m=com_err,
-                               recovered=recovered, extra=extra)
+    return dataclasses.replace(
+        result, target_com=target, final_com_error_m=com_err, recovered=recovered, extra=extra
+    )

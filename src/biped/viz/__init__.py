@@ -16,5 +16,14 @@ from biped.viz.replay import Replay, ReplayGeom, replay_from_mujoco, write_repla
 from biped.viz.timeline import SlowMotion
 from biped.viz.video import VideoResult, gl_available, render_video
 
-__all__ = ["Replay", "ReplayGeom", "SlowMotion", "VideoResult", "gl_available",
-           "render_push_video", "render_video", "replay_from_mujoco", "write_replay"]
+__all__ = [
+    "Replay",
+    "ReplayGeom",
+    "SlowMotion",
+    "VideoResult",
+    "gl_available",
+    "render_push_video",
+    "render_video",
+    "replay_from_mujoco",
+    "write_replay",
+]

@@ -32,13 +32,18 @@ import numpy as np
 from biped.analysis import envelope, feet_in_place_bound, survived, sweep_data
 from biped.errors import ScenarioError
 
-LABELS = {"speed_m_s": "block speed [m/s]", "impulse_n_s": "impulse to the body [N s]",
-          "impulse_horizontal_n_s": "horizontal impulse [N s]"}
+LABELS = {
+    "speed_m_s": "block speed [m/s]",
+    "impulse_n_s": "impulse to the body [N s]",
+    "impulse_horizontal_n_s": "horizontal impulse [N s]",
+}
 #: Where the radial tick labels sit [deg]: between the 0 and 45 deg spokes, clear of every
 #: angle label.
 RLABEL_DEG = 22.5
-FACING_NOTE = ("angle: direction the block travels (0 deg = +x). The biped faces -x (180 deg), "
-               "left side toward -y: 180 deg is W's push, from behind.")
+FACING_NOTE = (
+    "angle: direction the block travels (0 deg = +x). The biped faces -x (180 deg), "
+    "left side toward -y: 180 deg is W's push, from behind."
+)
 
 
 def _closed(theta: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -76,15 +81,27 @@ def _scale(data: Any, by: str, bound: bool) -> float:
 
 def _facing_arrow(ax: Any, rmax: float) -> None:
     """An arrow from the centre toward 180 deg: the way the biped faces."""
-    ax.annotate("", xy=(np.pi, 0.3 * rmax), xytext=(np.pi, 0.0),
-                arrowprops={"arrowstyle": "-|>", "color": "0.35", "lw": 1.2}, zorder=4)
-    ax.text(np.pi, 0.36 * rmax, "faces", color="0.35", fontsize=7, ha="center", va="bottom",
-            zorder=4)
+    ax.annotate(
+        "",
+        xy=(np.pi, 0.3 * rmax),
+        xytext=(np.pi, 0.0),
+        arrowprops={"arrowstyle": "-|>", "color": "0.35", "lw": 1.2},
+        zorder=4,
+    )
+    ax.text(np.pi, 0.36 * rmax, "faces", color="0.35", fontsize=7, ha="center", va="bottom", zorder=4)
 
 
-def plot_envelope(source: Any, ax: Any = None, *, by: str = "speed_m_s",
-                  criterion: str = "survived", bound: bool = True, title: str | None = None,
-                  rmax: float | None = None, bin_deg: float | None = None) -> Any:
+def plot_envelope(
+    source: Any,
+    ax: Any = None,
+    *,
+    by: str = "speed_m_s",
+    criterion: str = "survived",
+    bound: bool = True,
+    title: str | None = None,
+    rmax: float | None = None,
+    bin_deg: float | None = None,
+) -> Any:
     """Draw one sweep's envelope on a polar axes (created if None); returns the axes.
 
     ``by``: ``"speed_m_s"`` or ``"impulse_n_s"``; ``criterion``: ``"survived"`` or
@@ -105,8 +122,7 @@ def plot_envelope(source: Any, ax: Any = None, *, by: str = "speed_m_s",
     theta = np.radians(np.array(cols["direction_deg"], dtype=float))
     r = _values(cols, by)
     ax.scatter(theta[ok], r[ok], s=14, c="tab:green", marker="o", label=criterion, zorder=3)
-    ax.scatter(theta[~ok], r[~ok], s=18, c="tab:red", marker="x", label=f"not {criterion}",
-               zorder=3)
+    ax.scatter(theta[~ok], r[~ok], s=18, c="tab:red", marker="x", label=f"not {criterion}", zorder=3)
     env = envelope(cols, by=by, criterion=criterion, bin_deg=bin_deg)
     if len(env.directions_deg) >= 3:
         t, v = _closed(np.radians(env.directions_deg), np.nan_to_num(env.survived_max, nan=0.0))
@@ -116,8 +132,15 @@ def plot_envelope(source: Any, ax: Any = None, *, by: str = "speed_m_s",
         radius = _bound_radius(data, cols, by, dirs)
         t, v = _closed(np.radians(dirs), radius)
         unit = LABELS[by].split("[")[-1].rstrip("]")
-        ax.plot(t, v, color="black", ls="--", lw=1.6, zorder=5,
-                label=f"feet-in-place bound (Hof): {radius.min():.3g}-{radius.max():.3g} {unit}")
+        ax.plot(
+            t,
+            v,
+            color="black",
+            ls="--",
+            lw=1.6,
+            zorder=5,
+            label=f"feet-in-place bound (Hof): {radius.min():.3g}-{radius.max():.3g} {unit}",
+        )
     ax.set_ylim(0, rmax)
     ax.set_theta_zero_location("E")
     ax.set_theta_direction(1)
@@ -125,14 +148,19 @@ def plot_envelope(source: Any, ax: Any = None, *, by: str = "speed_m_s",
     _facing_arrow(ax, rmax)
     ctrl = cols["controller"][0] if cols["controller"] else "?"
     lim = cols["torque_limits"][0] if cols["torque_limits"] else "?"
-    ax.set_title(f"{title or f'{ctrl}, torque limits: {lim}'}\nradius: {LABELS[by]}", pad=14,
-                 fontsize=10)
+    ax.set_title(f"{title or f'{ctrl}, torque limits: {lim}'}\nradius: {LABELS[by]}", pad=14, fontsize=10)
     return ax
 
 
-def plot_comparison(sources: Any, *, labels: Any = None, by: str = "speed_m_s",
-                    criterion: str = "survived", out: str | os.PathLike | None = None,
-                    bin_deg: float | None = None) -> Any:
+def plot_comparison(
+    sources: Any,
+    *,
+    labels: Any = None,
+    by: str = "speed_m_s",
+    criterion: str = "survived",
+    out: str | os.PathLike | None = None,
+    bin_deg: float | None = None,
+) -> Any:
     """Polar envelopes of one or more sweeps side by side (same radial scale) and, for two or
     more, an overlay of their envelope lines; a note says which way the biped faces. Saved (PNG,
     SVG, PDF by suffix) if ``out`` is given. Returns the figure."""
@@ -147,8 +175,9 @@ def plot_comparison(sources: Any, *, labels: Any = None, by: str = "speed_m_s",
     rmax = max(_scale(d, by, True) for d in datas)
     n = len(datas)
     panels = n + 1 if n > 1 else 1
-    fig, axes = plt.subplots(1, panels, subplot_kw={"projection": "polar"},
-                             figsize=(4.6 * panels + 0.6, 6.0), squeeze=False)
+    fig, axes = plt.subplots(
+        1, panels, subplot_kw={"projection": "polar"}, figsize=(4.6 * panels + 0.6, 6.0), squeeze=False
+    )
     axes = axes[0]
     for ax, d, lab in zip(axes, datas, labels, strict=False):
         plot_envelope(d, ax, by=by, criterion=criterion, title=lab, rmax=rmax, bin_deg=bin_deg)
@@ -160,8 +189,7 @@ def plot_comparison(sources: Any, *, labels: Any = None, by: str = "speed_m_s",
             env = envelope(d.table, by=by, criterion=criterion, bin_deg=bin_deg)
             if len(env.directions_deg) < 3:
                 continue
-            t, v = _closed(np.radians(env.directions_deg),
-                           np.nan_to_num(env.survived_max, nan=0.0))
+            t, v = _closed(np.radians(env.directions_deg), np.nan_to_num(env.survived_max, nan=0.0))
             name = lab or d.table.column("controller")[0].as_py()
             ax.plot(t, v, color=colors[k % len(colors)], lw=2, label=name)
             ax.fill(t, v, color=colors[k % len(colors)], alpha=0.12)
@@ -172,8 +200,15 @@ def plot_comparison(sources: Any, *, labels: Any = None, by: str = "speed_m_s",
         ax.set_title(f"envelopes overlaid\nradius: {LABELS[by]}", pad=14, fontsize=10)
         h2, l2 = ax.get_legend_handles_labels()
         handles, labs = handles + h2, labs + l2
-    fig.legend(handles, labs, loc="lower center", ncol=min(2 * panels, len(labs), 6), fontsize=8,
-               frameon=False, bbox_to_anchor=(0.5, 0.06))
+    fig.legend(
+        handles,
+        labs,
+        loc="lower center",
+        ncol=min(2 * panels, len(labs), 6),
+        fontsize=8,
+        frameon=False,
+        bbox_to_anchor=(0.5, 0.06),
+    )
     note = textwrap.fill(FACING_NOTE, width=int(95 * min(panels, 2) / 2 + 10 * (panels > 1)))
     fig.text(0.5, 0.01, note, ha="center", va="bottom", fontsize=8)
     fig.tight_layout(rect=(0, 0.17, 1, 0.93))

@@ -63,8 +63,12 @@ def body_leg_figure(traj, which: str) -> Figure:
 
 #: Line styles of :func:`comparison_figure`, drawn in this order: a wide pale line first and
 #: narrower, dashed ones over it, so that forms whose curves coincide all stay visible.
-_COMPARE_STYLES = ({"lw": 5.0, "alpha": 0.45, "ls": "-"}, {"lw": 2.2, "ls": "-"},
-                   {"lw": 1.4, "ls": (0, (5, 3))}, {"lw": 1.0, "ls": (0, (1, 2))})
+_COMPARE_STYLES = (
+    {"lw": 5.0, "alpha": 0.45, "ls": "-"},
+    {"lw": 2.2, "ls": "-"},
+    {"lw": 1.4, "ls": (0, (5, 3))},
+    {"lw": 1.0, "ls": (0, (1, 2))},
+)
 
 
 def comparison_figure(trajs: dict, reference: str | None = None) -> Figure:
@@ -95,8 +99,7 @@ def comparison_figure(trajs: dict, reference: str | None = None) -> Figure:
     ax1.legend(fontsize=7)
     for ax in (ax1, ax2):
         ax.grid(alpha=0.3)
-    fig.suptitle("Body-leg model: B's equations of motion compared, same start and gains",
-                 fontsize=10)
+    fig.suptitle("Body-leg model: B's equations of motion compared, same start and gains", fontsize=10)
     fig.tight_layout()
     return fig
 
@@ -126,21 +129,29 @@ def stability_map_figure(smap, marks: dict | None = None, best=None) -> Figure:
         ax.plot([k1], [k2], "o", ms=7, mfc="white", mec="k")
         ax.annotate(label, (k1, k2), textcoords="offset points", xytext=(6, 6), fontsize=8)
     k1, k2, mg = best_on_map(smap)
-    ax.plot([k1], [k2], "*", ms=14, mfc="gold", mec="k",
-            label=f"best on this map: K_theta1 = {k1:.4g}, K_theta2 = {k2:.4g}, margin {mg:.3g} 1/s")
+    ax.plot(
+        [k1],
+        [k2],
+        "*",
+        ms=14,
+        mfc="gold",
+        mec="k",
+        label=f"best on this map: K_theta1 = {k1:.4g}, K_theta2 = {k2:.4g}, margin {mg:.3g} 1/s",
+    )
     if best is not None:
         gains = np.asarray(getattr(best, "gains", best), dtype=float)
         margin = getattr(best, "margin", None)
-        text = (f"best found over all four gains: K_theta1 = {gains[0]:.4g}, K_theta2 = "
-                f"{gains[2]:.4g}\n  (K_theta1dot = {gains[1]:.4g}, K_theta2dot = {gains[3]:.4g}"
-                + (f", margin {margin:.3g} 1/s)" if margin is not None else ")"))
+        text = (
+            f"best found over all four gains: K_theta1 = {gains[0]:.4g}, K_theta2 = "
+            f"{gains[2]:.4g}\n  (K_theta1dot = {gains[1]:.4g}, K_theta2dot = {gains[3]:.4g}"
+            + (f", margin {margin:.3g} 1/s)" if margin is not None else ")")
+        )
         ax.plot([gains[0]], [gains[2]], "D", ms=9, mfc="deepskyblue", mec="k", label=text)
     ax.legend(fontsize=6.5, loc="upper left", framealpha=0.85)
     ax.set_xlabel("K_theta1 [lb ft^2/s^2/rad]")
     ax.set_ylabel("K_theta2 [lb ft^2/s^2/rad]")
     ax.set_title(
-        f"Body-leg local feedback, K_theta1dot = {smap.k_theta1_dot:g}, "
-        f"K_theta2dot = {smap.k_theta2_dot:g}",
+        f"Body-leg local feedback, K_theta1dot = {smap.k_theta1_dot:g}, K_theta2dot = {smap.k_theta2_dot:g}",
         fontsize=9,
     )
     fig.tight_layout()
@@ -157,9 +168,7 @@ def _write_animation(images: list, path: Path, fps: float) -> None:
         from PIL import Image
 
         frames = [
-            Image.fromarray(im[..., :3]).convert(
-                "P", palette=Image.Palette.WEB, dither=Image.Dither.NONE
-            )
+            Image.fromarray(im[..., :3]).convert("P", palette=Image.Palette.WEB, dither=Image.Dither.NONE)
             for im in images
         ]
         frames[0].save(path, save_all=True, append_images=frames[1:],

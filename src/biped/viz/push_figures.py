@@ -36,12 +36,15 @@ def mark_events(ax, result, *, legend: bool = False) -> None:
     """Vertical lines: block hit (black), lift-off (dashed) and touch-down (dotted) per foot
     (left blue, right red; heel thick, toe thin), fall (grey band)."""
     if result.block_contact_time_s is not None:
-        ax.axvline(result.block_contact_time_s, color="k", lw=1.2,
-                   label="block hits" if legend else None)
+        ax.axvline(result.block_contact_time_s, color="k", lw=1.2, label="block hits" if legend else None)
     for e in result.events:
-        ax.axvline(e.time_s, color=_FOOT_COLOURS[e.foot],
-                   ls="--" if e.kind == "lift_off" else ":", lw=1.0 if e.part == "heel" else 0.5,
-                   alpha=0.7)
+        ax.axvline(
+            e.time_s,
+            color=_FOOT_COLOURS[e.foot],
+            ls="--" if e.kind == "lift_off" else ":",
+            lw=1.0 if e.part == "heel" else 0.5,
+            alpha=0.7,
+        )
     if result.fall_time_s is not None:
         ax.axvspan(result.fall_time_s, result.times[-1] + 1e-9, color="0.8", alpha=0.5)
 
@@ -49,11 +52,13 @@ def mark_events(ax, result, *, legend: bool = False) -> None:
 def _legend_events(fig):
     from matplotlib.lines import Line2D
 
-    handles = [Line2D([], [], color="k", lw=1.2, label="block hits the body"),
-               Line2D([], [], color="tab:blue", ls="--", label="left lift-off"),
-               Line2D([], [], color="tab:blue", ls=":", label="left touch-down"),
-               Line2D([], [], color="tab:red", ls="--", label="right lift-off"),
-               Line2D([], [], color="tab:red", ls=":", label="right touch-down")]
+    handles = [
+        Line2D([], [], color="k", lw=1.2, label="block hits the body"),
+        Line2D([], [], color="tab:blue", ls="--", label="left lift-off"),
+        Line2D([], [], color="tab:blue", ls=":", label="left touch-down"),
+        Line2D([], [], color="tab:red", ls="--", label="right lift-off"),
+        Line2D([], [], color="tab:red", ls=":", label="right touch-down"),
+    ]
     fig.legend(handles=handles, loc="lower center", ncol=5, fontsize=7, frameon=False)
 
 
@@ -69,8 +74,15 @@ def _panels(nrows, *, height=6.5, zoom=True):
     if not zoom:
         fig, full = plt.subplots(nrows, 1, sharex=True, figsize=(8, height), squeeze=False)
         return fig, list(full[:, 0]), []
-    fig, axes = plt.subplots(nrows, 2, sharex="col", sharey="row", figsize=(11.5, height),
-                             squeeze=False, gridspec_kw={"width_ratios": (2.2, 1.0)})
+    fig, axes = plt.subplots(
+        nrows,
+        2,
+        sharex="col",
+        sharey="row",
+        figsize=(11.5, height),
+        squeeze=False,
+        gridspec_kw={"width_ratios": (2.2, 1.0)},
+    )
     return fig, list(axes[:, 0]), list(axes[:, 1])
 
 
@@ -88,10 +100,12 @@ def _finish_zoom(result, zooms, *, labels=True):
     if labels:
         top = zooms[0]
         evs = [(result.block_contact_time_s, "block")] if result.block_contact_time_s is not None else []
-        evs += [(e.time_s, f"{e.foot[0].upper()} {e.part} {'up' if e.kind == 'lift_off' else 'down'}")
-                for e in result.events]
+        evs += [
+            (e.time_s, f"{e.foot[0].upper()} {e.part} {'up' if e.kind == 'lift_off' else 'down'}")
+            for e in result.events
+        ]
         evs = sorted((t, lab) for t, lab in evs if t0 <= t <= t0 + ZOOM_S)
-        groups: list[list] = []            # events closer than 6 % of the panel share a label
+        groups: list[list] = []  # events closer than 6 % of the panel share a label
         for t, lab in evs:
             if groups and t - groups[-1][0][0] < 0.06 * ZOOM_S:
                 groups[-1].append((t, lab))
@@ -99,11 +113,17 @@ def _finish_zoom(result, zooms, *, labels=True):
                 groups.append([(t, lab)])
         for i, g in enumerate(groups):
             text = "\n".join(f"{t:.3f} {lab}" for t, lab in g)
-            top.annotate(text, (g[0][0], 1.0), xycoords=("data", "axes fraction"),
-                         xytext=(2, -3 - 42 * (i % 2)), textcoords="offset points", fontsize=5.5,
-                         va="top",
-                         color="0.15", bbox={"boxstyle": "square,pad=0.1", "fc": "white",
-                                             "ec": "none", "alpha": 0.7})
+            top.annotate(
+                text,
+                (g[0][0], 1.0),
+                xycoords=("data", "axes fraction"),
+                xytext=(2, -3 - 42 * (i % 2)),
+                textcoords="offset points",
+                fontsize=5.5,
+                va="top",
+                color="0.15",
+                bbox={"boxstyle": "square,pad=0.1", "fc": "white", "ec": "none", "alpha": 0.7},
+            )
 
 
 def _legs_figure(result, values, ylabel, title, zoom=True):
@@ -112,7 +132,7 @@ def _legs_figure(result, values, ylabel, title, zoom=True):
     for i, side in enumerate(("left", "right")):
         for j, label in enumerate(_LEG_LABELS):
             col = names.index(f"{side}_{_LEG_JOINTS[j]}")
-            for ax in [axes[i]] + zooms[i:i + 1]:
+            for ax in [axes[i]] + zooms[i : i + 1]:
                 ax.plot(result.times, values[:, col], lw=1.2, label=label if ax is axes[i] else None)
         mark_events(axes[i], result)
         axes[i].set_ylabel(f"{side} leg: {ylabel}")
@@ -128,26 +148,30 @@ def _legs_figure(result, values, ylabel, title, zoom=True):
 
 def fig3_joint_angles(result, zoom=True):
     """W Fig. 3: joint angles theta_2..theta_13 [deg] against time (right: the first 0.5 s)."""
-    return _legs_figure(result, np.degrees(result.joint_angles), "joint angle [deg]",
-                        "Joint angles (W Fig. 3)", zoom)
+    return _legs_figure(
+        result, np.degrees(result.joint_angles), "joint angle [deg]", "Joint angles (W Fig. 3)", zoom
+    )
 
 
 def fig4_joint_torques(result, zoom=True):
     """W Fig. 4: joint torques [N m] against time, held over each control period (right: the
     first 0.5 s)."""
-    return _legs_figure(result, result.torques, "joint torque [N m]", "Joint torques (W Fig. 4)",
-                        zoom)
+    return _legs_figure(result, result.torques, "joint torque [N m]", "Joint torques (W Fig. 4)", zoom)
 
 
 def fig5_body_position(result, zoom=True):
     """W Fig. 5: central-body COM position [cm] against the set point (right: the first 0.5 s)."""
     fig, axes, zooms = _panels(3, zoom=zoom)
     for i, (ax, c) in enumerate(zip(axes, "xyz", strict=False)):
-        for a in [ax] + zooms[i:i + 1]:
-            a.plot(result.times, 100 * result.com[:, i], lw=1.4,
-                   label=f"COM {c}" if a is ax else None)
-            a.axhline(100 * result.target_com[i], color="0.3", ls="-.", lw=1.0,
-                      label="set point" if a is ax else None)
+        for a in [ax] + zooms[i : i + 1]:
+            a.plot(result.times, 100 * result.com[:, i], lw=1.4, label=f"COM {c}" if a is ax else None)
+            a.axhline(
+                100 * result.target_com[i],
+                color="0.3",
+                ls="-.",
+                lw=1.0,
+                label="set point" if a is ax else None,
+            )
         mark_events(ax, result)
         ax.set_ylabel(f"{c} [cm]")
         ax.grid(alpha=0.3)
@@ -164,11 +188,14 @@ def _quat_mat(q: np.ndarray) -> np.ndarray:
     """(..., 3, 3) rotation matrices of unit quaternions (..., 4) in (w, x, y, z) order."""
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
     w, x, y, z = np.moveaxis(q, -1, 0)
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-    ], -2)
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        -2,
+    )
 
 
 def orientation_error_rpy_deg(quat, target_quat) -> np.ndarray:
@@ -180,7 +207,8 @@ def orientation_error_rpy_deg(quat, target_quat) -> np.ndarray:
     is a lean forward or back; z is vertical). Small errors: each angle is the rotation about
     that axis."""
     Re = np.swapaxes(_quat_mat(np.asarray(target_quat, dtype=float)), -1, -2) @ _quat_mat(
-        np.asarray(quat, dtype=float))
+        np.asarray(quat, dtype=float)
+    )
     pitch = np.arcsin(np.clip(-Re[..., 2, 0], -1.0, 1.0))
     roll = np.arctan2(Re[..., 2, 1], Re[..., 2, 2])
     yaw = np.arctan2(Re[..., 1, 0], Re[..., 0, 0])
@@ -211,8 +239,9 @@ def fig6_orientation(result, zoom=True):
     if zoom:
         err_axes.append(fig.add_subplot(gs[2:4, 1], sharey=err_axes[0]))
     for ax in err_axes:
-        for k, (name, col) in enumerate(zip(("roll (x)", "pitch (y)", "yaw (z)"),
-                                            ("tab:purple", "tab:green", "tab:brown"), strict=False)):
+        for k, (name, col) in enumerate(
+            zip(("roll (x)", "pitch (y)", "yaw (z)"), ("tab:purple", "tab:green", "tab:brown"), strict=False)
+        ):
             ax.plot(result.times, rpy[:, k], color=col, lw=1.3, label=name)
         ax.axhline(0.0, color="0.3", ls="-.", lw=1.0)
         mark_events(ax, result)

@@ -55,21 +55,24 @@ def event_captions(result) -> list[dict]:
         out.append({"time_s": float(e.time_s), "label": f"{e.foot} {e.part} {word}"})
     if getattr(result, "fall_time_s", None) is not None:
         reason = getattr(result, "fall_reason", None)
-        out.append({"time_s": float(result.fall_time_s),
-                    "label": f"fall ({reason})" if reason else "fall"})
+        out.append({"time_s": float(result.fall_time_s), "label": f"fall ({reason})" if reason else "fall"})
     return sorted(out, key=lambda e: e["time_s"])
 
 
-def push_slow_motion(result, *, speed: float = SLOW_SPEED, before_s: float = BEFORE_HIT_S,
-                     after_s: float = AFTER_LANDING_S,
-                     min_after_hit_s: float = MIN_AFTER_HIT_S) -> SlowMotion | None:
+def push_slow_motion(
+    result,
+    *,
+    speed: float = SLOW_SPEED,
+    before_s: float = BEFORE_HIT_S,
+    after_s: float = AFTER_LANDING_S,
+    min_after_hit_s: float = MIN_AFTER_HIT_S,
+) -> SlowMotion | None:
     """The slow-motion window around the hit (module docstring), or ``None`` if the block never
     touched the biped. Foot events are those of ``result.events`` in ``(hit, hit + 1 s]``."""
     hit = result.block_contact_time_s
     if hit is None:
         return None
-    for name, v in (("before_s", before_s), ("after_s", after_s),
-                    ("min_after_hit_s", min_after_hit_s)):
+    for name, v in (("before_s", before_s), ("after_s", after_s), ("min_after_hit_s", min_after_hit_s)):
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
             raise ScenarioError(f"{name} must be a finite number of s >= 0, got {v!r}")
     hit = float(hit)
@@ -107,8 +110,15 @@ def _project(points, lookat, distance, azimuth, elevation, fovy_deg, aspect) -> 
     return np.column_stack([(rel @ right) / (z * t * aspect), (rel @ up) / (z * t)])
 
 
-def push_camera(model, result, *, azimuth: float = -110.0, elevation: float = -10.0,
-                aspect: float = 16 / 9, fill: float = 0.8) -> dict:
+def push_camera(
+    model,
+    result,
+    *,
+    azimuth: float = -110.0,
+    elevation: float = -10.0,
+    aspect: float = 16 / 9,
+    fill: float = 0.8,
+) -> dict:
     """``render_video`` camera keywords (``lookat``, ``distance``, ``azimuth``, ``elevation``) of
     a fixed camera that sees every geom but the floor at the moment of the hit (the first sample
     if there is none) and the block where it was thrown from, inside the central ``fill`` of the
@@ -117,8 +127,7 @@ def push_camera(model, result, *, azimuth: float = -110.0, elevation: float = -1
 
     times = np.asarray(result.times, dtype=float)
     hit = result.block_contact_time_s
-    k = 0 if hit is None else int(np.clip(np.searchsorted(times, hit + 1e-12) - 1, 0,
-                                          times.size - 1))
+    k = 0 if hit is None else int(np.clip(np.searchsorted(times, hit + 1e-12) - 1, 0, times.size - 1))
     planes = np.asarray(model.geom_type) == int(mujoco.mjtGeom.mjGEOM_PLANE)
     solids = [g for g in range(model.ngeom) if not planes[g]]
     block = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "block")
@@ -128,7 +137,7 @@ def push_camera(model, result, *, azimuth: float = -110.0, elevation: float = -1
     lookat = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
     fovy = float(model.vis.global_.fovy)
     fwd = _fwd(azimuth, elevation)
-    lo, hi = 0.1, 100.0                       # bisection on the distance that just fits
+    lo, hi = 0.1, 100.0  # bisection on the distance that just fits
     for _ in range(60):
         d = 0.5 * (lo + hi)
         uv = _project(pts, lookat, d, azimuth, elevation, fovy, aspect)
@@ -137,8 +146,7 @@ def push_camera(model, result, *, azimuth: float = -110.0, elevation: float = -1
             hi = d
         else:
             lo = d
-    return {"lookat": lookat, "distance": hi, "azimuth": float(azimuth),
-            "elevation": float(elevation)}
+    return {"lookat": lookat, "distance": hi, "azimuth": float(azimuth), "elevation": float(elevation)}
 
 
 def _fwd(azimuth, elevation) -> np.ndarray:
@@ -146,11 +154,23 @@ def _fwd(azimuth, elevation) -> np.ndarray:
     return np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
 
 
-def render_push_video(model, result, path, *, fps: float = 30, width: int = 1280,
-                      height: int = 720, speed: float = SLOW_SPEED,
-                      before_hit_s: float = BEFORE_HIT_S, after_landing_s: float = AFTER_LANDING_S,
-                      azimuth: float = -110.0, elevation: float = -10.0,
-                      title: str | None = None, progress=None, **render_kw) -> VideoResult:
+def render_push_video(
+    model,
+    result,
+    path,
+    *,
+    fps: float = 30,
+    width: int = 1280,
+    height: int = 720,
+    speed: float = SLOW_SPEED,
+    before_hit_s: float = BEFORE_HIT_S,
+    after_landing_s: float = AFTER_LANDING_S,
+    azimuth: float = -110.0,
+    elevation: float = -10.0,
+    title: str | None = None,
+    progress=None,
+    **render_kw,
+) -> VideoResult:
     """Render a push run (a :class:`biped.sim.push.PushResult`, or anything with its ``times``,
     ``qpos``, ``events``, ``block_contact_time_s``, ``fall_time_s``) to an MP4 with the
     defaults of the module docstring. ``model`` is the scene's ``MjModel`` (biped + block +
@@ -162,18 +182,29 @@ def render_push_video(model, result, path, *, fps: float = 30, width: int = 1280
         raise StateError("the run has no samples to render")
     slow = None
     if speed != 1:
-        slow = push_slow_motion(result, speed=speed, before_s=before_hit_s,
-                                after_s=after_landing_s)
+        slow = push_slow_motion(result, speed=speed, before_s=before_hit_s, after_s=after_landing_s)
     if title is None:
         s = getattr(result, "scenario", None)
         if s is not None and hasattr(s, "block_mass_kg"):
             v = float(np.linalg.norm(s.block_velocity_m_s))
             title = f"W section 4: a {s.block_mass_kg:g} kg block thrown at {v:.2f} m/s"
-    cam = push_camera(model, result, azimuth=azimuth, elevation=elevation,
-                      aspect=width / height)
+    cam = push_camera(model, result, azimuth=azimuth, elevation=elevation, aspect=width / height)
     for key in ("lookat", "distance"):
         if key in render_kw:
             cam[key] = render_kw.pop(key)
-    return render_video(model, times, result.qpos, path, fps=fps, width=width, height=height,
-                        track_body=None, slow_motion=slow, events=event_captions(result),
-                        title=title, progress=progress, **cam, **render_kw)
+    return render_video(
+        model,
+        times,
+        result.qpos,
+        path,
+        fps=fps,
+        width=width,
+        height=height,
+        track_body=None,
+        slow_motion=slow,
+        events=event_captions(result),
+        title=title,
+        progress=progress,
+        **cam,
+        **render_kw,
+    )

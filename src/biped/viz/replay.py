@@ -69,17 +69,18 @@ class ReplayGeom:
         if self.kind not in GEOM_KINDS:
             raise ModelError(
                 f"ReplayGeom {self.name!r}: unknown kind {self.kind!r}; valid kinds: "
-                f"{', '.join(map(repr, GEOM_KINDS))}")
+                f"{', '.join(map(repr, GEOM_KINDS))}"
+            )
         size = tuple(float(s) for s in np.ravel(self.size))
         n = GEOM_KINDS[self.kind]
         if len(size) != n or not all(math.isfinite(s) and s >= 0 for s in size):
             raise ModelError(
                 f"ReplayGeom {self.name!r}: a {self.kind} needs {n} finite non-negative size "
-                f"entries (m), got {self.size!r}")
+                f"entries (m), got {self.size!r}"
+            )
         rgba = tuple(float(c) for c in np.ravel(self.rgba))
         if len(rgba) != 4 or not all(0.0 <= c <= 1.0 for c in rgba):
-            raise ModelError(
-                f"ReplayGeom {self.name!r}: rgba needs 4 entries in [0, 1], got {self.rgba!r}")
+            raise ModelError(f"ReplayGeom {self.name!r}: rgba needs 4 entries in [0, 1], got {self.rgba!r}")
         object.__setattr__(self, "size", size)
         object.__setattr__(self, "rgba", rgba)
 
@@ -123,7 +124,8 @@ class Replay:
             k = int(np.argmax(np.diff(times) <= 0))
             raise StateError(
                 f"times must be strictly increasing; times[{k}] = {times[k]} s is followed by "
-                f"{times[k + 1]} s")
+                f"{times[k + 1]} s"
+            )
         T, G = times.size, len(geoms)
         pos = np.asarray(self.pos, dtype=float)
         quat = np.asarray(self.quat, dtype=float)
@@ -137,7 +139,8 @@ class Replay:
         if G and np.max(np.abs(norms - 1.0)) > 1e-3:
             raise StateError(
                 f"quat must hold unit quaternions (w, x, y, z); worst norm "
-                f"{norms.flat[np.argmax(np.abs(norms - 1))]:.6g}")
+                f"{norms.flat[np.argmax(np.abs(norms - 1))]:.6g}"
+            )
         if not isinstance(self.title, str):
             raise BipedError(f"title must be a str, got {type(self.title).__name__}")
         if not isinstance(self.info, Mapping):
@@ -186,7 +189,8 @@ def _check_markers(markers) -> tuple:
     for k, mk in enumerate(markers or ()):
         if not isinstance(mk, Mapping) or "time_s" not in mk:
             raise BipedError(
-                f"marker {k} must be a mapping with keys 'time_s' (s) and 'label' (str), got {mk!r}")
+                f"marker {k} must be a mapping with keys 'time_s' (s) and 'label' (str), got {mk!r}"
+            )
         t = mk["time_s"]
         try:
             t = float(t)
@@ -201,7 +205,7 @@ def _check_markers(markers) -> tuple:
         else:
             label = " ".join(str(v) for key, v in mk.items() if key != "time_s")
         out.append({"time_s": t, "label": label})
-    return tuple(sorted(out, key=lambda m: m["time_s"]))   # stable: equal times keep their order
+    return tuple(sorted(out, key=lambda m: m["time_s"]))  # stable: equal times keep their order
 
 
 # --------------------------------------------------------------------------------------------
@@ -225,15 +229,23 @@ def _material_rgba(model, matid: int) -> tuple:
         n, adr = int(model.tex_nchannel[t]), int(model.tex_adr[t])
         size = int(model.tex_width[t]) * int(model.tex_height[t]) * n
         if n >= 3 and size > 0:
-            pix = np.asarray(model.tex_data[adr:adr + size], dtype=float).reshape(-1, n)
+            pix = np.asarray(model.tex_data[adr : adr + size], dtype=float).reshape(-1, n)
             rgba[:3] *= pix[:, :3].mean(axis=0) / 255.0
     return tuple(float(c) for c in rgba)
 
 
-def replay_from_mujoco(model: mujoco.MjModel, times, qpos, *, geom_groups=None,
-                       title: str = "biped replay", info: Mapping[str, Any] | None = None,
-                       markers: Iterable[Mapping] = (), follow: str | None = None,
-                       max_rate_hz: float | None = 100.0) -> Replay:
+def replay_from_mujoco(
+    model: mujoco.MjModel,
+    times,
+    qpos,
+    *,
+    geom_groups=None,
+    title: str = "biped replay",
+    info: Mapping[str, Any] | None = None,
+    markers: Iterable[Mapping] = (),
+    follow: str | None = None,
+    max_rate_hz: float | None = 100.0,
+) -> Replay:
     """Record the world pose of each visible geom of ``model`` along a trajectory.
 
     Runs ``mujoco.mj_kinematics`` on a fresh ``MjData`` for each row of ``qpos`` (the model is not
@@ -273,15 +285,17 @@ def replay_from_mujoco(model: mujoco.MjModel, times, qpos, *, geom_groups=None,
     if qpos.shape != (times.size, model.nq):
         raise StateError(
             f"qpos must have shape (T, nq) = ({times.size}, {model.nq}) to match times and the "
-            f"model, got {qpos.shape}")
+            f"model, got {qpos.shape}"
+        )
     if not np.all(np.isfinite(qpos)):
         bad = np.argwhere(~np.isfinite(qpos))[0]
         raise StateError(f"qpos contains a non-finite entry at frame {bad[0]}, coordinate {bad[1]}")
 
     if max_rate_hz is not None:
         if not (isinstance(max_rate_hz, (int, float)) and max_rate_hz > 0):
-            raise BipedError(f"max_rate_hz must be a positive number of frames per second or None, "
-                             f"got {max_rate_hz!r}")
+            raise BipedError(
+                f"max_rate_hz must be a positive number of frames per second or None, got {max_rate_hz!r}"
+            )
         keep = _thin(times, 1.0 / float(max_rate_hz))
         times, qpos = times[keep], qpos[keep]
 
@@ -302,8 +316,9 @@ def replay_from_mujoco(model: mujoco.MjModel, times, qpos, *, geom_groups=None,
         offset = np.zeros(3)
         if gtype in _MJ_KIND:
             kind = _MJ_KIND[gtype]
-            size = {"sphere": size[:1], "capsule": size[:2], "cylinder": size[:2],
-                    "plane": size[:2]}.get(kind, size[:3])
+            size = {"sphere": size[:1], "capsule": size[:2], "cylinder": size[:2], "plane": size[:2]}.get(
+                kind, size[:3]
+            )
         elif gtype == 7:  # mesh: its bounding box in the geom frame (centre, half sizes)
             kind = "box"
             offset = np.array(model.geom_aabb[i, :3], dtype=float)
@@ -312,12 +327,19 @@ def replay_from_mujoco(model: mujoco.MjModel, times, qpos, *, geom_groups=None,
             continue
         ids.append(i)
         offsets.append(offset)
-        geoms.append(ReplayGeom(name=name, kind=kind, size=tuple(np.abs(size)),
-                                rgba=tuple(min(max(c, 0.0), 1.0) for c in rgba)))
+        geoms.append(
+            ReplayGeom(
+                name=name,
+                kind=kind,
+                size=tuple(np.abs(size)),
+                rgba=tuple(min(max(c, 0.0), 1.0) for c in rgba),
+            )
+        )
     if not ids:
         raise ModelError(
             f"no geom to draw: the model's geoms are in groups "
-            f"{sorted(set(map(int, model.geom_group)))}, geom_groups asked for {sorted(groups)}")
+            f"{sorted(set(map(int, model.geom_group)))}, geom_groups asked for {sorted(groups)}"
+        )
 
     data = mujoco.MjData(model)
     T, G = times.size, len(ids)
@@ -335,8 +357,16 @@ def replay_from_mujoco(model: mujoco.MjModel, times, qpos, *, geom_groups=None,
             pos[t] += np.einsum("gij,gj->gi", xmat, offsets_arr)
         for g in range(G):
             mujoco.mju_mat2Quat(quat[t, g], data.geom_xmat[ids_arr[g]])
-    return Replay(geoms=tuple(geoms), times=times, pos=pos, quat=quat, title=title,
-                  info=dict(info or {}), markers=tuple(markers), follow=follow)
+    return Replay(
+        geoms=tuple(geoms),
+        times=times,
+        pos=pos,
+        quat=quat,
+        title=title,
+        info=dict(info or {}),
+        markers=tuple(markers),
+        follow=follow,
+    )
 
 
 def _thin(times: np.ndarray, dt: float) -> np.ndarray:
@@ -354,6 +384,7 @@ def _thin(times: np.ndarray, dt: float) -> np.ndarray:
 # --------------------------------------------------------------------------------------------
 # To HTML
 # --------------------------------------------------------------------------------------------
+
 
 def _b64_f32(a: np.ndarray) -> str:
     return base64.b64encode(np.ascontiguousarray(a, dtype="<f4").tobytes()).decode("ascii")
@@ -397,8 +428,9 @@ def replay_payload(replay: Replay) -> dict:
         "title": replay.title,
         "info": [[str(k), _info_value(v)] for k, v in replay.info.items()],
         "markers": [{"t": m["time_s"], "label": m["label"]} for m in replay.markers],
-        "geoms": [{"name": g.name, "kind": g.kind, "size": list(g.size), "rgba": list(g.rgba)}
-                  for g in replay.geoms],
+        "geoms": [
+            {"name": g.name, "kind": g.kind, "size": list(g.size), "rgba": list(g.rgba)} for g in replay.geoms
+        ],
         "T": int(replay.times.size),
         "G": len(replay.geoms),
         "follow": replay.follow_index(),

@@ -26,8 +26,7 @@ import numpy as np
 
 from biped.errors import ScenarioError
 
-__all__ = ["SlowMotion", "frame_indices", "overlay_text", "playback_times", "video_duration",
-           "video_time"]
+__all__ = ["SlowMotion", "frame_indices", "overlay_text", "playback_times", "video_duration", "video_time"]
 
 
 @dataclass(frozen=True)
@@ -49,11 +48,11 @@ class SlowMotion:
             if not (isinstance(v, (int, float, np.integer, np.floating)) and math.isfinite(v)):
                 raise ScenarioError(f"slow motion {name} must be a finite number, got {v!r}")
         if not self.end_s > self.start_s:
-            raise ScenarioError(f"slow motion needs end_s > start_s [s], got "
-                                f"[{self.start_s}, {self.end_s}]")
+            raise ScenarioError(f"slow motion needs end_s > start_s [s], got [{self.start_s}, {self.end_s}]")
         if not 0.0 < self.speed <= 1.0:
-            raise ScenarioError(f"slow motion speed must be in (0, 1] (0.25 = four times slower), "
-                                f"got {self.speed!r}")
+            raise ScenarioError(
+                f"slow motion speed must be in (0, 1] (0.25 = four times slower), got {self.speed!r}"
+            )
 
 
 def _windows(t0: float, t1: float, slow_motion) -> list[SlowMotion]:
@@ -72,8 +71,9 @@ def _windows(t0: float, t1: float, slow_motion) -> list[SlowMotion]:
     out.sort(key=lambda w: w.start_s)
     for u, v in itertools.pairwise(out):
         if v.start_s < u.end_s:
-            raise ScenarioError(f"slow motion windows overlap: [{u.start_s}, {u.end_s}] and "
-                                f"[{v.start_s}, {v.end_s}] s")
+            raise ScenarioError(
+                f"slow motion windows overlap: [{u.start_s}, {u.end_s}] and [{v.start_s}, {v.end_s}] s"
+            )
     return out
 
 
@@ -124,18 +124,24 @@ def _event_list(events: Iterable[Mapping]) -> list[tuple[float, str]]:
     out = []
     for k, e in enumerate(events or ()):
         if not isinstance(e, Mapping) or "time_s" not in e or "label" not in e:
-            raise ScenarioError(f"event {k} must be a mapping with 'time_s' (s) and 'label', "
-                                f"got {e!r}")
+            raise ScenarioError(f"event {k} must be a mapping with 'time_s' (s) and 'label', got {e!r}")
         t = float(e["time_s"])
         if not math.isfinite(t):
             raise ScenarioError(f"event {k}: time_s must be finite, got {e['time_s']!r}")
         out.append((t, str(e["label"])))
-    return sorted(out, key=lambda x: x[0])   # stable: simultaneous events keep their order
+    return sorted(out, key=lambda x: x[0])  # stable: simultaneous events keep their order
 
 
-def overlay_text(frame_times: Sequence[float], fps: float, *, events: Iterable[Mapping] = (),
-                 slow_motion=None, hold_s: float = 1.5, max_events: int = 6,
-                 t1: float | None = None) -> list[dict]:
+def overlay_text(
+    frame_times: Sequence[float],
+    fps: float,
+    *,
+    events: Iterable[Mapping] = (),
+    slow_motion=None,
+    hold_s: float = 1.5,
+    max_events: int = 6,
+    t1: float | None = None,
+) -> list[dict]:
     """The caption of each frame: ``[{"time": str, "speed": str, "events": [str, ...]}, ...]``.
 
     ``time`` is ``"t = 0.123 s"``; ``speed`` is ``"0.25x slow motion"`` inside a window, else
@@ -165,9 +171,16 @@ def overlay_text(frame_times: Sequence[float], fps: float, *, events: Iterable[M
     out = []
     for k, tau in enumerate(ft):
         speed = next((w.speed for w in wins if w.start_s <= tau < w.end_s), None)
-        shown = [f"{t:.3f} s  {lab}" for (t, lab), f in zip(evs, first, strict=False)
-                 if f <= k and (k - f) / fps < hold_s]
-        out.append({"time": f"t = {tau:.3f} s",
-                    "speed": f"{speed:g}x slow motion" if speed is not None else "",
-                    "events": shown[-max_events:] if max_events > 0 else []})
+        shown = [
+            f"{t:.3f} s  {lab}"
+            for (t, lab), f in zip(evs, first, strict=False)
+            if f <= k and (k - f) / fps < hold_s
+        ]
+        out.append(
+            {
+                "time": f"t = {tau:.3f} s",
+                "speed": f"{speed:g}x slow motion" if speed is not None else "",
+                "events": shown[-max_events:] if max_events > 0 else [],
+            }
+        )
     return out

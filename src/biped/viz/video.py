@@ -56,8 +56,10 @@ class VideoResult:
     frames: int = 0
 
 
-_CHILD = ("import pathlib, sys; from biped.viz.video import _render_job; "
-          "sys.exit(_render_job(pathlib.Path(sys.argv[1])))")
+_CHILD = (
+    "import pathlib, sys; from biped.viz.video import _render_job; "
+    "sys.exit(_render_job(pathlib.Path(sys.argv[1])))"
+)
 
 _PROBE = r"""
 import mujoco
@@ -83,7 +85,7 @@ def _child_env(backend: str) -> dict:
         env["PYOPENGL_PLATFORM"] = backend
     else:
         env.pop("PYOPENGL_PLATFORM", None)
-    src = str(pathlib.Path(__file__).resolve().parents[2])   # the folder that holds biped/
+    src = str(pathlib.Path(__file__).resolve().parents[2])  # the folder that holds biped/
     env["PYTHONPATH"] = src + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
     return env
 
@@ -116,17 +118,24 @@ def gl_available() -> tuple[bool, str]:
     errors = []
     for backend in _candidates():
         try:
-            proc = subprocess.run([sys.executable, "-c", _PROBE], env=_child_env(backend),
-                                  capture_output=True, text=True, timeout=_PROBE_TIMEOUT_S,
-                                  check=False)
+            proc = subprocess.run(
+                [sys.executable, "-c", _PROBE],
+                env=_child_env(backend),
+                capture_output=True,
+                text=True,
+                timeout=_PROBE_TIMEOUT_S,
+                check=False,
+            )
         except subprocess.TimeoutExpired:
             errors.append(f"{backend}: timed out")
             continue
         if proc.returncode == 0 and proc.stdout.strip().endswith("ok"):
             return True, backend
         errors.append(f"{backend}: {_last_line(proc.stderr)}")
-    return False, ("no video: no offscreen OpenGL works here (install Debian's libegl1 or "
-                   "libosmesa6); " + "; ".join(errors))
+    return False, (
+        "no video: no offscreen OpenGL works here (install Debian's libegl1 or "
+        "libosmesa6); " + "; ".join(errors)
+    )
 
 
 def _check_inputs(model, times, qpos, fps, width, height, track_body):
@@ -139,8 +148,7 @@ def _check_inputs(model, times, qpos, fps, width, height, track_body):
     if times.ndim != 1 or times.size < 1:
         raise StateError(f"times must have shape (T,) with T >= 1, got {times.shape}")
     if qpos.shape != (times.size, model.nq):
-        raise StateError(
-            f"qpos must have shape (T, nq) = ({times.size}, {model.nq}), got {qpos.shape}")
+        raise StateError(f"qpos must have shape (T, nq) = ({times.size}, {model.nq}), got {qpos.shape}")
     if not (np.all(np.isfinite(times)) and np.all(np.isfinite(qpos))):
         raise StateError("times or qpos contains NaN or infinite entries")
     if np.any(np.diff(times) < 0):
@@ -150,8 +158,8 @@ def _check_inputs(model, times, qpos, fps, width, height, track_body):
     for name, v in (("width", width), ("height", height)):
         if not (isinstance(v, (int, np.integer)) and 16 <= v <= 4096 and v % 2 == 0):
             raise ScenarioError(
-                f"{name} must be an even number of pixels in [16, 4096] (H.264 needs even sizes), "
-                f"got {v!r}")
+                f"{name} must be an even number of pixels in [16, 4096] (H.264 needs even sizes), got {v!r}"
+            )
     body_id = -1
     if track_body is not None:
         body_id = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, str(track_body))
@@ -167,8 +175,7 @@ def _check_camera(lookat, shadows, progress, title):
         if lookat.shape != (3,) or not np.all(np.isfinite(lookat)):
             raise ScenarioError(f"lookat must be a finite (x, y, z) point in m, got {lookat!r}")
     if shadows not in _SHADOWS:
-        raise ScenarioError(f"shadows must be one of {', '.join(map(repr, _SHADOWS))}, "
-                            f"got {shadows!r}")
+        raise ScenarioError(f"shadows must be one of {', '.join(map(repr, _SHADOWS))}, got {shadows!r}")
     if progress is not None and not callable(progress):
         raise ScenarioError(f"progress must be a function progress(n, N) or None, got {progress!r}")
     if title is not None and not isinstance(title, str):
@@ -181,11 +188,28 @@ _SHADOWS = ("follow", "fixed", "off")
 _SHADOW_TEXELS = 2048
 
 
-def render_video(model, times, qpos, path, *, fps=30, width=640, height=480,
-                 track_body="central_body", distance=None, azimuth=60.0,
-                 elevation=-12.0, lookat=None, slow_motion=None, events=(), title=None,
-                 overlay=True, shadows="follow", shadow_radius_m=3.0,
-                 progress=None) -> VideoResult:
+def render_video(
+    model,
+    times,
+    qpos,
+    path,
+    *,
+    fps=30,
+    width=640,
+    height=480,
+    track_body="central_body",
+    distance=None,
+    azimuth=60.0,
+    elevation=-12.0,
+    lookat=None,
+    slow_motion=None,
+    events=(),
+    title=None,
+    overlay=True,
+    shadows="follow",
+    shadow_radius_m=3.0,
+    progress=None,
+) -> VideoResult:
     """Render the trajectory ``(times, qpos)`` of ``model`` to an H.264 MP4 file.
 
     Each frame runs ``mujoco.mj_forward`` on the sample shown (see
@@ -232,11 +256,9 @@ def render_video(model, times, qpos, path, *, fps=30, width=640, height=480,
     times, qpos, body_id = _check_inputs(model, times, qpos, fps, width, height, track_body)
     lookat = _check_camera(lookat, shadows, progress, title)
     if not (isinstance(shadow_radius_m, (int, float)) and shadow_radius_m > 0):
-        raise ScenarioError(f"shadow_radius_m must be a positive number of m, got "
-                            f"{shadow_radius_m!r}")
-    ft = playback_times(times[0], times[-1], fps, slow_motion)     # validates slow_motion
-    captions = overlay_text(ft.tolist(), fps, events=events, slow_motion=slow_motion,
-                            t1=times[-1])
+        raise ScenarioError(f"shadow_radius_m must be a positive number of m, got {shadow_radius_m!r}")
+    ft = playback_times(times[0], times[-1], fps, slow_motion)  # validates slow_motion
+    captions = overlay_text(ft.tolist(), fps, events=events, slow_motion=slow_motion, t1=times[-1])
     path = pathlib.Path(path)
     ok, backend = gl_available()
     if not ok:
@@ -250,23 +272,31 @@ def render_video(model, times, qpos, path, *, fps=30, width=640, height=480,
         mujoco.mj_saveModel(model, str(tmp / "model.mjb"), None)
         np.save(tmp / "qpos.npy", qpos[idx])
         extent = float(model.stat.extent) if model.stat.extent > 0 else 1.0
-        cfg = {"out": str(path.resolve()), "fps": float(fps), "width": int(width),
-               "height": int(height), "body_id": -1 if lookat is not None else int(body_id),
-               "lookat": None if lookat is None else lookat.tolist(),
-               "distance": float(distance) if distance is not None else 1.5 * extent,
-               "azimuth": float(azimuth), "elevation": float(elevation),
-               "shadows": shadows, "shadow_radius": float(shadow_radius_m),
-               "captions": captions if overlay else None, "title": title or "",
-               "font": _font_file()}
+        cfg = {
+            "out": str(path.resolve()),
+            "fps": float(fps),
+            "width": int(width),
+            "height": int(height),
+            "body_id": -1 if lookat is not None else int(body_id),
+            "lookat": None if lookat is None else lookat.tolist(),
+            "distance": float(distance) if distance is not None else 1.5 * extent,
+            "azimuth": float(azimuth),
+            "elevation": float(elevation),
+            "shadows": shadows,
+            "shadow_radius": float(shadow_radius_m),
+            "captions": captions if overlay else None,
+            "title": title or "",
+            "font": _font_file(),
+        }
         (tmp / "job.json").write_text(json.dumps(cfg))
         try:
             code, err = _run_child(tmp, backend, len(idx), progress)
         except subprocess.TimeoutExpired:
-            return VideoResult(None, f"no video: rendering with MUJOCO_GL={backend} timed out",
-                               backend)
+            return VideoResult(None, f"no video: rendering with MUJOCO_GL={backend} timed out", backend)
     if code != 0 or not path.is_file():
-        return VideoResult(None, f"no video: rendering with MUJOCO_GL={backend} failed: "
-                                 f"{_last_line(err)}", backend)
+        return VideoResult(
+            None, f"no video: rendering with MUJOCO_GL={backend} failed: {_last_line(err)}", backend
+        )
     return VideoResult(path.resolve(), None, backend, len(idx))
 
 
@@ -289,9 +319,14 @@ def _run_child(tmp: pathlib.Path, backend: str, n_frames: int, progress) -> tupl
     timeout = 120 + 2.0 * n_frames
     err_path = tmp / "stderr.txt"
     with open(err_path, "w") as err:
-        proc = subprocess.Popen([sys.executable, "-c", _CHILD, str(tmp)],
-                                env=_child_env(backend), stdout=subprocess.PIPE, stderr=err,
-                                text=True, bufsize=1)
+        proc = subprocess.Popen(
+            [sys.executable, "-c", _CHILD, str(tmp)],
+            env=_child_env(backend),
+            stdout=subprocess.PIPE,
+            stderr=err,
+            text=True,
+            bufsize=1,
+        )
         killed = threading.Event()
 
         def _kill():
@@ -303,7 +338,7 @@ def _run_child(tmp: pathlib.Path, backend: str, n_frames: int, progress) -> tupl
         try:
             if progress is not None:
                 progress(0, n_frames)
-            assert proc.stdout is not None          # stdout=PIPE
+            assert proc.stdout is not None  # stdout=PIPE
             for line in proc.stdout:
                 parts = line.split()
                 if progress is not None and len(parts) == 2 and parts[0] == "frame":
@@ -401,8 +436,7 @@ class _Caption:
             y -= bh
         draw.rectangle([x, y, x + bw, y + bh], fill=(0, 0, 0, 150))
         for i, ln in enumerate(lines):
-            draw.text((x + self.pad, y + self.pad // 2 + i * lh), ln, font=font,
-                      fill=(255, 255, 255, 255))
+            draw.text((x + self.pad, y + self.pad // 2 + i * lh), ln, font=font, fill=(255, 255, 255, 255))
 
     def draw(self, frame: np.ndarray, caption: dict, title: str) -> np.ndarray:
         from PIL import Image, ImageDraw
@@ -434,8 +468,7 @@ def _render_job(workdir: pathlib.Path) -> int:
     if cfg["shadows"] == "follow" and lights.size:
         # a shadow box of shadow_radius around the light, which is moved above the camera target
         extent = float(model.stat.extent) if model.stat.extent > 0 else 1.0
-        model.vis.map.shadowclip = min(float(model.vis.map.shadowclip),
-                                       cfg["shadow_radius"] / extent)
+        model.vis.map.shadowclip = min(float(model.vis.map.shadowclip), cfg["shadow_radius"] / extent)
         # the small box needs no 4096-texel map (2048 over 6 m: 3 mm a texel); with Mesa's
         # software renderer a 1280 x 720 frame takes 0.86 as long (benchmarks/video.py)
         model.vis.quality.shadowsize = min(int(model.vis.quality.shadowsize), _SHADOW_TEXELS)
@@ -452,14 +485,21 @@ def _render_job(workdir: pathlib.Path) -> int:
 
     renderer = mujoco.Renderer(model, h, w)
     floor = _floor_grid(model, data, qpos)
-    if model.nlight == 0:   # only the headlight: make it bright enough to see the floor
+    if model.nlight == 0:  # only the headlight: make it bright enough to see the floor
         model.vis.headlight.ambient[:] = 0.35
         model.vis.headlight.diffuse[:] = 0.65
     captions = cfg.get("captions")
     caption = _Caption(w, h, cfg.get("font")) if captions else None
-    writer = imageio_ffmpeg.write_frames(cfg["out"], (w, h), fps=cfg["fps"], codec="libx264",
-                                         pix_fmt_out="yuv420p", quality=7, macro_block_size=2,
-                                         ffmpeg_log_level="error")
+    writer = imageio_ffmpeg.write_frames(
+        cfg["out"],
+        (w, h),
+        fps=cfg["fps"],
+        codec="libx264",
+        pix_fmt_out="yuv420p",
+        quality=7,
+        macro_block_size=2,
+        ffmpeg_log_level="error",
+    )
     writer.send(None)
     try:
         for k, q in enumerate(qpos):

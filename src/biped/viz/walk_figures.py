@@ -35,8 +35,9 @@ def _markers(ax, markers, labels: bool = False):
     for m in markers:
         ax.axvline(m["time_s"], color="0.6", lw=0.6, ls="--")
         if labels:
-            ax.text(m["time_s"], ymax, " " + m["label"], rotation=90, va="top", ha="left", fontsize=6,
-                    color="0.4")
+            ax.text(
+                m["time_s"], ymax, " " + m["label"], rotation=90, va="top", ha="left", fontsize=6, color="0.4"
+            )
 
 
 def _stance_bands(ax, times, stance):
@@ -45,8 +46,15 @@ def _stance_bands(ax, times, stance):
         st = np.concatenate([[False], stance[:, j], [False]]).astype(int)
         d = np.diff(st)
         for a, b in zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1), strict=True):
-            ax.axvspan(times[a], times[b - 1], ymin=0.0 if j == 0 else 0.03, ymax=0.03 if j == 0 else 0.06,
-                       color=_SIDE_COLOURS[sd], alpha=0.6, lw=0)
+            ax.axvspan(
+                times[a],
+                times[b - 1],
+                ymin=0.0 if j == 0 else 0.03,
+                ymax=0.03 if j == 0 else 0.06,
+                color=_SIDE_COLOURS[sd],
+                alpha=0.6,
+                lw=0,
+            )
 
 
 def _save(fig, path) -> Path:
@@ -67,8 +75,10 @@ def plot_joint_angles(motion, path) -> Path:
     t = motion.times
     a = np.degrees(motion.angles)
     panels = [
-        ("hip flexion", "hip_flexion"), ("knee (+ extension)", "knee"),
-        ("ankle dorsiflexion", "ankle_dorsiflexion"), ("shoulder flexion", "shoulder_flexion"),
+        ("hip flexion", "hip_flexion"),
+        ("knee (+ extension)", "knee"),
+        ("ankle dorsiflexion", "ankle_dorsiflexion"),
+        ("shoulder flexion", "shoulder_flexion"),
         ("elbow flexion", "elbow_flexion"),
     ]
     fig, axes = plt.subplots(len(panels) + 1, 1, figsize=(10, 12), sharex=True)
@@ -84,13 +94,20 @@ def plot_joint_angles(motion, path) -> Path:
     ax.plot(t, a[:, J["torso_roll"]], color="tab:green", lw=1.0, label="torso roll")
     ax.plot(t, a[:, J["torso_pitch"]], color="tab:purple", lw=1.0, label="torso pitch (lean)")
     if np.any(motion.pelvis_pitch != 0):
-        ax.plot(t, np.degrees(motion.pelvis_pitch) / 10.0, color="k", lw=0.8,
-                label="pelvis pitch / 10 (somersault; 360 deg = 0)")
+        ax.plot(
+            t,
+            np.degrees(motion.pelvis_pitch) / 10.0,
+            color="k",
+            lw=0.8,
+            label="pelvis pitch / 10 (somersault; 360 deg = 0)",
+        )
     ax.set_ylabel("torso [deg]", fontsize=8)
     ax.legend(loc="upper right", fontsize=7)
     _markers(ax, motion.plan.markers)
     ax.set_xlabel("time [s]")
-    fig.suptitle("Kinematic figure: joint angles (B eq. 4.12-4.19 IK; bands: stance left / right)", fontsize=10)
+    fig.suptitle(
+        "Kinematic figure: joint angles (B eq. 4.12-4.19 IK; bands: stance left / right)", fontsize=10
+    )
     fig.tight_layout()
     return _save(fig, path)
 
@@ -106,8 +123,14 @@ def plot_feet(motion, landmarks: dict, path) -> Path:
     for sd in ("left", "right"):
         for part, ls in (("heel", "-"), ("toe", ":")):
             p = landmarks[f"{sd}_{part}"]
-            ax.plot(t, (p[:, 2] - terrain.height(p[:, 0])) * 100, color=_SIDE_COLOURS[sd], ls=ls, lw=1.0,
-                    label=f"{sd} {part}")
+            ax.plot(
+                t,
+                (p[:, 2] - terrain.height(p[:, 0])) * 100,
+                color=_SIDE_COLOURS[sd],
+                ls=ls,
+                lw=1.0,
+                label=f"{sd} {part}",
+            )
     ax.axhline(0, color="k", lw=0.6)
     ax.set_ylabel("height above the\nterrain below [cm]", fontsize=8)
     ax.legend(loc="upper right", fontsize=7, ncol=2)
@@ -144,14 +167,22 @@ def inverse_dynamics_figure(result, markers):
     t = result.times
     names = list(result.joint_names)
     fig, axes = plt.subplots(5, 1, figsize=(10, 13), sharex=True)
-    panels = ((axes[0], ("hip_flexion", "knee", "ankle_dorsiflexion"), "sagittal torques"),
-              (axes[1], ("hip_abduction", "hip_rotation", "ankle_inversion"), "frontal / axial torques"))
+    panels = (
+        (axes[0], ("hip_flexion", "knee", "ankle_dorsiflexion"), "sagittal torques"),
+        (axes[1], ("hip_abduction", "hip_rotation", "ankle_inversion"), "frontal / axial torques"),
+    )
     for ax, joints, title in panels:
         styles = ("-", "--", ":")
         for j, ls in zip(joints, styles, strict=True):
             for sd in ("left", "right"):
-                ax.plot(t, result.torques[:, names.index(f"{sd}_{j}")], color=_SIDE_COLOURS[sd], ls=ls, lw=0.9,
-                        label=f"{sd} {j}")
+                ax.plot(
+                    t,
+                    result.torques[:, names.index(f"{sd}_{j}")],
+                    color=_SIDE_COLOURS[sd],
+                    ls=ls,
+                    lw=0.9,
+                    label=f"{sd} {j}",
+                )
         ax.set_ylabel(f"{title}\n[N m]", fontsize=8)
         ax.legend(loc="upper right", fontsize=6, ncol=3)
         _markers(ax, markers, labels=ax is axes[0])
@@ -175,13 +206,19 @@ def inverse_dynamics_figure(result, markers):
     finite = fr[np.isfinite(fr) & (fr > 0)]
     if finite.size:
         peak = float(finite.max())
-        pk, pj = (int(i) for i in np.unravel_index(np.nanargmax(np.where(np.isfinite(fr), fr, -np.inf)),
-                                                   fr.shape))
+        pk, pj = (
+            int(i) for i in np.unravel_index(np.nanargmax(np.where(np.isfinite(fr), fr, -np.inf)), fr.shape)
+        )
         ax.set_yscale("log")
         ax.set_ylim(max(min(float(np.percentile(finite, 1)), 0.1) / 2, 1e-3), 2.0 * max(peak, 0.3))
         ax.plot([t[pk]], [peak], "v", color="k", ms=5)
-        ax.annotate(f"peak {peak:.3g} (t = {t[pk]:.2f} s, {('left', 'right')[pj]})", (t[pk], peak),
-                    textcoords="offset points", xytext=(4, 2), fontsize=7)
+        ax.annotate(
+            f"peak {peak:.3g} (t = {t[pk]:.2f} s, {('left', 'right')[pj]})",
+            (t[pk], peak),
+            textcoords="offset points",
+            xytext=(4, 2),
+            fontsize=7,
+        )
     else:
         ax.set_ylim(0, 1.0)
     ax.set_ylabel("|F_t| / F_n\nneeded (log)", fontsize=8)
@@ -189,7 +226,9 @@ def inverse_dynamics_figure(result, markers):
     _markers(ax, markers)
     ax = axes[4]
     ax.plot(t, np.linalg.norm(result.residual[:, :3], axis=1), color="k", lw=1.0, label="force [N]")
-    ax.plot(t, np.linalg.norm(result.residual[:, 3:], axis=1), color="tab:orange", lw=1.0, label="torque [N m]")
+    ax.plot(
+        t, np.linalg.norm(result.residual[:, 3:], axis=1), color="tab:orange", lw=1.0, label="torque [N m]"
+    )
     ax.set_ylabel("unsupplied root\nwrench (flight)", fontsize=8)
     ax.legend(loc="upper right", fontsize=7)
     _markers(ax, markers)

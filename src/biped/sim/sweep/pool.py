@@ -30,9 +30,11 @@ from typing import Any, BinaryIO
 
 _LEN = struct.Struct("<Q")
 _PR_SET_PDEATHSIG = 1
-_BOOT = ("import sys, pickle, struct; f = sys.stdin.buffer; "
-         "n = struct.unpack('<Q', f.read(8))[0]; sys.path[:] = pickle.loads(f.read(n)); "
-         "from biped.sim.sweep.pool import worker_main; worker_main(int(sys.argv[1]))")
+_BOOT = (
+    "import sys, pickle, struct; f = sys.stdin.buffer; "
+    "n = struct.unpack('<Q', f.read(8))[0]; sys.path[:] = pickle.loads(f.read(n)); "
+    "from biped.sim.sweep.pool import worker_main; worker_main(int(sys.argv[1]))"
+)
 
 
 def _frame(obj: Any) -> bytes:
@@ -43,7 +45,7 @@ def _frame(obj: Any) -> bytes:
 def _write_all(fd: int, data: bytes) -> None:
     view = memoryview(data)
     while view:
-        view = view[os.write(fd, view):]
+        view = view[os.write(fd, view) :]
 
 
 def _read_frame(f: BinaryIO) -> Any:
@@ -64,6 +66,7 @@ def _die_with_parent(parent_pid: int) -> None:
     except (OSError, AttributeError):  # not Linux
         ok = False
     if not ok:
+
         def watch() -> None:
             while os.getppid() == parent_pid:
                 time.sleep(0.5)
@@ -95,8 +98,12 @@ def worker_main(parent_pid: int) -> None:
 class _Worker:
     def __init__(self, trial_fn: Callable) -> None:
         self.proc = subprocess.Popen(
-            [sys.executable, "-c", _BOOT, str(os.getpid())], stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE, bufsize=0, close_fds=True)
+            [sys.executable, "-c", _BOOT, str(os.getpid())],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            bufsize=0,
+            close_fds=True,
+        )
         assert self.proc.stdin is not None and self.proc.stdout is not None
         self.stdin, self.stdout = self.proc.stdin, self.proc.stdout
         self.fd = self.stdout.fileno()
@@ -116,8 +123,8 @@ class _Worker:
             (n,) = _LEN.unpack_from(self.buf)
             if len(self.buf) < _LEN.size + n:
                 break
-            out.append(pickle.loads(self.buf[_LEN.size:_LEN.size + n]))
-            self.buf = self.buf[_LEN.size + n:]
+            out.append(pickle.loads(self.buf[_LEN.size : _LEN.size + n]))
+            self.buf = self.buf[_LEN.size + n :]
         return out
 
     def kill(self) -> list[dict]:

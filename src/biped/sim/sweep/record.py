@@ -13,8 +13,7 @@ from typing import Any
 import pyarrow as pa
 
 # annotation (as written, ``from __future__ import annotations``) -> Arrow type name
-_ARROW = {"bool": "bool_", "float": "float64", "int": "int64", "str": "string",
-          "str | None": "string"}
+_ARROW = {"bool": "bool_", "float": "float64", "int": "int64", "str": "string", "str | None": "string"}
 
 
 @dataclass(frozen=True)
@@ -83,14 +82,18 @@ class _Tail:
 #: Columns a trial function returns (the measured ones); every other column comes from the sweep.
 MEASURED: tuple[str, ...] = tuple(f.name for f in dataclasses.fields(Measured))
 #: Every column of the sweep file, in order.
-COLUMNS: tuple[str, ...] = tuple(f.name for cls in (_Head, Measured, _Tail)
-                                 for f in dataclasses.fields(cls))
+COLUMNS: tuple[str, ...] = tuple(f.name for cls in (_Head, Measured, _Tail) for f in dataclasses.fields(cls))
 
 
 def schema() -> pa.Schema:
     """The ``pyarrow.Schema`` of a sweep file (one row per trial), from the dataclasses above."""
-    return pa.schema([(f.name, getattr(pa, _ARROW[str(f.type)])())
-                      for cls in (_Head, Measured, _Tail) for f in dataclasses.fields(cls)])
+    return pa.schema(
+        [
+            (f.name, getattr(pa, _ARROW[str(f.type)])())
+            for cls in (_Head, Measured, _Tail)
+            for f in dataclasses.fields(cls)
+        ]
+    )
 
 
 __all__ = ["COLUMNS", "MEASURED", "Measured", "schema"]

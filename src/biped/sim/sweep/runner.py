@@ -45,16 +45,21 @@ def execute_trial(trial_fn: Callable[[TrialSetup], Any], setup: TrialSetup) -> d
     it is never lost. (KeyboardInterrupt and SystemExit are not trial errors: they propagate.)"""
     t0 = time.perf_counter()
     trial = setup.trial
-    row: dict[str, Any] = {"trial_key": trial.key, "index": trial.index, **trial.params(),
-                           "controller": setup.scenario.controller,
-                           "torque_limits": setup.torque_limits}
+    row: dict[str, Any] = {
+        "trial_key": trial.key,
+        "index": trial.index,
+        **trial.params(),
+        "controller": setup.scenario.controller,
+        "torque_limits": setup.torque_limits,
+    }
     try:
         result = trial_fn(setup)
         measured = result.row() if isinstance(result, Measured) else dict(result)
         unknown = set(measured) - set(MEASURED)
         if unknown:
-            raise ScenarioError(f"trial function returned unknown columns {sorted(unknown)}; "
-                                f"valid: {', '.join(MEASURED)}")
+            raise ScenarioError(
+                f"trial function returned unknown columns {sorted(unknown)}; valid: {', '.join(MEASURED)}"
+            )
         row.update(measured)
         row["error"] = None
     except Exception as exc:  # noqa: BLE001 - a crashed trial is a result, recorded with its error
@@ -102,18 +107,21 @@ def check_scheduler(address: str, timeout_s: float = SCHEDULER_TIMEOUT_S) -> Non
     except ValueError:
         host = port = None
     if parts.scheme not in ("tcp", "tls") or not host or not port:
-        raise ScenarioError(f"--scheduler must be a Dask address such as tcp://10.0.0.5:8786; "
-                            f"got {address!r}")
+        raise ScenarioError(
+            f"--scheduler must be a Dask address such as tcp://10.0.0.5:8786; got {address!r}"
+        )
     try:
         socket.create_connection((host, port), timeout=timeout_s).close()
     except OSError as exc:
-        raise ScenarioError(f"cannot reach the Dask scheduler at {address!r} "
-                            f"({exc.strerror or exc}); is `dask scheduler` running there?"
-                            ) from None
+        raise ScenarioError(
+            f"cannot reach the Dask scheduler at {address!r} "
+            f"({exc.strerror or exc}); is `dask scheduler` running there?"
+        ) from None
 
 
-def check_run_args(out: str | os.PathLike, *, workers: int | None = None, batch: int = 1,
-                   scheduler: Any = None) -> Path:
+def check_run_args(
+    out: str | os.PathLike, *, workers: int | None = None, batch: int = 1, scheduler: Any = None
+) -> Path:
     """The checks :func:`run_sweep` makes before any work (one-line :class:`ScenarioError`s);
     returns ``out`` as a Path. A scheduler address must answer within
     :data:`SCHEDULER_TIMEOUT_S`."""
@@ -122,15 +130,13 @@ def check_run_args(out: str | os.PathLike, *, workers: int | None = None, batch:
         raise ScenarioError(f"--out must name a .parquet file; got {str(out)!r}")
     if out.is_dir():
         raise ScenarioError(f"--out {str(out)!r} is a folder; name a .parquet file")
-    if workers is not None and (not isinstance(workers, int) or isinstance(workers, bool)
-                                or workers < 1):
+    if workers is not None and (not isinstance(workers, int) or isinstance(workers, bool) or workers < 1):
         raise ScenarioError(f"workers must be an integer >= 1; got {workers!r}")
     if not isinstance(batch, int) or isinstance(batch, bool) or batch < 1:
         raise ScenarioError(f"batch must be an integer >= 1; got {batch!r}")
     parent = next((p for p in (out.parent, *out.parent.parents) if p.exists()), Path("."))
     if not parent.is_dir() or not os.access(parent, os.W_OK | os.X_OK):
-        raise ScenarioError(f"cannot write --out {str(out)!r}: {str(parent)!r} is not a "
-                            f"writable folder")
+        raise ScenarioError(f"cannot write --out {str(out)!r}: {str(parent)!r} is not a writable folder")
     if isinstance(scheduler, str):
         check_scheduler(scheduler)
     return out
@@ -155,10 +161,18 @@ def _sigterm_raises() -> Iterator[dict]:
         signal.signal(signal.SIGTERM, old)
 
 
-def run_sweep(spec: SweepSpec, out: str | os.PathLike, *, workers: int | None = None,
-              scheduler: Any = None, trial_fn: Callable[[TrialSetup], Any] | None = None,
-              progress: bool = True, retry_failed: bool = False, overwrite: bool = False,
-              batch: int = 1) -> SweepSummary:
+def run_sweep(
+    spec: SweepSpec,
+    out: str | os.PathLike,
+    *,
+    workers: int | None = None,
+    scheduler: Any = None,
+    trial_fn: Callable[[TrialSetup], Any] | None = None,
+    progress: bool = True,
+    retry_failed: bool = False,
+    overwrite: bool = False,
+    batch: int = 1,
+) -> SweepSummary:
     """Run every trial of ``spec`` that ``out`` does not hold yet; write ONE Parquet file.
 
     workers: local processes (default: every usable core); 1 runs in this process.
@@ -188,12 +202,25 @@ def run_sweep(spec: SweepSpec, out: str | os.PathLike, *, workers: int | None = 
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
-        raise ScenarioError(f"cannot create the folder of --out {str(out)!r}: "
-                            f"{exc.strerror or exc}") from None
+        raise ScenarioError(
+            f"cannot create the folder of --out {str(out)!r}: {exc.strerror or exc}"
+        ) from None
     try:
         with store.SweepLock(out), _sigterm_raises() as state:
-            return _run_locked(spec, out, trials, trial_fn, workers, scheduler, progress,
-                               retry_failed, overwrite, batch, state, t_start)
+            return _run_locked(
+                spec,
+                out,
+                trials,
+                trial_fn,
+                workers,
+                scheduler,
+                progress,
+                retry_failed,
+                overwrite,
+                batch,
+                state,
+                t_start,
+            )
     except ScenarioError:
         if made_parent:
             with contextlib.suppress(OSError):
@@ -201,21 +228,30 @@ def run_sweep(spec: SweepSpec, out: str | os.PathLike, *, workers: int | None = 
         raise
 
 
-def _run_locked(spec: SweepSpec, out: Path, trials: tuple, trial_fn: Callable,
-                workers: int | None, scheduler: Any, progress: bool, retry_failed: bool,
-                overwrite: bool, batch: int, state: dict, t_start: float) -> SweepSummary:
+def _run_locked(
+    spec: SweepSpec,
+    out: Path,
+    trials: tuple,
+    trial_fn: Callable,
+    workers: int | None,
+    scheduler: Any,
+    progress: bool,
+    retry_failed: bool,
+    overwrite: bool,
+    batch: int,
+    state: dict,
+    t_start: float,
+) -> SweepSummary:
     if overwrite:
         store.remove_sweep(out)
     else:
         store.check_same_sweep(spec, out)
     table, _ = store.read_rows(out)
-    done = dict(zip(table.column("trial_key").to_pylist(), table.column("error").to_pylist(),
-                    strict=True))
+    done = dict(zip(table.column("trial_key").to_pylist(), table.column("error").to_pylist(), strict=True))
     wanted = {t.key for t in trials}
     todo = [t for t in trials if t.key not in done or (retry_failed and done[t.key] is not None)]
     skipped = len(trials) - len(todo)
-    failed_before = sum(1 for k, e in done.items() if k in wanted and e is not None
-                        and not retry_failed)
+    failed_before = sum(1 for k, e in done.items() if k in wanted and e is not None and not retry_failed)
     if todo:
         store.write_manifest(spec, out)
     writer = store.PartWriter(store.parts_dir(out))
@@ -237,7 +273,7 @@ def _run_locked(spec: SweepSpec, out: Path, trials: tuple, trial_fn: Callable,
             bar.update(len(rows))
             bar.set_postfix(failed=failed_before + counts["failed"])
 
-    chunks = [todo[i:i + batch] for i in range(0, len(todo), batch)]
+    chunks = [todo[i : i + batch] for i in range(0, len(todo), batch)]
     n_workers = workers or default_workers()
     lost = 0
     try:
@@ -253,8 +289,7 @@ def _run_locked(spec: SweepSpec, out: Path, trials: tuple, trial_fn: Callable,
         else:
             n = min(n_workers, len(chunks))
             backend = f"processes:{n}"
-            lost = LocalPool(n, trial_fn).run([[spec.setup(t) for t in c] for c in chunks],
-                                              record)
+            lost = LocalPool(n, trial_fn).run([[spec.setup(t) for t in c] for c in chunks], record)
     except KeyboardInterrupt:
         if state["terminated"]:
             raise Terminated from None
@@ -266,17 +301,26 @@ def _run_locked(spec: SweepSpec, out: Path, trials: tuple, trial_fn: Callable,
     complete = lost == 0
     if complete:
         store.consolidate(spec, out, trials)
-    return SweepSummary(path=out, total=len(trials), skipped=skipped, ran=counts["ran"],
-                        failed=counts["failed"], lost=lost, complete=complete,
-                        wall_time_s=time.perf_counter() - t_start, backend=backend)
+    return SweepSummary(
+        path=out,
+        total=len(trials),
+        skipped=skipped,
+        ran=counts["ran"],
+        failed=counts["failed"],
+        lost=lost,
+        complete=complete,
+        wall_time_s=time.perf_counter() - t_start,
+        backend=backend,
+    )
 
 
 def _execute_many(trial_fn: Callable, setups: list) -> list[dict]:
     return [execute_trial(trial_fn, s) for s in setups]
 
 
-def _run_dask(scheduler: Any, trial_fn: Callable, spec: SweepSpec, chunks: list,
-              record: Callable[[list[dict]], None]) -> int:
+def _run_dask(
+    scheduler: Any, trial_fn: Callable, spec: SweepSpec, chunks: list, record: Callable[[list[dict]], None]
+) -> int:
     """Dask: one task per chunk. A task whose workers keep dying (dask's KilledWorker) is lost,
     not recorded; the others go on."""
     from dask.distributed import Client, as_completed
@@ -287,13 +331,14 @@ def _run_dask(scheduler: Any, trial_fn: Callable, spec: SweepSpec, chunks: list,
         try:
             client = Client(scheduler, timeout=f"{SCHEDULER_TIMEOUT_S}s")
         except OSError as exc:
-            raise ScenarioError(f"cannot connect to the Dask scheduler at {scheduler!r}: "
-                                f"{exc}") from None
+            raise ScenarioError(f"cannot connect to the Dask scheduler at {scheduler!r}: {exc}") from None
         own = True
     lost = 0
     try:
-        futures = {client.submit(_execute_many, trial_fn, [spec.setup(t) for t in c],
-                                 pure=False): len(c) for c in chunks}
+        futures = {
+            client.submit(_execute_many, trial_fn, [spec.setup(t) for t in c], pure=False): len(c)
+            for c in chunks
+        }
         try:
             for fut in as_completed(list(futures)):
                 try:
@@ -311,5 +356,12 @@ def _run_dask(scheduler: Any, trial_fn: Callable, spec: SweepSpec, chunks: list,
     return lost
 
 
-__all__ = ["SweepSummary", "Terminated", "check_run_args", "check_scheduler", "default_workers",
-           "execute_trial", "run_sweep"]
+__all__ = [
+    "SweepSummary",
+    "Terminated",
+    "check_run_args",
+    "check_scheduler",
+    "default_workers",
+    "execute_trial",
+    "run_sweep",
+]

@@ -35,12 +35,11 @@ AXES: dict[str, str] = {
     "block_mass_kg": "block mass [kg]",
     "height_m": "height of the block's aim point above the floor [m]",
     "gain_scale": "factor s on the stiffness gains (kp * s) and sqrt(s) on the damping gains "
-                  "(kv * sqrt(s)), which keeps every damping ratio",
+    "(kv * sqrt(s)), which keeps every damping ratio",
 }
 
 #: W's throw (section 4) in sweep coordinates: 1.8 kg at 4.5 m/s along -x, 1.2 m high.
-W_THROW = {"speed_m_s": 4.5, "direction_deg": 180.0, "block_mass_kg": 1.8, "height_m": 1.2,
-           "gain_scale": 1.0}
+W_THROW = {"speed_m_s": 4.5, "direction_deg": 180.0, "block_mass_kg": 1.8, "height_m": 1.2, "gain_scale": 1.0}
 
 #: The most trials one sweep may hold (a grid's product or ``samples``): a bound on the work and
 #: the memory asked for by a typo such as ``num = 100000000``. Split larger studies into sweeps.
@@ -94,17 +93,19 @@ def _axis_values(name: str, value: Any) -> tuple[float, ...]:
     if _is_number(value):
         value = (value,)
     if isinstance(value, (str, bytes)) or not isinstance(value, Iterable):
-        raise ScenarioError(f"sweep axis {name} ({AXES[name]}) must be a number, a list of numbers "
-                            f"or {{start, stop, num}}; got {value!r}")
+        raise ScenarioError(
+            f"sweep axis {name} ({AXES[name]}) must be a number, a list of numbers "
+            f"or {{start, stop, num}}; got {value!r}"
+        )
     out = []
     for v in value:
         if not _is_number(v) or not math.isfinite(float(v)):
-            raise ScenarioError(f"sweep axis {name} ({AXES[name]}) must hold finite numbers; "
-                                f"got {v!r}")
+            raise ScenarioError(f"sweep axis {name} ({AXES[name]}) must hold finite numbers; got {v!r}")
         out.append(float(v))
         if len(out) > MAX_TRIALS:
-            raise ScenarioError(f"sweep axis {name} has more than {MAX_TRIALS} values "
-                                f"(the most a sweep may hold)")
+            raise ScenarioError(
+                f"sweep axis {name} has more than {MAX_TRIALS} values (the most a sweep may hold)"
+            )
     if not out:
         raise ScenarioError(f"sweep axis {name} ({AXES[name]}) is empty; give at least one value")
     lo = min(out)
@@ -117,20 +118,21 @@ def linspace_spec(name: str, value: Mapping) -> tuple[float, ...]:
     """``{start, stop, num}`` -> ``num`` evenly spaced values from start to stop, both included."""
     keys = {"start", "stop", "num"}
     if set(value) != keys:
-        raise ScenarioError(f"sweep axis {name}: a range needs exactly the keys start, stop, num; "
-                            f"got {sorted(map(str, value))}")
+        raise ScenarioError(
+            f"sweep axis {name}: a range needs exactly the keys start, stop, num; "
+            f"got {sorted(map(str, value))}"
+        )
     num = value["num"]
     if not isinstance(num, (int, np.integer)) or isinstance(num, bool) or num < 1:
         raise ScenarioError(f"sweep axis {name}: num must be an integer >= 1; got {num!r}")
     if num > MAX_TRIALS:
-        raise ScenarioError(f"sweep axis {name}: num = {num} is more than {MAX_TRIALS} (the most "
-                            f"trials a sweep may hold)")
+        raise ScenarioError(
+            f"sweep axis {name}: num = {num} is more than {MAX_TRIALS} (the most trials a sweep may hold)"
+        )
     for k in ("start", "stop"):
         if not _is_number(value[k]) or not math.isfinite(float(value[k])):
-            raise ScenarioError(f"sweep axis {name}: {k} must be a finite number; "
-                                f"got {value[k]!r}")
-    return tuple(float(x) for x in np.linspace(float(value["start"]), float(value["stop"]),
-                                               int(num)))
+            raise ScenarioError(f"sweep axis {name}: {k} must be a finite number; got {value[k]!r}")
+    return tuple(float(x) for x in np.linspace(float(value["start"]), float(value["stop"]), int(num)))
 
 
 def parse_axis(name: str, text: str) -> tuple[float, ...]:
@@ -141,14 +143,17 @@ def parse_axis(name: str, text: str) -> tuple[float, ...]:
             parts = text.split(":")
             if len(parts) != 3:
                 raise ValueError
-            return _axis_values(name, {"start": float(parts[0]), "stop": float(parts[1]),
-                                       "num": int(parts[2])})
+            return _axis_values(
+                name, {"start": float(parts[0]), "stop": float(parts[1]), "num": int(parts[2])}
+            )
         return _axis_values(name, [float(p) for p in text.split(",") if p.strip()])
     except ScenarioError:  # a number that is out of range: say so (it is also a ValueError)
         raise
     except ValueError:
-        raise ScenarioError(f"sweep axis {name} ({AXES[name]}): expected a number, a comma list "
-                            f"such as 1,2,4 or START:STOP:NUM such as 0:315:8; got {text!r}") from None
+        raise ScenarioError(
+            f"sweep axis {name} ({AXES[name]}): expected a number, a comma list "
+            f"such as 1,2,4 or START:STOP:NUM such as 0:315:8; got {text!r}"
+        ) from None
 
 
 def _check_int(name: str, value: Any, lo: int) -> None:
@@ -187,50 +192,57 @@ class SweepSpec:
         if not isinstance(self.base, Scenario):
             raise ScenarioError(f"base must be a biped.sim.scenario.Scenario; got {type(self.base)}")
         if not isinstance(self.axes, (Mapping, Iterable)) or isinstance(self.axes, (str, bytes)):
-            raise ScenarioError(f"axes must be a table of sweep axes ({', '.join(AXES)}); "
-                                f"got {self.axes!r}")
+            raise ScenarioError(f"axes must be a table of sweep axes ({', '.join(AXES)}); got {self.axes!r}")
         given = dict(self.axes.items() if isinstance(self.axes, Mapping) else self.axes)
         for name, value in given.items():
             _axis_values(name, value)  # unknown names and bad values raise here
         defaults = dict(W_THROW, block_mass_kg=self.base.block_mass_kg)
-        axes = tuple((name, _axis_values(name, given[name]) if name in given else
-                      (float(defaults[name]),)) for name in AXES)
+        axes = tuple(
+            (name, _axis_values(name, given[name]) if name in given else (float(defaults[name]),))
+            for name in AXES
+        )
         object.__setattr__(self, "axes", axes)
         if self.samples is not None:
             _check_int("samples", self.samples, 1)
             if self.samples > MAX_TRIALS:
-                raise ScenarioError(f"samples = {self.samples} is more than {MAX_TRIALS} (the most "
-                                    f"trials a sweep may hold)")
+                raise ScenarioError(
+                    f"samples = {self.samples} is more than {MAX_TRIALS} (the most trials a sweep may hold)"
+                )
         else:
             n = math.prod(len(v) for _, v in axes)
             if n > MAX_TRIALS:
-                raise ScenarioError(f"the grid has {n} trials, more than {MAX_TRIALS} (the most a "
-                                    f"sweep may hold): fewer values per axis, or --samples N")
+                raise ScenarioError(
+                    f"the grid has {n} trials, more than {MAX_TRIALS} (the most a "
+                    f"sweep may hold): fewer values per axis, or --samples N"
+                )
         _check_int("seed", self.seed, 0)
         ld = self.launch_distance_m
         if not (_is_number(ld) and math.isfinite(float(ld)) and float(ld) > 0.2):
-            raise ScenarioError(f"launch_distance_m must be a number > 0.2 m (outside the body); "
-                                f"got {ld!r}")
+            raise ScenarioError(f"launch_distance_m must be a number > 0.2 m (outside the body); got {ld!r}")
         if not isinstance(self.model, str):
-            raise ScenarioError(f"model must be the name of a shipped model "
-                                f"({', '.join(models.names())}); got {self.model!r}")
+            raise ScenarioError(
+                f"model must be the name of a shipped model ({', '.join(models.names())}); got {self.model!r}"
+            )
         models.path(self.model)  # unknown model names raise ModelError listing the valid ones
         if not isinstance(self.torque_limits, str) or self.torque_limits not in TORQUE_LIMIT_KINDS:
-            raise ScenarioError(f"torque_limits must be one of "
-                                f"{', '.join(map(repr, TORQUE_LIMIT_KINDS))}; "
-                                f"got {self.torque_limits!r}")
+            raise ScenarioError(
+                f"torque_limits must be one of "
+                f"{', '.join(map(repr, TORQUE_LIMIT_KINDS))}; "
+                f"got {self.torque_limits!r}"
+            )
         if self.base.torque_limits != "none":
-            raise ScenarioError("set the sweep's torque limits with torque_limits = 'none' | "
-                                "'human' (SweepSpec / --torque-limits), not the scenario's "
-                                f"torque_limits key (got {self.base.torque_limits!r})")
+            raise ScenarioError(
+                "set the sweep's torque limits with torque_limits = 'none' | "
+                "'human' (SweepSpec / --torque-limits), not the scenario's "
+                f"torque_limits key (got {self.base.torque_limits!r})"
+            )
 
     # ------------------------------------------------------------------ construction
     @classmethod
     def from_dict(cls, values: Mapping) -> SweepSpec:
         """From ``{"grid": {axis: values}, "scenario": {key: value}, "samples": N, "seed": S,
         "launch_distance_m": L}`` (the TOML layout, see :meth:`from_toml`)."""
-        valid = {"grid", "scenario", "samples", "seed", "launch_distance_m", "model",
-                 "torque_limits"}
+        valid = {"grid", "scenario", "samples", "seed", "launch_distance_m", "model", "torque_limits"}
         for k in values:
             if k not in valid:
                 raise ScenarioError(f"unknown sweep key {k!r}; valid keys: {', '.join(sorted(valid))}")
@@ -241,35 +253,41 @@ class SweepSpec:
         if not isinstance(scen, Mapping):
             raise ScenarioError(f"[scenario] must be a table of scenario keys; got {scen!r}")
         base = Scenario.from_dict(dict(scen))
-        return cls(axes=dict(grid), base=base, samples=values.get("samples"),
-                   seed=values.get("seed", 0), launch_distance_m=values.get("launch_distance_m", 0.5),
-                   model=values.get("model", "wendlandt"),
-                   torque_limits=values.get("torque_limits", "none"))
+        return cls(
+            axes=dict(grid),
+            base=base,
+            samples=values.get("samples"),
+            seed=values.get("seed", 0),
+            launch_distance_m=values.get("launch_distance_m", 0.5),
+            model=values.get("model", "wendlandt"),
+            torque_limits=values.get("torque_limits", "none"),
+        )
 
     @classmethod
     def from_toml(cls, path: str | os.PathLike) -> SweepSpec:
         """A sweep from a TOML file (UTF-8)::
 
-            samples = 200            # optional: a random sample instead of the full grid
-            seed = 0
-            [grid]
-            speed_m_s = {start = 1.0, stop = 8.0, num = 8}
-            direction_deg = [0, 45, 90, 135, 180, 225, 270, 315]
-            block_mass_kg = 1.8
-            [scenario]               # any key of biped.sim.scenario.Scenario
-            duration_s = 3.0
-            controller = "workspace"
+        samples = 200            # optional: a random sample instead of the full grid
+        seed = 0
+        [grid]
+        speed_m_s = {start = 1.0, stop = 8.0, num = 8}
+        direction_deg = [0, 45, 90, 135, 180, 225, 270, 315]
+        block_mass_kg = 1.8
+        [scenario]               # any key of biped.sim.scenario.Scenario
+        duration_s = 3.0
+        controller = "workspace"
         """
         path = Path(path)
         try:
             values = tomllib.loads(path.read_text(encoding="utf-8"))
         except OSError as exc:
-            raise ScenarioError(f"cannot read sweep file {str(path)!r}: "
-                                f"{exc.strerror or exc}") from None
+            raise ScenarioError(f"cannot read sweep file {str(path)!r}: {exc.strerror or exc}") from None
         except UnicodeDecodeError as exc:
-            raise ScenarioError(f"sweep file {str(path)!r} is not UTF-8 text (byte "
-                                f"{exc.object[exc.start]:#04x} at offset {exc.start}); TOML "
-                                f"files must be UTF-8") from None
+            raise ScenarioError(
+                f"sweep file {str(path)!r} is not UTF-8 text (byte "
+                f"{exc.object[exc.start]:#04x} at offset {exc.start}); TOML "
+                f"files must be UTF-8"
+            ) from None
         except tomllib.TOMLDecodeError as exc:
             raise ScenarioError(f"sweep file {str(path)!r} is not valid TOML: {exc}") from None
         return cls.from_dict(values)
@@ -280,10 +298,15 @@ class SweepSpec:
 
     # ------------------------------------------------------------------ identity
     def to_dict(self) -> dict:
-        return {"grid": {k: list(v) for k, v in self.axes}, "scenario": self.base.to_dict(),
-                "samples": self.samples, "seed": self.seed,
-                "launch_distance_m": self.launch_distance_m, "model": self.model,
-                "torque_limits": self.torque_limits}
+        return {
+            "grid": {k: list(v) for k, v in self.axes},
+            "scenario": self.base.to_dict(),
+            "samples": self.samples,
+            "seed": self.seed,
+            "launch_distance_m": self.launch_distance_m,
+            "model": self.model,
+            "torque_limits": self.torque_limits,
+        }
 
     @property
     def model_path(self) -> Path:
@@ -299,9 +322,13 @@ class SweepSpec:
     @property
     def identity(self) -> str:
         """Hash of what makes two trials with equal parameters the same experiment."""
-        ident = {"scenario": self.base.to_dict(), "launch_distance_m": self.launch_distance_m,
-                 "model_sha256": self.model_sha256, "torque_limits": self.torque_limits,
-                 "schema": SCHEMA_VERSION}
+        ident = {
+            "scenario": self.base.to_dict(),
+            "launch_distance_m": self.launch_distance_m,
+            "model_sha256": self.model_sha256,
+            "torque_limits": self.torque_limits,
+            "schema": SCHEMA_VERSION,
+        }
         return hashlib.sha256(json.dumps(ident, sort_keys=True).encode()).hexdigest()[:16]
 
     @property
@@ -319,8 +346,10 @@ class SweepSpec:
         if self.samples is None:
             # direction fastest, then speed, mass, height, gain: a partial sweep covers the polar map
             order = ["gain_scale", "height_m", "block_mass_kg", "speed_m_s", "direction_deg"]
-            points = [dict(zip(order, combo, strict=True))
-                      for combo in itertools.product(*(values[n] for n in order))]
+            points = [
+                dict(zip(order, combo, strict=True))
+                for combo in itertools.product(*(values[n] for n in order))
+            ]
         else:
             rng = np.random.default_rng(self.seed)
             draws = {n: rng.uniform(min(values[n]), max(values[n]), self.samples) for n in names}
@@ -329,8 +358,7 @@ class SweepSpec:
         out = []
         for i, p in enumerate(points):
             p = {n: float(p[n]) for n in names}
-            key = hashlib.sha256(json.dumps([ident, [repr(p[n]) for n in names]]).encode()
-                                 ).hexdigest()[:20]
+            key = hashlib.sha256(json.dumps([ident, [repr(p[n]) for n in names]]).encode()).hexdigest()[:20]
             out.append(Trial(index=i, key=key, **p))
         return tuple(out)
 
@@ -348,13 +376,19 @@ def hold_scenario(base: Scenario | None = None) -> Scenario:
     ``--task hold``: the same job for W's controller and for the joint-space PD baseline (which
     holds the initial joint angles), so their envelopes compare like with like."""
     base = base or Scenario()
-    return base.with_overrides(target_com_m=base.initial_com_m,
-                               target_tilt_deg=base.initial_tilt_deg, target_axis="-y")
+    return base.with_overrides(
+        target_com_m=base.initial_com_m, target_tilt_deg=base.initial_tilt_deg, target_axis="-y"
+    )
 
 
-def aim_block(target_xy: Any, speed_m_s: float, direction_deg: float, height_m: float,
-              launch_distance_m: float = 0.5, gravity: float = GRAVITY
-              ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+def aim_block(
+    target_xy: Any,
+    speed_m_s: float,
+    direction_deg: float,
+    height_m: float,
+    launch_distance_m: float = 0.5,
+    gravity: float = GRAVITY,
+) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
     """Start position [m] and velocity [m/s] (world frame) of a block aimed at a vertical line.
 
     The block travels in direction ``u = (cos a, sin a, 0)`` (a = direction_deg) at horizontal
@@ -366,22 +400,42 @@ def aim_block(target_xy: Any, speed_m_s: float, direction_deg: float, height_m: 
     a = math.radians(direction_deg)
     ux, uy = math.cos(a), math.sin(a)
     T = launch_distance_m / speed_m_s
-    p0 = (float(target_xy[0] - launch_distance_m * ux), float(target_xy[1] - launch_distance_m * uy),
-          float(height_m))
+    p0 = (
+        float(target_xy[0] - launch_distance_m * ux),
+        float(target_xy[1] - launch_distance_m * uy),
+        float(height_m),
+    )
     v0 = (float(speed_m_s * ux), float(speed_m_s * uy), float(0.5 * gravity * T))
     return p0, v0
 
 
 def trial_scenario(base: Scenario, trial: Trial, *, launch_distance_m: float = 0.5) -> Scenario:
     """``base`` with the block of ``trial`` aimed at the initial COM line and the gains scaled."""
-    p0, v0 = aim_block(base.initial_com_m[:2], trial.speed_m_s, trial.direction_deg,
-                       trial.height_m, launch_distance_m)
+    p0, v0 = aim_block(
+        base.initial_com_m[:2], trial.speed_m_s, trial.direction_deg, trial.height_m, launch_distance_m
+    )
     s, r = trial.gain_scale, math.sqrt(trial.gain_scale)
     return base.with_overrides(
-        block_mass_kg=trial.block_mass_kg, block_position_m=p0, block_velocity_m_s=v0,
-        kp_com=tuple(k * s for k in base.kp_com), kv_com=tuple(k * r for k in base.kv_com),
-        kp_rot=tuple(k * s for k in base.kp_rot), kv_rot=tuple(k * r for k in base.kv_rot))
+        block_mass_kg=trial.block_mass_kg,
+        block_position_m=p0,
+        block_velocity_m_s=v0,
+        kp_com=tuple(k * s for k in base.kp_com),
+        kv_com=tuple(k * r for k in base.kv_com),
+        kp_rot=tuple(k * s for k in base.kp_rot),
+        kv_rot=tuple(k * r for k in base.kv_rot),
+    )
 
 
-__all__ = ["AXES", "MAX_TRIALS", "W_THROW", "SweepSpec", "Trial", "TrialSetup", "aim_block",
-           "hold_scenario", "linspace_spec", "parse_axis", "trial_scenario"]
+__all__ = [
+    "AXES",
+    "MAX_TRIALS",
+    "W_THROW",
+    "SweepSpec",
+    "Trial",
+    "TrialSetup",
+    "aim_block",
+    "hold_scenario",
+    "linspace_spec",
+    "parse_axis",
+    "trial_scenario",
+]

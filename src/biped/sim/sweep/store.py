@@ -50,6 +50,7 @@ def lock_path(out: Path) -> Path:
 # ---------------------------------------------------------------------------------------------
 # lock
 
+
 class SweepLock:
     """An exclusive lock on ``out`` for one process (``flock`` on ``<out>.lock``, non-blocking).
 
@@ -72,7 +73,8 @@ class SweepLock:
                 os.close(fd)
                 raise ScenarioError(
                     f"another sweep (pid {owner}) is writing {str(self.out)!r}; wait for it to "
-                    f"finish (a rerun then skips its trials) or choose another --out") from None
+                    f"finish (a rerun then skips its trials) or choose another --out"
+                ) from None
             # the file may have been released and removed between our open and flock: retry
             try:
                 same = os.path.samestat(os.fstat(fd), os.stat(self.path))
@@ -105,6 +107,7 @@ class SweepLock:
 
 # ---------------------------------------------------------------------------------------------
 # this run's part file
+
 
 class PartWriter:
     """Appends rows to this run's part file, each :meth:`write` one record batch straight to the
@@ -158,8 +161,7 @@ def part_files(directory: Path) -> list[Path]:
     """Every part file in ``directory``, oldest first (later rows of a trial win)."""
     if not directory.is_dir():
         return []
-    return sorted([*directory.glob("part-*.parquet"), *directory.glob("part-*.arrows")],
-                  key=lambda p: p.name)
+    return sorted([*directory.glob("part-*.parquet"), *directory.glob("part-*.arrows")], key=lambda p: p.name)
 
 
 def read_rows(out: Path) -> tuple[pa.Table, list[Path]]:
@@ -174,6 +176,7 @@ def read_rows(out: Path) -> tuple[pa.Table, list[Path]]:
 
 # ---------------------------------------------------------------------------------------------
 # same sweep, an extension, or refused
+
 
 def _fmt_values(values: list[float]) -> str:
     v = sorted(values)
@@ -190,14 +193,15 @@ def spec_difference(old: dict, old_model_sha256: str | None, spec: SweepSpec) ->
     old_scen, new_scen = old.get("scenario", {}), new["scenario"]
     for k in sorted(set(old_scen) | set(new_scen)):
         if old_scen.get(k) != new_scen.get(k):
-            diffs.append(f"scenario key {k}: {old_scen.get(k)!r} in the file, "
-                         f"{new_scen.get(k)!r} now")
+            diffs.append(f"scenario key {k}: {old_scen.get(k)!r} in the file, {new_scen.get(k)!r} now")
     for k in ("launch_distance_m", "model", "torque_limits", "samples", "seed"):
         if old.get(k) != new[k]:
             diffs.append(f"{k}: {old.get(k)!r} in the file, {new[k]!r} now")
     if old_model_sha256 and old_model_sha256 != spec.model_sha256:
-        diffs.append(f"the model file {spec.model!r} changed (SHA-256 {old_model_sha256[:12]}... "
-                     f"in the file, {spec.model_sha256[:12]}... now)")
+        diffs.append(
+            f"the model file {spec.model!r} changed (SHA-256 {old_model_sha256[:12]}... "
+            f"in the file, {spec.model_sha256[:12]}... now)"
+        )
     old_grid = old.get("grid", {})
     for name in AXES:
         a, b = old_grid.get(name, []), new["grid"][name]
@@ -205,8 +209,10 @@ def spec_difference(old: dict, old_model_sha256: str | None, spec: SweepSpec) ->
             if sorted(a) != sorted(b):
                 diffs.append(f"{name}: {_fmt_values(a)} in the file, {_fmt_values(b)} now")
         elif not set(a) <= set(b):
-            diffs.append(f"{name}: {_fmt_values(a)} in the file, {_fmt_values(b)} now, which "
-                         f"lacks {len(set(a) - set(b))} of them")
+            diffs.append(
+                f"{name}: {_fmt_values(a)} in the file, {_fmt_values(b)} now, which "
+                f"lacks {len(set(a) - set(b))} of them"
+            )
     return "; ".join(diffs) or None
 
 
@@ -216,11 +222,14 @@ def _stored_spec(out: Path) -> tuple[dict, str | None] | None:
     try:
         meta = pq.read_schema(out).metadata or {}
     except Exception as exc:  # noqa: BLE001 - any unreadable file is refused the same way
-        raise ScenarioError(f"--out {str(out)!r} exists and is not a readable Parquet file "
-                            f"({exc}); choose another path or pass --overwrite") from None
+        raise ScenarioError(
+            f"--out {str(out)!r} exists and is not a readable Parquet file "
+            f"({exc}); choose another path or pass --overwrite"
+        ) from None
     if b"biped.sweep" not in meta:
-        raise ScenarioError(f"--out {str(out)!r} is not a biped sweep file; choose another path "
-                            f"or pass --overwrite")
+        raise ScenarioError(
+            f"--out {str(out)!r} is not a biped sweep file; choose another path or pass --overwrite"
+        )
     sha = meta.get(b"biped.model_sha256")
     return json.loads(meta[b"biped.sweep"]), sha.decode() if sha else None
 
@@ -234,7 +243,8 @@ def check_same_sweep(spec: SweepSpec, out: Path) -> None:
         if diff:
             raise ScenarioError(
                 f"--out {str(out)!r} holds a different sweep ({diff}); a rerun may only add "
-                f"values to the grid. Choose another --out, or pass --overwrite to replace it")
+                f"values to the grid. Choose another --out, or pass --overwrite to replace it"
+            )
     manifest = parts_dir(out) / MANIFEST
     if manifest.exists():
         try:
@@ -246,7 +256,8 @@ def check_same_sweep(spec: SweepSpec, out: Path) -> None:
             raise ScenarioError(
                 f"{str(parts_dir(out))!r} holds the unfinished parts of a different sweep "
                 f"({diff}). Finish it with its own command, choose another --out, or pass "
-                f"--overwrite to discard it")
+                f"--overwrite to discard it"
+            )
 
 
 def remove_sweep(out: Path) -> None:
@@ -263,24 +274,28 @@ def remove_sweep(out: Path) -> None:
         try:
             pdir.rmdir()
         except OSError:
-            raise ScenarioError(f"{str(pdir)!r} holds files that are not a sweep's parts; "
-                                f"remove them yourself") from None
+            raise ScenarioError(
+                f"{str(pdir)!r} holds files that are not a sweep's parts; remove them yourself"
+            ) from None
 
 
 def write_manifest(spec: SweepSpec, out: Path) -> None:
     pdir = parts_dir(out)
     pdir.mkdir(exist_ok=True)
-    (pdir / MANIFEST).write_text(json.dumps({"sweep_id": spec.identity, "sweep": spec.to_dict(),
-                                             "model_sha256": spec.model_sha256}))
+    (pdir / MANIFEST).write_text(
+        json.dumps({"sweep_id": spec.identity, "sweep": spec.to_dict(), "model_sha256": spec.model_sha256})
+    )
 
 
 def metadata(spec: SweepSpec) -> dict[bytes, bytes]:
-    return {b"biped.sweep": json.dumps(spec.to_dict()).encode(),
-            b"biped.scenario": spec.base.to_toml().encode(),
-            b"biped.model": (spec.model if spec.base.model == "wendlandt" else spec.base.model).encode(),
-            b"biped.model_sha256": spec.model_sha256.encode(),
-            b"biped.version": __version__.encode(),
-            b"biped.sweep_id": spec.identity.encode()}
+    return {
+        b"biped.sweep": json.dumps(spec.to_dict()).encode(),
+        b"biped.scenario": spec.base.to_toml().encode(),
+        b"biped.model": (spec.model if spec.base.model == "wendlandt" else spec.base.model).encode(),
+        b"biped.model_sha256": spec.model_sha256.encode(),
+        b"biped.version": __version__.encode(),
+        b"biped.sweep_id": spec.identity.encode(),
+    }
 
 
 def consolidate(spec: SweepSpec, out: Path, trials: Iterable[Trial]) -> int:
@@ -313,6 +328,7 @@ def consolidate(spec: SweepSpec, out: Path, trials: Iterable[Trial]) -> int:
 # ---------------------------------------------------------------------------------------------
 # reading
 
+
 @dataclass(frozen=True)
 class SweepData:
     """A consolidated sweep file: its table (pyarrow) and metadata."""
@@ -340,10 +356,25 @@ def load(path: str | os.PathLike) -> SweepData:
     if b"biped.sweep" not in meta:
         raise ScenarioError(f"{str(path)!r} is not a biped sweep file (no biped.sweep metadata)")
     spec = json.loads(meta[b"biped.sweep"])
-    return SweepData(table=table, spec=spec, scenario=Scenario.from_dict(spec["scenario"]),
-                     model_sha256=meta[b"biped.model_sha256"].decode(),
-                     version=meta[b"biped.version"].decode())
+    return SweepData(
+        table=table,
+        spec=spec,
+        scenario=Scenario.from_dict(spec["scenario"]),
+        model_sha256=meta[b"biped.model_sha256"].decode(),
+        version=meta[b"biped.version"].decode(),
+    )
 
 
-__all__ = ["PartWriter", "SweepData", "SweepLock", "check_same_sweep", "consolidate", "load",
-           "parts_dir", "read_part", "read_rows", "remove_sweep", "spec_difference"]
+__all__ = [
+    "PartWriter",
+    "SweepData",
+    "SweepLock",
+    "check_same_sweep",
+    "consolidate",
+    "load",
+    "parts_dir",
+    "read_part",
+    "read_rows",
+    "remove_sweep",
+    "spec_difference",
+]

@@ -26,8 +26,7 @@ _CACHE_SIZE = 16
 
 #: Scenario keys that a trial changes and the scene does not depend on (set in the initial state
 #: or read by the controller only).
-_NOT_SCENE = frozenset({"block_position_m", "block_velocity_m_s", "kp_com", "kv_com", "kp_rot",
-                        "kv_rot"})
+_NOT_SCENE = frozenset({"block_position_m", "block_velocity_m_s", "kp_com", "kv_com", "kp_rot", "kv_rot"})
 
 
 def _scene_for(scenario: Scenario) -> Scene:
@@ -48,8 +47,9 @@ def _tree(model: str) -> TreeModel:
     return _TREES[model]
 
 
-def make_policy(setup: TrialSetup, scene: Scene
-                ) -> Callable[[float, np.ndarray, np.ndarray, tuple[bool, bool]], np.ndarray]:
+def make_policy(
+    setup: TrialSetup, scene: Scene
+) -> Callable[[float, np.ndarray, np.ndarray, tuple[bool, bool]], np.ndarray]:
     """The trial's loop policy ``policy(t, qpos_biped, qvel_biped, feet) -> torques (12,)`` in
     ``scene.joint_names`` order (:func:`biped.sim.push.controller_policy`): W's workspace
     controller with the scenario's set point, gains and distribution, or the joint-space PD of
@@ -58,8 +58,13 @@ def make_policy(setup: TrialSetup, scene: Scene
     are constraints of the QP."""
     limits = torque_limits(setup.torque_limits)
     tree = _tree(setup.scenario.model) if setup.scenario.controller == "workspace" else None
-    return controller_policy(setup.scenario, scene, gain_scale=setup.trial.gain_scale,
-                             torque_limits=None if limits.unlimited else limits, tree=tree)
+    return controller_policy(
+        setup.scenario,
+        scene,
+        gain_scale=setup.trial.gain_scale,
+        torque_limits=None if limits.unlimited else limits,
+        tree=tree,
+    )
 
 
 def run_trial(setup: TrialSetup) -> dict[str, Any]:
@@ -75,8 +80,14 @@ def run_trial(setup: TrialSetup) -> dict[str, Any]:
     return measure(result, np.asarray(result.block_velocity), scene=scene).row()
 
 
-def ballistic_impulse(times, velocity, mass_kg: float, gravity=(0.0, 0.0, -GRAVITY),
-                      contact_time_s: float | None = None, tol: float = 1e-6):
+def ballistic_impulse(
+    times,
+    velocity,
+    mass_kg: float,
+    gravity=(0.0, 0.0, -GRAVITY),
+    contact_time_s: float | None = None,
+    tol: float = 1e-6,
+):
     """Impulse [N s] (3,) delivered BY a free-flying block TO what it hits, from its momentum
     change: ``J = -m (u_after - u_before)``, ``u = v - g t``.
 
@@ -109,8 +120,7 @@ def ballistic_impulse(times, velocity, mass_kg: float, gravity=(0.0, 0.0, -GRAVI
     return np.full(3, np.nan), t1
 
 
-def measure(result: PushResult, block_velocity: np.ndarray, *, scene: Scene | None = None
-            ) -> Measured:
+def measure(result: PushResult, block_velocity: np.ndarray, *, scene: Scene | None = None) -> Measured:
     """The sweep's measured columns (:class:`Measured`) from one :class:`biped.sim.push.PushResult`.
 
     impulse_*: :func:`ballistic_impulse` of the block's velocity at the control rate.
@@ -146,22 +156,29 @@ def measure(result: PushResult, block_velocity: np.ndarray, *, scene: Scene | No
     lifts = [e for e in result.events if e.kind == "lift_off" and e.time_s >= t_after]
     slip, rise = _foot_motion(result, scene)
     return Measured(
-        recovered=bool(result.recovered), fell=bool(result.fell),
-        impulse_n_s=float(np.linalg.norm(J)), impulse_horizontal_n_s=float(np.hypot(J[0], J[1])),
-        impulse_x_n_s=float(J[0]), impulse_y_n_s=float(J[1]), impulse_z_n_s=float(J[2]),
+        recovered=bool(result.recovered),
+        fell=bool(result.fell),
+        impulse_n_s=float(np.linalg.norm(J)),
+        impulse_horizontal_n_s=float(np.hypot(J[0], J[1])),
+        impulse_x_n_s=float(J[0]),
+        impulse_y_n_s=float(J[1]),
+        impulse_z_n_s=float(J[2]),
         block_contact_time_s=float(tc) if tc is not None else float("nan"),
-        max_com_excursion_m=max_exc, time_to_recover_s=ttr,
+        max_com_excursion_m=max_exc,
+        time_to_recover_s=ttr,
         final_com_error_m=float(result.final_com_error_m),
         final_orientation_error_deg=float(result.final_orientation_error_deg),
         left_lift_off=any(e.foot == "left" for e in lifts),
         right_lift_off=any(e.foot == "right" for e in lifts),
-        lift_off_count=len(lifts), max_foot_lift_m=rise,
-        left_slip_m=slip[0], right_slip_m=slip[1],
+        lift_off_count=len(lifts),
+        max_foot_lift_m=rise,
+        left_slip_m=slip[0],
+        right_slip_m=slip[1],
         peak_torque_n_m=float(np.abs(result.torques).max()) if n else float("nan"),
         simulated_time_s=float(t[-1]) if n else 0.0,
-        completed=bool(n and t[-1] >= sc.duration_s - 0.5 / sc.control_rate_hz
-                          and not result.interrupted),
-        fall_reason=result.fall_reason, controller_error=result.controller_error,
+        completed=bool(n and t[-1] >= sc.duration_s - 0.5 / sc.control_rate_hz and not result.interrupted),
+        fall_reason=result.fall_reason,
+        controller_error=result.controller_error,
         diverged=getattr(result, "diverged", None),
         step_count=len(result.extra.get("steps", ())),
     )
