@@ -6,7 +6,7 @@ video.mp4 and replay.html.
 >>> from biped.outputs.push import write_outputs
 >>> result = simulate(Scenario(duration_s=0.1))
 >>> sorted(write_outputs(result, tempfile.mkdtemp(), figures=False, video=False, replay=False))
-['scenario', 'summary', 'trajectory']
+['columns', 'scenario', 'summary', 'trajectory']
 """
 
 from __future__ import annotations

@@ -9,9 +9,11 @@ cached code for this machine and these sources; :func:`warm_up` compiles them, t
 first. ``biped push`` and ``biped sweep`` call it before they start (the sweep before its worker
 processes start, so that they all load the cache instead of each compiling).
 
-    >>> from biped.sim.jit import cold_kernels, warm_up
-    >>> cold_kernels()            # [] once compiled on this machine
-    >>> warm_up(log=print)        # prints "compiling ..." only when something is cold
+Usage (the answer depends on this machine's cache, so not a doctest)::
+
+    from biped.sim.jit import cold_kernels, warm_up
+    cold_kernels()            # [] once compiled on this machine
+    warm_up(log=print)        # prints "compiling ..." only when something is cold
 
 Chosen over compiling at install (a wheel or editable install runs no package code, and the
 machine code is tied to the CPU that runs it) and at ``import biped`` (which would charge ~15 s

@@ -8,9 +8,11 @@ pressure (W section 4's outputs, and what a biomechanics lab measures with force
 >>> scene = build_scene(scenario)
 >>> result = simulate(scenario, scene=scene)
 >>> rows = measure_rows(scene, result)
->>> rows.grf[:, 0, 2] + rows.grf[:, 1, 2]      # (n,) total vertical ground force [N]
->>> block_separation(result, rows).momentum   # the block's momentum when it leaves the body
->>> foot_drift(result)                         # how far the feet moved from the hit to the end
+>>> rows.grf.shape                              # (n rows, left/right, xyz) ground forces [N]
+(26, 2, 3)
+
+On a run with a hit, ``block_separation(result, rows).momentum`` is the block's momentum when it
+leaves the body and ``foot_drift(result)`` how far the feet moved from the hit to the end.
 
 ``biped.outputs.push`` writes these as trajectory.csv's columns (tests/test_outputs_push.py
 checks them against MuJoCo and closed forms).

@@ -3,8 +3,10 @@
 Plotting only: every function takes a :class:`biped.sim.push.PushResult` and draws it; events
 (block hit, heel/toe lift-off and touch-down, fall) are marked as vertical lines on every panel.
 
->>> from biped.viz.push_figures import plot_push
->>> plot_push(result, "runs/mine/figures")     # fig3_joint_angles.png/.svg ... fig6_orientation
+Usage (needs a run's result, so not a doctest)::
+
+    from biped.viz.push_figures import plot_push
+    plot_push(result, "runs/mine/figures")     # fig3_joint_angles.png/.svg ... fig6_orientation
 
 Each figure has, beside the whole run, a panel of its first :data:`ZOOM_S` = 0.5 s (where the
 hit and the feet's events crowd), with the events named; Fig. 6 adds the orientation error in
