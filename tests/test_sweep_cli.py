@@ -173,3 +173,26 @@ def test_sweep_physics_preset_defaults_to_fast_unless_physics_is_given(tmp_path,
         argv = [*argv, "--grid", str(tmp_path / "g.toml")]
     spec = build_spec(build_parser().parse_args(["sweep", "--speed", "2", *argv]))
     assert (spec.base.physics, spec.base.physics_timestep_s) == (physics, step)
+
+
+def test_envelope_labels_tell_the_distributions_apart(tmp_path):
+    """W's min-norm and the QP are both the workspace controller: the overlay must not call both
+    "workspace" (each sweep file's scenario says which distribution it ran)."""
+    pytest.importorskip("matplotlib")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from biped.sim.scenario import Scenario
+    from biped.sim.sweep import SweepSpec, run_sweep
+    from biped.viz.envelope import plot_comparison
+
+    outs = []
+    for name, base in (("a.parquet", Scenario()), ("b.parquet", Scenario(distribution="qp"))):
+        spec = SweepSpec(
+            axes={"speed_m_s": (2.0, 4.0, 6.0), "direction_deg": tuple(range(0, 360, 45))}, base=base
+        )
+        run_sweep(spec, tmp_path / name, workers=1, trial_fn=_toy, progress=False)
+        outs.append(tmp_path / name)
+    fig = plot_comparison(outs)
+    assert {ln.get_label() for ln in fig.axes[-1].get_lines()} == {"workspace", "workspace (qp)"}
+    assert fig.axes[1].get_title().startswith("workspace (qp), torque limits")

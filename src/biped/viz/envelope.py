@@ -50,6 +50,17 @@ def _closed(theta: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.append(theta, theta[:1]), np.append(r, r[:1])
 
 
+def controller_label(scenario: Any) -> str:
+    """The sweep's controller as a label: ``workspace``, ``workspace (qp)`` for a distribution
+    other than W's min-norm split, ``+ stepping`` when it steps; ``joint-pd``."""
+    name = str(scenario.controller)
+    if name == "workspace" and getattr(scenario, "distribution", "statics") != "statics":
+        name += f" ({scenario.distribution})"
+    if getattr(scenario, "stepping", False):
+        name += " + stepping"
+    return name
+
+
 def _columns(data: Any) -> dict[str, list]:
     return {n: data.table.column(n).to_pylist() for n in data.table.column_names}
 
@@ -146,7 +157,7 @@ def plot_envelope(
     ax.set_theta_direction(1)
     ax.set_rlabel_position(RLABEL_DEG)
     _facing_arrow(ax, rmax)
-    ctrl = cols["controller"][0] if cols["controller"] else "?"
+    ctrl = controller_label(data.scenario) if cols["controller"] else "?"
     lim = cols["torque_limits"][0] if cols["torque_limits"] else "?"
     ax.set_title(f"{title or f'{ctrl}, torque limits: {lim}'}\nradius: {LABELS[by]}", pad=14, fontsize=10)
     return ax
@@ -190,7 +201,7 @@ def plot_comparison(
             if len(env.directions_deg) < 3:
                 continue
             t, v = _closed(np.radians(env.directions_deg), np.nan_to_num(env.survived_max, nan=0.0))
-            name = lab or d.table.column("controller")[0].as_py()
+            name = lab or controller_label(d.scenario)
             ax.plot(t, v, color=colors[k % len(colors)], lw=2, label=name)
             ax.fill(t, v, color=colors[k % len(colors)], alpha=0.12)
         ax.set_ylim(0, rmax)
