@@ -238,13 +238,10 @@ def _check_plot(path: str | None, compare: list[str]) -> None:
 
 def run(args) -> int:
     """The command; MuJoCo's warnings go to its output's log while it runs (then back)."""
-    from biped.sim.mjlog import current_log, route_to
+    from biped.sim.mjlog import preserved
 
-    previous = current_log()
-    try:
+    with preserved():
         return _run(args)
-    finally:
-        route_to(previous)
 
 
 def _run(args) -> int:

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import mujoco
 
-__all__ = ["ENV", "configure_from_env", "current_log", "route_to", "routed"]
+__all__ = ["ENV", "configure_from_env", "current_log", "preserved", "route_to"]
 
 #: Environment variable holding the log file MuJoCo's warnings are appended to ("" = none).
 ENV = "BIPED_MUJOCO_LOG"
@@ -64,11 +64,10 @@ def configure_from_env() -> None:
 
 
 @contextmanager
-def routed(path: str | os.PathLike | None) -> Iterator[None]:
-    """:func:`route_to` ``path`` for the ``with`` block, then back to the previous choice (a
-    command run from Python, e.g. by the tests, leaves no routing behind)."""
+def preserved() -> Iterator[None]:
+    """Whatever the ``with`` block routes (:func:`route_to`), the previous choice is back after it
+    (a command run from Python, e.g. by the tests, leaves no routing behind)."""
     previous = current_log()
-    route_to(path)
     try:
         yield
     finally:
