@@ -12,7 +12,7 @@ import os
 import sys
 from pathlib import Path
 
-from biped.cli._common import run_dir
+from biped.cli._common import command_seconds, run_dir
 
 
 def register(subparsers) -> None:
@@ -250,27 +250,6 @@ def _table(result, out: Path, paths: dict, times: dict | None = None) -> str:
         )
     w = max(len(k) for k, _ in rows)
     return "\n".join(f"  {k:<{w}}  {v}" for k, v in rows)
-
-
-def command_seconds(fallback_start: float) -> float:
-    """Wall time of the command [s]: since this process started (Linux: /proc), so that the
-    last line counts the start-up (imports) too; since ``fallback_start`` (a
-    ``time.perf_counter()`` value taken when the command began) elsewhere, or when the process
-    is older than a start-up (the command was called from a running Python, e.g. a test)."""
-    import time
-
-    elapsed = time.perf_counter() - fallback_start
-    try:
-        with open("/proc/self/stat") as fh:
-            start_ticks = float(fh.read().rsplit(")", 1)[1].split()[19])
-        with open("/proc/uptime") as fh:
-            uptime = float(fh.read().split()[0])
-        age = uptime - start_ticks / os.sysconf("SC_CLK_TCK")
-        if elapsed <= age < elapsed + 30.0:  # start-up: seconds, not a long-lived process
-            return age
-    except (OSError, ValueError, IndexError):
-        pass
-    return elapsed
 
 
 def _writer_progress(quiet: bool):

@@ -183,7 +183,7 @@ def _run(args) -> int:
 
     from tqdm import tqdm
 
-    from biped.cli.push import command_seconds
+    from biped.cli._common import command_seconds
     from biped.outputs.walk import walk_stages, write_walk
     from biped.sim.mjlog import route_to
 
