@@ -36,6 +36,7 @@ from biped.control.policy import PolicyConfig, make_policy, symmetric_limits
 from biped.control.workspace import Gains, Target
 from biped.errors import BipedError, ScenarioError
 from biped.models import subject
+from biped.sim import fused as fused_mod
 from biped.sim.contact import SOLE_GEOMS, ContactMonitor
 from biped.sim.scenario import Scenario
 from biped.sim.scene import Scene, build_scene, initial_state, tilt_quat
@@ -176,13 +177,16 @@ def policy_config(
 
 class ControllerPolicy:
     """A :class:`biped.control.policy.Policy` as a loop policy (the time is not used).
-    ``policy`` is the control-level policy, ``policy.controller`` the controller object."""
+    ``policy`` is the control-level policy, ``policy.controller`` the controller object;
+    ``sensed``: whether it is given the sensed feet (None: not known, which keeps
+    :func:`run_closed_loop` on its Python loop)."""
 
-    __slots__ = ("joint_names", "policy")
+    __slots__ = ("joint_names", "policy", "sensed")
 
-    def __init__(self, policy):
+    def __init__(self, policy, *, sensed: bool | None = None):
         self.policy = policy
         self.joint_names = policy.joint_names
+        self.sensed = sensed
 
     def __call__(self, t: float, qpos: np.ndarray, qvel: np.ndarray, feet) -> np.ndarray:
         return self.policy(qpos, qvel, feet)
@@ -205,7 +209,8 @@ def controller_policy(
         return SteppingController(
             config, SteppingConfig(max_steps=scenario.max_steps), scene.joint_names, tree=tree
         )
-    return ControllerPolicy(make_policy(config, scene.joint_names, tree=tree))
+    sensed = config.support == "sensed" or config.distribution == "qp"  # as make_policy decides
+    return ControllerPolicy(make_policy(config, scene.joint_names, tree=tree), sensed=sensed)
 
 
 class RecordedTorques:
@@ -252,8 +257,41 @@ def _feet_poses(scene: Scene, qpos: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     return pos, quat
 
 
+def _diverged(t: float, period: float) -> str:
+    return (
+        f"MuJoCo's integration diverged (non-finite accelerations) between "
+        f"t = {t:.4f} s and {t + period:.4f} s"
+    )
+
+
+def _fused_rows(scene, scenario, policy, m, d, monitor, records):
+    """The :class:`biped.sim.fused.FusedRows` of this run, or None if it cannot have one."""
+    found = fused_mod.fused_controller(policy)
+    if found is None:
+        return None
+    try:
+        return fused_mod.FusedRows(
+            model=m,
+            data=d,
+            scene=scene,
+            scenario=scenario,
+            controller=found[0],
+            sensed=found[1],
+            codes=monitor.pair_codes,
+            records=records,
+        )
+    except LookupError:
+        return None
+
+
 def run_closed_loop(
-    scenario: Scenario, scene: Scene, policy, *, progress: Callable[[float], None] | None = None, on_step=None
+    scenario: Scenario,
+    scene: Scene,
+    policy,
+    *,
+    progress: Callable[[float], None] | None = None,
+    on_step=None,
+    compiled: bool | None = None,
 ) -> PushResult:
     """Run ``policy`` (see the module docstring) on ``scene`` from ``scenario``'s initial state
     for ``scenario.duration_s`` and return the :class:`PushResult`.
@@ -263,6 +301,11 @@ def run_closed_loop(
     (``interrupted = True``); a :class:`~biped.errors.BipedError` from the policy ends it with
     ``controller_error`` set. The scenario's ``torque_limits`` are the policy's business
     (:func:`controller_policy` applies them).
+
+    ``compiled``: run W's controller (:func:`controller_policy` of a workspace scenario without
+    the QP, limits or stepping) in :mod:`biped.sim.fused`'s compiled loop, bit for bit the same
+    result at a fraction of the Python loop's overhead. None (default): when it can (no
+    ``on_step``); False: never; True: or raise ScenarioError.
     """
     m = scene.model
     d = mujoco.MjData(m)
@@ -288,9 +331,12 @@ def run_closed_loop(
     com = np.zeros((n, 3))
     torques = np.zeros((n, 12))
     contacts = np.zeros((n, len(SOLE_GEOMS)), dtype=bool)
+    bits = np.zeros(n, dtype=np.int64)  # the monitor's contact bits of each row
     feet_pos = np.zeros((n, 2, 3))
     feet_quat = np.zeros((n, 2, 4))
     f0, f1 = (m.body(f).id for f in FOOT_BODIES)
+    records = {"qpos": qpos, "qvel": qvel, "com": com, "torques": torques, "bits": bits}
+    records.update(feet_pos=feet_pos, feet_quat=feet_quat, feet_bodies=(f0, f1))
     feet_rows = 0  # rows whose foot poses were read in the loop
     iq, iv = _as_slice(scene.biped_qpos_index), _as_slice(scene.biped_qvel_index)
     act = scene.actuator_index
@@ -314,11 +360,35 @@ def run_closed_loop(
         policy(0.0, d.qpos[iq], d.qvel[iv], (True, True))
     except BipedError:
         pass
+    fused = None
+    if compiled is not False and on_step is None and live:
+        fused = _fused_rows(scene, scenario, policy, m, d, monitor, records)
+    if compiled and fused is None:
+        raise ScenarioError("this policy or run cannot use the compiled loop (compiled=True)")
+    synced = 0  # rows [0, synced) went through the monitor
     t0 = time.perf_counter()
     try:
-        for k in range(n):
+        k = 0
+        while k < n:
             t = k * period
-            if not live:
+            if fused is not None:  # rows up to the next progress report in one compiled call
+                k, why = fused.run(k, min(n, (k // progress_every + 1) * progress_every))
+                if why != fused_mod.PYTHON:
+                    rows = min(k + 1, n) if why != fused_mod.DONE else k
+                    feet_rows = k
+                    if why == fused_mod.DONE:
+                        if progress is not None and k % progress_every == 0:
+                            progress(k * period)
+                        continue
+                    if why == fused_mod.DIVERGED:
+                        diverged = _diverged(k * period, period)
+                    break
+                fused_mod.sync_monitor(monitor, bits, com, period, synced, k, d)
+                synced = k + 1  # row k runs in Python below (the policy's error or retry)
+                t = k * period
+                if not live:
+                    q, v = dq[iq], dv[iv]
+            elif not live:
                 q, v = dq[iq], dv[iv]
             fell = monitor.update(t, d)
             feet = monitor.feet  # (left, right) on the floor
@@ -331,7 +401,7 @@ def run_closed_loop(
             qvel[k] = dv
             com[k] = xipos[cb]
             torques[k] = tau
-            contacts[k] = monitor.flags  # (left heel, left toe, right heel, right toe)
+            bits[k] = monitor.bits
             rows = k + 1
             if fell or controller_error or k == n_ctrl:
                 break
@@ -346,17 +416,18 @@ def run_closed_loop(
                 mujoco.mj_step(m, d, sub - 1)  # = mj_step(m, d, sub): MuJoCo loops the same way
             if warnings[_BADQACC]:  # MuJoCo reset the state: the integration diverged
                 feet_rows = k  # (a reset in the first step left the reset state's kinematics)
-                diverged = (
-                    f"MuJoCo's integration diverged (non-finite accelerations) between "
-                    f"t = {t:.4f} s and {t + period:.4f} s"
-                )
+                diverged = _diverged(t, period)
                 break
             if on_step is not None:
                 on_step(m, d)
-            if progress is not None and (k + 1) % progress_every == 0:
-                progress((k + 1) * period)
+            k += 1
+            if progress is not None and k % progress_every == 0:
+                progress(k * period)
     except KeyboardInterrupt:
         interrupted = True
+    if fused is not None and synced < rows:
+        fused_mod.sync_monitor(monitor, bits, com, period, synced, rows, d)
+    contacts[:] = (bits[:, None] >> np.arange(len(SOLE_GEOMS))) & 1
     wall = time.perf_counter() - t0
     if progress is not None:
         progress(max(rows - 1, 0) * period)
