@@ -1,7 +1,8 @@
 """The push loop's hot path in one compiled call: contacts, W's controller, records and MuJoCo.
 
 :func:`biped.sim.push.run_closed_loop` runs W's workspace controller (min-norm or printed
-distribution, no torque limits, no stepping) through :func:`run_rows`: one numba call runs up to
+distribution, clipped by torque limits or not; not the QP, not stepping) through
+:class:`FusedRows`: one numba call runs up to
 one progress interval of control periods, each doing exactly what the Python loop does, in the
 same order: classify MuJoCo's contacts (the OR of :attr:`~biped.sim.contact.ContactMonitor.pair_codes`
 over ``data.contact.geom``), call :func:`biped.control.recursions.compute_kernel` on the live
@@ -49,7 +50,7 @@ _LEFT_MASK = 0b0011
 _RIGHT_MASK = 0b1100
 
 # p (int params) entries
-P_SUB, P_NCTRL, P_CB, P_F0, P_F1, P_NCON, P_CPTR, P_CBASE, P_SENSED, P_BADQACC, P_NJ = range(11)
+P_SUB, P_NCTRL, P_CB, P_F0, P_F1, P_NCON, P_CPTR, P_CBASE, P_SENSED, P_BADQACC, P_NJ, P_CLIP = range(12)
 
 _SIGNATURE = types.int64(
     types.FunctionType(_STEP_SIG),  # mj_step
@@ -80,6 +81,8 @@ _SIGNATURE = types.int64(
     types.float64[::1],  # controller model
     types.float64[::1],  # controller work
     types.float64[::1],  # controller out
+    types.float64[::1],  # torque lower bounds (used when p[P_CLIP])
+    types.float64[::1],  # torque upper bounds
     types.float64[:, ::1],  # records: qpos
     types.float64[:, ::1],  # qvel
     types.float64[:, ::1],  # com
@@ -90,11 +93,14 @@ _SIGNATURE = types.int64(
 )
 
 
+# fmt: off
 @njit(cache=True, nogil=False)
 def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
     step, m, d, k0, k1, p, fall_h, s32, s64, geom, codes, dq, dv, q, v, xipos, xpos, xquat, ctrl, act,
-    warn, target, gains, contact, mi, mf, work, out, rq, rv, rcom, rtau, rbits, rfpos, rfquat,
-):
+    warn, target, gains, contact, mi, mf, work, out, lower, upper, rq, rv, rcom, rtau, rbits, rfpos,
+    rfquat,
+):  # the arguments of _SIGNATURE, in its order
+    # fmt: on
     sub, n_ctrl, cb, f0, f1 = p[P_SUB], p[P_NCTRL], p[P_CB], p[P_F0], p[P_F1]
     nj = p[P_NJ]
     for k in range(k0, k1):
@@ -113,14 +119,18 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
         rq[k, :] = dq
         rv[k, :] = dv
         rcom[k, :] = xipos[cb]
-        for j in range(nj):
-            rtau[k, j] = out[j]
+        if p[P_CLIP]:  # clip_torques: np.minimum(np.maximum(tau, lower), upper)
+            for j in range(nj):
+                rtau[k, j] = min(max(out[j], lower[j]), upper[j])
+        else:
+            for j in range(nj):
+                rtau[k, j] = out[j]
         if bits & _LYING_BIT or xipos[cb, 2] < fall_h:
             return k * 8 + FELL
         if k == n_ctrl:
             return k * 8 + LAST
         for j in range(nj):
-            ctrl[act[j]] = out[j]
+            ctrl[act[j]] = rtau[k, j]
         step(m, d)  # its forward pass computed the kinematics of row k's qpos
         rfpos[k, 0, :] = xpos[f0]
         rfpos[k, 1, :] = xpos[f1]
@@ -237,8 +247,9 @@ def mjdata_layout(model, data):
 
 
 def fused_controller(policy):
-    """The :class:`~biped.control.workspace.WorkspaceController` behind a loop ``policy`` and
-    whether it takes the sensed feet, if the compiled loop can run it; else None."""
+    """(the :class:`~biped.control.workspace.WorkspaceController` behind a loop ``policy``,
+    whether it takes the sensed feet, its torque limits or None) if the compiled loop can run it;
+    else None."""
     from biped.control.workspace import WorkspaceController
 
     sensed = getattr(policy, "sensed", None)
@@ -246,9 +257,12 @@ def fused_controller(policy):
     ctrl = getattr(inner, "controller", None)
     if sensed is None or not isinstance(ctrl, WorkspaceController) or ctrl.qp is not None:
         return None
-    if inner.limits is not None or tuple(inner.joint_names) != tuple(ctrl.joint_names):
+    if tuple(inner.joint_names) != tuple(ctrl.joint_names):
         return None
-    return ctrl, bool(sensed)
+    limits = inner.limits  # in joint_names order (make_policy reorders them)
+    if limits is not None and tuple(limits.joint_names) != tuple(ctrl.joint_names):
+        return None
+    return ctrl, bool(sensed), limits
 
 
 __all__ = [
@@ -259,7 +273,9 @@ __all__ = [
     "PYTHON",
     "FusedRows",
     "compile_kernel",
+    "diverged_message",
     "fused_controller",
+    "fused_rows",
     "mjdata_layout",
     "sync_monitor",
 ]
@@ -269,7 +285,7 @@ class FusedRows:
     """The compiled loop bound to one run's MuJoCo data, controller and record arrays
     (see :func:`biped.sim.push.run_closed_loop`). ``run(k0, k1)`` -> (row, why)."""
 
-    def __init__(self, *, model, data, scene, scenario, controller, sensed, codes, records):
+    def __init__(self, *, model, data, scene, scenario, controller, sensed, limits, codes, records):
         step = mj_step_function()
         lay = mjdata_layout(model, data) if step is not None else None
         if lay is None:
@@ -279,7 +295,7 @@ class FusedRows:
         compile_kernel()
         iq, iv = scene.biped_qpos_index, scene.biped_qvel_index
         nj = len(controller.joint_names)
-        p = np.zeros(11, dtype=np.int64)
+        p = np.zeros(12, dtype=np.int64)
         p[P_SUB] = scenario.control_substeps
         p[P_NCTRL] = scenario.control_steps
         p[P_CB] = scene.central_body
@@ -288,6 +304,9 @@ class FusedRows:
         p[P_SENSED] = 1 if sensed else 0
         p[P_BADQACC] = int(mujoco.mjtWarning.mjWARN_BADQACC)
         p[P_NJ] = nj
+        p[P_CLIP] = 0 if limits is None else 1
+        lower = np.full(nj, -np.inf) if limits is None else np.ascontiguousarray(limits.lower, dtype=float)
+        upper = np.full(nj, np.inf) if limits is None else np.ascontiguousarray(limits.upper, dtype=float)
         ws = controller
         contact = ws._both.copy() if not sensed else np.ones(2, dtype=np.int64)
         self._keep = (lay, data)  # the views point into data's memory
@@ -318,6 +337,8 @@ class FusedRows:
             ws._mf,
             ws._work,
             ws._out,
+            lower,
+            upper,
         )
         self._records = tuple(
             records[k] for k in ("qpos", "qvel", "com", "torques", "bits", "feet_pos", "feet_quat")
@@ -336,3 +357,33 @@ def sync_monitor(monitor, bits, com, period: float, a: int, b: int, data) -> Non
     for k in range(a, b):
         if k == 0 or k == b - 1 or int(bits[k]) != monitor.bits:
             monitor.record(k * period, int(bits[k]), com[k, 2], data)
+
+
+def fused_rows(scene, scenario, policy, model, data, codes, records) -> FusedRows | None:
+    """The :class:`FusedRows` of one run of ``policy`` (see
+    :func:`biped.sim.push.run_closed_loop`), or None if it cannot have one."""
+    found = fused_controller(policy)
+    if found is None:
+        return None
+    try:
+        return FusedRows(
+            model=model,
+            data=data,
+            scene=scene,
+            scenario=scenario,
+            controller=found[0],
+            sensed=found[1],
+            limits=found[2],
+            codes=codes,
+            records=records,
+        )
+    except LookupError:
+        return None
+
+
+def diverged_message(t: float, period: float) -> str:
+    """``PushResult.diverged`` for a divergence in the control period starting at ``t`` [s]."""
+    return (
+        f"MuJoCo's integration diverged (non-finite accelerations) between "
+        f"t = {t:.4f} s and {t + period:.4f} s"
+    )

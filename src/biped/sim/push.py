@@ -257,33 +257,6 @@ def _feet_poses(scene: Scene, qpos: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     return pos, quat
 
 
-def _diverged(t: float, period: float) -> str:
-    return (
-        f"MuJoCo's integration diverged (non-finite accelerations) between "
-        f"t = {t:.4f} s and {t + period:.4f} s"
-    )
-
-
-def _fused_rows(scene, scenario, policy, m, d, monitor, records):
-    """The :class:`biped.sim.fused.FusedRows` of this run, or None if it cannot have one."""
-    found = fused_mod.fused_controller(policy)
-    if found is None:
-        return None
-    try:
-        return fused_mod.FusedRows(
-            model=m,
-            data=d,
-            scene=scene,
-            scenario=scenario,
-            controller=found[0],
-            sensed=found[1],
-            codes=monitor.pair_codes,
-            records=records,
-        )
-    except LookupError:
-        return None
-
-
 def run_closed_loop(
     scenario: Scenario,
     scene: Scene,
@@ -362,7 +335,7 @@ def run_closed_loop(
         pass
     fused = None
     if compiled is not False and on_step is None and live:
-        fused = _fused_rows(scene, scenario, policy, m, d, monitor, records)
+        fused = fused_mod.fused_rows(scene, scenario, policy, m, d, monitor.pair_codes, records)
     if compiled and fused is None:
         raise ScenarioError("this policy or run cannot use the compiled loop (compiled=True)")
     synced = 0  # rows [0, synced) went through the monitor
@@ -381,7 +354,7 @@ def run_closed_loop(
                             progress(k * period)
                         continue
                     if why == fused_mod.DIVERGED:
-                        diverged = _diverged(k * period, period)
+                        diverged = fused_mod.diverged_message(k * period, period)
                     break
                 fused_mod.sync_monitor(monitor, bits, com, period, synced, k, d)
                 synced = k + 1  # row k runs in Python below (the policy's error or retry)
@@ -416,7 +389,7 @@ def run_closed_loop(
                 mujoco.mj_step(m, d, sub - 1)  # = mj_step(m, d, sub): MuJoCo loops the same way
             if warnings[_BADQACC]:  # MuJoCo reset the state: the integration diverged
                 feet_rows = k  # (a reset in the first step left the reset state's kinematics)
-                diverged = _diverged(t, period)
+                diverged = fused_mod.diverged_message(t, period)
                 break
             if on_step is not None:
                 on_step(m, d)
