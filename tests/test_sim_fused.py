@@ -46,6 +46,16 @@ def test_bits_agree_with_the_contact_monitor():
     )
 
 
+def test_cache_key_covers_the_controller_sources():
+    """The loop compiles the controller's kernel in: its cache key names those files too."""
+    import biped.control.recursions
+
+    stamp = fused._run_rows._cache._cache_file._source_stamp
+    own, extra = stamp
+    assert len(extra) == 4
+    assert extra[0][1] == __import__("os").stat(biped.control.recursions.__file__).st_size
+
+
 def test_mjdata_layout_reads_what_the_bindings_read():
     """ncon and the contacts' geom pairs, read through the struct offsets, equal MuJoCo's own
     ``data.ncon`` / ``data.contact.geom`` over a run with changing contacts."""

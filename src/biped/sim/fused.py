@@ -143,6 +143,29 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
     return k1 * 8 + DONE
 
 
+def _key_cache_by_what_it_compiles_in() -> None:
+    """numba keys a cached kernel by its own source file only, but :func:`_run_rows` compiles the
+    controller's kernel into itself: key it by those files too (recursions, statics, buffers,
+    spatial), so that an edit of the controller recompiles the loop instead of loading stale
+    code. Uses numba's cache internals (as :func:`biped.sim.jit.is_cached` does); without them,
+    numba's own key stands."""
+    import biped.control.buffers
+    import biped.control.recursions
+    import biped.control.statics
+    import biped.spatial
+
+    modules = (biped.control.recursions, biped.control.statics, biped.control.buffers, biped.spatial)
+    try:
+        cache_file = _run_rows._cache._cache_file
+        extra = tuple((os.stat(m.__file__).st_mtime, os.stat(m.__file__).st_size) for m in modules)
+        cache_file._source_stamp = (cache_file._source_stamp, extra)
+    except (AttributeError, OSError, TypeError):  # pragma: no cover - another numba, or no cache
+        pass
+
+
+_key_cache_by_what_it_compiles_in()
+
+
 class _MjStep(types.WrapperAddressProtocol):
     """MuJoCo's C ``mj_step`` as a numba first-class function (its address is an argument, so the
     compiled loop can be cached)."""
@@ -363,7 +386,7 @@ def fused_rows(scene, scenario, policy, model, data, codes, records) -> FusedRow
     """The :class:`FusedRows` of one run of ``policy`` (see
     :func:`biped.sim.push.run_closed_loop`), or None if it cannot have one."""
     found = fused_controller(policy)
-    if found is None:
+    if found is None or not hasattr(_run_rows, "compile"):  # (NUMBA_DISABLE_JIT=1: Python loop)
         return None
     try:
         return FusedRows(
