@@ -366,10 +366,16 @@ class FusedRows:
         self._records = tuple(
             records[k] for k in ("qpos", "qvel", "com", "torques", "bits", "feet_pos", "feet_quat")
         )
+        # one call through the dispatcher checks every argument against the signature (no rows
+        # run); later calls go straight to the compiled entry point, without numba's typing of
+        # the arguments (~10 us a call instead of ~27 us)
+        a = self._args
+        _run_rows(a[0], a[1], a[2], 0, 0, *a[3:], *self._records)
+        self._call = _run_rows.overloads[_run_rows.signatures[0]].entry_point
 
     def run(self, k0: int, k1: int) -> tuple[int, int]:
         a = self._args
-        code = _run_rows(a[0], a[1], a[2], k0, k1, *a[3:], *self._records)
+        code = self._call(a[0], a[1], a[2], k0, k1, *a[3:], *self._records)
         return code >> 3, code & 7
 
 

@@ -339,13 +339,14 @@ def run_closed_loop(
     if compiled and fused is None:
         raise ScenarioError("this policy or run cannot use the compiled loop (compiled=True)")
     synced = 0  # rows [0, synced) went through the monitor
+    chunk = progress_every if progress is not None else 10 * progress_every  # rows a call
     t0 = time.perf_counter()
     try:
         k = 0
         while k < n:
             t = k * period
             if fused is not None:  # rows up to the next progress report in one compiled call
-                k, why = fused.run(k, min(n, (k // progress_every + 1) * progress_every))
+                k, why = fused.run(k, min(n, (k // chunk + 1) * chunk))
                 if why != fused_mod.PYTHON:
                     rows = min(k + 1, n) if why != fused_mod.DONE else k
                     feet_rows = k
