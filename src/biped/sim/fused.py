@@ -383,9 +383,18 @@ def sync_monitor(monitor, bits, com, period: float, a: int, b: int, data) -> Non
     """Feed rows [a, b) of a compiled run's contact ``bits`` to ``monitor`` (its
     :meth:`~biped.sim.contact.ContactMonitor.record`) where they can change its state: the first
     row, a change of bits, the last row (a fall; ``data`` then holds that row's state)."""
-    for k in range(a, b):
-        if k == 0 or k == b - 1 or int(bits[k]) != monitor.bits:
-            monitor.record(k * period, int(bits[k]), com[k, 2], data)
+    if b <= a:
+        return
+    seg = bits[a:b]
+    prev = np.empty_like(seg)
+    prev[0] = monitor.bits
+    prev[1:] = seg[:-1]
+    rows = set((np.flatnonzero(seg != prev) + a).tolist())
+    rows.add(b - 1)
+    if a == 0:
+        rows.add(0)
+    for k in sorted(rows):
+        monitor.record(k * period, int(bits[k]), com[k, 2], data)
 
 
 def fused_rows(scene, scenario, policy, model, data, codes, records) -> FusedRows | None:

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 import time
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -238,10 +239,15 @@ def _as_slice(index: np.ndarray):
     return index
 
 
+_KINEMATICS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def _feet_poses(scene: Scene, qpos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(n, 2, 3) positions and (n, 2, 4) quaternions of :data:`FOOT_BODIES` (mj_kinematics)."""
     m = scene.model
-    d = mujoco.MjData(m)
+    d = _KINEMATICS.get(m)
+    if d is None:  # one MjData per model for this (a sweep calls it once a trial)
+        d = _KINEMATICS[m] = mujoco.MjData(m)
     f0, f1 = (m.body(f).id for f in FOOT_BODIES)
     n = len(qpos)
     pos = np.empty((n, 2, 3))
