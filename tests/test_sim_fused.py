@@ -132,6 +132,30 @@ def test_other_policies_keep_the_python_loop():
     assert fused.fused_controller(controller_policy(qp, build_scene(qp))) is None
 
 
+def test_sweep_rows_unchanged(monkeypatch):
+    """Sweep trials (``run_trial``: the sweep's scene cache, its policy, its measurements) give
+    the same rows with the compiled loop as with the Python loop."""
+    from biped.sim.sweep import SweepSpec, hold_scenario
+    from biped.sim.sweep.trial import run_trial
+
+    base = hold_scenario(Scenario(physics="fast")).with_overrides(duration_s=0.4)
+    spec = SweepSpec(axes={"speed_m_s": (3.0, 6.0), "direction_deg": (0.0, 90.0, 180.0)}, base=base)
+    setups = [spec.setup(t) for t in spec.trials()]
+    made = []
+    real = fused.fused_rows
+    monkeypatch.setattr(fused, "fused_rows", lambda *a, **k: made.append(real(*a, **k)) or made[-1])
+    compiled = [run_trial(s) for s in setups]
+    assert len(made) == 6 and all(f is not None for f in made)  # the trials ran compiled
+    monkeypatch.setattr(fused, "fused_rows", lambda *a, **k: None)
+    python = [run_trial(s) for s in setups]
+    assert len(compiled) == 6
+    for a, b in zip(compiled, python, strict=True):
+        assert a.keys() == b.keys()
+        for key in a:
+            same = a[key] == b[key] or (a[key] != a[key] and b[key] != b[key])  # NaN == NaN
+            assert same, (key, a[key], b[key])
+
+
 @pytest.mark.slow
 def test_w_full_run_and_a_sweep_are_unchanged():
     """W's 3 s run (faithful) and a few sweep trials (fast): the compiled loop's results and
