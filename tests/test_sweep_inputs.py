@@ -7,6 +7,7 @@ from __future__ import annotations
 import time
 
 import pytest
+from _helpers import one_line_error, tiny_sweep_argv
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -23,10 +24,7 @@ def _sweep(capsys, *args):
 
 
 def _one_line_error(err: str) -> str:
-    lines = [ln for ln in err.splitlines() if ln.strip()]
-    assert "Traceback" not in err
-    assert len(lines) == 1 and lines[0].startswith("biped sweep: error: "), err
-    return lines[0]
+    return one_line_error(err, "sweep")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -71,24 +69,7 @@ def test_speed_zero_says_it_must_be_positive(tmp_path, capsys):
 
 def test_an_unknown_plot_type_is_refused_before_the_sweep(tmp_path, capsys):
     out = tmp_path / "runs" / "s.parquet"
-    rc, _, err = _sweep(
-        capsys,
-        "--speed",
-        "3",
-        "--direction",
-        "0",
-        "--duration",
-        "0.02",
-        "--controller",
-        "joint-pd",
-        "--workers",
-        "1",
-        "--quiet",
-        "--out",
-        str(out),
-        "--plot",
-        str(tmp_path / "x.xyz"),
-    )
+    rc, _, err = _sweep(capsys, *tiny_sweep_argv(out, "--plot", str(tmp_path / "x.xyz"))[1:])
     line = _one_line_error(err)
     assert rc == 2 and "--plot" in line and "'.png'" not in line and ".png" in line
     assert not (tmp_path / "runs").exists()
