@@ -293,6 +293,7 @@ def test_any_gains_line_starts_the_design_or_is_a_one_line_error(tmp_path, capsy
         (["posture", "pendulum", "--dt", "1e-9"], "more than the limit of 1,000,000"),
         (["posture", "gains", "--grid", "100000"], "--grid must be in [2, 401]"),
         (["posture", "gains", "--poles", "-1", "-1", "-1", "-1"], "-1 is given 4 times"),
+        (["posture", "gains", "--grid", "0", "--"], "the bare '--' after --grid ends the options"),
         (
             ["posture", "pendulum", "--poles", "1", "2"],
             "biped posture pendulum: error: unrecognized arguments: --poles",
