@@ -186,6 +186,51 @@ def test_walk_cli_writes_the_dynamics_csv_and_the_whole_time(tmp_path, capsys):
     assert "inverse_dynamics.csv" in manifest["files"]
 
 
+def _stub_video(frames: int):
+    """A render_video for outputs.walk and outputs.push that reports ``frames`` frames through its
+    progress callback and writes nothing."""
+    from biped.viz.video import VideoResult
+
+    def fake(*args, progress=None, **kw):
+        for i in range(frames + 1):
+            if progress is not None:
+                progress(i, frames)
+        return VideoResult(None, "stubbed", None, 0)
+
+    return fake
+
+
+@pytest.mark.parametrize("quiet", [False, True])
+def test_walk_video_draws_pushs_frame_bar_unless_quiet(tmp_path, capsys, monkeypatch, quiet):
+    """The walk's video stage shows the same frame bar as push (cli._common.frame_bar): tqdm's
+    "rendering video.mp4 ... n/7" on stderr (gone when the stage ends); --quiet shows none."""
+    import biped.outputs.walk as walk_out
+
+    monkeypatch.setattr(walk_out, "render_video", _stub_video(7))
+    argv = walk_argv(tmp_path / "w", files=True)
+    argv.remove("--no-video")
+    argv += ["--no-replay", "--no-figures", "--no-dynamics"]
+    if not quiet:
+        argv.remove("--quiet")
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert ("rendering video.mp4" in err and "/7 [" in err) is not quiet, err
+
+
+def test_push_quiet_says_nothing_about_video_frames(tmp_path, capsys, monkeypatch):
+    """--quiet: no frame bar, and no "video.mp4: rendering n/N frames" lines instead of it."""
+    import biped.outputs.push as push_out
+
+    monkeypatch.setattr(push_out, "render_push_video", _stub_video(8))
+    argv = ["push", "--duration", "0.02", "--controller", "joint-pd", "--no-replay", "--no-figures"]
+    assert main([*argv, "--quiet", "--out", str(tmp_path / "q")]) == 0
+    cap = capsys.readouterr()
+    assert "rendering" not in cap.out + cap.err, cap
+    assert main([*argv, "--out", str(tmp_path / "loud")]) == 0
+    cap = capsys.readouterr()
+    assert "rendering video.mp4" in cap.err and "8/8" in cap.err, cap
+
+
 def test_push_outputs_report_stages_and_video_frames(tmp_path, monkeypatch):
     import biped.outputs.push as push_out
     from biped.sim import Scenario, simulate
