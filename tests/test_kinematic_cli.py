@@ -117,13 +117,10 @@ def test_chromium_draws_the_stance_foot_on_its_tread(tmp_path):
     assert boxes["stair2"]["max"][2] == pytest.approx(2 * rise, abs=2e-4)
 
 
-def test_video_of_the_figure(tmp_path):
+def test_video_of_the_figure(tmp_path, gl):
     """A few frames of the figure's MJCF render to an MP4 (skipped where no OpenGL works)."""
-    from biped.viz.video import gl_available, render_video
+    from biped.viz.video import render_video
 
-    ok, why = gl_available()
-    if not ok:
-        pytest.skip(why)
     motion = step_upward(steps=1).sample(50.0)
     model = figure_model(motion)
     q = figure_qpos(model, motion)

@@ -23,6 +23,18 @@ def _sweep(capsys, *args):
     return rc, cap.out, cap.err
 
 
+def _status(capsys, argv) -> tuple[int, str]:
+    """(exit status, last stderr line) of ``biped argv``: 0 or 2, never a traceback."""
+    try:
+        rc = main(argv)
+    except SystemExit as exc:  # argparse: a value of the wrong type for an int/float option
+        rc = exc.code
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    assert rc in (0, 2), err
+    return rc, (err.strip().splitlines()[-1] if rc == 2 else "")
+
+
 def _one_line_error(err: str) -> str:
     return one_line_error(err, "sweep")
 
@@ -206,15 +218,8 @@ def test_any_command_line_is_a_dry_run_or_a_one_line_error_naming_the_option(tmp
     argv = ["sweep", "--dry-run", "--quiet", "--out", str(tmp_path / "s.parquet")]
     for k, v in opts.items():
         argv.append(f"{k}={v}")
-    try:
-        rc = main(argv)
-    except SystemExit as exc:  # argparse: a value of the wrong type for an int/float option
-        rc = exc.code
-    err = capsys.readouterr().err
-    assert "Traceback" not in err
-    assert rc in (0, 2), err
+    rc, last = _status(capsys, argv)
     if rc == 2:
-        last = err.strip().splitlines()[-1]
         words = [w for k in opts for w in (*_OPTIONS[k], k)]
         assert any(w in last for w in words), (opts, last)
 
@@ -279,13 +284,6 @@ def test_any_set_and_choice_line_is_a_dry_run_or_a_one_line_error_naming_it(tmp_
         values = _CHOICES[opt]
         argv += [opt, values[i % len(values)]]
         names += [opt, opt.lstrip("-").replace("-", "_"), "model", "--plot"]
-    try:
-        rc = main(argv)
-    except SystemExit as exc:
-        rc = exc.code
-    err = capsys.readouterr().err
-    assert "Traceback" not in err
-    assert rc in (0, 2), err
+    rc, last = _status(capsys, argv)
     if rc == 2:
-        last = err.strip().splitlines()[-1]
         assert last.startswith("biped sweep: error: ") and any(w in last for w in names), (argv, last)

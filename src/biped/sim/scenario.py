@@ -13,6 +13,7 @@ Frames: world, z up, the biped faces -x, its left leg on -y.
 from __future__ import annotations
 
 import dataclasses
+import os
 import tomllib
 from dataclasses import dataclass
 from pathlib import Path
@@ -219,24 +220,29 @@ class Scenario:
         return round(self.duration_s * self.control_rate_hz)
 
 
+def read_toml(path: str | os.PathLike, kind: str) -> dict:
+    """The table of the TOML file ``path``; a file that cannot be read, is not UTF-8 or is not
+    TOML is a one-line :class:`ScenarioError` naming the ``kind`` of file ("scenario", "sweep")."""
+    path = Path(path)
+    try:
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise ScenarioError(f"cannot read {kind} file {str(path)!r}: {exc.strerror or exc}") from None
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(
+            f"{kind} file {str(path)!r} is not UTF-8 text (byte "
+            f"0x{exc.object[exc.start]:02x} at offset {exc.start}); TOML files "
+            f"must be UTF-8"
+        ) from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"{kind} file {str(path)!r} is not valid TOML: {exc}") from None
+
+
 def toml_values(path: str | Path) -> dict:
     """The ``{key: value}`` of a scenario TOML file (top-level ``key = value`` lines; keys
     checked, values not yet)."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ScenarioError(f"cannot read scenario file {str(path)!r}: {exc.strerror}") from None
-    except UnicodeDecodeError as exc:
-        raise ScenarioError(
-            f"scenario file {str(path)!r} is not UTF-8 text (byte "
-            f"0x{exc.object[exc.start]:02x} at offset {exc.start}); TOML files "
-            f"must be UTF-8"
-        ) from None
-    try:
-        values = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"scenario file {str(path)!r} is not valid TOML: {exc}") from None
+    values = read_toml(path, "scenario")
     for k, v in values.items():
         if isinstance(v, dict):
             raise ScenarioError(
@@ -336,6 +342,7 @@ __all__ = [
     "Scenario",
     "keys",
     "parse_assignment",
+    "read_toml",
     "toml_values",
     "validate",
 ]
