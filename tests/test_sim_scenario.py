@@ -68,6 +68,21 @@ def test_unknown_key_lists_every_valid_key():
         assert k in str(err.value)
 
 
+@pytest.mark.parametrize(
+    ("key", "hint"),
+    [
+        ("duraton_s", " (did you mean 'duration_s'?)"),
+        ("block_mas_kg", " (did you mean 'block_mass_kg'?)"),
+        ("zzz", ""),
+    ],
+)
+def test_a_misspelt_key_names_the_nearest_valid_one(key, hint):
+    """A typo gets the closest key (difflib) before the full list; a word near no key gets none."""
+    with pytest.raises(ScenarioError) as err:
+        Scenario.from_dict({key: 1.0})
+    assert str(err.value).startswith(f"unknown scenario key {key!r}{hint}; valid keys: duration_s, ")
+
+
 def test_set_assignment_parses_toml_values():
     assert parse_assignment("kp_com=[60, 60, 200]") == ("kp_com", [60, 60, 200])
     assert parse_assignment("controller=joint-pd") == ("controller", "joint-pd")

@@ -13,6 +13,7 @@ Frames: world, z up, the biped faces -x, its left leg on -y.
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import os
 import tomllib
 from dataclasses import dataclass
@@ -275,7 +276,9 @@ def _check_keys(values: dict) -> None:
     valid = keys()
     for k in values:
         if k not in valid:
-            raise ScenarioError(f"unknown scenario key {k!r}; valid keys: {', '.join(valid)}")
+            close = difflib.get_close_matches(str(k), valid, n=1)
+            hint = f" (did you mean {close[0]!r}?)" if close else ""
+            raise ScenarioError(f"unknown scenario key {k!r}{hint}; valid keys: {', '.join(valid)}")
 
 
 def _coerce(key: str, v):
