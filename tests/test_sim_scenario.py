@@ -149,3 +149,11 @@ def test_push_cli_physics_flag():
     assert scenario().physics == "faithful" and scenario().physics_timestep_s == 0.0005
     assert scenario("--physics", "fast") == Scenario(physics="fast")
     assert scenario("--physics", "fast", "--timestep", "0.0005").physics_timestep_s == 0.0005
+
+
+@pytest.mark.parametrize(("value", "shown"), [(1, "1"), (0.0, "0.0"), ("yes", "'yes'")])
+def test_a_non_bool_stepping_is_shown_as_given(value, shown):
+    """``--set stepping=1`` said "got 1.0": the number was made a float before the check."""
+    with pytest.raises(ScenarioError) as err:
+        Scenario.from_dict({"stepping": value})
+    assert str(err.value) == f"stepping must be true or false; got {shown}"

@@ -292,7 +292,7 @@ def _coerce(key: str, v):
         if isinstance(v, (list, tuple)):
             return tuple(float(x) if is_number(x) else x for x in v)
         return float(v) if is_number(v) else v
-    if key in _STRINGS or key in INTS:
+    if key in _STRINGS or key in INTS or key == "stepping":  # a bool is checked, not converted
         return v
     if key == "model":
         return str(v) if isinstance(v, Path) else v
