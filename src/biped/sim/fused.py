@@ -2,17 +2,16 @@
 
 :func:`biped.sim.push.run_closed_loop` runs W's workspace controller (min-norm or printed
 distribution, clipped by torque limits or not; not the QP, not stepping) through
-:class:`FusedRows`: one numba call runs up to
-one progress interval of control periods, each doing exactly what the Python loop does, in the
-same order: classify MuJoCo's contacts (the OR of :attr:`~biped.sim.contact.ContactMonitor.pair_codes`
-over ``data.contact.geom``), call :func:`biped.control.recursions.compute_kernel` on the live
-qpos/qvel views, record the row, write ``ctrl`` and call MuJoCo's C ``mj_step`` through its
-function pointer (``libmujoco``'s own symbol, the library the Python bindings use). The events,
-fall and block-hit time are then rebuilt from the recorded contact bits by the same
-:class:`~biped.sim.contact.ContactMonitor` state machine, so a result is bit for bit the Python
-loop's (``tests/test_sim_fused.py``). Anything unusual (a controller status other than 0, the
-contact buffer not where it was) hands the row back to the Python loop, which reproduces the
-policy's own error or retry.
+:class:`FusedRows`: one numba call runs up to one progress interval of control periods, each
+doing exactly what the Python loop does, in the same order: classify MuJoCo's contacts (the OR
+of :attr:`~biped.sim.contact.ContactMonitor.pair_codes` over ``data.contact.geom``), call
+:func:`biped.control.recursions.compute_kernel` on the live qpos/qvel views, record the row,
+write ``ctrl`` and call MuJoCo's C ``mj_step`` through its function pointer (``libmujoco``'s own
+symbol, the library the Python bindings use). The events, fall and block-hit time are then
+rebuilt from the recorded contact bits by the same :class:`~biped.sim.contact.ContactMonitor`
+state machine, so a result is bit for bit the Python loop's (``tests/test_sim_fused.py``).
+Anything unusual (a controller status other than 0, the contact buffer not where it was) hands
+the row back to the Python loop, which reproduces the policy's own error or retry.
 
 Reading MuJoCo's ``mjData`` from compiled code needs two numbers the bindings do not expose:
 where ``ncon`` lives in the struct (right after the ``timer`` array, whose address the bindings
@@ -23,8 +22,9 @@ a check fails (another MuJoCo layout) it returns None and the Python loop runs i
 
 Limits: a MuJoCo *error* (not a warning) inside ``mj_step`` cannot unwind through compiled code
 and would abort the process; for this scene MuJoCo raises none (contact and constraint overflow
-are warnings, which reach ``biped.sim.mjlog`` as before). Ctrl-C is seen between calls (every
-0.05 s of simulated time).
+are warnings, which reach ``biped.sim.mjlog`` as before; a Python warning handler that raises
+aborts the Python loop too). Ctrl-C is seen between calls (every 0.05 s of simulated time, 0.5 s
+when the run reports no progress).
 """
 
 from __future__ import annotations
@@ -156,8 +156,9 @@ def _key_cache_by_what_it_compiles_in() -> None:
 
     modules = (biped.control.recursions, biped.control.statics, biped.control.buffers, biped.spatial)
     try:
-        cache_file = _run_rows._cache._cache_file
-        extra = tuple((os.stat(m.__file__).st_mtime, os.stat(m.__file__).st_size) for m in modules)
+        cache_file = _run_rows._cache._cache_file  # type: ignore[attr-defined]
+        stats = [os.stat(str(m.__file__)) for m in modules]
+        extra = tuple((st.st_mtime, st.st_size) for st in stats)
         cache_file._source_stamp = (cache_file._source_stamp, extra)
     except (AttributeError, OSError, TypeError):  # pragma: no cover - another numba, or no cache
         pass
@@ -212,8 +213,8 @@ _PROBE_XML = """<mujoco><worldbody><geom name="floor" type="plane" size="1 1 .1"
 
 
 def _struct_views(data, size: int):
-    raw = (ctypes.c_uint8 * size).from_address(int(data._address))
-    return np.frombuffer(raw, dtype=np.int32), np.frombuffer(raw, dtype=np.uint64, count=size // 8)
+    raw = np.ctypeslib.as_array((ctypes.c_uint8 * size).from_address(int(data._address)))
+    return raw[: size // 4 * 4].view(np.int32), raw[: size // 8 * 8].view(np.uint64)
 
 
 def _offsets():
@@ -278,7 +279,7 @@ def fused_controller(policy):
     sensed = getattr(policy, "sensed", None)
     inner = getattr(policy, "policy", None)
     ctrl = getattr(inner, "controller", None)
-    if sensed is None or not isinstance(ctrl, WorkspaceController) or ctrl.qp is not None:
+    if sensed is None or inner is None or not isinstance(ctrl, WorkspaceController) or ctrl.qp is not None:
         return None
     if tuple(inner.joint_names) != tuple(ctrl.joint_names):
         return None
@@ -371,7 +372,7 @@ class FusedRows:
         # the arguments (~10 us a call instead of ~27 us)
         a = self._args
         _run_rows(a[0], a[1], a[2], 0, 0, *a[3:], *self._records)
-        self._call = _run_rows.overloads[_run_rows.signatures[0]].entry_point
+        self._call = _run_rows.overloads[_run_rows.signatures[0]].entry_point  # type: ignore[attr-defined]
 
     def run(self, k0: int, k1: int) -> tuple[int, int]:
         a = self._args

@@ -314,7 +314,7 @@ def run_closed_loop(
     feet_pos = np.zeros((n, 2, 3))
     feet_quat = np.zeros((n, 2, 4))
     f0, f1 = (m.body(f).id for f in FOOT_BODIES)
-    records = {"qpos": qpos, "qvel": qvel, "com": com, "torques": torques, "bits": bits}
+    records: dict = {"qpos": qpos, "qvel": qvel, "com": com, "torques": torques, "bits": bits}
     records.update(feet_pos=feet_pos, feet_quat=feet_quat, feet_bodies=(f0, f1))
     feet_rows = 0  # rows whose foot poses were read in the loop
     iq, iv = _as_slice(scene.biped_qpos_index), _as_slice(scene.biped_qvel_index)
