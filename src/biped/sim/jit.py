@@ -33,7 +33,7 @@ KERNELS = {
     "controller": ("W's controller", 15),
     "qp": ("the contact QP", 5),
     "contact": ("the contact monitor", 1),
-    "loop": ("the compiled push loop", 8),
+    "loop": ("the compiled push loop", 3),
 }
 
 
