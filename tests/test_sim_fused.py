@@ -94,6 +94,16 @@ def test_sensed_feet_and_torque_limits():
     assert_same(a, b)
 
 
+@pytest.mark.parametrize("gain_scale", [1.0, 0.3])
+def test_joint_pd(gain_scale):
+    """The joint-PD baseline (its gains scaled as a sweep does), through the block hit."""
+    sc = Scenario(physics="fast", duration_s=0.4, controller="joint-pd")
+    a, b = both(sc, gain_scale=gain_scale)
+    assert fused.fused_controller(controller_policy(sc, build_scene(sc))) is not None
+    assert a.block_contact_time_s is not None and np.abs(a.torques).max() > 1.0
+    assert_same(a, b)
+
+
 def test_a_fall_and_a_divergence():
     """A fall (a set point 10 cm lower takes the COM under a raised fall height mid-run) and a
     divergence (a 20 kg block at 6 m/s): the run stops at the same row with the same reason."""
@@ -140,15 +150,18 @@ def test_sweep_rows_unchanged(monkeypatch):
 
     base = hold_scenario(Scenario(physics="fast")).with_overrides(duration_s=0.4)
     spec = SweepSpec(axes={"speed_m_s": (3.0, 6.0), "direction_deg": (0.0, 90.0, 180.0)}, base=base)
-    setups = [spec.setup(t) for t in spec.trials()]
+    pd = SweepSpec(
+        axes={"speed_m_s": 5.0, "direction_deg": (0.0, 90.0)}, base=base.with_overrides(controller="joint-pd")
+    )
+    setups = [spec.setup(t) for t in spec.trials()] + [pd.setup(t) for t in pd.trials()]
     made = []
     real = fused.fused_rows
     monkeypatch.setattr(fused, "fused_rows", lambda *a, **k: made.append(real(*a, **k)) or made[-1])
     compiled = [run_trial(s) for s in setups]
-    assert len(made) == 6 and all(f is not None for f in made)  # the trials ran compiled
+    assert len(made) == 8 and all(f is not None for f in made)  # the trials ran compiled
     monkeypatch.setattr(fused, "fused_rows", lambda *a, **k: None)
     python = [run_trial(s) for s in setups]
-    assert len(compiled) == 6
+    assert len(compiled) == 8
     for a, b in zip(compiled, python, strict=True):
         assert a.keys() == b.keys()
         for key in a:

@@ -1,12 +1,13 @@
 """The push loop's hot path in one compiled call: contacts, W's controller, records and MuJoCo.
 
 :func:`biped.sim.push.run_closed_loop` runs W's workspace controller (min-norm or printed
-distribution, clipped by torque limits or not; not the QP, not stepping) through
-:class:`FusedRows`: one numba call runs up to one progress interval of control periods, each
-doing exactly what the Python loop does, in the same order: classify MuJoCo's contacts (the OR
-of :attr:`~biped.sim.contact.ContactMonitor.pair_codes` over ``data.contact.geom``), call
-:func:`biped.control.recursions.compute_kernel` on the live qpos/qvel views, record the row,
-write ``ctrl`` and call MuJoCo's C ``mj_step`` through its function pointer (``libmujoco``'s own
+distribution) and the joint-PD baseline (without gravity compensation), clipped by torque limits
+or not (not the QP, not stepping), through :class:`FusedRows`: one numba call runs up to one
+progress interval of control periods, each doing exactly what the Python loop does, in the
+same order: classify MuJoCo's contacts (the OR of
+:attr:`~biped.sim.contact.ContactMonitor.pair_codes` over ``data.contact.geom``), call
+:func:`biped.control.recursions.compute_kernel` (or the joint PD's law) on the live qpos/qvel
+views, record the row, write ``ctrl`` and call MuJoCo's C ``mj_step`` through its function pointer (``libmujoco``'s own
 symbol, the library the Python bindings use). The events, fall and block-hit time are then
 rebuilt from the recorded contact bits by the same :class:`~biped.sim.contact.ContactMonitor`
 state machine, so a result is bit for bit the Python loop's (``tests/test_sim_fused.py``).
@@ -36,7 +37,9 @@ import mujoco
 import numpy as np
 from numba import njit, types
 
+from biped.control.joint_pd import JointPDController
 from biped.control.recursions import compute_kernel
+from biped.control.workspace import WorkspaceController
 
 _STEP_SIG = types.void(types.uintp, types.uintp)  # mj_step(const mjModel*, mjData*)
 
@@ -50,7 +53,7 @@ _LEFT_MASK = 0b0011
 _RIGHT_MASK = 0b1100
 
 # p (int params) entries
-P_SUB, P_NCTRL, P_CB, P_F0, P_F1, P_NCON, P_CPTR, P_CBASE, P_SENSED, P_BADQACC, P_NJ, P_CLIP = range(12)
+P_SUB, P_NCTRL, P_CB, P_F0, P_F1, P_NCON, P_CPTR, P_CBASE, P_SENSED, P_BADQACC, P_NJ, P_CLIP, P_PD = range(13)
 
 _SIGNATURE = types.int64(
     types.FunctionType(_STEP_SIG),  # mj_step
@@ -83,6 +86,9 @@ _SIGNATURE = types.int64(
     types.float64[::1],  # controller out
     types.float64[::1],  # torque lower bounds (used when p[P_CLIP])
     types.float64[::1],  # torque upper bounds
+    types.int64[::1],  # joint PD (when p[P_PD]): qpos address of each joint in the biped's qpos
+    types.int64[::1],  # its qvel address
+    types.float64[:, ::1],  # (4, nj): qpos offset, q_ref, kp, kd
     types.float64[:, ::1],  # records: qpos
     types.float64[:, ::1],  # qvel
     types.float64[:, ::1],  # com
@@ -97,8 +103,8 @@ _SIGNATURE = types.int64(
 @njit(cache=True, nogil=False)
 def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
     step, m, d, k0, k1, p, fall_h, s32, s64, geom, codes, dq, dv, q, v, xipos, xpos, xquat, ctrl, act,
-    warn, target, gains, contact, mi, mf, work, out, lower, upper, rq, rv, rcom, rtau, rbits, rfpos,
-    rfquat,
+    warn, target, gains, contact, mi, mf, work, out, lower, upper, pd_q, pd_v, pd, rq, rv, rcom, rtau,
+    rbits, rfpos, rfquat,
 ):  # the arguments of _SIGNATURE, in its order
     # fmt: on
     sub, n_ctrl, cb, f0, f1 = p[P_SUB], p[P_NCTRL], p[P_CB], p[P_F0], p[P_F1]
@@ -114,7 +120,16 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
         if p[P_SENSED]:
             contact[0] = 1 if bits & _LEFT_MASK else 0
             contact[1] = 1 if bits & _RIGHT_MASK else 0
-        if compute_kernel(q, v, target, gains, contact, mi, mf, work, out) != 0:
+        if p[P_PD]:  # JointPDController.compute: kp (q_ref - q) - kd qd, q and qd finite
+            finite = True
+            for j in range(nj):
+                qj = q[pd_q[j]] - pd[0, j]
+                qdj = v[pd_v[j]]
+                finite = finite and np.isfinite(qj) and np.isfinite(qdj)
+                out[j] = pd[2, j] * (pd[1, j] - qj) - pd[3, j] * qdj
+            if not finite:
+                return k * 8 + PYTHON  # the policy's own error comes from Python
+        elif compute_kernel(q, v, target, gains, contact, mi, mf, work, out) != 0:
             return k * 8 + PYTHON  # the policy's own error (or its retry) comes from Python
         rq[k, :] = dq
         rv[k, :] = dv
@@ -271,15 +286,20 @@ def mjdata_layout(model, data):
 
 
 def fused_controller(policy):
-    """(the :class:`~biped.control.workspace.WorkspaceController` behind a loop ``policy``,
-    whether it takes the sensed feet, its torque limits or None) if the compiled loop can run it;
-    else None."""
-    from biped.control.workspace import WorkspaceController
-
+    """(the controller behind a loop ``policy``: a
+    :class:`~biped.control.workspace.WorkspaceController` or a
+    :class:`~biped.control.joint_pd.JointPDController`; whether it takes the sensed feet; its
+    torque limits or None) if the compiled loop can run it (not the QP, not the joint PD's gravity
+    compensation); else None."""
     sensed = getattr(policy, "sensed", None)
     inner = getattr(policy, "policy", None)
     ctrl = getattr(inner, "controller", None)
-    if sensed is None or inner is None or not isinstance(ctrl, WorkspaceController) or ctrl.qp is not None:
+    if sensed is None or inner is None:
+        return None
+    if isinstance(ctrl, WorkspaceController):
+        if ctrl.qp is not None:
+            return None
+    elif not isinstance(ctrl, JointPDController) or ctrl.gravity_compensation:
         return None
     if tuple(inner.joint_names) != tuple(ctrl.joint_names):
         return None
@@ -319,7 +339,7 @@ class FusedRows:
         compile_kernel()
         iq, iv = scene.biped_qpos_index, scene.biped_qvel_index
         nj = len(controller.joint_names)
-        p = np.zeros(12, dtype=np.int64)
+        p = np.zeros(13, dtype=np.int64)
         p[P_SUB] = scenario.control_substeps
         p[P_NCTRL] = scenario.control_steps
         p[P_CB] = scene.central_body
@@ -331,7 +351,14 @@ class FusedRows:
         p[P_CLIP] = 0 if limits is None else 1
         lower = np.full(nj, -np.inf) if limits is None else np.ascontiguousarray(limits.lower, dtype=float)
         upper = np.full(nj, np.inf) if limits is None else np.ascontiguousarray(limits.upper, dtype=float)
-        ws = controller
+        pd_q, pd_v, pd = np.zeros(nj, dtype=np.int64), np.zeros(nj, dtype=np.int64), np.zeros((4, nj))
+        if isinstance(controller, WorkspaceController):
+            ws = controller
+        else:  # the joint PD: its own arrays; the workspace controller's are placeholders
+            p[P_PD] = 1
+            pd_q[:], pd_v[:] = controller._qadr, controller._vadr
+            pd[:] = controller._qoff, controller.q_ref, controller.gains.kp, controller.gains.kd
+            ws = WorkspaceController(controller.tree)
         contact = ws._both.copy() if not sensed else np.ones(2, dtype=np.int64)
         self._keep = (lay, data)  # the views point into data's memory
         self._args = (
@@ -363,6 +390,9 @@ class FusedRows:
             ws._out,
             lower,
             upper,
+            pd_q,
+            pd_v,
+            pd,
         )
         self._records = tuple(
             records[k] for k in ("qpos", "qvel", "com", "torques", "bits", "feet_pos", "feet_quat")
