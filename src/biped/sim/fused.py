@@ -33,10 +33,15 @@ from __future__ import annotations
 import ctypes
 import os
 
+import itertools
+import weakref
+
 import mujoco
 import numpy as np
-from numba import njit, types
+from numba import njit, objmode, types
 
+from biped.control.buffers import unpack
+from biped.control.distribution import qp_build, qp_finish
 from biped.control.joint_pd import JointPDController
 from biped.control.recursions import compute_kernel
 from biped.control.workspace import WorkspaceController
@@ -54,6 +59,8 @@ _RIGHT_MASK = 0b1100
 
 # p (int params) entries
 P_SUB, P_NCTRL, P_CB, P_F0, P_F1, P_NCON, P_CPTR, P_CBASE, P_SENSED, P_BADQACC, P_NJ, P_CLIP, P_PD = range(13)
+P_QP, P_NLIM, P_SLOT = range(13, 16)  # the QP distribution: on, with torque-limit rows, its slot
+_NP = 16
 
 _SIGNATURE = types.int64(
     types.FunctionType(_STEP_SIG),  # mj_step
@@ -96,7 +103,38 @@ _SIGNATURE = types.int64(
     types.int64[::1],  # contact bits
     types.float64[:, :, ::1],  # feet positions
     types.float64[:, :, ::1],  # feet quaternions
+    # the QP distribution (when p[P_QP]; ContactQP's arrays, biped.control.distribution)
+    types.float64[:, :, ::1],  # soles: g_{foot,sole} (2, 4, 4)
+    types.float64[:, ::1],  # dims: half length and width (2, 2)
+    types.float64[::1],  # prm: the weights' array
+    types.float64[::1],  # torque-limit rows: lower bounds
+    types.float64[::1],  # upper bounds
+    types.float64[:, :, ::1],  # A (2, 6, 6)
+    types.float64[:, ::1],  # T (n_joints, 12)
+    types.float64[:, ::1],  # F (n_links, 6)
+    types.float64[::1],  # tau scratch (n_joints,)
+    types.float64[:, ::1],  # col (2, 6)
+    types.float64[:, ::1],  # Gq (12, 12)
+    types.float64[::1],  # av (12,)
+    types.float64[:, ::1],  # Ct (rows, 12)
+    types.float64[::1],  # b (rows,)
+    types.float64[::1],  # x (12,)
 )
+
+# the ContactQP of each live FusedRows with the QP, by slot: the compiled loop builds the QP and
+# applies its solution, the solve itself (daqp or quadprog, with ContactQP.solve's fallbacks and
+# counters) runs in Python through numba's objmode
+_QP_SLOTS: dict = {}
+_QP_SLOT_IDS = itertools.count(1)
+
+
+def _solve_qp(slot, meq, used, f0, f1):
+    """ContactQP.solve for the QP that the compiled loop has just built (what ContactQP.build
+    records about it first); returns its status."""
+    qp = _QP_SLOTS[slot]
+    qp.meq, qp.rows, qp.first = meq, used, (f0, f1)
+    qp.solve()
+    return qp.status
 
 
 # fmt: off
@@ -104,7 +142,7 @@ _SIGNATURE = types.int64(
 def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
     step, m, d, k0, k1, p, fall_h, s32, s64, geom, codes, dq, dv, q, v, xipos, xpos, xquat, ctrl, act,
     warn, target, gains, contact, mi, mf, work, out, lower, upper, pd_q, pd_v, pd, rq, rv, rcom, rtau,
-    rbits, rfpos, rfquat,
+    rbits, rfpos, rfquat, soles, dims, prm, qlo, qhi, qa, qt, qf, qtau, qcol, qg, qav, qct, qb, qx,
 ):  # the arguments of _SIGNATURE, in its order
     # fmt: on
     sub, n_ctrl, cb, f0, f1 = p[P_SUB], p[P_NCTRL], p[P_CB], p[P_F0], p[P_F1]
@@ -131,6 +169,22 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
                 return k * 8 + PYTHON  # the policy's own error comes from Python
         elif compute_kernel(q, v, target, gains, contact, mi, mf, work, out) != 0:
             return k * 8 + PYTHON  # the policy's own error (or its retry) comes from Python
+        elif p[P_QP]:  # WorkspaceController._run's QP step: build, solve (Python), finish
+            ti, tm, tw, to = unpack(mi, mf, work, out)
+            meq, used, ff0, ff1 = qp_build(
+                tw.g, tw.gl, ti.parent, tm.H, ti.leg, ti.beyond, ti.feet, contact, to.Fd, soles, dims,
+                prm, qlo, qhi, p[P_NLIM], qa, qt, qf, qtau, qcol, qg, qav, qct, qb,
+            )  # fmt: skip
+            if contact[0] == 0 and contact[1] == 0:
+                qx[:] = 0.0
+            else:
+                slot = p[P_SLOT]
+                with objmode():
+                    _solve_qp(slot, meq, used, ff0, ff1)
+            qp_finish(
+                qx, contact, qa, qt, soles, to.tau, to.Fl_tilde, to.Fr_tilde, to.Fl, to.Fr, ti.parent, tm.H,
+                ti.leg, ti.beyond, tw.gl, qf, p[P_NLIM],
+            )  # fmt: skip
         rq[k, :] = dq
         rv[k, :] = dv
         rcom[k, :] = xipos[cb]
@@ -161,15 +215,22 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
 def _key_cache_by_what_it_compiles_in() -> None:
     """numba keys a cached kernel by its own source file only, but :func:`_run_rows` compiles the
     controller's kernel into itself: key it by those files too (recursions, statics, buffers,
-    spatial), so that an edit of the controller recompiles the loop instead of loading stale
+    spatial, distribution), so that an edit of the controller recompiles the loop instead of loading stale
     code. Uses numba's cache internals (as :func:`biped.sim.jit.is_cached` does); without them,
     numba's own key stands."""
     import biped.control.buffers
+    import biped.control.distribution
     import biped.control.recursions
     import biped.control.statics
     import biped.spatial
 
-    modules = (biped.control.recursions, biped.control.statics, biped.control.buffers, biped.spatial)
+    modules = (
+        biped.control.recursions,
+        biped.control.statics,
+        biped.control.buffers,
+        biped.spatial,
+        biped.control.distribution,
+    )
     try:
         cache_file = _run_rows._cache._cache_file  # type: ignore[attr-defined]
         stats = [os.stat(str(m.__file__)) for m in modules]
@@ -297,8 +358,7 @@ def fused_controller(policy):
     if sensed is None or inner is None:
         return None
     if isinstance(ctrl, WorkspaceController):
-        if ctrl.qp is not None:
-            return None
+        pass
     elif not isinstance(ctrl, JointPDController) or ctrl.gravity_compensation:
         return None
     if tuple(inner.joint_names) != tuple(ctrl.joint_names):
@@ -339,7 +399,7 @@ class FusedRows:
         compile_kernel()
         iq, iv = scene.biped_qpos_index, scene.biped_qvel_index
         nj = len(controller.joint_names)
-        p = np.zeros(13, dtype=np.int64)
+        p = np.zeros(_NP, dtype=np.int64)
         p[P_SUB] = scenario.control_substeps
         p[P_NCTRL] = scenario.control_steps
         p[P_CB] = scene.central_body
@@ -360,6 +420,12 @@ class FusedRows:
             pd[:] = controller._qoff, controller.q_ref, controller.gains.kp, controller.gains.kd
             ws = WorkspaceController(controller.tree)
         contact = ws._both.copy() if not sensed else np.ones(2, dtype=np.int64)
+        qp_args = _qp_arguments(ws.qp, nj, ws.tree.n_links)
+        if ws.qp is not None:
+            p[P_QP], p[P_NLIM] = 1, 1 if ws.qp.limited else 0
+            p[P_SLOT] = next(_QP_SLOT_IDS)
+            _QP_SLOTS[int(p[P_SLOT])] = ws.qp
+            weakref.finalize(self, _QP_SLOTS.pop, int(p[P_SLOT]), None)
         self._keep = (lay, data)  # the views point into data's memory
         self._args = (
             step,
@@ -396,7 +462,7 @@ class FusedRows:
         )
         self._records = tuple(
             records[k] for k in ("qpos", "qvel", "com", "torques", "bits", "feet_pos", "feet_quat")
-        )
+        ) + qp_args
         # one call through the dispatcher checks every argument against the signature (no rows
         # run); later calls go straight to the compiled entry point, without numba's typing of
         # the arguments (~10 us a call instead of ~27 us)
@@ -408,6 +474,17 @@ class FusedRows:
         a = self._args
         code = self._call(a[0], a[1], a[2], k0, k1, *a[3:], *self._records)
         return code >> 3, code & 7
+
+
+def _qp_arguments(qp, nj: int, n_links: int) -> tuple:
+    """The QP's arrays in :data:`_SIGNATURE`'s order (the ContactQP's own, so that its ``x`` and
+    matrices after a run are those of the Python loop), or placeholders without a QP."""
+    if qp is None:
+        z1, z2 = np.zeros(1), np.zeros((1, 1))
+        return np.zeros((2, 4, 4)), np.zeros((2, 2)), np.zeros(8), z1, z1, np.zeros((2, 6, 6)), z2, z2, z1, z2, z2, z1, z2, z1, z1
+    return (
+        qp._soles, qp._dims, qp._prm, qp._lo, qp._hi, qp.A, qp.T, qp._F, qp._tau, qp._col, qp.Gq, qp.av, qp.Ct, qp.b, qp.x,
+    )  # fmt: skip
 
 
 def sync_monitor(monitor, bits, com, period: float, a: int, b: int, data) -> None:
