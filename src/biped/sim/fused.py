@@ -31,9 +31,8 @@ when the run reports no progress).
 from __future__ import annotations
 
 import ctypes
-import os
-
 import itertools
+import os
 import weakref
 
 import mujoco
@@ -420,7 +419,7 @@ class FusedRows:
             pd[:] = controller._qoff, controller.q_ref, controller.gains.kp, controller.gains.kd
             ws = WorkspaceController(controller.tree)
         contact = ws._both.copy() if not sensed else np.ones(2, dtype=np.int64)
-        qp_args = _qp_arguments(ws.qp, nj, ws.tree.n_links)
+        qp_args = _qp_arguments(ws.qp)
         if ws.qp is not None:
             p[P_QP], p[P_NLIM] = 1, 1 if ws.qp.limited else 0
             p[P_SLOT] = next(_QP_SLOT_IDS)
@@ -476,15 +475,15 @@ class FusedRows:
         return code >> 3, code & 7
 
 
-def _qp_arguments(qp, nj: int, n_links: int) -> tuple:
+def _qp_arguments(qp) -> tuple:
     """The QP's arrays in :data:`_SIGNATURE`'s order (the ContactQP's own, so that its ``x`` and
     matrices after a run are those of the Python loop), or placeholders without a QP."""
     if qp is None:
         z1, z2 = np.zeros(1), np.zeros((1, 1))
-        return np.zeros((2, 4, 4)), np.zeros((2, 2)), np.zeros(8), z1, z1, np.zeros((2, 6, 6)), z2, z2, z1, z2, z2, z1, z2, z1, z1
-    return (
-        qp._soles, qp._dims, qp._prm, qp._lo, qp._hi, qp.A, qp.T, qp._F, qp._tau, qp._col, qp.Gq, qp.av, qp.Ct, qp.b, qp.x,
-    )  # fmt: skip
+        head = (np.zeros((2, 4, 4)), np.zeros((2, 2)), np.zeros(8), z1, z1, np.zeros((2, 6, 6)))
+        return head + (z2, z2, z1, z2, z2, z1, z2, z1, z1)
+    head = (qp._soles, qp._dims, qp._prm, qp._lo, qp._hi, qp.A, qp.T, qp._F)
+    return head + (qp._tau, qp._col, qp.Gq, qp.av, qp.Ct, qp.b, qp.x)
 
 
 def sync_monitor(monitor, bits, com, period: float, a: int, b: int, data) -> None:
