@@ -66,7 +66,9 @@ def test_mjdata_layout_reads_what_the_bindings_read():
 
     d.qpos[:], d.qvel[:] = initial_state(scene, sc)
     mujoco.mj_forward(m, d)
-    s32, s64, cptr, c0, geom = fused.mjdata_layout(m, d)
+    layout = fused.mjdata_layout(m, d)
+    assert layout is not None, fused.last_failure
+    s32, s64, cptr, c0, geom = layout
     ncon_i = fused._OFFSETS[0][0]
     seen = set()
     for _ in range(300):

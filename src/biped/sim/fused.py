@@ -295,44 +295,56 @@ def _struct_views(data, size: int):
 def _offsets():
     """Byte offsets in ``mjData`` of ``ncon``, the ``arena`` and ``contact`` pointers, and the
     geom pair in ``mjContact`` and its size, found on a probe (a ball resting on a plane) and
-    checked against what the bindings report; None when a check fails."""
+    checked against what the bindings report; a string saying which check failed otherwise.
+
+    The struct's pointer fields come in mjdata.h's order: ``buffer``, ``arena``, then the buffer's
+    arrays from ``qpos`` on, then the arena's from ``contact`` on. A pointer equal to the
+    contacts' address before ``qpos`` is ``arena``; the last one after it is ``contact`` (an
+    empty array at the end of the buffer may point there too, before ``contact``)."""
     m = mujoco.MjModel.from_xml_string(_PROBE_XML)
     d = mujoco.MjData(m)
     mujoco.mj_forward(m, d)
-    if d.ncon != 1:
-        return None
+    if d.ncon < 1:
+        return f"the probe has {d.ncon} contacts"
     base = int(d._address)
     timer = d.timer.duration
     ncon_at = timer.ctypes.data - base + timer.shape[0] * timer.strides[0]
-    size = ncon_at + 4096
-    s32, s64 = _struct_views(d, size)
+    if ncon_at % 8:
+        return f"ncon at byte {ncon_at}, not 8-aligned"
+    s32, s64 = _struct_views(d, ncon_at + 4096)
+    if s32[ncon_at // 4] != d.ncon:
+        return f"the int after timer[] is {s32[ncon_at // 4]}, not ncon = {d.ncon}"
     contact0 = d.contact.dist.ctypes.data  # dist is mjContact's first field
-    qpos_at = np.flatnonzero(s64 == np.uint64(d.qpos.ctypes.data))  # buffer (qpos first), qpos
+    qpos = np.flatnonzero(s64 == np.uint64(d.qpos.ctypes.data)) * 8  # buffer (qpos first), qpos
     at = np.flatnonzero(s64 == np.uint64(contact0)) * 8
-    if ncon_at % 8 or s32[ncon_at // 4] != 1 or len(qpos_at) != 2 or len(at) != 2:
-        return None
-    arena_at, contact_at = at  # MuJoCo puts the contacts at the start of the arena
-    if not arena_at < qpos_at[-1] * 8 < contact_at:
-        return None
+    if len(qpos) == 0 or not np.any(at < qpos[-1]) or not np.any(at > qpos[-1]):
+        return f"pointer fields: qpos at {qpos.tolist()}, the contacts' address at {at.tolist()}"
+    arena_at, contact_at = int(at[at < qpos[-1]][-1]), int(at[-1])
     geom = d.contact.geom
-    return ncon_at // 4, int(arena_at), int(contact_at), geom.ctypes.data - contact0, geom.strides[0]
+    return ncon_at // 4, arena_at, contact_at, geom.ctypes.data - contact0, geom.strides[0]
 
 
 _OFFSETS: list = []
+#: Why :func:`mjdata_layout` last returned None (for diagnosis), or None.
+last_failure: str | None = None
 
 
 def mjdata_layout(model, data):
-    """(int32 view of ``data``'s struct, uint64 view of it, index of ``ncon`` in the first, index
-    of the ``contact`` pointer in the second, the contacts' address, (capacity, 2) int32 view of
-    their geom pairs), or None when this MuJoCo's layout does not pass :func:`_offsets`' checks
-    or ``data`` disagrees with the bindings."""
+    """(int32 view of ``data``'s struct, uint64 view of it, index of the ``contact`` pointer in
+    the second, the contacts' address, (capacity, 2) int32 view of their geom pairs), or None
+    (the reason in :data:`last_failure`) when this MuJoCo's layout does not pass
+    :func:`_offsets`' checks or ``data`` disagrees with the bindings."""
+    global last_failure
     if not _OFFSETS:
-        _OFFSETS.append(_offsets())
-    if _OFFSETS[0] is None:
-        return None
+        found = _offsets()
+        if isinstance(found, str):  # not cached: the next run probes again
+            last_failure = found
+            return None
+        _OFFSETS.append(found)
     ncon_i, arena_at, contact_at, geom_at, stride = _OFFSETS[0]
     s32, s64 = _struct_views(data, ncon_i * 4 + 4096)
     if s32[ncon_i] != data.ncon:
+        last_failure = f"ncon read as {s32[ncon_i]}, the bindings say {data.ncon}"
         return None
     contact0 = int(s64[arena_at // 8])
     capacity = max(1, int(model.narena) // stride)
@@ -341,6 +353,7 @@ def mjdata_layout(model, data):
     if data.ncon and (
         int(s64[contact_at // 8]) != contact0 or not np.array_equal(geom[: data.ncon], data.contact.geom)
     ):
+        last_failure = "the contacts are not at the start of the arena"
         return None
     return s32, s64, contact_at // 8, contact0, geom
 
@@ -379,6 +392,7 @@ __all__ = [
     "diverged_message",
     "fused_controller",
     "fused_rows",
+    "refusal",
     "mjdata_layout",
     "sync_monitor",
 ]
@@ -392,7 +406,8 @@ class FusedRows:
         step = mj_step_function()
         lay = mjdata_layout(model, data) if step is not None else None
         if lay is None:
-            raise LookupError("the compiled loop cannot read this MuJoCo's data")
+            why = last_failure if step is not None else "libmujoco's mj_step not found"
+            raise LookupError(f"the compiled loop cannot read this MuJoCo's data: {why}")
         s32, s64, cptr_i, cbase, geom = lay
         ncon_i = _OFFSETS[0][0]
         compile_kernel()
@@ -522,8 +537,16 @@ def fused_rows(scene, scenario, policy, model, data, codes, records) -> FusedRow
             codes=codes,
             records=records,
         )
-    except LookupError:
+    except LookupError as exc:
+        global last_failure
+        last_failure = str(exc)
         return None
+
+
+def refusal() -> str:
+    """The error of ``run_closed_loop(..., compiled=True)`` when the run cannot have the loop."""
+    why = f" ({last_failure})" if last_failure else ""
+    return f"this policy or run cannot use the compiled loop (compiled=True){why}"
 
 
 def diverged_message(t: float, period: float) -> str:

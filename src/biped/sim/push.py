@@ -301,14 +301,9 @@ def run_closed_loop(
         central_body=scene.central_body,
         fall_height_m=scenario.fall_height_m,
     )
-    n_ctrl = scenario.control_steps
-    sub = scenario.control_substeps
-    period = 1.0 / scenario.control_rate_hz
+    n_ctrl, sub, period = scenario.control_steps, scenario.control_substeps, 1.0 / scenario.control_rate_hz
     n = n_ctrl + 1
-    qpos = np.zeros((n, m.nq))
-    qvel = np.zeros((n, m.nv))
-    com = np.zeros((n, 3))
-    torques = np.zeros((n, 12))
+    qpos, qvel, com, torques = np.zeros((n, m.nq)), np.zeros((n, m.nv)), np.zeros((n, 3)), np.zeros((n, 12))
     contacts = np.zeros((n, len(SOLE_GEOMS)), dtype=bool)
     bits = np.zeros(n, dtype=np.int64)  # the monitor's contact bits of each row
     feet_pos = np.zeros((n, 2, 3))
@@ -343,7 +338,7 @@ def run_closed_loop(
     if compiled is not False and on_step is None and live:
         fused = fused_mod.fused_rows(scene, scenario, policy, m, d, monitor.pair_codes, records)
     if compiled and fused is None:
-        raise ScenarioError("this policy or run cannot use the compiled loop (compiled=True)")
+        raise ScenarioError(fused_mod.refusal())
     synced = 0  # rows [0, synced) went through the monitor
     chunk = progress_every if progress is not None else 10 * progress_every  # rows a call
     t0 = time.perf_counter()
