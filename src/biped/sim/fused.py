@@ -1,10 +1,10 @@
 """The push loop's hot path in one compiled call: contacts, W's controller, records and MuJoCo.
 
-:func:`biped.sim.push.run_closed_loop` runs W's workspace controller (min-norm or printed
-distribution) and the joint-PD baseline (without gravity compensation), clipped by torque limits
-or not (not the QP, not stepping), through :class:`FusedRows`: one numba call runs up to one
-progress interval of control periods, each doing exactly what the Python loop does, in the
-same order: classify MuJoCo's contacts (the OR of
+:func:`biped.sim.push.run_closed_loop` runs W's workspace controller (min-norm, printed or QP
+distribution; the QP's solve itself in Python, :mod:`biped.sim.fused_qp`) and the joint-PD
+baseline (without gravity compensation), clipped by torque limits or not (not stepping),
+through :class:`FusedRows`: one numba call runs up to one progress interval of control
+periods, each doing exactly what the Python loop does, in the same order: classify MuJoCo's contacts (the OR of
 :attr:`~biped.sim.contact.ContactMonitor.pair_codes` over ``data.contact.geom``), call
 :func:`biped.control.recursions.compute_kernel` (or the joint PD's law) on the live qpos/qvel
 views, record the row, write ``ctrl`` and call MuJoCo's C ``mj_step`` through its function pointer (``libmujoco``'s own
@@ -31,9 +31,7 @@ when the run reports no progress).
 from __future__ import annotations
 
 import ctypes
-import itertools
 import os
-import weakref
 
 import mujoco
 import numpy as np
@@ -44,6 +42,7 @@ from biped.control.distribution import qp_build, qp_finish
 from biped.control.joint_pd import JointPDController
 from biped.control.recursions import compute_kernel
 from biped.control.workspace import WorkspaceController
+from biped.sim.fused_qp import QP_TYPES, qp_arguments, register_qp, solve_qp
 
 _STEP_SIG = types.void(types.uintp, types.uintp)  # mj_step(const mjModel*, mjData*)
 
@@ -102,38 +101,8 @@ _SIGNATURE = types.int64(
     types.int64[::1],  # contact bits
     types.float64[:, :, ::1],  # feet positions
     types.float64[:, :, ::1],  # feet quaternions
-    # the QP distribution (when p[P_QP]; ContactQP's arrays, biped.control.distribution)
-    types.float64[:, :, ::1],  # soles: g_{foot,sole} (2, 4, 4)
-    types.float64[:, ::1],  # dims: half length and width (2, 2)
-    types.float64[::1],  # prm: the weights' array
-    types.float64[::1],  # torque-limit rows: lower bounds
-    types.float64[::1],  # upper bounds
-    types.float64[:, :, ::1],  # A (2, 6, 6)
-    types.float64[:, ::1],  # T (n_joints, 12)
-    types.float64[:, ::1],  # F (n_links, 6)
-    types.float64[::1],  # tau scratch (n_joints,)
-    types.float64[:, ::1],  # col (2, 6)
-    types.float64[:, ::1],  # Gq (12, 12)
-    types.float64[::1],  # av (12,)
-    types.float64[:, ::1],  # Ct (rows, 12)
-    types.float64[::1],  # b (rows,)
-    types.float64[::1],  # x (12,)
+    *QP_TYPES,  # the QP distribution (when p[P_QP]): biped.sim.fused_qp
 )
-
-# the ContactQP of each live FusedRows with the QP, by slot: the compiled loop builds the QP and
-# applies its solution, the solve itself (daqp or quadprog, with ContactQP.solve's fallbacks and
-# counters) runs in Python through numba's objmode
-_QP_SLOTS: dict = {}
-_QP_SLOT_IDS = itertools.count(1)
-
-
-def _solve_qp(slot, meq, used, f0, f1):
-    """ContactQP.solve for the QP that the compiled loop has just built (what ContactQP.build
-    records about it first); returns its status."""
-    qp = _QP_SLOTS[slot]
-    qp.meq, qp.rows, qp.first = meq, used, (f0, f1)
-    qp.solve()
-    return qp.status
 
 
 # fmt: off
@@ -179,7 +148,7 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
             else:
                 slot = p[P_SLOT]
                 with objmode():
-                    _solve_qp(slot, meq, used, ff0, ff1)
+                    solve_qp(slot, meq, used, ff0, ff1)
             qp_finish(
                 qx, contact, qa, qt, soles, to.tau, to.Fl_tilde, to.Fr_tilde, to.Fl, to.Fr, ti.parent, tm.H,
                 ti.leg, ti.beyond, tw.gl, qf, p[P_NLIM],
@@ -362,16 +331,16 @@ def fused_controller(policy):
     """(the controller behind a loop ``policy``: a
     :class:`~biped.control.workspace.WorkspaceController` or a
     :class:`~biped.control.joint_pd.JointPDController`; whether it takes the sensed feet; its
-    torque limits or None) if the compiled loop can run it (not the QP, not the joint PD's gravity
+    torque limits or None) if the compiled loop can run it (not the joint PD's gravity
     compensation); else None."""
     sensed = getattr(policy, "sensed", None)
     inner = getattr(policy, "policy", None)
     ctrl = getattr(inner, "controller", None)
     if sensed is None or inner is None:
         return None
-    if isinstance(ctrl, WorkspaceController):
-        pass
-    elif not isinstance(ctrl, JointPDController) or ctrl.gravity_compensation:
+    if not isinstance(ctrl, (WorkspaceController, JointPDController)) or getattr(
+        ctrl, "gravity_compensation", False
+    ):
         return None
     if tuple(inner.joint_names) != tuple(ctrl.joint_names):
         return None
@@ -434,12 +403,10 @@ class FusedRows:
             pd[:] = controller._qoff, controller.q_ref, controller.gains.kp, controller.gains.kd
             ws = WorkspaceController(controller.tree)
         contact = ws._both.copy() if not sensed else np.ones(2, dtype=np.int64)
-        qp_args = _qp_arguments(ws.qp)
+        qp_args = qp_arguments(ws.qp)
         if ws.qp is not None:
             p[P_QP], p[P_NLIM] = 1, 1 if ws.qp.limited else 0
-            p[P_SLOT] = next(_QP_SLOT_IDS)
-            _QP_SLOTS[int(p[P_SLOT])] = ws.qp
-            weakref.finalize(self, _QP_SLOTS.pop, int(p[P_SLOT]), None)
+            p[P_SLOT] = register_qp(self, ws.qp)
         self._keep = (lay, data)  # the views point into data's memory
         self._args = (
             step,
@@ -488,17 +455,6 @@ class FusedRows:
         a = self._args
         code = self._call(a[0], a[1], a[2], k0, k1, *a[3:], *self._records)
         return code >> 3, code & 7
-
-
-def _qp_arguments(qp) -> tuple:
-    """The QP's arrays in :data:`_SIGNATURE`'s order (the ContactQP's own, so that its ``x`` and
-    matrices after a run are those of the Python loop), or placeholders without a QP."""
-    if qp is None:
-        z1, z2 = np.zeros(1), np.zeros((1, 1))
-        head = (np.zeros((2, 4, 4)), np.zeros((2, 2)), np.zeros(8), z1, z1, np.zeros((2, 6, 6)))
-        return head + (z2, z2, z1, z2, z2, z1, z2, z1, z1)
-    head = (qp._soles, qp._dims, qp._prm, qp._lo, qp._hi, qp.A, qp.T, qp._F)
-    return head + (qp._tau, qp._col, qp.Gq, qp.av, qp.Ct, qp.b, qp.x)
 
 
 def sync_monitor(monitor, bits, com, period: float, a: int, b: int, data) -> None:

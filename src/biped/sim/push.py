@@ -281,8 +281,8 @@ def run_closed_loop(
     ``controller_error`` set. The scenario's ``torque_limits`` are the policy's business
     (:func:`controller_policy` applies them).
 
-    ``compiled``: run the policy (:func:`controller_policy` of W's controller or the joint PD;
-    not the QP, not stepping) in :mod:`biped.sim.fused`'s compiled loop, bit for bit the same
+    ``compiled``: run the policy (:func:`controller_policy` of W's controller, any distribution,
+    or the joint PD; not stepping) in :mod:`biped.sim.fused`'s compiled loop, bit for bit the same
     result at a fraction of the Python loop's overhead. None (default): when it can (no
     ``on_step``); False: never; True: or raise ScenarioError.
     """
