@@ -13,6 +13,8 @@ import mujoco
 import numpy as np
 import pytest
 
+from biped.control import distribution
+from biped.control.limits import torque_limits
 from biped.control.policy import symmetric_limits
 from biped.sim import Scenario, build_scene, contact, fused
 from biped.sim.push import RecordedTorques, controller_policy, run_closed_loop
@@ -52,7 +54,7 @@ def test_cache_key_covers_the_controller_sources():
 
     stamp = fused._run_rows._cache._cache_file._source_stamp
     own, extra = stamp
-    assert len(extra) == 4
+    assert len(extra) == 5  # recursions, statics, buffers, spatial, distribution
     assert extra[0][1] == __import__("os").stat(biped.control.recursions.__file__).st_size
 
 
@@ -140,8 +142,69 @@ def test_other_policies_keep_the_python_loop():
 
     with pytest.raises(ScenarioError, match="compiled loop"):
         run_closed_loop(sc, scene, RecordedTorques(np.zeros((11, 12)), 500.0), compiled=True)
-    qp = sc.with_overrides(distribution="qp")
-    assert fused.fused_controller(controller_policy(qp, build_scene(qp))) is None
+    stepping = sc.with_overrides(stepping=True)
+    assert fused.fused_controller(controller_policy(stepping, build_scene(stepping))) is None
+
+
+def both_qp(scenario: Scenario, **policy_kw):
+    """``both`` for the QP distribution, also returning the two runs' ContactQP objects (the
+    solve runs in Python in both loops: its fallbacks counted on the controller's own QP)."""
+    scene = build_scene(scenario)
+    pa = controller_policy(scenario, scene, **policy_kw)
+    pb = controller_policy(scenario, scene, **policy_kw)
+    assert fused.fused_controller(pa) is not None  # the QP runs in the compiled loop
+    a = run_closed_loop(scenario, scene, pa, compiled=True)
+    b = run_closed_loop(scenario, scene, pb, compiled=False)
+    qa, qb = pa.policy.controller.qp, pb.policy.controller.qp
+    assert qa.status == qb.status and qa.fallbacks == qb.fallbacks
+    assert np.array_equal(qa.x, qb.x) and np.array_equal(qa.Gq, qb.Gq) and np.array_equal(qa.b, qb.b)
+    return a, b, qa
+
+
+@pytest.mark.parametrize("physics", ["fast", "faithful"])
+def test_qp_distribution(physics):
+    """W's push with distribution "qp" (always the sensed feet) through the block hit and the
+    heel contacts' flicker: identical results, solver status and fallback counts."""
+    a, b, _ = both_qp(Scenario(physics=physics, duration_s=0.4, distribution="qp"))
+    assert a.block_contact_time_s is not None and len(a.events) > 2
+    assert_same(a, b)
+
+
+def test_qp_torque_limits_and_fallbacks():
+    """Human torque limits (rows of the QP), and limits so low (0.5 N m) that the minimum normal
+    force cannot be met: the RELAXED retry and the ZEROED fallback happen at the same periods,
+    the counters agree (and the biped falls at the same row)."""
+    sc = Scenario(physics="fast", duration_s=0.4, distribution="qp")
+    a, b, qp = both_qp(sc, torque_limits=torque_limits("human", body_mass_kg=73.0))
+    assert qp.limited
+    assert_same(a, b)
+    sc = Scenario(physics="fast", duration_s=0.3, distribution="qp", block_velocity_m_s=(-6.0, 0.0, 0.1))
+    a, b, qp = both_qp(sc, torque_limits=symmetric_limits(0.5))
+    assert qp.fallbacks[distribution.RELAXED] > 0 and qp.fallbacks[distribution.ZEROED] > 0
+    assert a.fell and np.all(np.abs(a.torques) <= 0.5)
+    assert_same(a, b)
+
+
+def test_qp_fall_and_a_foot_in_the_air():
+    """A fall (the COM set point 10 cm lower under a raised fall height) and a 4 kg block that
+    lifts a foot (its wrench an equality row, zero): the same rows, events and fall."""
+    sc = Scenario(
+        physics="fast", duration_s=0.5, distribution="qp", target_com_m=(-0.01, 0.0, 1.0), fall_height_m=1.02
+    )
+    a, b, _ = both_qp(sc)
+    assert a.fell and "below" in a.fall_reason
+    assert_same(a, b)
+    sc = Scenario(
+        physics="fast",
+        duration_s=0.6,
+        distribution="qp",
+        block_velocity_m_s=(-6.0, 0.0, 0.1),
+        block_mass_kg=4.0,
+    )
+    a, b, _ = both_qp(sc)
+    assert (a.left_contact != a.right_contact).any()  # a foot in the air while the other stood
+    assert (~a.left_contact & ~a.right_contact).any()  # and no foot down (the first rows): no solve
+    assert_same(a, b)
 
 
 def test_sweep_rows_unchanged(monkeypatch):
@@ -173,9 +236,12 @@ def test_sweep_rows_unchanged(monkeypatch):
 
 @pytest.mark.slow
 def test_w_full_run_and_a_sweep_are_unchanged():
-    """W's 3 s run (faithful) and a few sweep trials (fast): the compiled loop's results and
+    """W's 3 s run (faithful; min-norm and qp) and a few sweep trials (fast): the compiled loop's results and
     events are those of the Python loop."""
     a, b = both(Scenario())
+    assert_same(a, b)
+    a, b, _ = both_qp(Scenario(distribution="qp"))  # W's push with the QP, 3 s
+    assert a.recovered
     assert_same(a, b)
     for velocity in ((-3.0, 1.0, 0.3), (-5.0, -2.0, 0.2), (2.0, 0.5, 0.4)):
         a, b = both(Scenario(physics="fast", block_velocity_m_s=velocity))
