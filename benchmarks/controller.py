@@ -13,8 +13,8 @@ the contact-feasible QP distribution (``distribution="qp"``): ``compute``/``torq
 problem, and the ratio of the
 qp ``torques`` call to the min-norm (``statics``) one. The calls are interleaved in rounds so that a
 change in machine load affects all alike. With ``--push N``: W's default push (faithful physics,
-3 s) closed loop with statics and with qp, interleaved N times, median wall times and their ratio
-(goal <= 1.3x). Then checks
+3 s) closed loop with statics and with qp, in the compiled loop and in the Python loop, interleaved
+N times, median wall and CPU times and their ratio (goal <= 1.3x). Then checks
 that the hot path allocates nothing (tracemalloc over 1000 calls) and reports the numba compile
 time of this process (zero when the cache in ``__pycache__`` was warm).
 """
@@ -163,15 +163,24 @@ def main(argv=None) -> int:
 
 def push_ratio(repeat: int) -> None:
     """W's default push (scenario defaults, faithful physics) closed loop with the min-norm split,
-    with the QP (daqp, the default) and with the QP solved by quadprog, interleaved ``repeat``
-    times: median wall and thread-CPU times, their ratios, and the thread CPU per controller call
-    inside the loop (the QP's active set there is not the one at the initial state)."""
+    with the QP (daqp, the default) and with the QP solved by quadprog, all in the compiled loop
+    (``biped.sim.fused``; the QP's solve in Python through objmode), and the statics and qp runs
+    in the Python loop (``compiled=False``, what they cost before), interleaved ``repeat`` times:
+    median wall and thread-CPU times, their ratios to the compiled statics run, and the thread CPU
+    per controller call inside the Python loop (the QP's active set there is not the one at the
+    initial state)."""
     from biped.control.distribution import ContactQP
-    from biped.sim import Scenario, build_scene
+    from biped.sim import Scenario, build_scene, fused
     from biped.sim.push import controller_policy, run_closed_loop
 
     runs, per_call = {}, {}
-    for name, dist in (("statics", "statics"), ("qp", "qp"), ("qp (quadprog)", "qp")):
+    for name, dist, compiled in (
+        ("statics", "statics", True),
+        ("qp", "qp", True),
+        ("qp (quadprog)", "qp", True),
+        ("statics, Python", "statics", False),
+        ("qp, Python", "qp", False),
+    ):
         sc = Scenario(distribution=dist)
         scene = build_scene(sc)
         policy = controller_policy(sc, scene)
@@ -186,6 +195,7 @@ def push_ratio(repeat: int) -> None:
                 q._hi if q.limited else None,
                 solver="quadprog",
             )
+        assert not compiled or fused.fused_controller(policy) is not None, name
         acc = per_call[name] = [0.0, 0]
 
         def timed(t, qpos, qvel, feet, policy=policy, acc=acc):
@@ -195,17 +205,17 @@ def push_ratio(repeat: int) -> None:
             acc[1] += 1
             return out
 
-        run_closed_loop(sc.with_overrides(duration_s=0.02), scene, policy)  # compile, warm caches
-        runs[name] = (sc, scene, policy, timed)
+        run_closed_loop(sc.with_overrides(duration_s=0.02), scene, policy, compiled=compiled)  # compile, warm
+        runs[name] = (sc, scene, policy, timed, compiled)
     wall = {k: [] for k in runs}
     cpu = {k: [] for k in runs}
     for i in range(repeat + 1):
-        for k, (sc, scene, policy, timed) in runs.items():
-            if i == repeat:  # one more run, timing the controller calls inside the loop
+        for k, (sc, scene, policy, timed, compiled) in runs.items():
+            if i == repeat:  # one more run, timing the controller calls inside the (Python) loop
                 res = run_closed_loop(sc, scene, timed)
                 continue
             t0, c0 = time.perf_counter(), time.thread_time()
-            res = run_closed_loop(sc, scene, policy)
+            res = run_closed_loop(sc, scene, policy, compiled=compiled)
             wall[k].append(time.perf_counter() - t0)
             cpu[k].append(time.thread_time() - c0)
             assert res.recovered, f"W's push with {k!r} did not recover"
@@ -214,18 +224,22 @@ def push_ratio(repeat: int) -> None:
     print(
         f"W's push closed loop (3 s, faithful physics), median of {repeat}, interleaved "
         f"(load average {os.getloadavg()[0]:.1f}: the machine is shared, wall times move with "
-        f"other work; thread CPU is the steadier figure):"
+        f"other work; thread CPU is the steadier figure); without ', Python': the compiled loop:"
     )
     print(
         f"{'':16s} {'wall [ms]':>10s} {'/ statics':>10s} {'CPU [ms]':>10s} {'/ statics':>10s} "
-        f"{'CPU per controller call [us]':>30s}"
+        f"{'CPU per controller call, Python loop [us]':>42s}"
     )
     for k in runs:
         print(
             f"{k:16s} {med[k] * 1e3:10.0f} {med[k] / med['statics']:10.2f} {medc[k] * 1e3:10.0f} "
-            f"{medc[k] / medc['statics']:10.2f} {per_call[k][0] / per_call[k][1] * 1e6:30.1f}"
+            f"{medc[k] / medc['statics']:10.2f} {per_call[k][0] / per_call[k][1] * 1e6:42.1f}"
         )
-    print("goal: qp / statics <= 1.3")
+    print(
+        f"goal: qp / statics <= 1.3 (both compiled): wall {med['qp'] / med['statics']:.2f}, "
+        f"CPU {medc['qp'] / medc['statics']:.2f}; Python loop qp / statics: wall "
+        f"{med['qp, Python'] / med['statics, Python']:.2f}, CPU {medc['qp, Python'] / medc['statics, Python']:.2f}"
+    )
 
 
 if __name__ == "__main__":

@@ -16,7 +16,8 @@ factors and the ratios closed loop / physics-only. Goals: closed loop <= 1.25x t
 ``mj_step`` loop (``physics = "faithful"``); >= 30x real time with ``--physics fast``.
 W's 3 s run took 2066 s on a 100 MHz SGI R4000 (0.0015x real time).
 
-    python benchmarks/push.py [--repeat 7] [--physics faithful|fast] [--set KEY=VALUE ...]
+    python benchmarks/push.py [--repeat 7] [--physics faithful|fast] [--distribution statics|printed|qp]
+                              [--set KEY=VALUE ...]
 """
 
 from __future__ import annotations
@@ -77,9 +78,16 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--repeat", type=int, default=7)
     ap.add_argument("--physics", choices=("faithful", "fast"), default="faithful")
+    ap.add_argument(
+        "--distribution",
+        choices=("statics", "printed", "qp"),
+        default="statics",
+        help="W's controller's wrench distribution (qp: its solve runs in Python inside the compiled loop)",
+    )
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     args = ap.parse_args()
-    scenario = Scenario(physics=args.physics).with_overrides(**dict(parse_assignment(a) for a in args.set))
+    scenario = Scenario(physics=args.physics, distribution=args.distribution)
+    scenario = scenario.with_overrides(**dict(parse_assignment(a) for a in args.set))
     scene = build_scene(scenario)
     policy = controller_policy(scenario, scene)
     result = run_closed_loop(scenario.with_overrides(duration_s=0.02), scene, policy)  # compile, warm caches
@@ -124,7 +132,7 @@ def main() -> None:
         f"scenario: physics {scenario.physics!r} ({scenario.physics_timestep_s * 1e3:g} ms step, "
         f"contact time constant {scenario.contact_timeconst_s * 1e3:g} ms"
         f"{', sleep' if scenario.sleep else ''}), control {scenario.control_rate_hz:g} Hz, "
-        f"controller {scenario.controller}, simulated {sim_time:.3f} s of "
+        f"controller {scenario.controller} ({scenario.distribution}), simulated {sim_time:.3f} s of "
         f"{scenario.duration_s:g} s"
         + (
             ""

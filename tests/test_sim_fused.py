@@ -54,7 +54,7 @@ def test_cache_key_covers_the_controller_sources():
 
     stamp = fused._run_rows._cache._cache_file._source_stamp
     own, extra = stamp
-    assert len(extra) == 5  # recursions, statics, buffers, spatial, distribution
+    assert len(extra) == 6  # recursions, statics, buffers, spatial, distribution, fused_qp
     assert extra[0][1] == __import__("os").stat(biped.control.recursions.__file__).st_size
 
 

@@ -35,14 +35,14 @@ import os
 
 import mujoco
 import numpy as np
-from numba import njit, objmode, types
+from numba import njit, types
 
 from biped.control.buffers import unpack
 from biped.control.distribution import qp_build, qp_finish
 from biped.control.joint_pd import JointPDController
 from biped.control.recursions import compute_kernel
 from biped.control.workspace import WorkspaceController
-from biped.sim.fused_qp import QP_TYPES, qp_arguments, register_qp, solve_qp
+from biped.sim.fused_qp import QP_TYPES, call_solve, qp_arguments, register_qp
 
 _STEP_SIG = types.void(types.uintp, types.uintp)  # mj_step(const mjModel*, mjData*)
 
@@ -146,9 +146,7 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
             if contact[0] == 0 and contact[1] == 0:
                 qx[:] = 0.0
             else:
-                slot = p[P_SLOT]
-                with objmode():
-                    solve_qp(slot, meq, used, ff0, ff1)
+                call_solve(p[P_SLOT], meq, used, ff0, ff1)
             qp_finish(
                 qx, contact, qa, qt, soles, to.tau, to.Fl_tilde, to.Fr_tilde, to.Fl, to.Fr, ti.parent, tm.H,
                 ti.leg, ti.beyond, tw.gl, qf, p[P_NLIM],
@@ -183,14 +181,15 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
 def _key_cache_by_what_it_compiles_in() -> None:
     """numba keys a cached kernel by its own source file only, but :func:`_run_rows` compiles the
     controller's kernel into itself: key it by those files too (recursions, statics, buffers,
-    spatial, distribution), so that an edit of the controller recompiles the loop instead of loading stale
-    code. Uses numba's cache internals (as :func:`biped.sim.jit.is_cached` does); without them,
+    spatial, distribution, fused_qp), so that an edit of the controller recompiles the loop
+    instead of loading stale code. Uses numba's cache internals (as :func:`biped.sim.jit.is_cached` does); without them,
     numba's own key stands."""
     import biped.control.buffers
     import biped.control.distribution
     import biped.control.recursions
     import biped.control.statics
     import biped.spatial
+    from biped.sim import fused_qp
 
     modules = (
         biped.control.recursions,
@@ -198,6 +197,7 @@ def _key_cache_by_what_it_compiles_in() -> None:
         biped.control.buffers,
         biped.spatial,
         biped.control.distribution,
+        fused_qp,
     )
     try:
         cache_file = _run_rows._cache._cache_file  # type: ignore[attr-defined]
