@@ -90,7 +90,7 @@ def main() -> None:
     scenario = scenario.with_overrides(**dict(parse_assignment(a) for a in args.set))
     scene = build_scene(scenario)
     policy = controller_policy(scenario, scene)
-    result = run_closed_loop(scenario.with_overrides(duration_s=0.02), scene, policy)  # compile, warm caches
+    result = run_closed_loop(scenario.with_overrides(duration_s=0.1), scene, policy)  # compile, warm caches (QP: its solve)
     rdata = mujoco.MjData(scene.model)
 
     run_closed_loop(scenario.with_overrides(duration_s=0.02), scene, policy, compiled=False)
