@@ -90,7 +90,9 @@ def main() -> None:
     scenario = scenario.with_overrides(**dict(parse_assignment(a) for a in args.set))
     scene = build_scene(scenario)
     policy = controller_policy(scenario, scene)
-    result = run_closed_loop(scenario.with_overrides(duration_s=0.1), scene, policy)  # compile, warm caches (QP: its solve)
+    result = run_closed_loop(
+        scenario.with_overrides(duration_s=0.1), scene, policy
+    )  # compile, warm (QP: a solve)
     rdata = mujoco.MjData(scene.model)
 
     run_closed_loop(scenario.with_overrides(duration_s=0.02), scene, policy, compiled=False)
