@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
+from biped.control.cones import ROWS_PER_FOOT, carry_leg_weight, cone_rows, leg_weight_wrench
 from biped.control.recursions import alg6_torques
 from biped.errors import ScenarioError
 
@@ -48,8 +49,6 @@ __all__ = ["RELAXED", "SOLVED", "ZEROED", "ContactQP", "QPWeights", "cone_rows"]
 
 #: ContactQP.status values
 SOLVED, RELAXED, ZEROED = 0, 1, 2
-
-_ROWS_PER_FOOT = 18  # min and max normal force + 4 friction + 4 CoP + 8 yaw moment
 
 
 @dataclass(frozen=True)
@@ -81,6 +80,7 @@ class QPWeights:
     friction: float = 0.3
     friction_scale: float = 1.0 / math.sqrt(2.0)
     cop_scale: float = 1.0
+    leg_weight: float = 1.0
     array: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
@@ -101,6 +101,9 @@ class QPWeights:
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
                 raise ScenarioError(f"QP weight {name} must be a finite number >= 0; got {v!r}")
+        lw = self.leg_weight
+        if not (isinstance(lw, (int, float)) and 0.0 <= lw <= 1.0):
+            raise ScenarioError(f"QP leg_weight must be a share of the legs' weight in [0, 1]; got {lw!r}")
         arr = np.array(
             [
                 self.force,
@@ -111,6 +114,7 @@ class QPWeights:
                 self.min_normal_n,
                 self.friction * self.friction_scale,
                 self.max_normal_n,
+                self.leg_weight,
             ],
             dtype=float,
         )
@@ -155,51 +159,6 @@ def _sole_to_body(gf, gfs, g1, A):
 
 
 @njit(cache=True)
-def cone_rows(X, Y, mu, fmin, fmax, o, Ct, b, m):
-    """Write the 18 rows ``Ct[r] . w >= b[r]`` of one rectangular sole's contact wrench cone
-    (half length X along x, half width Y along y, friction mu, normal force in [fmin, fmax]) for the
-    wrench w = x[o:o+6] = [fx, fy, fz, tx, ty, tz] from row m on; returns the next row."""
-    for r in range(m, m + _ROWS_PER_FOOT):
-        for c in range(Ct.shape[1]):
-            Ct[r, c] = 0.0
-        b[r] = 0.0
-    Ct[m, o + 2] = 1.0
-    b[m] = fmin
-    Ct[m + 1, o + 2] = -1.0
-    b[m + 1] = -fmax
-    r = m + 2
-    for s in (-1.0, 1.0):
-        Ct[r, o + 2] = mu  # mu fz + s fx >= 0
-        Ct[r, o + 0] = s
-        Ct[r + 1, o + 2] = mu  # mu fz + s fy >= 0
-        Ct[r + 1, o + 1] = s
-        Ct[r + 2, o + 2] = Y  # Y fz + s tx >= 0 (CoP_y = tx / fz)
-        Ct[r + 2, o + 3] = s
-        Ct[r + 3, o + 2] = X  # X fz + s ty >= 0 (CoP_x = -ty / fz)
-        Ct[r + 3, o + 4] = s
-        r += 4
-    k = (X + Y) * mu
-    for s1 in (-1.0, 1.0):
-        for s2 in (-1.0, 1.0):
-            # tz >= -k fz + |Y fx - mu tx| + |X fy - mu ty|
-            Ct[r, o + 5] = 1.0
-            Ct[r, o + 2] = k
-            Ct[r, o + 0] = -s1 * Y
-            Ct[r, o + 3] = s1 * mu
-            Ct[r, o + 1] = -s2 * X
-            Ct[r, o + 4] = s2 * mu
-            # tz <= k fz - |Y fx + mu tx| - |X fy + mu ty|
-            Ct[r + 1, o + 5] = -1.0
-            Ct[r + 1, o + 2] = k
-            Ct[r + 1, o + 0] = -s1 * Y
-            Ct[r + 1, o + 3] = -s1 * mu
-            Ct[r + 1, o + 1] = -s2 * X
-            Ct[r + 1, o + 4] = -s2 * mu
-            r += 2
-    return r
-
-
-@njit(cache=True)
 def qp_build(
     g,
     gl,
@@ -225,6 +184,9 @@ def qp_build(
     av,
     Ct,
     b,
+    mass,
+    grav,
+    wg,
 ):
     """Fill the QP (quadprog's form: minimize 1/2 x^T Gq x - av^T x s.t. Ct x >= b, the first
     ``meq`` rows equalities) from the kernel's poses ``g`` and joint transforms ``gl`` and the
@@ -280,7 +242,11 @@ def qp_build(
     for f in range(2):
         if contact[f] != 0:
             first[f] = m
+            m0 = m
             m = cone_rows(dims[f, 0], dims[f, 1], prm[6], prm[5], prm[7], 6 * f, Ct, b, m)
+            if prm[8] != 0.0:  # the cone holds the ground's wrench: the QP's share plus the leg's weight
+                leg_weight_wrench(g, feet[f], soles[f], leg, f, mass, grav, prm[8], wg[f])
+                carry_leg_weight(Ct, b, m0, 6 * f, wg[f])
     if nlim:
         for j in range(nj):
             side = leg[j + 1] if beyond[j + 1] == 0 else -1
@@ -378,7 +344,7 @@ class ContactQP:
                 f"QP torque limits need {nj} lower and upper bounds; got {self._lo.shape}, {self._hi.shape}"
             )
         n_lim = sum(1 for j in range(nj) if tree.leg[j + 1] >= 0 and not tree.beyond_foot[j + 1])
-        rows = 2 * _ROWS_PER_FOOT + (2 * n_lim if self.limited else 0)
+        rows = 2 * ROWS_PER_FOOT + (2 * n_lim if self.limited else 0)
         self.A = np.zeros((2, 6, 6))
         self.T = np.zeros((nj, 12))
         self._F = np.zeros((tree.n_links, 6))
@@ -389,6 +355,7 @@ class ContactQP:
         self.Ct = np.zeros((rows, 12))
         self.b = np.zeros(rows)
         self.x = np.zeros(12)
+        self.wg = np.zeros((2, 6))
         self.meq = 0
         self.rows = 0
         self.first = (-1, -1)
@@ -436,6 +403,9 @@ class ContactQP:
             self.av,
             self.Ct,
             self.b,
+            t.mass,
+            t.gravity,
+            self.wg,
         )
         self.meq, self.rows, self.first = meq, used, (f0, f1)
         self._gl = gl
@@ -464,7 +434,7 @@ class ContactQP:
         except ValueError:
             first = [f for f in self.first if f >= 0]
             saved = [self.b[f] for f in first]
-            self.b[first] = 0.0
+            self.b[first] = np.minimum(saved, 0.0)  # no minimum normal force: w = 0 is feasible
             try:
                 x[:] = self._solve_once()
                 self.status = RELAXED

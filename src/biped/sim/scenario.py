@@ -92,6 +92,7 @@ class Scenario:
     qp_moment_weight: float = 100.0  # "qp": weight of the moment rows [1/(N m)^2] (force rows: 1 /N^2)
     qp_min_normal_n: float = 10.0  # "qp": minimum normal force of a foot in contact [N]
     qp_cop_scale: float = 1.0  # "qp": the CoP stays in the sole shrunk by this factor
+    qp_leg_weight: float = 1.0  # "qp": share of the legs' weight in the ground wrench the cones hold
     torque_limits: Any = "none"
     friction: float = 0.3
     restitution: float = 0.2
@@ -460,6 +461,9 @@ def validate(s: Scenario) -> None:
     c = _positive(s, "qp_cop_scale", "fraction of the sole the CoP may use, in (0, 1]")
     if c > 1:
         raise ScenarioError(f"qp_cop_scale must be in (0, 1] (fraction of the sole); got {c!r}")
+    lw = _positive(s, "qp_leg_weight", "share of the legs' weight, in [0, 1]", zero_ok=True)
+    if lw > 1:
+        raise ScenarioError(f"qp_leg_weight must be in [0, 1] (share of the legs' weight); got {lw!r}")
     _in_range("recovery_com_tol_m", _positive(s, "recovery_com_tol_m", "m"))
     _in_range("recovery_orientation_tol_deg", _positive(s, "recovery_orientation_tol_deg", "deg"))
     if not isinstance(s.seed, int) or isinstance(s.seed, bool) or not 0 <= s.seed <= MAX_SEED:
