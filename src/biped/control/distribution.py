@@ -432,16 +432,20 @@ class ContactQP:
             x[:] = self._solve_once()
             self.status = SOLVED
         except ValueError:
-            first = [f for f in self.first if f >= 0]
-            saved = [self.b[f] for f in first]
-            self.b[first] = np.minimum(saved, 0.0)  # no minimum normal force: w = 0 is feasible
+            # relaxed: the cones of the legs' shares alone (massless legs) without a minimum
+            # normal force, for which w = 0 is feasible (the legs' weight line may leave the sole)
+            saved = self.b.copy()
+            p = self._prm
+            for f, m in enumerate(self.first):
+                if m >= 0:
+                    cone_rows(self._dims[f, 0], self._dims[f, 1], p[6], 0.0, p[7], 6 * f, self.Ct, self.b, m)
             try:
                 x[:] = self._solve_once()
                 self.status = RELAXED
             except ValueError:
                 x[:] = 0.0
                 self.status = ZEROED
-            self.b[first] = saved
+            self.b[:] = saved
             self.fallbacks[self.status] += 1
         if not math.isfinite(x.sum()):
             x[:] = 0.0
