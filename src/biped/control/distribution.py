@@ -10,7 +10,8 @@ commanded torques grow without bound. ``distribution="qp"`` solves instead, at e
     subject to per foot in contact: the contact wrench cone of a rectangular sole (Caron, Pham &
                Nakamura, ICRA 2015: friction pyramid |f_x|, |f_y| <= mu f_z, centre of pressure
                inside the sole |tau_x| <= Y f_z, |tau_y| <= X f_z, and the eight yaw-moment rows),
-               f_z >= f_min;
+               f_z >= f_min; these rows hold the ground's wrench, w_foot plus the leg's own weight
+               (:mod:`biped.control.cones`: all but the far edge's CoP row and the yaw rows);
                per foot not in contact: w_foot = 0;
                with torque limits: lo <= J_leg^T F~_leg <= hi for every leg joint, linear in w
                because each leg's torques are tau_leg = J_leg^T Ad^T_{g_{sole,1}} w_foot (W Alg. 6);
@@ -28,8 +29,8 @@ dense QPs) called directly on preallocated matrices that a compiled function fil
 measured comparison (daqp about 2x faster on this problem, same solution).
 
 Failure handling (never an exception in the loop): if the QP is infeasible (the minimum normal
-force together with the torque limits cannot be met), it is solved again with ``f_min = 0``, for
-which ``w = 0`` is feasible; if that fails too (numerically), every foot wrench and torque is zero.
+force together with the torque limits cannot be met), it is solved again on the massless-leg
+cones with ``f_min = 0``, for which ``w = 0`` is feasible; if that fails too (numerically), every foot wrench and torque is zero.
 ``ContactQP.status`` tells which happened at the last call and ``ContactQP.fallbacks`` counts them.
 """
 
@@ -68,6 +69,8 @@ class QPWeights:
         inscribed in the circular cone that the scene's elliptic MuJoCo contact has).
     cop_scale: the centre of pressure is kept inside the sole rectangle shrunk about its centre
         by this factor (1: the whole sole; < 1 keeps it off the edges the foot would tip about).
+    leg_weight: share in [0, 1] of each leg's weight that the cone rows add to the leg's share
+        (:func:`biped.control.cones.carry_leg_weight`; 0: the legs taken as massless).
     """
 
     force: float = 1.0
