@@ -30,7 +30,8 @@ measured comparison (daqp about 2x faster on this problem, same solution).
 
 Failure handling (never an exception in the loop): if the QP is infeasible (the minimum normal
 force together with the torque limits cannot be met), it is solved again on the massless-leg
-cones with ``f_min = 0``, for which ``w = 0`` is feasible; if that fails too (numerically), every foot wrench and torque is zero.
+cones with ``f_min = 0``, for which ``w = 0`` is feasible; if that fails too (numerically),
+every foot wrench and torque is zero.
 ``ContactQP.status`` tells which happened at the last call and ``ContactQP.fallbacks`` counts them.
 """
 
