@@ -159,6 +159,8 @@ def policy_config(
             friction=scenario.friction,
             min_normal_n=scenario.qp_min_normal_n,
             cop_scale=scenario.qp_cop_scale,
+            # the stepping controller was tuned with massless-leg cones (docs/controller.md)
+            leg_weight=0.0 if scenario.stepping else scenario.qp_leg_weight,
         )
     model_path = None if scenario.model == subject.DEFAULT else subject.resolve(scenario.model)
     return PolicyConfig(
@@ -306,8 +308,7 @@ def run_closed_loop(
     qpos, qvel, com, torques = np.zeros((n, m.nq)), np.zeros((n, m.nv)), np.zeros((n, 3)), np.zeros((n, 12))
     contacts = np.zeros((n, len(SOLE_GEOMS)), dtype=bool)
     bits = np.zeros(n, dtype=np.int64)  # the monitor's contact bits of each row
-    feet_pos = np.zeros((n, 2, 3))
-    feet_quat = np.zeros((n, 2, 4))
+    feet_pos, feet_quat = np.zeros((n, 2, 3)), np.zeros((n, 2, 4))
     f0, f1 = (m.body(f).id for f in FOOT_BODIES)
     records: dict = {"qpos": qpos, "qvel": qvel, "com": com, "torques": torques, "bits": bits}
     records.update(feet_pos=feet_pos, feet_quat=feet_quat, feet_bodies=(f0, f1))
