@@ -110,7 +110,7 @@ _SIGNATURE = types.int64(
 def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
     step, m, d, k0, k1, p, fall_h, s32, s64, geom, codes, dq, dv, q, v, xipos, xpos, xquat, ctrl, act,
     warn, target, gains, contact, mi, mf, work, out, lower, upper, pd_q, pd_v, pd, rq, rv, rcom, rtau,
-    rbits, rfpos, rfquat, soles, dims, prm, qlo, qhi, qa, qt, qf, qtau, qcol, qg, qav, qct, qb, qx,
+    rbits, rfpos, rfquat, soles, dims, prm, qlo, qhi, qa, qt, qf, qtau, qcol, qg, qav, qct, qb, qx, qwg,
 ):  # the arguments of _SIGNATURE, in its order
     # fmt: on
     sub, n_ctrl, cb, f0, f1 = p[P_SUB], p[P_NCTRL], p[P_CB], p[P_F0], p[P_F1]
@@ -141,7 +141,7 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
             ti, tm, tw, to = unpack(mi, mf, work, out)
             meq, used, ff0, ff1 = qp_build(
                 tw.g, tw.gl, ti.parent, tm.H, ti.leg, ti.beyond, ti.feet, contact, to.Fd, soles, dims,
-                prm, qlo, qhi, p[P_NLIM], qa, qt, qf, qtau, qcol, qg, qav, qct, qb,
+                prm, qlo, qhi, p[P_NLIM], qa, qt, qf, qtau, qcol, qg, qav, qct, qb, tm.mass, tm.gravity, qwg,
             )  # fmt: skip
             if contact[0] == 0 and contact[1] == 0:
                 qx[:] = 0.0
@@ -181,10 +181,11 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
 def _key_cache_by_what_it_compiles_in() -> None:
     """numba keys a cached kernel by its own source file only, but :func:`_run_rows` compiles the
     controller's kernel into itself: key it by those files too (recursions, statics, buffers,
-    spatial, distribution, fused_qp), so that an edit of the controller recompiles the loop
+    spatial, distribution, fused_qp, cones), so that an edit of the controller recompiles the loop
     instead of loading stale code. Uses numba's cache internals (as :func:`biped.sim.jit.is_cached` does); without them,
     numba's own key stands."""
     import biped.control.buffers
+    import biped.control.cones
     import biped.control.distribution
     import biped.control.recursions
     import biped.control.statics
@@ -198,6 +199,7 @@ def _key_cache_by_what_it_compiles_in() -> None:
         biped.spatial,
         biped.control.distribution,
         fused_qp,
+        biped.control.cones,
     )
     try:
         cache_file = _run_rows._cache._cache_file  # type: ignore[attr-defined]
