@@ -34,6 +34,7 @@ __all__ = [
     "capture_point",
     "clamp_step",
     "convex_hull",
+    "excess",
     "lipm_state",
     "omega0",
     "predict_capture_point",
@@ -159,28 +160,48 @@ def shrink_polygon(poly, margin: float) -> np.ndarray:
 class CaptureTrigger:
     """Step trigger with hysteresis: fires once the capture point has stayed outside the support
     polygon shrunk by ``margin_m`` for ``hold`` consecutive calls; re-arms only after it has
-    come back inside the polygon shrunk by ``rearm_margin_m`` (> margin_m)."""
+    come back inside the polygon shrunk by ``rearm_margin_m`` (> margin_m).
 
-    def __init__(self, margin_m: float = 0.0, rearm_margin_m: float = 0.02, hold: int = 3):
+    ``lateral_margin_m`` (>= margin_m) shrinks the polygon's extent along world y (the biped's
+    sideways axis) further: sideways the feet-in-place strategy holds the capture point just
+    inside the polygon's edge while the trunk rolls over, so waiting for xi to cross the edge
+    steps too late (:func:`excess` is the test). Re-arming asks for the same extra inside."""
+
+    def __init__(
+        self, margin_m: float = 0.0, rearm_margin_m: float = 0.02, hold: int = 3, lateral_margin_m=None
+    ):
         if rearm_margin_m < margin_m:
             raise ScenarioError(f"rearm_margin_m ({rearm_margin_m}) must be >= margin_m ({margin_m})")
+        lateral = margin_m if lateral_margin_m is None else float(lateral_margin_m)
+        if lateral < margin_m:
+            raise ScenarioError(f"lateral_margin_m ({lateral}) must be >= margin_m ({margin_m})")
         self.margin_m, self.rearm_margin_m, self.hold = margin_m, rearm_margin_m, int(hold)
+        self.lateral_margin_m = lateral
         self.armed = True
         self._count = 0
 
     def update(self, poly, xi) -> bool:
-        d = signed_distance(poly, xi)
+        ex, ey = excess(poly, xi)
+        d = max(ex + self.margin_m, ey + self.lateral_margin_m)  # > 0: outside the shrunk polygon
         if not self.armed:
-            if d < -self.rearm_margin_m:
+            if d < -(self.rearm_margin_m - self.margin_m):
                 self.armed = True
             self._count = 0
             return False
-        self._count = self._count + 1 if d > -self.margin_m else 0
+        self._count = self._count + 1 if d > 0 else 0
         if self._count >= self.hold:
             self.armed = False
             self._count = 0
             return True
         return False
+
+
+def excess(poly, xi) -> tuple[float, float]:
+    """(signed distance of xi to the polygon (:func:`signed_distance`), signed distance of xi's
+    y to the polygon's y-extent [ymin, ymax]) [m]: > 0 outside, < 0 inside."""
+    poly = np.asarray(poly, dtype=float)
+    y = float(np.asarray(xi, dtype=float)[1])
+    return signed_distance(poly, xi), max(y - float(poly[:, 1].max()), float(poly[:, 1].min()) - y)
 
 
 @dataclass(frozen=True)
