@@ -124,6 +124,7 @@ class SteppingConfig:
     lateral_margin_m: float = 0.03
     lateral_offset_m: float = 0.15
     lateral_swing_time_s: float = 0.2
+    lateral_rot_gain_scale: float = 4.0
     lateral_limits: cp.StepLimits = field(default_factory=lambda: cp.StepLimits(max_step=0.6, max_width=0.6))
 
     def __post_init__(self):
@@ -185,6 +186,10 @@ class SteppingController:
             )
         self._inner = make_policy(inner, tree=tree)
         self.ctrl = self._inner.controller
+        # before the first step: the scenario's own controller (its QP weights), so that a push
+        # that takes no step runs exactly as without stepping
+        plain = replace(config, torque_limits=None)
+        self._ctrl_before = make_policy(plain, tree=tree).controller if plain != inner else self.ctrl
         names = tuple(self.ctrl.joint_names)
         self.joint_names = tuple(joint_order) if joint_order is not None else names
         if sorted(self.joint_names) != sorted(names):
@@ -219,13 +224,19 @@ class SteppingController:
         self._gravity = float(-m.opt.gravity[2])
         self.base_target: Target = config.target
         self.gains: Gains = config.gains
-        k = self.stepping.swing_rot_gain_scale
-        self._swing_gains = Gains(
-            kp_com=(0.0, 0.0, self.gains.kp_com[2]),
-            kv_com=(0.0, 0.0, self.gains.kv_com[2]),
-            kp_rot=tuple(k * x for x in self.gains.kp_rot),
-            kv_rot=tuple(math.sqrt(k) * x for x in self.gains.kv_rot),
-        )
+        self._gains_by_mode = {
+            lateral: Gains(
+                kp_com=(0.0, 0.0, self.gains.kp_com[2]),
+                kv_com=(0.0, 0.0, self.gains.kv_com[2]),
+                kp_rot=tuple(k * x for x in self.gains.kp_rot),
+                kv_rot=tuple(math.sqrt(k) * x for x in self.gains.kv_rot),
+            )
+            for lateral, k in (
+                (False, self.stepping.swing_rot_gain_scale),
+                (True, self.stepping.lateral_rot_gain_scale),
+            )
+        }
+        self._swing_gains = self._gains_by_mode[False]
         self.reset()
 
     # ------------------------------------------------------------------ state
@@ -293,7 +304,8 @@ class SteppingController:
             self._start_step(t, xi, (left, right))
         if self.phase == "swing":
             return self._swing_call(t, qpos, qvel, xi, omega, (left, right))
-        tau = self.ctrl.torques(
+        ctrl = self.ctrl if self.steps else self._ctrl_before
+        tau = ctrl.torques(
             qpos, qvel, target=self.target, gains=self.gains, feet_in_contact=self._flags(left, right)
         )
         return self._out(tau)
@@ -317,6 +329,7 @@ class SteppingController:
             self._T, self._offset, self._limits = s.lateral_swing_time_s, s.lateral_offset_m, s.lateral_limits
         else:
             self._T, self._offset, self._limits = s.swing_time_s, s.offset_m, s.limits
+        self._swing_gains = self._gains_by_mode[lateral]
         if self.steps:  # later steps alternate feet
             swing = 1 - FEET.index(self.steps[-1]["foot"])
         elif feet[0] != feet[1] and not lateral:
