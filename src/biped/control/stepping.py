@@ -311,6 +311,9 @@ class SteppingController:
         return self._out(tau)
 
     def _flags(self, left, right):
+        # the scenario's support (W's fixed support by default), also with "qp", where make_policy
+        # passes the sensed feet: sensed feet here made the goal push and the 18 m/s push from
+        # behind fall (docs/controller.md, "Stepping")
         return (left, right) if self.config.support == "sensed" else None
 
     def _out(self, tau):
