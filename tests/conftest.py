@@ -18,6 +18,18 @@ mjlog.route_to(None)
 
 
 @pytest.fixture(scope="session")
+def gl():
+    """The offscreen OpenGL backend MuJoCo renders with here (``"egl"``, ...); skips the test where
+    none works (:func:`biped.viz.video.gl_available` says why)."""
+    from biped.viz.video import gl_available
+
+    ok, why = gl_available()
+    if not ok:
+        pytest.skip(why)
+    return why
+
+
+@pytest.fixture(scope="session")
 def wendlandt_path():
     """Path of the shipped MJCF of W's biped."""
     return models.path("wendlandt")

@@ -32,6 +32,17 @@ def _sentinel(*args, **kwargs):
 
 _counter = itertools.count()
 
+
+def _examples(n: int):
+    """Hypothesis settings of these properties: ``n`` lines, no deadline (the first line imports
+    the command), the fixtures shared by the lines of one test (each line makes its own folder)."""
+    return settings(
+        max_examples=n,
+        deadline=None,
+        suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+    )
+
+
 # numbers as the shell would pass them: floats in every syntax, huge, tiny, non-finite, signs
 _NUMBER = st.one_of(
     st.floats(allow_nan=True, allow_infinity=True).map(repr),
@@ -137,11 +148,7 @@ def _push_line(draw):
     return argv, names or ["--"]
 
 
-@settings(
-    max_examples=150,
-    deadline=None,
-    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
-)
+@_examples(150)
 @given(_push_line())
 def test_any_push_line_starts_the_simulation_or_is_a_one_line_error(tmp_path, capsys, monkeypatch, line):
     monkeypatch.setattr(biped.sim.push, "simulate", _sentinel)
@@ -176,11 +183,7 @@ def _walk_line(draw):
     return argv, names
 
 
-@settings(
-    max_examples=120,
-    deadline=None,
-    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
-)
+@_examples(120)
 @given(_walk_line())
 def test_any_walk_line_starts_the_motion_or_is_a_one_line_error(tmp_path, capsys, monkeypatch, line):
     monkeypatch.setattr(biped.outputs.walk, "write_walk", _sentinel)
@@ -236,11 +239,7 @@ def _posture_line(draw):
     return [model], argv, names
 
 
-@settings(
-    max_examples=150,
-    deadline=None,
-    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
-)
+@_examples(150)
 @given(_posture_line())
 def test_any_posture_line_is_a_run_or_a_one_line_error(tmp_path, capsys, monkeypatch, line):
     monkeypatch.setattr(biped.outputs.posture, "viz", _STUB_VIZ)
@@ -256,11 +255,7 @@ def test_any_posture_line_is_a_run_or_a_one_line_error(tmp_path, capsys, monkeyp
         assert not out.exists(), "a rejected or failed run left its folder behind"
 
 
-@settings(
-    max_examples=120,
-    deadline=None,
-    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
-)
+@_examples(120)
 @given(
     st.dictionaries(
         st.sampled_from(["--grid", "--k1-max", "--k2-max", "--rate-gains", "--poles", "--param"]),
@@ -298,6 +293,7 @@ def test_any_gains_line_starts_the_design_or_is_a_one_line_error(tmp_path, capsy
         (["posture", "pendulum", "--dt", "1e-9"], "more than the limit of 1,000,000"),
         (["posture", "gains", "--grid", "100000"], "--grid must be in [2, 401]"),
         (["posture", "gains", "--poles", "-1", "-1", "-1", "-1"], "-1 is given 4 times"),
+        (["posture", "gains", "--grid", "0", "--"], "the bare '--' after --grid ends the options"),
         (
             ["posture", "pendulum", "--poles", "1", "2"],
             "biped posture pendulum: error: unrecognized arguments: --poles",

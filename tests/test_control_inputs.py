@@ -14,7 +14,7 @@ from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
 from biped.control import Gains, Target, WorkspaceController
-from biped.errors import BipedError
+from biped.errors import BipedError, ScenarioError, StateError
 
 
 @pytest.fixture(scope="module")
@@ -151,3 +151,56 @@ def test_a_root_foot_a_third_leg_and_an_empty_source_are_model_errors(tmp_path, 
         WorkspaceController.from_mjcf(three, feet=("lfoot", "rfoot"))
     with pytest.raises(ModelError, match="empty model source"):
         WorkspaceController.from_mjcf("")
+
+
+def test_a_nan_state_is_one_short_line_with_the_count_and_the_first_entries(setup):
+    """Every entry NaN: the message counts them and names only the first few (it used to list all
+    62 on one line)."""
+    ctrl, q0, v0 = setup
+    q, v = np.full_like(q0, math.nan), np.full_like(v0, math.nan)
+    with pytest.raises(StateError) as info:
+        ctrl.compute(q, v)
+    msg = str(info.value)
+    n = q.size + v.size
+    assert msg == (
+        f"qpos and qvel must be finite; {n} entries are NaN or infinite: qpos[0], qpos[1], qpos[2] and {n - 3} more"
+    )
+    q = q0.copy()
+    q[9] = math.inf
+    with pytest.raises(StateError, match=r"1 entry is NaN or infinite: qpos\[9\]$"):
+        ctrl.compute(q, v0)
+
+
+@pytest.mark.parametrize(
+    ("quat", "norm"),
+    [
+        ((1e308, 0, 0, 0), "1e+308"),
+        ((1e308, 1e308, 0, 0), "1.41421356e+308"),
+        ((1.7e308, 1.7e308, 0, 0), "inf"),
+    ],
+)
+def test_a_huge_target_quaternion_is_a_clean_error_without_numpy_warnings(quat, norm):
+    """The norm of a 1e308 quaternion overflowed in numpy (a RuntimeWarning printed before the
+    error); math.hypot scales, so the message states the norm and nothing else is printed."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # any warning fails the test
+        with pytest.raises(ScenarioError) as info:
+            Target(quat=quat)
+    assert str(info.value) == f"target quat must be a unit quaternion (w, x, y, z); its norm is {norm}"
+
+
+def test_a_huge_target_tilt_on_the_command_line_is_one_line(tmp_path, capsys):
+    """The command line sets the target by axis and tilt, never by quaternion: a 1e308 tilt is
+    refused by the scenario's range, in one line and with no warning."""
+    import warnings
+
+    from biped.cli import main
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        rc = main(["push", "--set", "target_tilt_deg=1e308", "--out", str(tmp_path / "r"), "--quiet"])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.count("\n") == 1, err
+    assert err.startswith("biped push: error: target_tilt_deg must be in [-90, 90]")

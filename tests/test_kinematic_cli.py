@@ -6,26 +6,18 @@ boxes three.js builds, and the CSV read back with the csv module.
 
 from __future__ import annotations
 
-import csv
 import html
 import json
 import math
 import re
-import shutil
-import subprocess
 
 import numpy as np
 import pytest
+from _helpers import read_csv, run_chromium, walk_argv
 
 from biped.cli import main
 from biped.kinematic import step_upward
 from biped.outputs.walk import CSV_COLUMNS, build_replay, figure_model, figure_qpos
-
-
-def _read_csv(path):
-    with open(path, newline="") as fh:
-        rows = list(csv.reader(fh))
-    return rows[0], np.array(rows[1:], dtype=float)
 
 
 def test_forward_writes_csv_summary_figures_and_replay(tmp_path, capsys):
@@ -33,7 +25,7 @@ def test_forward_writes_csv_summary_figures_and_replay(tmp_path, capsys):
     assert (
         main(["walk", "--gait", "forward", "--steps", "2", "--out", str(out), "--no-video", "--quiet"]) == 0
     )
-    header, data = _read_csv(out / "trajectory.csv")
+    header, data = read_csv(out / "trajectory.csv")
     assert tuple(header) == CSV_COLUMNS
     for col in ("time", "left_knee", "pelvis_z", "left_heel_x", "right_toe_z"):
         assert col in header
@@ -65,33 +57,11 @@ def test_forward_writes_csv_summary_figures_and_replay(tmp_path, capsys):
 
 def test_upstairs_options_reach_the_stairs(tmp_path):
     out = tmp_path / "up"
-    assert (
-        main(
-            [
-                "walk",
-                "--gait",
-                "upstairs",
-                "--steps",
-                "3",
-                "--stair-rise",
-                "0.15",
-                "--stair-run",
-                "0.32",
-                "--out",
-                str(out),
-                "--no-video",
-                "--no-replay",
-                "--no-figures",
-                "--no-dynamics",
-                "--quiet",
-            ]
-        )
-        == 0
-    )
+    assert main(walk_argv(out, "--stair-rise", "0.15", "--stair-run", "0.32", gait="upstairs", steps=3)) == 0
     s = json.loads((out / "summary.json").read_text())
     assert s["stairs"]["rise_m"] == 0.15 and s["stairs"]["run_m"] == 0.32
     assert s["height_climbed_m"] == pytest.approx(0.45)
-    header, data = _read_csv(out / "trajectory.csv")
+    header, data = read_csv(out / "trajectory.csv")
     c = {n: i for i, n in enumerate(header)}
     assert data[-1, c["left_heel_z"]] == pytest.approx(0.45, abs=1e-6)  # both feet on tread 3
     assert data[-1, c["right_toe_z"]] == pytest.approx(0.45, abs=1e-6)
@@ -114,32 +84,11 @@ def test_bad_arguments_exit_2_with_a_clear_message(tmp_path, capsys, argv, messa
 
 def test_existing_run_is_not_overwritten(tmp_path, capsys):
     out = tmp_path / "r"
-    args = [
-        "walk",
-        "--gait",
-        "forward",
-        "--steps",
-        "1",
-        "--out",
-        str(out),
-        "--no-video",
-        "--no-replay",
-        "--no-figures",
-        "--no-dynamics",
-        "--quiet",
-    ]
+    args = walk_argv(out)
     assert main(args) == 0
     assert main(args) == 2
     assert "--overwrite" in capsys.readouterr().err
     assert main([*args, "--overwrite"]) == 0
-
-
-def _chromium():
-    for name in ("chromium", "chromium-browser", "google-chrome"):
-        exe = shutil.which(name)
-        if exe:
-            return exe
-    pytest.skip("Debian's chromium is not installed (apt-get install chromium); CI installs it")
 
 
 @pytest.mark.browser
@@ -156,28 +105,9 @@ def test_chromium_draws_the_stance_foot_on_its_tread(tmp_path):
     t = float(plan.starts[2])  # both feet down: treads 1 and 2
     i = int(np.argmin(np.abs(rep.times - t)))
     t = float(rep.times[i])
-    cmd = [
-        _chromium(),
-        "--headless",
-        "--no-sandbox",
-        "--disable-gpu",
-        "--use-angle=swiftshader",
-        "--enable-unsafe-swiftshader",
-        "--disable-background-networking",
-        "--disable-component-update",
-        "--disable-sync",
-        "--no-first-run",
-        "--disable-extensions",
-        f"--user-data-dir={tmp_path / 'profile'}",
-        "--window-size=800,600",
-        "--virtual-time-budget=8000",
-        "--dump-dom",
-        f"{f.as_uri()}#t={t!r}&probe=1",
-    ]
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=90, check=False)
-    assert proc.returncode == 0, proc.stderr[-2000:]
-    probe = re.search(r'<pre id="probe" style="[^"]*">(.*?)</pre>', proc.stdout, re.DOTALL)
-    assert probe, proc.stdout[-2000:]
+    dom = run_chromium(tmp_path, "--dump-dom", url=f"{f.as_uri()}#t={t!r}&probe=1")
+    probe = re.search(r'<pre id="probe" style="[^"]*">(.*?)</pre>', dom, re.DOTALL)
+    assert probe, dom[-2000:]
     boxes = {b["name"]: b for b in json.loads(html.unescape(probe[1]))["boxes"]}
     assert len([n for n in boxes if not n.startswith(("stair", "floor"))]) == 15
     rise = plan.terrain.blocks[0][2]
@@ -187,13 +117,10 @@ def test_chromium_draws_the_stance_foot_on_its_tread(tmp_path):
     assert boxes["stair2"]["max"][2] == pytest.approx(2 * rise, abs=2e-4)
 
 
-def test_video_of_the_figure(tmp_path):
+def test_video_of_the_figure(tmp_path, gl):
     """A few frames of the figure's MJCF render to an MP4 (skipped where no OpenGL works)."""
-    from biped.viz.video import gl_available, render_video
+    from biped.viz.video import render_video
 
-    ok, why = gl_available()
-    if not ok:
-        pytest.skip(why)
     motion = step_upward(steps=1).sample(50.0)
     model = figure_model(motion)
     q = figure_qpos(model, motion)
@@ -218,16 +145,24 @@ def test_video_of_the_figure(tmp_path):
 def test_walk_with_video_writes_its_summary(tmp_path, monkeypatch, model):
     """The video stage builds the figure's own MjModel; the summary must still name the caller's
     biped (a merge once let that MjModel shadow ``model`` and the default ``biped walk`` crashed
-    before summary.json). render_video is replaced by a stub: the test is about the summary."""
+    before summary.json; another rebound ``model`` to the figure's MjModel and the summary failed
+    on Path(MjModel)). render_video is replaced by a stub that reports its frames through the
+    progress callback, which must reach on_frame: the test is about the summary and the relay."""
+    import mujoco
+
     import biped.outputs.walk as ow
     from biped.kinematic import step_forward
     from biped.models.subject import resolve
     from biped.viz.video import VideoResult
 
-    seen = {}
+    seen, frames = {}, []
 
-    def fake_video(fig_model, times, qpos, path, **kw):
+    def fake_video(fig_model, times, qpos, path, progress=None, **kw):
+        assert isinstance(fig_model, mujoco.MjModel) and qpos.shape == (len(times), fig_model.nq)
         seen["nbody"] = fig_model.nbody
+        for i in range(3):
+            if progress is not None:
+                progress(i + 1, 3)
         return VideoResult(None, "stubbed in the test")
 
     monkeypatch.setattr(ow, "render_video", fake_video)
@@ -243,8 +178,10 @@ def test_walk_with_video_writes_its_summary(tmp_path, monkeypatch, model):
         replay=False,
         video=True,
         model=path,
+        on_frame=lambda done, total: frames.append((done, total)),
     )
     s = json.loads((tmp_path / "w" / "summary.json").read_text())
     assert s["model"] == (str(resolve("wendlandt").resolve()) if model else "wendlandt")
     assert s["notes"]["video"] == "stubbed in the test" and seen["nbody"] > 10
     assert run.summary == s
+    assert frames == [(1, 3), (2, 3), (3, 3)]

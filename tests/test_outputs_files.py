@@ -15,25 +15,13 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import pytest
+from _helpers import read_csv, strict_json, walk_argv
 
 from biped.cli import main
 from biped.kinematic.dynamics import load_biped
 from biped.outputs._json import finite_json, write_json
 
 SRC = str(Path(__file__).resolve().parents[1] / "src")
-
-
-def _strict(text: str):
-    def bad(name):
-        raise ValueError(f"non-JSON constant {name}")
-
-    return json.loads(text, parse_constant=bad)
-
-
-def _read_csv(path):
-    with open(path) as f:
-        rows = list(csv.reader(f))
-    return rows[0], np.array([[float(x) if x else np.nan for x in r] for r in rows[1:]])
 
 
 @pytest.mark.parametrize("gait", ["forward", "jump"])
@@ -49,8 +37,8 @@ def test_walk_inverse_dynamics_csv_obeys_newtons_law(tmp_path, gait):
     plan = step_forward(dims, 2, 1.0, params) if gait == "forward" else jump(dims, 1.0, params)
     out = tmp_path / "w"
     run = write_walk(plan, out, gait=gait, speed=1.0, rate=200.0, figures=False, replay=False, video=False)
-    head, data = _read_csv(out / "inverse_dynamics.csv")
-    summary = _strict((out / "summary.json").read_text())
+    head, data = read_csv(out / "inverse_dynamics.csv")
+    summary = strict_json((out / "summary.json").read_text())
     assert list(summary["inverse_dynamics_columns"]) == head
     with open(out / "trajectory.csv") as f:
         assert list(summary["trajectory_columns"]) == next(csv.reader(f))
@@ -96,7 +84,7 @@ def test_finite_json_replaces_every_non_finite_value(tmp_path):
         "g": (True, None, "x"),
     }
     path = write_json(tmp_path / "x.json", obj)
-    assert _strict(path.read_text()) == {
+    assert strict_json(path.read_text()) == {
         "a": None,
         "b": [1.0, None, None],
         "c": [[None, 2.0]],
@@ -111,7 +99,7 @@ def test_posture_writes_strict_json_under_runs(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     assert main(["posture", "pendulum", "--duration", "0.2", "--no-animation"]) == 0
     (out,) = (tmp_path / "runs").glob("posture-pendulum-*")
-    _strict((out / "summary.json").read_text())
+    strict_json((out / "summary.json").read_text())
 
 
 _WARN = textwrap.dedent("""
@@ -189,64 +177,58 @@ def test_push_says_what_it_writes_and_the_whole_time(tmp_path, capsys, monkeypat
 
 def test_walk_cli_writes_the_dynamics_csv_and_the_whole_time(tmp_path, capsys):
     out = tmp_path / "w"
-    assert (
-        main(
-            [
-                "walk",
-                "--gait",
-                "forward",
-                "--steps",
-                "1",
-                "--out",
-                str(out),
-                "--no-video",
-                "--no-replay",
-                "--no-figures",
-                "--quiet",
-            ]
-        )
-        == 0
-    )
+    assert main(walk_argv(out, "--no-replay", "--no-figures", files=True)) == 0
     text = capsys.readouterr().out
     assert "the whole command" in text
-    head, _data = _read_csv(out / "inverse_dynamics.csv")
+    head, _data = read_csv(out / "inverse_dynamics.csv")
     assert head[0] == "time" and "left_grf_z" in head and "residual_mz" in head
     manifest = json.loads((out / ".biped-run.json").read_text())
     assert "inverse_dynamics.csv" in manifest["files"]
 
 
-def test_walk_with_video_records_the_biped_model_not_the_figure(tmp_path, monkeypatch):
-    """Regression: the video stage rebound ``model`` to the figure's MjModel, and the summary
-    then failed on Path(MjModel) (TypeError after the whole run). The renderer is stubbed here:
-    it reports its frames through the progress callback, which reaches on_frame."""
-    import biped.outputs.walk as walk_out
-    from biped.kinematic import FigureDims, GaitParams, step_forward
+def _stub_video(frames: int):
+    """A render_video for outputs.walk and outputs.push that reports ``frames`` frames through its
+    progress callback and writes nothing."""
     from biped.viz.video import VideoResult
 
-    frames = []
-
-    def fake_render(model, times, qpos, path, progress=None, **kw):
-        assert isinstance(model, mujoco.MjModel) and qpos.shape == (len(times), model.nq)
-        for i in range(3):
+    def fake(*args, progress=None, **kw):
+        for i in range(frames + 1):
             if progress is not None:
-                progress(i + 1, 3)
+                progress(i, frames)
         return VideoResult(None, "stubbed", None, 0)
 
-    monkeypatch.setattr(walk_out, "render_video", fake_render)
-    plan = step_forward(FigureDims.from_anthropometry(), 1, 1.0, GaitParams())
-    run = walk_out.write_walk(
-        plan,
-        tmp_path / "w",
-        gait="forward",
-        speed=1.0,
-        rate=100.0,
-        figures=False,
-        replay=False,
-        dynamics=False,
-        on_frame=lambda done, total: frames.append((done, total)),
-    )
-    assert run.summary["model"] == "wendlandt" and run.summary["notes"]["video"] == "stubbed"
-    assert frames == [(1, 3), (2, 3), (3, 3)]
+    return fake
+
+
+@pytest.mark.parametrize("quiet", [False, True])
+def test_walk_video_draws_pushs_frame_bar_unless_quiet(tmp_path, capsys, monkeypatch, quiet):
+    """The walk's video stage shows the same frame bar as push (cli._common.frame_bar): tqdm's
+    "rendering video.mp4 ... n/7" on stderr (gone when the stage ends); --quiet shows none."""
+    import biped.outputs.walk as walk_out
+
+    monkeypatch.setattr(walk_out, "render_video", _stub_video(7))
+    argv = walk_argv(tmp_path / "w", files=True)
+    argv.remove("--no-video")
+    argv += ["--no-replay", "--no-figures", "--no-dynamics"]
+    if not quiet:
+        argv.remove("--quiet")
+    assert main(argv) == 0
+    err = capsys.readouterr().err
+    assert ("rendering video.mp4" in err and "/7 [" in err) is not quiet, err
+
+
+def test_push_quiet_says_nothing_about_video_frames(tmp_path, capsys, monkeypatch):
+    """--quiet: no frame bar, and no "video.mp4: rendering n/N frames" lines instead of it."""
+    import biped.outputs.push as push_out
+
+    monkeypatch.setattr(push_out, "render_push_video", _stub_video(8))
+    argv = ["push", "--duration", "0.02", "--controller", "joint-pd", "--no-replay", "--no-figures"]
+    assert main([*argv, "--quiet", "--out", str(tmp_path / "q")]) == 0
+    cap = capsys.readouterr()
+    assert "rendering" not in cap.out + cap.err, cap
+    assert main([*argv, "--out", str(tmp_path / "loud")]) == 0
+    cap = capsys.readouterr()
+    assert "rendering video.mp4" in cap.err and "8/8" in cap.err, cap
 
 
 def test_push_outputs_report_stages_and_video_frames(tmp_path, monkeypatch):
@@ -306,6 +288,6 @@ def test_any_nested_value_gives_strict_json(tmp_path):
     @given(tree)
     def check(obj):
         path = write_json(tmp_path / "p.json", obj)
-        assert same(obj, _strict(path.read_text()))
+        assert same(obj, strict_json(path.read_text()))
 
     check()

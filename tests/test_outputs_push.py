@@ -5,34 +5,18 @@ leaves the body (ballistic flight afterwards), the column dictionary, strict JSO
 
 from __future__ import annotations
 
-import csv
 import dataclasses
-import json
 
 import mujoco
 import numpy as np
 import pytest
+from _helpers import read_csv, strict_json
 
 import biped.models
 from biped.outputs.push import column_dictionary, summary_dict, write_outputs, write_summary
 from biped.sim import Scenario, build_scene, simulate
 from biped.sim.measure import block_separation, foot_drift, measure_rows
 from biped.sim.sweep import ballistic_impulse
-
-
-def _read_csv(path):
-    with open(path) as f:
-        rows = list(csv.reader(f))
-    head = rows[0]
-    data = np.array([[float(x) if x else np.nan for x in r] for r in rows[1:]])
-    return head, data
-
-
-def _strict(text: str):
-    def bad(name):
-        raise ValueError(f"non-JSON constant {name}")
-
-    return json.loads(text, parse_constant=bad)
 
 
 @pytest.fixture(scope="module")
@@ -43,7 +27,7 @@ def w_run(tmp_path_factory):
     result = simulate(scenario, scene=scene)
     out = tmp_path_factory.mktemp("w_run")
     write_outputs(result, out, figures=False, video=False, replay=False, scene=scene, log=lambda m: None)
-    head, data = _read_csv(out / "trajectory.csv")
+    head, data = read_csv(out / "trajectory.csv")
     return {
         "scenario": scenario,
         "scene": scene,
@@ -170,7 +154,7 @@ def test_block_momentum_after_is_taken_when_the_block_leaves_the_body(w_run):
     the sweep's independent ballistic estimate of the impulse, and differs from the momentum at
     the end of the run (the block lies on the floor)."""
     result = w_run["result"]
-    summary = _strict((w_run["out"] / "summary.json").read_text())
+    summary = strict_json((w_run["out"] / "summary.json").read_text())
     mass = result.scenario.block_mass_kg
     g = np.array([0.0, 0.0, -9.81])
     t_sep = summary["block_leaves_body_time_s"]
@@ -203,7 +187,7 @@ def test_block_momentum_after_is_taken_when_the_block_leaves_the_body(w_run):
 def test_feet_drift_is_checkable_from_the_csv(w_run):
     """The README's "feet drift ~5 mm in +y, ~1 mm in -x": the summary's feet_drift_m is the feet
     frames' displacement from the hit to the end, and the CSV's foot columns give the same."""
-    summary = _strict((w_run["out"] / "summary.json").read_text())
+    summary = strict_json((w_run["out"] / "summary.json").read_text())
     drift = summary["feet_drift_m"]
     c = w_run["col"]
     t = c("time")
@@ -218,8 +202,8 @@ def test_feet_drift_is_checkable_from_the_csv(w_run):
 def test_column_dictionary_names_every_column_with_a_unit(tmp_path):
     r = simulate(Scenario(duration_s=0.05))
     paths = write_outputs(r, tmp_path, figures=False, video=False, replay=False, log=lambda m: None)
-    head, data = _read_csv(paths["trajectory"])
-    cols = _strict((tmp_path / "columns.json").read_text())
+    head, data = read_csv(paths["trajectory"])
+    cols = strict_json((tmp_path / "columns.json").read_text())
     assert list(cols) == head == list(column_dictionary(r.joint_names))
     assert all(set(v) == {"unit", "meaning"} and v["unit"] for v in cols.values())
     assert cols["left_grf_z"]["unit"] == "N" and cols["right_cop_x"]["unit"] == "m"
@@ -242,7 +226,7 @@ def test_summary_is_strict_json_when_values_do_not_exist(tmp_path):
         block_momentum_before=np.array([np.nan, np.inf, -np.inf]),
     )
     path = write_summary(bad, tmp_path / "summary.json", rows=measure_rows(build_scene(r.scenario), r))
-    data = _strict(path.read_text())
+    data = strict_json(path.read_text())
     assert data["final_com_error_m"] is None and data["realtime_factor"] is None
     assert data["block_momentum_before_kg_m_s"] == [None, None, None]
     assert data["judged_against"]["final_com_error_m"] is None

@@ -74,3 +74,23 @@ def test_bad_input_gets_clear_errors(tmp_path, capsys):
         main(["posture", "body-leg", "--method", "kane"])
     assert exc.value.code == 2
     assert "invalid choice: 'kane'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("argv", "shows"),
+    [
+        (["posture"], ["biped posture: Bediz's planar postural models"]),
+        (["posture", "pendulum"], ["--x0 TH THD", "--alpha A ", "--dt S", "single-link inverted pendulum"]),
+        (["posture", "body-leg"], ["--x0 T1 T1D T2 T2D", "--alpha A1 A2", "body on a massless leg"]),
+        (["posture", "gains"], ["--grid N", "--k1-max K", "body-leg parameter override", "(default 60000)"]),
+    ],
+)
+def test_posture_help_names_the_values_each_option_takes(capsys, argv, shows):
+    """--help shows the overview's names for the values (TH THD, not X0 X0), a line on what each
+    model is, and no reStructuredText quotes."""
+    with pytest.raises(SystemExit):
+        main([*argv, "--help"])
+    out = capsys.readouterr().out
+    assert "``" not in out
+    for s in shows:
+        assert s in out, (s, out)

@@ -68,6 +68,21 @@ def test_unknown_key_lists_every_valid_key():
         assert k in str(err.value)
 
 
+@pytest.mark.parametrize(
+    ("key", "hint"),
+    [
+        ("duraton_s", " (did you mean 'duration_s'?)"),
+        ("block_mas_kg", " (did you mean 'block_mass_kg'?)"),
+        ("zzz", ""),
+    ],
+)
+def test_a_misspelt_key_names_the_nearest_valid_one(key, hint):
+    """A typo gets the closest key (difflib) before the full list; a word near no key gets none."""
+    with pytest.raises(ScenarioError) as err:
+        Scenario.from_dict({key: 1.0})
+    assert str(err.value).startswith(f"unknown scenario key {key!r}{hint}; valid keys: duration_s, ")
+
+
 def test_set_assignment_parses_toml_values():
     assert parse_assignment("kp_com=[60, 60, 200]") == ("kp_com", [60, 60, 200])
     assert parse_assignment("controller=joint-pd") == ("controller", "joint-pd")
@@ -134,3 +149,11 @@ def test_push_cli_physics_flag():
     assert scenario().physics == "faithful" and scenario().physics_timestep_s == 0.0005
     assert scenario("--physics", "fast") == Scenario(physics="fast")
     assert scenario("--physics", "fast", "--timestep", "0.0005").physics_timestep_s == 0.0005
+
+
+@pytest.mark.parametrize(("value", "shown"), [(1, "1"), (0.0, "0.0"), ("yes", "'yes'")])
+def test_a_non_bool_stepping_is_shown_as_given(value, shown):
+    """``--set stepping=1`` said "got 1.0": the number was made a float before the check."""
+    with pytest.raises(ScenarioError) as err:
+        Scenario.from_dict({"stepping": value})
+    assert str(err.value) == f"stepping must be true or false; got {shown}"

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _helpers import tiny_sweep_argv, toy_trial
 
 from biped.analysis import feet_in_place_bound
 from biped.cli import main
@@ -63,27 +64,7 @@ def test_envelope_plot_draws_hofs_bound(tmp_path):
     from biped.viz.envelope import plot_envelope
 
     out = tmp_path / "s.parquet"
-    assert (
-        main(
-            [
-                "sweep",
-                "--speed",
-                "3",
-                "--direction",
-                "0,180",
-                "--duration",
-                "0.02",
-                "--controller",
-                "joint-pd",
-                "--workers",
-                "1",
-                "--quiet",
-                "--out",
-                str(out),
-            ]
-        )
-        == 0
-    )
+    assert main(tiny_sweep_argv(out, direction="0,180")) == 0
     ax = plot_envelope(out, by="impulse_n_s")
     (line,) = [ln for ln in ax.get_lines() if ln.get_linestyle() == "--"]
     theta, r = line.get_data()
@@ -95,21 +76,17 @@ def test_envelope_plot_draws_hofs_bound(tmp_path):
 # the envelope plot: what a reader must be able to see
 
 
-def _toy(setup) -> dict:
-    t = setup.trial
-    return {"impulse_n_s": 2.2 * t.speed_m_s, "completed": True, "fell": t.speed_m_s > 4}
-
-
-def _toy_sweep(tmp_path, name, controller="workspace"):
+def _toy_sweep(tmp_path, name, **base):
+    """A sweep file of :func:`toy_trial` rows over 3 speeds x 8 directions of ``Scenario(**base)``."""
     from biped.sim.scenario import Scenario
     from biped.sim.sweep import SweepSpec, run_sweep
 
     out = tmp_path / name
     spec = SweepSpec(
         axes={"speed_m_s": (2.0, 4.0, 6.0), "direction_deg": tuple(range(0, 360, 45))},
-        base=Scenario(controller=controller),
+        base=Scenario(**base),
     )
-    run_sweep(spec, out, workers=1, trial_fn=_toy, progress=False)
+    run_sweep(spec, out, workers=1, trial_fn=toy_trial, progress=False)
     return out
 
 
@@ -148,7 +125,7 @@ def test_envelope_plot_shows_hofs_bound_the_facing_and_no_overlapping_labels(tmp
             )
     text = " ".join(t.get_text() for t in fig.texts)
     assert "faces -x" in text and "180 deg is W's push, from behind" in text
-    two = plot_comparison([one, _toy_sweep(tmp_path, "b.parquet", "joint-pd")])
+    two = plot_comparison([one, _toy_sweep(tmp_path, "b.parquet", controller="joint-pd")])
     assert len(two.axes) == 3 and two.axes[-1].get_title().startswith("envelopes overlaid")
     assert {ln.get_label() for ln in two.axes[-1].get_lines()} == {"workspace", "joint-pd"}
 
@@ -182,17 +159,10 @@ def test_envelope_labels_tell_the_distributions_apart(tmp_path):
     import matplotlib
 
     matplotlib.use("Agg")
-    from biped.sim.scenario import Scenario
-    from biped.sim.sweep import SweepSpec, run_sweep
     from biped.viz.envelope import plot_comparison
 
-    outs = []
-    for name, base in (("a.parquet", Scenario()), ("b.parquet", Scenario(distribution="qp"))):
-        spec = SweepSpec(
-            axes={"speed_m_s": (2.0, 4.0, 6.0), "direction_deg": tuple(range(0, 360, 45))}, base=base
-        )
-        run_sweep(spec, tmp_path / name, workers=1, trial_fn=_toy, progress=False)
-        outs.append(tmp_path / name)
-    fig = plot_comparison(outs)
+    fig = plot_comparison(
+        [_toy_sweep(tmp_path, "a.parquet"), _toy_sweep(tmp_path, "b.parquet", distribution="qp")]
+    )
     assert {ln.get_label() for ln in fig.axes[-1].get_lines()} == {"workspace", "workspace (qp)"}
     assert fig.axes[1].get_title().startswith("workspace (qp), torque limits")

@@ -7,6 +7,7 @@ from __future__ import annotations
 import time
 
 import pytest
+from _helpers import one_line_error, tiny_sweep_argv
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -22,11 +23,20 @@ def _sweep(capsys, *args):
     return rc, cap.out, cap.err
 
 
-def _one_line_error(err: str) -> str:
-    lines = [ln for ln in err.splitlines() if ln.strip()]
+def _status(capsys, argv) -> tuple[int, str]:
+    """(exit status, last stderr line) of ``biped argv``: 0 or 2, never a traceback."""
+    try:
+        rc = main(argv)
+    except SystemExit as exc:  # argparse: a value of the wrong type for an int/float option
+        rc = exc.code
+    err = capsys.readouterr().err
     assert "Traceback" not in err
-    assert len(lines) == 1 and lines[0].startswith("biped sweep: error: "), err
-    return lines[0]
+    assert rc in (0, 2), err
+    return rc, (err.strip().splitlines()[-1] if rc == 2 else "")
+
+
+def _one_line_error(err: str) -> str:
+    return one_line_error(err, "sweep")
 
 
 # ---------------------------------------------------------------------------------------------
@@ -71,24 +81,7 @@ def test_speed_zero_says_it_must_be_positive(tmp_path, capsys):
 
 def test_an_unknown_plot_type_is_refused_before_the_sweep(tmp_path, capsys):
     out = tmp_path / "runs" / "s.parquet"
-    rc, _, err = _sweep(
-        capsys,
-        "--speed",
-        "3",
-        "--direction",
-        "0",
-        "--duration",
-        "0.02",
-        "--controller",
-        "joint-pd",
-        "--workers",
-        "1",
-        "--quiet",
-        "--out",
-        str(out),
-        "--plot",
-        str(tmp_path / "x.xyz"),
-    )
+    rc, _, err = _sweep(capsys, *tiny_sweep_argv(out, "--plot", str(tmp_path / "x.xyz"))[1:])
     line = _one_line_error(err)
     assert rc == 2 and "--plot" in line and "'.png'" not in line and ".png" in line
     assert not (tmp_path / "runs").exists()
@@ -225,15 +218,8 @@ def test_any_command_line_is_a_dry_run_or_a_one_line_error_naming_the_option(tmp
     argv = ["sweep", "--dry-run", "--quiet", "--out", str(tmp_path / "s.parquet")]
     for k, v in opts.items():
         argv.append(f"{k}={v}")
-    try:
-        rc = main(argv)
-    except SystemExit as exc:  # argparse: a value of the wrong type for an int/float option
-        rc = exc.code
-    err = capsys.readouterr().err
-    assert "Traceback" not in err
-    assert rc in (0, 2), err
+    rc, last = _status(capsys, argv)
     if rc == 2:
-        last = err.strip().splitlines()[-1]
         words = [w for k in opts for w in (*_OPTIONS[k], k)]
         assert any(w in last for w in words), (opts, last)
 
@@ -298,13 +284,6 @@ def test_any_set_and_choice_line_is_a_dry_run_or_a_one_line_error_naming_it(tmp_
         values = _CHOICES[opt]
         argv += [opt, values[i % len(values)]]
         names += [opt, opt.lstrip("-").replace("-", "_"), "model", "--plot"]
-    try:
-        rc = main(argv)
-    except SystemExit as exc:
-        rc = exc.code
-    err = capsys.readouterr().err
-    assert "Traceback" not in err
-    assert rc in (0, 2), err
+    rc, last = _status(capsys, argv)
     if rc == 2:
-        last = err.strip().splitlines()[-1]
         assert last.startswith("biped sweep: error: ") and any(w in last for w in names), (argv, last)

@@ -14,6 +14,7 @@ import time
 from pathlib import Path
 
 import pytest
+from _helpers import toy_trial
 
 from biped.errors import ScenarioError
 from biped.sim.sweep import SweepSpec, load, parts_dir, run_sweep
@@ -21,11 +22,6 @@ from biped.sim.sweep.store import part_files, read_part
 
 HERE = Path(__file__).parent
 GRID = {"speed_m_s": (1.0, 3.0), "direction_deg": (0.0, 90.0, 180.0, 270.0)}
-
-
-def toy_trial(setup) -> dict:
-    t = setup.trial
-    return {"impulse_n_s": 1.2 * t.block_mass_kg * t.speed_m_s, "completed": True, "fell": t.speed_m_s > 4}
 
 
 def slow_trial(setup) -> dict:

@@ -17,18 +17,9 @@ import numpy as np
 import pytest
 
 from biped.errors import ScenarioError
-from biped.viz import gl_available
 from biped.viz.push_video import push_camera, push_slow_motion, render_push_video
 from biped.viz.timeline import SlowMotion, overlay_text, playback_times
 from biped.viz.video import frame_indices, render_video
-
-
-@pytest.fixture(scope="module")
-def gl():
-    ok, why = gl_available()
-    if not ok:
-        pytest.skip(why)
-    return why
 
 
 def _expected_frames(t0, t1, fps, windows):

@@ -12,13 +12,12 @@ import dataclasses
 import html
 import json
 import re
-import shutil
-import subprocess
 import xml.etree.ElementTree as ET
 
 import mujoco
 import numpy as np
 import pytest
+from _helpers import run_chromium
 
 from biped.errors import BipedError, ModelError, StateError
 from biped.viz import Replay, ReplayGeom, replay_from_mujoco, write_replay
@@ -269,39 +268,6 @@ def test_page_loads_nothing_from_the_network(biped_replay, tmp_path):
 # ------------------------------------------------------------------------------------------
 
 
-def _chromium():
-    for name in ("chromium", "chromium-browser", "google-chrome"):
-        exe = shutil.which(name)
-        if exe:
-            return exe
-    pytest.skip("Debian's chromium is not installed (apt-get install chromium); CI installs it")
-
-
-def _run_chromium(tmp_path, *args, url):
-    cmd = [
-        _chromium(),
-        "--headless",
-        "--no-sandbox",
-        "--disable-gpu",
-        "--use-angle=swiftshader",
-        "--enable-unsafe-swiftshader",
-        "--disable-background-networking",
-        "--disable-component-update",
-        "--disable-sync",
-        "--no-first-run",
-        "--disable-extensions",
-        f"--user-data-dir={tmp_path / 'profile'}",
-        "--window-size=800,600",
-        "--virtual-time-budget=8000",
-        "--hide-scrollbars",
-        *args,
-        url,
-    ]
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=90, check=False)
-    assert proc.returncode == 0, proc.stderr[-2000:]
-    return proc.stdout
-
-
 def _world_aabb(geom: ReplayGeom, pos, quat):
     """Closed-form world bounding box (min, max) of a shape with MuJoCo's size semantics."""
     R, s = _rot(quat), np.array(geom.size)
@@ -332,7 +298,7 @@ def test_chromium_builds_each_shape_where_mujoco_puts_it(biped_replay, tmp_path)
     rep = _evil_replay(biped_replay)
     f = write_replay(rep, tmp_path / "evil.html")
     t = float(rep.times[1] + rep.times[2]) / 2
-    dom = _run_chromium(tmp_path, "--dump-dom", url=f"{f.as_uri()}#t={t!r}&probe=1")
+    dom = run_chromium(tmp_path, "--dump-dom", url=f"{f.as_uri()}#t={t!r}&probe=1")
     assert 'data-ready="1"' in dom, dom[-3000:]
     assert "<img" not in dom and "&lt;img src=x" in dom  # the name shows as text only
     assert len(re.findall(r"<script\b", dom, re.IGNORECASE)) == 5
@@ -360,7 +326,7 @@ def test_chromium_screenshot_shows_the_biped(biped_replay, tmp_path):
 
     f = write_replay(biped_replay, tmp_path / "replay.html")
     png = tmp_path / "shot.png"
-    _run_chromium(tmp_path, f"--screenshot={png}", url=f.as_uri())
+    run_chromium(tmp_path, f"--screenshot={png}", url=f.as_uri())
     img = np.asarray(Image.open(png).convert("RGB"), dtype=float)
     assert img.shape == (600, 800, 3)
     img = img[:530]  # above the control bar (its blue ticks and checkboxes)
@@ -385,7 +351,7 @@ def test_chromium_lists_events_in_time_order(biped_replay, tmp_path):
     ]  # same time: given order kept
     rep = dataclasses.replace(biped_replay, markers=tuple(given))
     f = write_replay(rep, tmp_path / "events.html")
-    dom = _run_chromium(tmp_path, "--dump-dom", url=f"{f.as_uri()}#probe=1")
+    dom = run_chromium(tmp_path, "--dump-dom", url=f"{f.as_uri()}#probe=1")
     assert 'data-ready="1"' in dom, dom[-3000:]
     box = dom[dom.index('id="events"') :]
     box = box[: box.index("</div></div>") + 6]  # the list: rows of plain text divs

@@ -34,14 +34,6 @@ def _decode(path):
     return iio.imread(path, plugin="FFMPEG")
 
 
-@pytest.fixture(scope="module")
-def gl():
-    ok, why = gl_available()
-    if not ok:
-        pytest.skip(why)
-    return why
-
-
 def test_frame_indices_hold_the_last_sample_at_or_before_each_frame_time():
     times = np.arange(501) / 500.0  # 1 s at 500 Hz
     idx = frame_indices(times, 30)

@@ -37,3 +37,11 @@ def unknown_name(kind: str, name: object, valid: Iterable[Any]) -> str:
     """Message for an unknown name, listing the valid ones."""
     valid = sorted(valid)
     return f"unknown {kind} {name!r}; valid {kind}s: {', '.join(map(repr, valid))}"
+
+
+def first_few(names: Iterable[Any], n: int = 3) -> str:
+    """``"a, b, c and 7 more"``: the first ``n`` of ``names``, and how many were left out (a
+    message stays one short line however many entries are bad)."""
+    names = [str(x) for x in names]
+    head = ", ".join(names[:n])
+    return head if len(names) <= n else f"{head} and {len(names) - n} more"

@@ -133,6 +133,10 @@ def _extra_values(parser: argparse.ArgumentParser, argv: list[str] | None, rest:
     """`` (--opt takes N values)`` when the first unrecognized word is a value left over after an
     option of fixed arity (``--block-position 0 0 0 0``), else ''."""
     argv = list(sys.argv[1:] if argv is None else argv)
+    if "--" in rest and "--" in argv:  # argparse's end of options: what follows is left over
+        before = [w for w in argv[: argv.index("--")] if w.startswith("-") and not _NEGATIVE_NUMBER.match(w)]
+        after = f" after {before[-1].split('=', 1)[0]}" if before else ""
+        return f" (the bare '--'{after} ends the options, so the words after it are left over; drop it)"
     first = rest[0]
     if first.startswith("-") and not _NEGATIVE_NUMBER.match(first):
         return ""

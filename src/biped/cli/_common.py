@@ -1,4 +1,5 @@
-"""Helpers shared by the subcommands: the one rule for output folders, and range checks.
+"""Helpers shared by the subcommands: the one rule for output folders, range checks, and the
+frame bar of a video being rendered.
 
 Output folders (every command that writes a folder: push, walk, posture):
 
@@ -259,3 +260,25 @@ def command_seconds(fallback_start: float) -> float:
     except (OSError, ValueError, IndexError):
         pass
     return elapsed
+
+
+def frame_bar(**tqdm_kwargs):
+    """``(on_frame, close)``: ``on_frame(done, total)`` (the video renderer's progress) draws a tqdm
+    bar "rendering video.mp4" of ``total`` frames, made at the first report; ``close()`` ends it.
+    One bar for every command that renders a video (push, walk); ``tqdm_kwargs`` go to tqdm."""
+    state: dict = {}
+
+    def on_frame(done, total=None, *_):
+        from tqdm import tqdm
+
+        if state.get("bar") is None:
+            state["bar"] = tqdm(total=total, desc="rendering video.mp4", unit="frame", **tqdm_kwargs)
+        bar = state["bar"]
+        bar.update(max(0, int(done) - bar.n))
+
+    def close():
+        if state.get("bar") is not None:
+            state["bar"].close()
+            state["bar"] = None
+
+    return on_frame, close

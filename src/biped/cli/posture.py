@@ -31,7 +31,7 @@ def register(subparsers) -> None:
     parser = subparsers.add_parser(
         "posture",
         help="Bediz's planar postural models: pendulum, body + massless leg, gain design",
-        description=__doc__,
+        description=__doc__.replace("``", ""),  # the docstring's RST quotes read badly in a terminal
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     sub = parser.add_subparsers(dest="model", metavar="MODEL", required=True)
@@ -41,15 +41,17 @@ def register(subparsers) -> None:
                        help=f"equations to integrate (default {method})")  # fmt: skip
         p.add_argument("--integrator", default=integrator, choices=sorted(integrators.INTEGRATORS),
                        help=f"integration method (default {integrator})")  # fmt: skip
-        p.add_argument("--dt", type=float, default=dt, help=f"time step [s] (default {dt})")
-        p.add_argument("--duration", type=float, default=duration,
+        p.add_argument("--dt", type=float, default=dt, metavar="S", help=f"time step [s] (default {dt})")
+        p.add_argument("--duration", type=float, default=duration, metavar="S",
                        help=f"simulated time [s] (default {duration})")  # fmt: skip
         names = ["K", "KD"] if n_gains == 2 else ["K1", "K1D", "K2", "K2D"]
         p.add_argument("--gains", type=float, nargs=n_gains, default=list(gains), metavar=tuple(names),
                        help=f"local feedback gains (default {' '.join(f'{g:g}' for g in gains)})")  # fmt: skip
-        p.add_argument("--x0", type=float, nargs=len(x0), default=list(x0),
+        states = ("TH", "THD") if len(x0) == 2 else ("T1", "T1D", "T2", "T2D")
+        p.add_argument("--x0", type=float, nargs=len(x0), default=list(x0), metavar=states,
                        help=f"initial state [rad, rad/s] (default {' '.join(f'{v:g}' for v in x0)})")  # fmt: skip
         p.add_argument("--alpha", type=float, nargs=n_alpha, default=[0.0] * n_alpha,
+                       metavar=("A",) if n_alpha == 1 else ("A1", "A2"),
                        help="set point(s) [rad] (default 0)")  # fmt: skip
         p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                        help="model parameter override, repeatable (e.g. --param m=80)")  # fmt: skip
@@ -66,12 +68,14 @@ def register(subparsers) -> None:
             help="allow writing into a folder that already holds a run (its files are removed first)",
         )
 
-    pp = sub.add_parser("pendulum", help="single-link inverted pendulum (B Fig. 25)")
+    what = "single-link inverted pendulum (B Fig. 25)"
+    pp = sub.add_parser("pendulum", help=what, description=f"{what}; B's units: lb used as a mass, ft, s")
     common(pp, pd.PENDULUM_METHODS, "newton-euler", "euler", 0.02, 20.0, 2, runs.PENDULUM_GAINS,
            (1.0, 0.0), 1, "posture-pendulum")  # fmt: skip
     pp.set_defaults(func=run)
 
-    pb = sub.add_parser("body-leg", help="body on a massless leg (B Figs. 30, 31, 36, 37)")
+    what = "body on a massless leg (B Figs. 30, 31, 36, 37)"
+    pb = sub.add_parser("body-leg", help=what, description=f"{what}; B's units: lb used as a mass, ft, s")
     common(pb, bl.BODY_LEG_METHODS, "lagrange-linear", "heun", 0.01, 5.0, 4, runs.BODY_LEG_GAINS,
            (0.5, 0.0, 1.0, 0.0), 2, "posture-body-leg")  # fmt: skip
     pb.add_argument("--compare", action="store_true",
@@ -79,18 +83,21 @@ def register(subparsers) -> None:
                          "differences (comparison.json, comparison.png)")  # fmt: skip
     pb.set_defaults(func=run)
 
-    pg = sub.add_parser("gains", help="linear analysis, pole placement, LQR, best local gains, map")
-    pg.add_argument(
-        "--grid", type=int, default=81, help=f"stability map points per axis, 2..{MAX_GRID} (default 81)"
-    )
-    pg.add_argument("--k1-max", type=float, default=60000.0, help="map K_theta1 range end")
-    pg.add_argument("--k2-max", type=float, default=60000.0, help="map K_theta2 range end")
+    what = "linear analysis, pole placement, LQR, best local gains, map"
+    pg = sub.add_parser("gains", help=what, description=f"the body-leg model's {what}")
+    pg.add_argument("--grid", type=int, default=81, metavar="N",
+                    help=f"stability map points per axis, 2..{MAX_GRID} (default 81)")  # fmt: skip
+    pg.add_argument("--k1-max", type=float, default=60000.0, metavar="K",
+                    help="map K_theta1 range end (default 60000)")  # fmt: skip
+    pg.add_argument("--k2-max", type=float, default=60000.0, metavar="K",
+                    help="map K_theta2 range end (default 60000)")  # fmt: skip
     pg.add_argument("--rate-gains", type=float, nargs=2, default=[2500.0, 400.0],
                     metavar=("K1D", "K2D"), help="rate gains fixed on the map (default B's)")  # fmt: skip
     pg.add_argument("--poles", type=float, nargs=4, default=None, metavar="P",
                     help="real closed-loop poles for pole placement [1/s], each value at most "
                          "twice (rank of B) (default: those of the best local gains)")  # fmt: skip
-    pg.add_argument("--param", action="append", default=[], metavar="NAME=VALUE")
+    pg.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                    help="body-leg parameter override, repeatable (e.g. --param m=80)")  # fmt: skip
     pg.add_argument(
         "--out", metavar="DIR", help="output folder (default: a new runs/posture-gains-<date>-<time>)"
     )

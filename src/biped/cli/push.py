@@ -12,7 +12,7 @@ import os
 import sys
 from pathlib import Path
 
-from biped.cli._common import command_seconds, run_dir
+from biped.cli._common import command_seconds, frame_bar, run_dir
 
 
 def register(subparsers) -> None:
@@ -253,15 +253,11 @@ def _table(result, out: Path, paths: dict, times: dict | None = None) -> str:
 
 
 def _writer_progress(quiet: bool):
-    """(on_stage, on_frame, close) that tell what is being written after the simulation."""
+    """(on_stage, on_frame, close) that tell what is being written after the simulation; with
+    ``quiet``, nothing (not even the video's frame counts)."""
     if quiet:
-        return None, None, lambda: None
-    state: dict = {}
-
-    def close():
-        if state.get("bar") is not None:
-            state["bar"].close()
-            state["bar"] = None
+        return None, lambda *_: None, lambda: None
+    on_frame, close = frame_bar()
 
     def on_stage(name):
         close()
@@ -272,14 +268,6 @@ def _writer_progress(quiet: bool):
             "replay.html": "replay.html",
         }.get(name, name)
         print(f"writing {what} ...", flush=True)
-
-    def on_frame(done, total=None, *_):
-        from tqdm import tqdm
-
-        if state.get("bar") is None:
-            state["bar"] = tqdm(total=total, desc="rendering video.mp4", unit="frame")
-        bar = state["bar"]
-        bar.update(max(0, int(done) - bar.n))
 
     return on_stage, on_frame, close
 

@@ -183,7 +183,7 @@ def _run(args) -> int:
 
     from tqdm import tqdm
 
-    from biped.cli._common import command_seconds
+    from biped.cli._common import command_seconds, frame_bar
     from biped.outputs.walk import walk_stages, write_walk
     from biped.sim.mjlog import route_to
 
@@ -203,30 +203,32 @@ def _run(args) -> int:
 
     started: list[str] = []
 
+    # the video stage draws push's frame bar under the stage bar (gone when the stage ends)
+    on_frame, close_frames = (lambda *_: None, lambda: None) if args.quiet else frame_bar(leave=False)
+
     def on_stage(stage):  # the bar counts finished stages and names the running one
+        close_frames()
         if started:
             bar.update(1)
         started.append(stage)
         bar.set_postfix_str("inverse dynamics, inverse_dynamics.csv" if stage == "dynamics" else stage)
 
-    def on_frame(done, total=None, *_):  # the video stage names its frames
-        bar.set_postfix_str(
-            f"video.mp4 {int(done)}/{total} frames" if total else f"video.mp4 {int(done)} frames"
+    try:
+        walk = write_walk(
+            plan,
+            out,
+            gait=args.gait,
+            speed=args.speed,
+            rate=args.rate,
+            stair_rise=args.stair_rise,
+            stair_run=args.stair_run,
+            on_stage=on_stage,
+            model=args.model,
+            on_frame=on_frame,
+            **flags,
         )
-
-    walk = write_walk(
-        plan,
-        out,
-        gait=args.gait,
-        speed=args.speed,
-        rate=args.rate,
-        stair_rise=args.stair_rise,
-        stair_run=args.stair_run,
-        on_stage=on_stage,
-        model=args.model,
-        on_frame=on_frame,
-        **flags,
-    )
+    finally:
+        close_frames()
     bar.update(1)
     bar.close()
     metrics, idyn, summary, notes = walk.metrics, walk.idyn, walk.summary, walk.notes

@@ -7,6 +7,7 @@ body), SI units (N, N m, m/s^2, rad/s^2).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, fields
 from os import PathLike
 from typing import TYPE_CHECKING
@@ -26,7 +27,7 @@ from biped.control.recursions import (
     layout,
     unpack,
 )
-from biped.errors import BipedError, ModelError, ScenarioError, SingularityError, StateError
+from biped.errors import BipedError, ModelError, ScenarioError, SingularityError, StateError, first_few
 from biped.model import DEFAULT_FEET, TreeModel, sole_rectangles
 from biped.spatial import axis_angle_quat, rot_to_quat
 
@@ -90,10 +91,9 @@ class Target:
 
     def __post_init__(self):
         q = _vec("target quat", self.quat, 4)
-        if abs(np.linalg.norm(q) - 1.0) > 1e-6:
-            raise ScenarioError(
-                f"target quat must be a unit quaternion (w, x, y, z), norm is {np.linalg.norm(q)}"
-            )
+        norm = math.hypot(*q)  # scaled: no overflow warning for 1e308 entries (inf beyond)
+        if abs(norm - 1.0) > 1e-6:
+            raise ScenarioError(f"target quat must be a unit quaternion (w, x, y, z); its norm is {norm:.9g}")
         arr = np.concatenate(
             [
                 _vec("target com", self.com, 3),
@@ -327,7 +327,10 @@ class WorkspaceController:
         bad = [f"qpos[{i}]" for i in np.flatnonzero(~np.isfinite(qpos))]
         bad += [f"qvel[{i}]" for i in np.flatnonzero(~np.isfinite(qvel))]
         if bad:
-            raise StateError(f"non-finite state entries: {', '.join(bad)}; qpos and qvel must be finite")
+            raise StateError(
+                f"qpos and qvel must be finite; {len(bad)} "
+                f"{'entry is' if len(bad) == 1 else 'entries are'} NaN or infinite: {first_few(bad)}"
+            )
         a = self.tree.qpos_adr[0] + 3
         if not np.any(qpos[a : a + 4]):
             raise StateError(

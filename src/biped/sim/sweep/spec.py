@@ -15,7 +15,6 @@ import itertools
 import json
 import math
 import os
-import tomllib
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,7 +25,7 @@ import numpy as np
 from biped import models
 from biped.control.limits import KINDS as TORQUE_LIMIT_KINDS
 from biped.errors import ScenarioError
-from biped.sim.scenario import Scenario
+from biped.sim.scenario import Scenario, read_toml
 
 #: The swept quantities: name -> (unit, what it means).
 AXES: dict[str, str] = {
@@ -277,20 +276,7 @@ class SweepSpec:
         duration_s = 3.0
         controller = "workspace"
         """
-        path = Path(path)
-        try:
-            values = tomllib.loads(path.read_text(encoding="utf-8"))
-        except OSError as exc:
-            raise ScenarioError(f"cannot read sweep file {str(path)!r}: {exc.strerror or exc}") from None
-        except UnicodeDecodeError as exc:
-            raise ScenarioError(
-                f"sweep file {str(path)!r} is not UTF-8 text (byte "
-                f"{exc.object[exc.start]:#04x} at offset {exc.start}); TOML "
-                f"files must be UTF-8"
-            ) from None
-        except tomllib.TOMLDecodeError as exc:
-            raise ScenarioError(f"sweep file {str(path)!r} is not valid TOML: {exc}") from None
-        return cls.from_dict(values)
+        return cls.from_dict(read_toml(path, "sweep"))
 
     def with_axes(self, **axes: Any) -> SweepSpec:
         """A copy with some axes replaced."""

@@ -1,0 +1,127 @@
+"""Plain helpers that several test modules share (fixtures live in conftest.py).
+
+Import them as ``from _helpers import ...``: pytest puts this folder on ``sys.path`` (the tests are
+not a package), and so does a test's own child process that adds it.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+
+
+def read_csv(path) -> tuple[list[str], np.ndarray]:
+    """(header, (rows, columns) float array) of a CSV file; an empty cell is NaN."""
+    with open(path, newline="") as fh:
+        rows = list(csv.reader(fh))
+    return rows[0], np.array([[float(x) if x else np.nan for x in r] for r in rows[1:]], dtype=float)
+
+
+def strict_json(text: str):
+    """``json.loads`` that refuses NaN and Infinity (not JSON, though Python writes them)."""
+
+    def bad(name):
+        raise ValueError(f"non-JSON constant {name}")
+
+    return json.loads(text, parse_constant=bad)
+
+
+def one_line_error(err: str, command: str) -> str:
+    """The single line of ``err`` (stderr of ``biped COMMAND``), which must read
+    ``biped COMMAND: error: ...`` with no traceback."""
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert "Traceback" not in err
+    assert len(lines) == 1 and lines[0].startswith(f"biped {command}: error: "), err
+    return lines[0]
+
+
+# ---------------------------------------------------------------------------------------------
+# command lines of small runs
+
+
+def walk_argv(
+    out, *extra: str, gait: str = "forward", steps: int | None = 1, files: bool = False
+) -> list[str]:
+    """``biped walk`` of ``steps`` steps of ``gait`` into ``out``, quiet; ``files=False`` also
+    skips the video, replay, figures and dynamics (only trajectory.csv and summary.json)."""
+    argv = ["walk", "--gait", gait]
+    if steps is not None:
+        argv += ["--steps", str(steps)]
+    argv += [*extra, "--out", str(out), "--no-video", "--quiet"]
+    if not files:
+        argv += ["--no-replay", "--no-figures", "--no-dynamics"]
+    return argv
+
+
+def tiny_sweep_argv(out, *extra: str, direction: str = "0") -> list[str]:
+    """``biped sweep`` of joint-PD trials at 3 m/s from ``direction`` (deg), 0.02 s each, one
+    worker, quiet, into ``out``: seconds of work."""
+    return [
+        "sweep",
+        "--speed",
+        "3",
+        "--direction",
+        direction,
+        "--duration",
+        "0.02",
+        "--controller",
+        "joint-pd",
+        "--workers",
+        "1",
+        "--quiet",
+        "--out",
+        str(out),
+        *extra,
+    ]
+
+
+def toy_trial(setup) -> dict:
+    """A closed-form stand-in for a push trial (no physics): the block's momentum 1.2 m v reaches
+    the body, which falls above 4 m/s; for tests of storage, scheduling and plots."""
+    t = setup.trial
+    return {"impulse_n_s": 1.2 * t.block_mass_kg * t.speed_m_s, "completed": True, "fell": t.speed_m_s > 4}
+
+
+# ---------------------------------------------------------------------------------------------
+# headless Chromium
+
+
+def chromium() -> str:
+    """Path of a Chromium executable; skips the test where there is none."""
+    for name in ("chromium", "chromium-browser", "google-chrome"):
+        exe = shutil.which(name)
+        if exe:
+            return exe
+    pytest.skip("Debian's chromium is not installed (apt-get install chromium); CI installs it")
+
+
+def run_chromium(tmp_path, *args: str, url: str) -> str:
+    """Stdout of headless Chromium (software WebGL, an 800 x 600 window, 8 s of virtual time, a
+    fresh profile under ``tmp_path``) given ``args`` (e.g. ``--dump-dom``) and ``url``."""
+    cmd = [
+        chromium(),
+        "--headless",
+        "--no-sandbox",
+        "--disable-gpu",
+        "--use-angle=swiftshader",
+        "--enable-unsafe-swiftshader",
+        "--disable-background-networking",
+        "--disable-component-update",
+        "--disable-sync",
+        "--no-first-run",
+        "--disable-extensions",
+        f"--user-data-dir={tmp_path / 'profile'}",
+        "--window-size=800,600",
+        "--virtual-time-budget=8000",
+        "--hide-scrollbars",
+        *args,
+        url,
+    ]
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=90, check=False)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    return proc.stdout
