@@ -56,6 +56,9 @@ __all__ = ["SteppingConfig", "SteppingController"]
 
 FEET = ("left", "right")
 FOOT_BODIES = ("left_foot", "right_foot")
+#: With W's fixed support and "qp", a foot whose sole centre is this far above the floor is left
+#: out of the double-support QP [m].
+AIRBORNE_M = 0.10
 
 
 @dataclass(frozen=True)
@@ -311,10 +314,16 @@ class SteppingController:
         return self._out(tau)
 
     def _flags(self, left, right):
-        # the scenario's support (W's fixed support by default), also with "qp", where make_policy
-        # passes the sensed feet: sensed feet here made the goal push and the 18 m/s push from
-        # behind fall (docs/controller.md, "Stepping")
-        return (left, right) if self.config.support == "sensed" else None
+        # "sensed" support: the sensed feet. Otherwise (W's fixed support, also with "qp", where
+        # make_policy passes the sensed feet) both feet, except a foot whose sole centre is over
+        # 2 cm above the floor: the sensed feet made the goal push and the 18 m/s push from behind
+        # fall; both feet always made the QP load feet in the air while the biped tumbled after its
+        # last step, and MuJoCo diverged (docs/controller.md, "Stepping")
+        if self.config.support == "sensed":
+            return (left, right)
+        if self.config.distribution != "qp":
+            return None
+        return tuple(bool(f) or self._sole_pose(k)[0][2] < AIRBORNE_M for k, f in enumerate((left, right)))
 
     def _out(self, tau):
         out = np.asarray(tau)[self._order]
