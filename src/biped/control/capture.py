@@ -17,6 +17,7 @@ al. 2012). Frames: world, z up; 2-vectors are (x, y) on the floor [m], velocitie
 Support polygons are convex, counter-clockwise (p, 2) arrays; :func:`support_polygon` builds one
 from sole rectangles (:class:`biped.model.SoleRectangle` numbers) and foot poses;
 :func:`signed_distance` is > 0 outside, < 0 inside (the distance to the nearest edge line).
+:func:`min_jerk` and :func:`bump` are the swing foot's path pieces (horizontal, vertical).
 """
 
 from __future__ import annotations
@@ -31,11 +32,13 @@ from biped.errors import ScenarioError
 __all__ = [
     "CaptureTrigger",
     "StepLimits",
+    "bump",
     "capture_point",
     "clamp_step",
     "convex_hull",
     "excess",
     "lipm_state",
+    "min_jerk",
     "omega0",
     "predict_capture_point",
     "shrink_polygon",
@@ -257,3 +260,29 @@ def step_target(
     if r > 1e-9:
         xi_td = xi_td + offset_m * d / r
     return clamp_step(xi_td, stance_xy, side, limits)
+
+
+# ---------------------------------------------------------------------------------------------
+# swing path
+
+
+def min_jerk(s: float) -> tuple[float, float, float]:
+    """h(s) = 10 s^3 - 15 s^4 + 6 s^5 and its first two derivatives, s clamped to [0, 1]."""
+    if s <= 0.0:
+        return 0.0, 0.0, 0.0
+    if s >= 1.0:
+        return 1.0, 0.0, 0.0
+    return (s**3 * (10 - 15 * s + 6 * s * s), 30 * s * s * (1 - s) ** 2, 60 * s * (1 - s) * (1 - 2 * s))
+
+
+def bump(s: float) -> tuple[float, float, float]:
+    """64 s^3 (1 - s)^3 (peak 1 at s = 1/2, zero value, slope and curvature at both ends) and its
+    first two derivatives."""
+    if s <= 0.0 or s >= 1.0:
+        return 0.0, 0.0, 0.0
+    u = 1 - s
+    return (
+        64 * s**3 * u**3,
+        192 * s * s * u * u * (u - s),
+        192 * (2 * s * u**3 - 6 * s * s * u * u + 2 * s**3 * u),
+    )
