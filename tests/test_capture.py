@@ -149,10 +149,11 @@ def test_trigger_lateral_margin_fires_sideways_only():
         cp.CaptureTrigger(margin_m=0.02, lateral_margin_m=0.01)
 
 
+@pytest.mark.parametrize("lim", [cp.StepLimits(), cp.StepLimits(max_step=0.6, max_width=0.6)])
 @settings(max_examples=60, deadline=None)
-@given(st.floats(-1.5, 1.5), st.floats(-1.5, 1.5), st.sampled_from([-1.0, 1.0]))
-def test_clamped_step_respects_reach_and_no_crossover(x, y, side):
-    lim = cp.StepLimits()
+@given(x=st.floats(-1.5, 1.5), y=st.floats(-1.5, 1.5), side=st.sampled_from([-1.0, 1.0]))
+def test_clamped_step_respects_reach_and_no_crossover(x, y, side, lim):
+    """Default limits and the sideways ones (SteppingConfig.lateral_limits)."""
     stance = np.array([0.1, -0.2])
     p = cp.clamp_step(stance + [x, y], stance, side, lim)
     rel = p - stance

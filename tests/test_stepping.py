@@ -226,6 +226,9 @@ def test_sideways_push_steps_the_push_side_foot_out_and_recovers():
     assert np.linalg.norm(np.subtract(st["position_m"][:2], st["target_m"][:2])) < 0.03
     k = int(np.searchsorted(r.times, st["touch_down_s"]))
     assert st["position_m"][1] - r.feet_pos[k, 0, 1] > 0.3
+    # reach: within the sideways limit of the stance foot (foot frame vs sole centre: 7.5 cm apart)
+    rel = np.subtract(st["position_m"][:2], r.feet_pos[k, 0, :2])
+    assert np.linalg.norm(rel) < SteppingConfig().lateral_limits.max_step + 0.1
     assert _lowest_sole_z(sc, r, st) > -0.005
     assert r.recovered and r.extra["final_com_speed_m_s"] < 0.05
 
