@@ -162,7 +162,9 @@ class SteppingController:
         path = _model_path(config)
         self.model = mujoco.MjModel.from_xml_path(str(path))
         self.data = mujoco.MjData(self.model)
-        inner = replace(config, torque_limits=None)
+        # with "qp" the torque limits are the QP's constraints (as in make_policy); the swing leg's
+        # torques and the min-norm split's are clipped (_out)
+        inner = replace(config, torque_limits=config.torque_limits if config.distribution == "qp" else None)
         if config.distribution == "qp" and self.stepping.qp_moment_weight is not None:
             from biped.control.distribution import QPWeights
 
@@ -174,7 +176,7 @@ class SteppingController:
         self.ctrl = self._inner.controller
         # before the first step: the scenario's own controller (its QP weights), so that a push
         # that takes no step runs exactly as without stepping
-        plain = replace(config, torque_limits=None)
+        plain = replace(inner, qp_weights=config.qp_weights)
         self._ctrl_before = make_policy(plain, tree=tree).controller if plain != inner else self.ctrl
         names = tuple(self.ctrl.joint_names)
         self.joint_names = tuple(joint_order) if joint_order is not None else names
