@@ -163,11 +163,12 @@ def test_a_nan_state_is_one_short_line_with_the_count_and_the_first_entries(setu
     msg = str(info.value)
     n = q.size + v.size
     assert msg == (
-        f"qpos and qvel must be finite; {n} entries are NaN or infinite: qpos[0], qpos[1], qpos[2] and {n - 3} more"
+        f"qpos and qvel must be finite; {n} non-finite entries (NaN or infinite): "
+        f"qpos[0], qpos[1], qpos[2] and {n - 3} more"
     )
     q = q0.copy()
     q[9] = math.inf
-    with pytest.raises(StateError, match=r"1 entry is NaN or infinite: qpos\[9\]$"):
+    with pytest.raises(StateError, match=r"; 1 non-finite entry \(NaN or infinite\): qpos\[9\]$"):
         ctrl.compute(q, v0)
 
 

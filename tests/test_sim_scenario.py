@@ -157,3 +157,18 @@ def test_a_non_bool_stepping_is_shown_as_given(value, shown):
     with pytest.raises(ScenarioError) as err:
         Scenario.from_dict({"stepping": value})
     assert str(err.value) == f"stepping must be true or false; got {shown}"
+
+
+def test_a_huge_block_speed_is_stated_not_inf():
+    """|v| is taken with math.hypot: a 1e308 m/s block is refused as 1e+308 m/s, not inf."""
+    with pytest.raises(ScenarioError, match=r"got 1e\+308 m/s$"):
+        Scenario(block_velocity_m_s=(1e308, 1e300, 0.0))
+
+
+@pytest.mark.parametrize("bad", ["x", {"duration_s": 1.0}, 0])
+def test_simulate_refuses_what_is_not_a_scenario(bad):
+    """simulate("x") raised AttributeError ('str' object has no attribute 'model')."""
+    from biped.sim import simulate
+
+    with pytest.raises(ScenarioError, match=r"^simulate takes a biped\.sim\.Scenario"):
+        simulate(bad)

@@ -287,3 +287,20 @@ def test_any_set_and_choice_line_is_a_dry_run_or_a_one_line_error_naming_it(tmp_
     rc, last = _status(capsys, argv)
     if rc == 2:
         assert last.startswith("biped sweep: error: ") and any(w in last for w in names), (argv, last)
+
+
+@pytest.mark.parametrize(
+    ("options", "name"),
+    [
+        ([], "sweep-workspace-none.parquet"),
+        (["--distribution", "qp"], "sweep-workspace-qp-none.parquet"),
+        (["--stepping", "--distribution", "qp"], "sweep-workspace-qp-stepping-none.parquet"),
+        (["--controller", "joint-pd", "--torque-limits", "human"], "sweep-joint-pd-human.parquet"),
+    ],
+)
+def test_default_file_names_tell_stepping_sweeps_apart(tmp_path, capsys, monkeypatch, options, name):
+    """Without --out a stepping sweep went to the file of the same sweep without stepping (refused
+    as a different sweep, or replaced with --overwrite)."""
+    monkeypatch.chdir(tmp_path)
+    rc, stdout, _ = _sweep(capsys, "--speed", "3", "--direction", "0", "--dry-run", *options)
+    assert rc == 0 and stdout.rstrip().endswith(f"-> runs/{name}"), stdout

@@ -257,18 +257,8 @@ def test_walk_friction_panel_reaches_the_peak_the_summary_reports():
     idyn = SimpleNamespace(
         times=t,
         joint_names=tuple(
-            f"left_{j}"
-            for j in (
-                "hip_flexion",
-                "knee",
-                "ankle_dorsiflexion",
-                "hip_abduction",
-                "hip_rotation",
-                "ankle_inversion",
-            )
-        )
-        + tuple(
-            f"right_{j}"
+            f"{side}_{j}"
+            for side in ("left", "right")
             for j in (
                 "hip_flexion",
                 "knee",

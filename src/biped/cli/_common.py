@@ -262,6 +262,17 @@ def command_seconds(fallback_start: float) -> float:
     return elapsed
 
 
+def add_folder_options(parser, default: str = "a new one under runs/") -> None:
+    """``--out DIR`` and ``--overwrite`` of a command that writes a run folder (push, walk,
+    posture), which :func:`run_dir` then checks; ``default`` says where a run goes without --out."""
+    parser.add_argument("--out", metavar="DIR", help=f"output folder (default: {default})")
+    parser.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="allow writing into a folder that already holds a run (its files are removed first)",
+    )
+
+
 def frame_bar(**tqdm_kwargs):
     """``(on_frame, close)``: ``on_frame(done, total)`` (the video renderer's progress) draws a tqdm
     bar "rendering video.mp4" of ``total`` frames, made at the first report; ``close()`` ends it.

@@ -15,7 +15,7 @@ import dataclasses
 
 import numpy as np
 
-from biped.cli._common import check_range, run_dir
+from biped.cli._common import add_folder_options, check_range, run_dir
 from biped.errors import ScenarioError, unknown_name
 
 #: Bounds on the work one command may ask for (a run must end in minutes and fit in memory).
@@ -59,14 +59,7 @@ def register(subparsers) -> None:
                        help="re-evaluate the torques in every integrator stage "
                             "(default: held over each step, as B's code)")  # fmt: skip
         p.add_argument("--no-animation", action="store_true", help="skip the GIF")
-        p.add_argument(
-            "--out", metavar="DIR", help=f"output folder (default: a new runs/{out}-<date>-<time>)"
-        )
-        p.add_argument(
-            "--overwrite",
-            action="store_true",
-            help="allow writing into a folder that already holds a run (its files are removed first)",
-        )
+        add_folder_options(p, f"a new runs/{out}-<date>-<time>")
 
     what = "single-link inverted pendulum (B Fig. 25)"
     pp = sub.add_parser("pendulum", help=what, description=f"{what}; B's units: lb used as a mass, ft, s")
@@ -98,14 +91,7 @@ def register(subparsers) -> None:
                          "twice (rank of B) (default: those of the best local gains)")  # fmt: skip
     pg.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                     help="body-leg parameter override, repeatable (e.g. --param m=80)")  # fmt: skip
-    pg.add_argument(
-        "--out", metavar="DIR", help="output folder (default: a new runs/posture-gains-<date>-<time>)"
-    )
-    pg.add_argument(
-        "--overwrite",
-        action="store_true",
-        help="allow writing into a folder that already holds a run (its files are removed first)",
-    )
+    add_folder_options(pg, "a new runs/posture-gains-<date>-<time>")
     pg.set_defaults(func=run)
 
 

@@ -12,7 +12,7 @@ import os
 import sys
 from pathlib import Path
 
-from biped.cli._common import command_seconds, frame_bar, run_dir
+from biped.cli._common import add_folder_options, command_seconds, frame_bar, run_dir
 
 
 def register(subparsers) -> None:
@@ -79,10 +79,7 @@ def register(subparsers) -> None:
         help="any scenario key, TOML value syntax (repeatable), e.g. "
         "--set 'kp_com=[60, 60, 200]' --set target_axis='\"-x\"'",
     )
-    p.add_argument("--out", metavar="DIR", help="output folder (default: a new one under runs/)")
-    p.add_argument(
-        "--overwrite", action="store_true", help="allow writing into a folder that already holds a run"
-    )
+    add_folder_options(p)
     p.add_argument("--no-video", action="store_true", help="skip video.mp4")
     p.add_argument("--no-replay", action="store_true", help="skip replay.html")
     p.add_argument("--no-figures", action="store_true", help="skip figures/")

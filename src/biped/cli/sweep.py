@@ -106,7 +106,9 @@ def register(subparsers) -> None:
     )
     p.add_argument("--batch", type=int, default=1, metavar="N", help="trials per task (1)")
     p.add_argument(
-        "--out", metavar="FILE.parquet", help="results (default runs/sweep-<controller>-<limits>.parquet)"
+        "--out",
+        metavar="FILE.parquet",
+        help="results (default runs/sweep-<controller>[-<distribution>][-stepping]-<limits>.parquet)",
     )
     p.add_argument("--retry-failed", action="store_true", help="rerun trials that raised")
     p.add_argument(
@@ -198,10 +200,14 @@ def build_spec(args):
     )
 
 
-def _qp_suffix(base) -> str:
-    return (
+def _variant_suffix(base) -> str:
+    """What sets the default file apart beyond controller and limits: the workspace controller's
+    distribution when it is not W's, and stepping (else a stepping sweep would land on the file of
+    the same sweep without it, and be refused or, with --overwrite, replace it)."""
+    dist = (
         f"-{base.distribution}" if base.controller == "workspace" and base.distribution != "statics" else ""
     )
+    return dist + ("-stepping" if base.stepping else "")
 
 
 def _grid_file(grid) -> tuple[dict, dict]:
@@ -254,7 +260,7 @@ def _run(args) -> int:
         Path(args.out)
         if args.out
         else Path("runs")
-        / (f"sweep-{spec.base.controller}{_qp_suffix(spec.base)}-{spec.torque_limits}.parquet")
+        / (f"sweep-{spec.base.controller}{_variant_suffix(spec.base)}-{spec.torque_limits}.parquet")
     )
     n = spec.n_trials
     where = args.scheduler or f"{args.workers or 'all'} local worker(s)"

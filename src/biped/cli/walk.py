@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from biped.cli._common import check_range, run_dir
+from biped.cli._common import add_folder_options, check_range, run_dir
 from biped.errors import ScenarioError
 
 _DEFAULT_STEPS = {"forward": 6, "upstairs": 5}
@@ -83,10 +83,7 @@ def register(subparsers) -> None:
         help="the biped (MJCF with W's structure, e.g. from `biped model`): the figure "
         "takes its legs and the inverse dynamics its masses (default: W's shipped biped)",
     )
-    p.add_argument("--out", metavar="DIR", help="output folder (default: a new one under runs/)")
-    p.add_argument(
-        "--overwrite", action="store_true", help="allow writing into a folder that already holds a run"
-    )
+    add_folder_options(p)
     p.add_argument("--no-dynamics", action="store_true", help="skip the inverse dynamics")
     p.add_argument("--no-video", action="store_true", help="skip video.mp4")
     p.add_argument("--no-replay", action="store_true", help="skip replay.html")

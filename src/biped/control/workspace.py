@@ -328,8 +328,8 @@ class WorkspaceController:
         bad += [f"qvel[{i}]" for i in np.flatnonzero(~np.isfinite(qvel))]
         if bad:
             raise StateError(
-                f"qpos and qvel must be finite; {len(bad)} "
-                f"{'entry is' if len(bad) == 1 else 'entries are'} NaN or infinite: {first_few(bad)}"
+                f"qpos and qvel must be finite; {len(bad)} non-finite "
+                f"{'entry' if len(bad) == 1 else 'entries'} (NaN or infinite): {first_few(bad)}"
             )
         a = self.tree.qpos_adr[0] + 3
         if not np.any(qpos[a : a + 4]):

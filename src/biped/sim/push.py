@@ -433,7 +433,11 @@ def simulate(
 ) -> PushResult:
     """Run ``scenario`` (W's defaults if None) closed loop with its controller
     (:func:`controller_policy`) and return its :class:`PushResult`; see :func:`run_closed_loop`."""
-    scenario = scenario or Scenario()
+    scenario = Scenario() if scenario is None else scenario
+    if not isinstance(scenario, Scenario):
+        raise ScenarioError(
+            f"simulate takes a biped.sim.Scenario (or None: W's); got {type(scenario).__name__}"
+        )
     scene = scene or build_scene(scenario)
     return run_closed_loop(
         scenario, scene, controller_policy(scenario, scene), progress=progress, on_step=on_step
