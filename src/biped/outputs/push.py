@@ -303,7 +303,7 @@ def _footprints(scene: Scene, result: PushResult) -> list[dict]:
     from biped.model import sole_rectangles
 
     m = scene.model
-    soles = dict(zip(FEET, sole_rectangles(m, tuple(f"{f}_foot" for f in FEET)), strict=True))
+    soles = dict(zip(FEET, sole_rectangles(m, ("left_foot", "right_foot")), strict=True))
     d = mujoco.MjData(m)
     out = []
     for k, st in enumerate(steps):
