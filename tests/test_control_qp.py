@@ -2,7 +2,8 @@
 
 Oracles the project did not compute: the contact wrench cone against its definition (the
 nonnegative span of the sole corners' friction-pyramid edges, by scipy's NNLS); foot and body
-poses from MuJoCo; a second QP solver (quadprog beside the default daqp) and a solver-free KKT
+poses from MuJoCo; the legs' weight from MuJoCo's subtree masses and centres of mass; a second
+QP solver (quadprog beside the default daqp) and a solver-free KKT
 certificate on the same problems; the
 optimality bound of a regularised least-squares problem; MuJoCo's compiled joint damping.
 """
@@ -142,6 +143,13 @@ def ctrls(wendlandt_path):
         "statics": WorkspaceController.from_mjcf(wendlandt_path),
         "qp": WorkspaceController.from_mjcf(wendlandt_path, distribution="qp"),
         "qp_human": WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", torque_limits=HUMAN),
+        # the legs taken as massless (the cones hold the legs' shares alone: QPWeights.leg_weight 0)
+        "qp_massless": WorkspaceController.from_mjcf(
+            wendlandt_path, distribution="qp", qp_weights=QPWeights(leg_weight=0.0)
+        ),
+        "qp_human_massless": WorkspaceController.from_mjcf(
+            wendlandt_path, distribution="qp", torque_limits=HUMAN, qp_weights=QPWeights(leg_weight=0.0)
+        ),
         "qp_quadprog": WorkspaceController.from_mjcf(
             wendlandt_path, distribution="qp", torque_limits=HUMAN, qp_solver="quadprog"
         ),
@@ -149,7 +157,8 @@ def ctrls(wendlandt_path):
 
 
 def test_qp_wrenches_satisfy_every_cone_cop_and_torque_row(ctrls, wendlandt_mj, soles):
-    m, ctrl = wendlandt_mj, ctrls["qp_human"]
+    """Legs taken as massless: each leg's share, moved to its sole, lies in the sole's cone."""
+    m, ctrl = wendlandt_mj, ctrls["qp_human_massless"]
     wts = ctrl.qp.weights
     mu = wts.friction * wts.friction_scale
     lim = HUMAN.reorder(ctrl.joint_names)
@@ -195,7 +204,7 @@ def test_qp_reproduces_a_feasible_min_norm_split(ctrls, wendlandt_mj, soles):
     regularisation cost of that split (it is a feasible point of the QP): the desired wrench is
     reproduced up to the regularisation."""
     m = wendlandt_mj
-    wts = ctrls["qp"].qp.weights
+    wts = ctrls["qp_massless"].qp.weights
     mu = wts.friction * wts.friction_scale
     W = np.array([wts.force] * 3 + [wts.moment] * 3)
     reg = np.array([wts.reg_force] * 3 + [wts.reg_moment] * 3)
@@ -208,7 +217,7 @@ def test_qp_reproduces_a_feasible_min_norm_split(ctrls, wendlandt_mj, soles):
             for w, s in zip(sole_mn, soles, strict=True)
         ):
             continue
-        out = ctrls["qp"].compute(d.qpos, d.qvel)
+        out = ctrls["qp_massless"].compute(d.qpos, d.qvel)
         err = out.wrench_left + out.wrench_right - out.wrench_desired
         bound = sum(reg @ w**2 for w in sole_mn) + wts.split * (sole_mn[0][2] - sole_mn[1][2]) ** 2
         assert W @ err**2 <= bound * (1 + 1e-6) + 1e-9
@@ -267,13 +276,16 @@ def test_a_foot_in_the_air_carries_nothing(ctrls, wendlandt_mj):
 
 
 @pytest.mark.parametrize("solver", ["quadprog", "daqp"])
-def test_infeasible_qp_falls_back_without_an_exception(wendlandt_path, wendlandt_mj, solver):
-    """Limits too small for the minimum normal force: the QP is solved without it (documented)."""
+@pytest.mark.parametrize("weights", [QPWeights(leg_weight=0.0), QPWeights(min_normal_n=400.0)])
+def test_infeasible_qp_falls_back_without_an_exception(wendlandt_path, wendlandt_mj, solver, weights):
+    """Limits too small for the minimum normal force: the QP is solved without it (documented).
+    With the legs' weight in the cones the ground carries 142 N a foot at zero torque, so the
+    minimum normal force must exceed that to make the QP infeasible."""
     from biped.control.limits import TorqueLimits
 
     tiny = TorqueLimits("tiny", HUMAN.joint_names, -0.01 * np.ones(12), 0.01 * np.ones(12))
     ctrl = WorkspaceController.from_mjcf(
-        wendlandt_path, distribution="qp", torque_limits=tiny, qp_solver=solver
+        wendlandt_path, distribution="qp", torque_limits=tiny, qp_solver=solver, qp_weights=weights
     )
     d = next(_states(wendlandt_mj, 1, 6))
     tau = ctrl.compute(d.qpos, d.qvel).torques
@@ -320,6 +332,8 @@ def test_bad_qp_settings_are_one_line_errors(wendlandt_path):
         QPWeights(min_normal_n=100.0, max_normal_n=50.0)
     with pytest.raises(ScenarioError, match="distribution"):
         WorkspaceController.from_mjcf(wendlandt_path, distribution="lp")
+    with pytest.raises(ScenarioError, match="leg_weight"):
+        QPWeights(leg_weight=1.5)
 
 
 def test_joint_damping_key_reaches_the_plant():
@@ -334,6 +348,8 @@ def test_joint_damping_key_reaches_the_plant():
         Scenario(joint_damping_n_m_s=-1.0)
     with pytest.raises(ScenarioError, match="distribution"):
         Scenario(distribution="lp")
+    with pytest.raises(ScenarioError, match="qp_leg_weight"):
+        Scenario(qp_leg_weight=-0.5)
 
 
 @pytest.mark.slow
@@ -385,3 +401,54 @@ def test_unlimited_qp_torques_are_alg6_of_the_shares(ctrls, wendlandt_path, wend
             out.torques, ctrl.leg_torques(d.qpos, out.wrench_left, out.wrench_right), atol=1e-9 * scale
         )
         np.testing.assert_allclose(out.torques, ref.torques, atol=1e-6 * scale)
+
+
+def _leg_weight_mujoco(m, d, foot, sole):
+    """The ground's wrench carrying one leg's weight, in the sole frame at the sole centre, from
+    MuJoCo alone: the leg's subtree mass and centre of mass, the sole frame from MuJoCo's pose."""
+    hip = m.body(f"{foot}_hip_1").id
+    f = -m.body_subtreemass[hip] * m.opt.gravity
+    b = m.body(f"{foot}_foot").id
+    g0s = transform(d.ximat[b].reshape(3, 3), d.xipos[b]) @ sole.g_foot_sole
+    R, p = g0s[:3, :3], g0s[:3, 3]
+    return np.concatenate([R.T @ f, R.T @ np.cross(d.subtree_com[hip] - p, f)]), g0s
+
+
+def test_the_legs_weight_in_the_cones_is_mujocos(ctrls, wendlandt_mj, soles):
+    """The default QP's cones hold the ground's wrench: the leg's share plus the leg's weight.
+    That weight (ContactQP.wg) is MuJoCo's subtree mass at its subtree COM; the ground wrench
+    meets the normal-force, friction, lateral-CoP rows and the CoP row of the sole edge nearer
+    the weight line; the share alone meets the far edge's CoP row and the yaw rows (the NNLS
+    test above checks those rows against the cone's definition)."""
+    m, ctrl = wendlandt_mj, ctrls["qp_human"]
+    wts = ctrl.qp.weights
+    mu = wts.friction * wts.friction_scale
+    assert wts.leg_weight == 1.0  # the default
+    beyond_share = 0
+    for d in _states(m, 30, 11, vel=2.0):
+        out = ctrl.compute(d.qpos, d.qvel)
+        assert ctrl.qp.status == SOLVED
+        sole_w, _ = _sole_wrenches(m, d, out, soles)
+        for f, (foot, w, sole) in enumerate(zip(("left", "right"), sole_w, soles, strict=True)):
+            wg, _ = _leg_weight_mujoco(m, d, foot, sole)
+            np.testing.assert_allclose(ctrl.qp.wg[f], wg, atol=1e-9 * np.linalg.norm(wg))
+            X, Y = sole.half_length, sole.half_width
+            gw = w + wg  # the ground's wrench on the foot, quasi-static
+            tol = 1e-6 * max(1.0, np.linalg.norm(gw))
+            assert wts.min_normal_n - tol <= gw[2] <= wts.max_normal_n + tol
+            assert abs(gw[0]) <= mu * gw[2] + tol and abs(gw[1]) <= mu * gw[2] + tol
+            assert abs(gw[3]) <= Y * gw[2] + tol  # lateral CoP tx / fz inside the sole
+            x_leg = -wg[4] / wg[2]  # the weight line's x in the sole frame
+            cop_ground = -gw[4] / gw[2]
+            if x_leg < 0:  # near edge -X: the ground's CoP; far edge +X: the share's
+                assert cop_ground >= -X - tol / gw[2]
+                assert -w[4] <= X * w[2] + tol
+                beyond_share += w[4] > X * w[2] + 1e-3  # the share's CoP past the near edge
+            else:
+                assert cop_ground <= X + tol / gw[2]
+                assert w[4] <= X * w[2] + tol
+                beyond_share += -w[4] > X * w[2] + 1e-3
+            Ct, b = _rows(X, Y, mu)
+            assert np.all(Ct[10:] @ w - b[10:] >= -tol)  # yaw rows on the share
+    # some states used what the legs' weight adds: the share alone lies past the near edge
+    assert beyond_share > 0

@@ -4,6 +4,7 @@ any work: the reported cases, then hypothesis over the grid file's and the comma
 
 from __future__ import annotations
 
+import os
 import time
 
 import pytest
@@ -77,6 +78,18 @@ def test_bad_grid_files_are_one_line_errors_before_any_work(tmp_path, capsys, to
 def test_speed_zero_says_it_must_be_positive(tmp_path, capsys):
     rc, _, err = _sweep(capsys, "--speed", "0", "--out", str(tmp_path / "s.parquet"))
     assert rc == 2 and "speed_m_s" in (line := _one_line_error(err)) and "must be > 0" in line
+
+
+def test_more_workers_than_twice_the_cores_is_refused_before_any_process_starts(tmp_path, capsys):
+    # --workers 100000 used to be accepted (one process per chunk of trials, ~0.2 GB each)
+    limit = max(4, 2 * (os.cpu_count() or 1))
+    out = tmp_path / "runs" / "s.parquet"
+    rc, _, err = _sweep(capsys, *tiny_sweep_argv(out, "--workers", "100000")[1:])
+    line = _one_line_error(err)
+    assert rc == 2 and "workers" in line and f"from 1 to {limit}" in line and "100000" in line
+    assert not (tmp_path / "runs").exists()
+    rc, _, _ = _sweep(capsys, *tiny_sweep_argv(out, "--workers", str(limit), "--dry-run")[1:])
+    assert rc == 0
 
 
 def test_an_unknown_plot_type_is_refused_before_the_sweep(tmp_path, capsys):

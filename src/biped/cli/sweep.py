@@ -100,7 +100,12 @@ def register(subparsers) -> None:
         metavar="KEY=VALUE",
         help="any scenario key (TOML value syntax), repeatable",
     )
-    p.add_argument("--workers", type=int, metavar="N", help="local processes (default: all cores)")
+    p.add_argument(
+        "--workers",
+        type=int,
+        metavar="N",
+        help="local processes (default: all cores; at most twice the cores)",
+    )
     p.add_argument(
         "--scheduler", metavar="ADDRESS", help="run on a Dask cluster instead, e.g. tcp://10.0.0.5:8786"
     )

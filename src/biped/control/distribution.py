@@ -10,7 +10,8 @@ commanded torques grow without bound. ``distribution="qp"`` solves instead, at e
     subject to per foot in contact: the contact wrench cone of a rectangular sole (Caron, Pham &
                Nakamura, ICRA 2015: friction pyramid |f_x|, |f_y| <= mu f_z, centre of pressure
                inside the sole |tau_x| <= Y f_z, |tau_y| <= X f_z, and the eight yaw-moment rows),
-               f_z >= f_min;
+               f_z >= f_min; these rows hold the ground's wrench, w_foot plus the leg's own weight
+               (:mod:`biped.control.cones`: all but the far edge's CoP row and the yaw rows);
                per foot not in contact: w_foot = 0;
                with torque limits: lo <= J_leg^T F~_leg <= hi for every leg joint, linear in w
                because each leg's torques are tau_leg = J_leg^T Ad^T_{g_{sole,1}} w_foot (W Alg. 6);
@@ -28,8 +29,9 @@ dense QPs) called directly on preallocated matrices that a compiled function fil
 measured comparison (daqp about 2x faster on this problem, same solution).
 
 Failure handling (never an exception in the loop): if the QP is infeasible (the minimum normal
-force together with the torque limits cannot be met), it is solved again with ``f_min = 0``, for
-which ``w = 0`` is feasible; if that fails too (numerically), every foot wrench and torque is zero.
+force together with the torque limits cannot be met), it is solved again on the massless-leg
+cones with ``f_min = 0``, for which ``w = 0`` is feasible; if that fails too (numerically),
+every foot wrench and torque is zero.
 ``ContactQP.status`` tells which happened at the last call and ``ContactQP.fallbacks`` counts them.
 """
 
@@ -41,6 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
+from biped.control.cones import ROWS_PER_FOOT, carry_leg_weight, cone_rows, leg_weight_wrench
 from biped.control.recursions import alg6_torques
 from biped.errors import ScenarioError
 
@@ -48,8 +51,6 @@ __all__ = ["RELAXED", "SOLVED", "ZEROED", "ContactQP", "QPWeights", "cone_rows"]
 
 #: ContactQP.status values
 SOLVED, RELAXED, ZEROED = 0, 1, 2
-
-_ROWS_PER_FOOT = 18  # min and max normal force + 4 friction + 4 CoP + 8 yaw moment
 
 
 @dataclass(frozen=True)
@@ -69,6 +70,8 @@ class QPWeights:
         inscribed in the circular cone that the scene's elliptic MuJoCo contact has).
     cop_scale: the centre of pressure is kept inside the sole rectangle shrunk about its centre
         by this factor (1: the whole sole; < 1 keeps it off the edges the foot would tip about).
+    leg_weight: share in [0, 1] of each leg's weight that the cone rows add to the leg's share
+        (:func:`biped.control.cones.carry_leg_weight`; 0: the legs taken as massless).
     """
 
     force: float = 1.0
@@ -81,6 +84,7 @@ class QPWeights:
     friction: float = 0.3
     friction_scale: float = 1.0 / math.sqrt(2.0)
     cop_scale: float = 1.0
+    leg_weight: float = 1.0
     array: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
@@ -101,6 +105,9 @@ class QPWeights:
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
                 raise ScenarioError(f"QP weight {name} must be a finite number >= 0; got {v!r}")
+        lw = self.leg_weight
+        if not (isinstance(lw, (int, float)) and 0.0 <= lw <= 1.0):
+            raise ScenarioError(f"QP leg_weight must be a share of the legs' weight in [0, 1]; got {lw!r}")
         arr = np.array(
             [
                 self.force,
@@ -111,6 +118,7 @@ class QPWeights:
                 self.min_normal_n,
                 self.friction * self.friction_scale,
                 self.max_normal_n,
+                self.leg_weight,
             ],
             dtype=float,
         )
@@ -155,51 +163,6 @@ def _sole_to_body(gf, gfs, g1, A):
 
 
 @njit(cache=True)
-def cone_rows(X, Y, mu, fmin, fmax, o, Ct, b, m):
-    """Write the 18 rows ``Ct[r] . w >= b[r]`` of one rectangular sole's contact wrench cone
-    (half length X along x, half width Y along y, friction mu, normal force in [fmin, fmax]) for the
-    wrench w = x[o:o+6] = [fx, fy, fz, tx, ty, tz] from row m on; returns the next row."""
-    for r in range(m, m + _ROWS_PER_FOOT):
-        for c in range(Ct.shape[1]):
-            Ct[r, c] = 0.0
-        b[r] = 0.0
-    Ct[m, o + 2] = 1.0
-    b[m] = fmin
-    Ct[m + 1, o + 2] = -1.0
-    b[m + 1] = -fmax
-    r = m + 2
-    for s in (-1.0, 1.0):
-        Ct[r, o + 2] = mu  # mu fz + s fx >= 0
-        Ct[r, o + 0] = s
-        Ct[r + 1, o + 2] = mu  # mu fz + s fy >= 0
-        Ct[r + 1, o + 1] = s
-        Ct[r + 2, o + 2] = Y  # Y fz + s tx >= 0 (CoP_y = tx / fz)
-        Ct[r + 2, o + 3] = s
-        Ct[r + 3, o + 2] = X  # X fz + s ty >= 0 (CoP_x = -ty / fz)
-        Ct[r + 3, o + 4] = s
-        r += 4
-    k = (X + Y) * mu
-    for s1 in (-1.0, 1.0):
-        for s2 in (-1.0, 1.0):
-            # tz >= -k fz + |Y fx - mu tx| + |X fy - mu ty|
-            Ct[r, o + 5] = 1.0
-            Ct[r, o + 2] = k
-            Ct[r, o + 0] = -s1 * Y
-            Ct[r, o + 3] = s1 * mu
-            Ct[r, o + 1] = -s2 * X
-            Ct[r, o + 4] = s2 * mu
-            # tz <= k fz - |Y fx + mu tx| - |X fy + mu ty|
-            Ct[r + 1, o + 5] = -1.0
-            Ct[r + 1, o + 2] = k
-            Ct[r + 1, o + 0] = -s1 * Y
-            Ct[r + 1, o + 3] = -s1 * mu
-            Ct[r + 1, o + 1] = -s2 * X
-            Ct[r + 1, o + 4] = -s2 * mu
-            r += 2
-    return r
-
-
-@njit(cache=True)
 def qp_build(
     g,
     gl,
@@ -225,6 +188,9 @@ def qp_build(
     av,
     Ct,
     b,
+    mass,
+    grav,
+    wg,
 ):
     """Fill the QP (quadprog's form: minimize 1/2 x^T Gq x - av^T x s.t. Ct x >= b, the first
     ``meq`` rows equalities) from the kernel's poses ``g`` and joint transforms ``gl`` and the
@@ -280,7 +246,11 @@ def qp_build(
     for f in range(2):
         if contact[f] != 0:
             first[f] = m
+            m0 = m
             m = cone_rows(dims[f, 0], dims[f, 1], prm[6], prm[5], prm[7], 6 * f, Ct, b, m)
+            if prm[8] != 0.0:  # the cone holds the ground's wrench: the QP's share plus the leg's weight
+                leg_weight_wrench(g, feet[f], soles[f], leg, f, mass, grav, prm[8], wg[f])
+                carry_leg_weight(Ct, b, m0, 6 * f, wg[f])
     if nlim:
         for j in range(nj):
             side = leg[j + 1] if beyond[j + 1] == 0 else -1
@@ -378,7 +348,7 @@ class ContactQP:
                 f"QP torque limits need {nj} lower and upper bounds; got {self._lo.shape}, {self._hi.shape}"
             )
         n_lim = sum(1 for j in range(nj) if tree.leg[j + 1] >= 0 and not tree.beyond_foot[j + 1])
-        rows = 2 * _ROWS_PER_FOOT + (2 * n_lim if self.limited else 0)
+        rows = 2 * ROWS_PER_FOOT + (2 * n_lim if self.limited else 0)
         self.A = np.zeros((2, 6, 6))
         self.T = np.zeros((nj, 12))
         self._F = np.zeros((tree.n_links, 6))
@@ -389,6 +359,7 @@ class ContactQP:
         self.Ct = np.zeros((rows, 12))
         self.b = np.zeros(rows)
         self.x = np.zeros(12)
+        self.wg = np.zeros((2, 6))
         self.meq = 0
         self.rows = 0
         self.first = (-1, -1)
@@ -436,6 +407,9 @@ class ContactQP:
             self.av,
             self.Ct,
             self.b,
+            t.mass,
+            t.gravity,
+            self.wg,
         )
         self.meq, self.rows, self.first = meq, used, (f0, f1)
         self._gl = gl
@@ -462,16 +436,20 @@ class ContactQP:
             x[:] = self._solve_once()
             self.status = SOLVED
         except ValueError:
-            first = [f for f in self.first if f >= 0]
-            saved = [self.b[f] for f in first]
-            self.b[first] = 0.0
+            # relaxed: the cones of the legs' shares alone (massless legs) without a minimum
+            # normal force, for which w = 0 is feasible (the legs' weight line may leave the sole)
+            saved = self.b.copy()
+            p = self._prm
+            for f, m in enumerate(self.first):
+                if m >= 0:
+                    cone_rows(self._dims[f, 0], self._dims[f, 1], p[6], 0.0, p[7], 6 * f, self.Ct, self.b, m)
             try:
                 x[:] = self._solve_once()
                 self.status = RELAXED
             except ValueError:
                 x[:] = 0.0
                 self.status = ZEROED
-            self.b[first] = saved
+            self.b[:] = saved
             self.fallbacks[self.status] += 1
         if not math.isfinite(x.sum()):
             x[:] = 0.0

@@ -95,6 +95,7 @@ class Scenario:
     qp_moment_weight: float = 100.0  # "qp": weight of the moment rows [1/(N m)^2] (force rows: 1 /N^2)
     qp_min_normal_n: float = 10.0  # "qp": minimum normal force of a foot in contact [N]
     qp_cop_scale: float = 1.0  # "qp": the CoP stays in the sole shrunk by this factor
+    qp_leg_weight: float = 1.0  # "qp": share of the legs' weight in the cones (0 with stepping = true)
     torque_limits: Any = "none"
     friction: float = 0.3
     restitution: float = 0.2

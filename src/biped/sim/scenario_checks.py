@@ -198,6 +198,9 @@ def validate(s: Scenario, choices: Mapping[str, tuple[str, ...]]) -> None:
     c = _positive(s, "qp_cop_scale", "fraction of the sole the CoP may use, in (0, 1]")
     if c > 1:
         raise ScenarioError(f"qp_cop_scale must be in (0, 1] (fraction of the sole); got {c!r}")
+    lw = _positive(s, "qp_leg_weight", "share of the legs' weight, in [0, 1]", zero_ok=True)
+    if lw > 1:
+        raise ScenarioError(f"qp_leg_weight must be in [0, 1] (share of the legs' weight); got {lw!r}")
     _in_range("recovery_com_tol_m", _positive(s, "recovery_com_tol_m", "m"))
     _in_range("recovery_orientation_tol_deg", _positive(s, "recovery_orientation_tol_deg", "deg"))
     if not isinstance(s.seed, int) or isinstance(s.seed, bool) or not 0 <= s.seed <= MAX_SEED:

@@ -119,6 +119,13 @@ def check_scheduler(address: str, timeout_s: float = SCHEDULER_TIMEOUT_S) -> Non
         ) from None
 
 
+def max_local_workers() -> int:
+    """The most local worker processes a sweep accepts: twice the cores (at least 4). Each worker
+    is a process holding MuJoCo, numba and the compiled controller; more than the cores only
+    queues them, and an unbounded count (``--workers 100000``) would start one process per chunk."""
+    return max(4, 2 * (os.cpu_count() or 1))
+
+
 def check_run_args(
     out: str | os.PathLike, *, workers: int | None = None, batch: int = 1, scheduler: Any = None
 ) -> Path:
@@ -130,8 +137,14 @@ def check_run_args(
         raise ScenarioError(f"--out must name a .parquet file; got {str(out)!r}")
     if out.is_dir():
         raise ScenarioError(f"--out {str(out)!r} is a folder; name a .parquet file")
-    if workers is not None and (not isinstance(workers, int) or isinstance(workers, bool) or workers < 1):
-        raise ScenarioError(f"workers must be an integer >= 1; got {workers!r}")
+    limit = max_local_workers()
+    if workers is not None and (
+        not isinstance(workers, int) or isinstance(workers, bool) or not 1 <= workers <= limit
+    ):
+        raise ScenarioError(
+            f"workers must be an integer from 1 to {limit} (one process each, ~0.2 GB; this machine "
+            f"has {os.cpu_count() or 1} cores; for more use a Dask scheduler); got {workers!r}"
+        )
     if not isinstance(batch, int) or isinstance(batch, bool) or batch < 1:
         raise ScenarioError(f"batch must be an integer >= 1; got {batch!r}")
     parent = next((p for p in (out.parent, *out.parent.parents) if p.exists()), Path("."))

@@ -1,0 +1,122 @@
+"""The contact wrench cone of a rectangular sole, and the legs' weight that the ground carries too.
+
+Rows ``Ct[r] . w >= b[r]`` on a foot's ground wrench ``w = [fx, fy, fz, tx, ty, tz]`` in its sole
+frame at the sole centre (Caron, Pham & Nakamura, ICRA 2015): normal force in [fmin, fmax], the
+friction pyramid ``|fx|, |fy| <= mu fz``, the centre of pressure inside the sole ``|tx| <= Y fz``,
+``|ty| <= X fz`` and the eight yaw-moment rows.
+
+The QP's variables are the wrenches the legs pass to the central body (W Alg. 5-6), moved to the
+soles as if the legs were massless. The ground carries the legs' weight as well (14.5 kg a leg in
+W's model, 142 N, its line about 7 cm from the sole centre): quasi-statically the ground's wrench
+on a foot is the QP's share plus the leg's weight, so a cone on the share alone keeps the real
+centre of pressure well inside the sole on the side away from the leg's weight line.
+:func:`carry_leg_weight` moves the rows onto the real ground wrench (``share`` of the weight),
+except two that keep the massless-leg form, chosen by push-recovery sweeps (docs/controller.md):
+the CoP row of the sole edge FAR from the leg's weight line (with it, the real CoP reached that
+edge during a push, where the legs' inertia is not quasi-static, and the feet rocked: 0 deg
+fell from 15 to 9 m/s) and the yaw rows.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["ROWS_PER_FOOT", "carry_leg_weight", "cone_rows", "leg_weight_wrench"]
+
+ROWS_PER_FOOT = 18  # min and max normal force + 4 friction + 4 CoP + 8 yaw moment
+
+
+@njit(cache=True)
+def cone_rows(X, Y, mu, fmin, fmax, o, Ct, b, m):
+    """Write the 18 rows ``Ct[r] . w >= b[r]`` of one rectangular sole's contact wrench cone
+    (half length X along x, half width Y along y, friction mu, normal force in [fmin, fmax]) for the
+    wrench w = x[o:o+6] = [fx, fy, fz, tx, ty, tz] from row m on; returns the next row."""
+    for r in range(m, m + ROWS_PER_FOOT):
+        for c in range(Ct.shape[1]):
+            Ct[r, c] = 0.0
+        b[r] = 0.0
+    Ct[m, o + 2] = 1.0
+    b[m] = fmin
+    Ct[m + 1, o + 2] = -1.0
+    b[m + 1] = -fmax
+    r = m + 2
+    for s in (-1.0, 1.0):
+        Ct[r, o + 2] = mu  # mu fz + s fx >= 0
+        Ct[r, o + 0] = s
+        Ct[r + 1, o + 2] = mu  # mu fz + s fy >= 0
+        Ct[r + 1, o + 1] = s
+        Ct[r + 2, o + 2] = Y  # Y fz + s tx >= 0 (CoP_y = tx / fz)
+        Ct[r + 2, o + 3] = s
+        Ct[r + 3, o + 2] = X  # X fz + s ty >= 0 (CoP_x = -ty / fz)
+        Ct[r + 3, o + 4] = s
+        r += 4
+    k = (X + Y) * mu
+    for s1 in (-1.0, 1.0):
+        for s2 in (-1.0, 1.0):
+            # tz >= -k fz + |Y fx - mu tx| + |X fy - mu ty|
+            Ct[r, o + 5] = 1.0
+            Ct[r, o + 2] = k
+            Ct[r, o + 0] = -s1 * Y
+            Ct[r, o + 3] = s1 * mu
+            Ct[r, o + 1] = -s2 * X
+            Ct[r, o + 4] = s2 * mu
+            # tz <= k fz - |Y fx + mu tx| - |X fy + mu ty|
+            Ct[r + 1, o + 5] = -1.0
+            Ct[r + 1, o + 2] = k
+            Ct[r + 1, o + 0] = -s1 * Y
+            Ct[r + 1, o + 3] = -s1 * mu
+            Ct[r + 1, o + 1] = -s2 * X
+            Ct[r + 1, o + 4] = -s2 * mu
+            r += 2
+    return r
+
+
+@njit(cache=True)
+def leg_weight_wrench(g, foot, gfs, leg, side, mass, grav, share, out):
+    """out (6,) = ``share`` x the wrench [f; tau] with which the ground carries the weight of leg
+    ``side``'s links (``leg[k] == side``, the foot included), in the sole frame at the sole centre
+    (g: world poses of the link COM frames, gfs = g_{foot,sole}, grav: gravity in the world)."""
+    Rs = np.empty((3, 3))
+    ps = np.empty(3)
+    gf = g[foot]
+    for i in range(3):
+        for j in range(3):
+            Rs[i, j] = gf[i, 0] * gfs[0, j] + gf[i, 1] * gfs[1, j] + gf[i, 2] * gfs[2, j]
+        ps[i] = gf[i, 3] + gf[i, 0] * gfs[0, 3] + gf[i, 1] * gfs[1, 3] + gf[i, 2] * gfs[2, 3]
+    f = np.zeros(3)
+    t = np.zeros(3)
+    for k in range(leg.shape[0]):
+        if leg[k] != side:
+            continue
+        fk0, fk1, fk2 = -share * mass[k] * grav[0], -share * mass[k] * grav[1], -share * mass[k] * grav[2]
+        d0, d1, d2 = g[k, 0, 3] - ps[0], g[k, 1, 3] - ps[1], g[k, 2, 3] - ps[2]
+        f[0] += fk0
+        f[1] += fk1
+        f[2] += fk2
+        t[0] += d1 * fk2 - d2 * fk1
+        t[1] += d2 * fk0 - d0 * fk2
+        t[2] += d0 * fk1 - d1 * fk0
+    for i in range(3):  # world -> sole frame
+        out[i] = Rs[0, i] * f[0] + Rs[1, i] * f[1] + Rs[2, i] * f[2]
+        out[3 + i] = Rs[0, i] * t[0] + Rs[1, i] * t[1] + Rs[2, i] * t[2]
+
+
+@njit(cache=True)
+def carry_leg_weight(Ct, b, m, o, wg):
+    """Move one foot's cone rows m .. m+17 (written by :func:`cone_rows` for x[o:o+6]) onto the
+    ground's wrench ``x_f + wg``: ``Ct (x_f + wg) >= b``, i.e. ``b -= Ct wg``, on the normal-force,
+    friction and lateral CoP rows and on the CoP row of the sole edge nearer the leg's weight line
+    (the smaller shift of the two); the far edge's CoP row and the yaw rows stay as they are."""
+    corr = np.empty(ROWS_PER_FOOT)
+    for r in range(ROWS_PER_FOOT):
+        s = 0.0
+        for c in range(6):
+            s += Ct[m + r, o + c] * wg[c]
+        corr[r] = s
+    # row order of cone_rows: 0-1 normal force; for s = -1 then +1: friction x, friction y,
+    # CoP y (|tx| <= Y fz), CoP x (|ty| <= X fz) at 2-5 and 6-9; yaw moment 10-17
+    for r in (0, 1, 2, 3, 4, 6, 7, 8):
+        b[m + r] -= corr[r]
+    near = 5 if corr[5] < corr[9] else 9
+    b[m + near] -= corr[near]
