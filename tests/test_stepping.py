@@ -195,11 +195,11 @@ def _lowest_sole_z(sc, r, st):
 
 @pytest.mark.slow
 def test_push_just_beyond_the_qp_envelope_from_behind_takes_one_step():
-    """Sweep grid, from behind (180 deg): the QP feet in place holds 7 m/s and falls at 8 m/s
-    (docs/sweep.md); with stepping the 8 m/s push (16 N s) is held with exactly one step and
+    """Sweep grid, from behind (180 deg): the QP feet in place holds 9 m/s and falls at 10 m/s
+    (docs/sweep.md); with stepping the 10 m/s push (20 N s) is held with exactly one step and
     recovered, the step never below the floor, landing within 3 cm of its target."""
-    assert simulate(_sweep_scenario(8, 180)).fell
-    sc = _sweep_scenario(8, 180, "--stepping")
+    assert simulate(_sweep_scenario(10, 180)).fell
+    sc = _sweep_scenario(10, 180, "--stepping")
     r = simulate(sc)
     steps = r.extra["steps"]
     assert len(steps) == 1 and not steps[0]["sideways"], steps
@@ -236,7 +236,7 @@ def test_sideways_push_steps_the_push_side_foot_out_and_recovers():
 @pytest.mark.slow
 def test_sideways_push_inside_the_envelope_takes_no_step():
     """A sideways push well inside the QP's feet-in-place envelope (6 m/s at 90 deg, 12 N s; the
-    QP alone holds 10 m/s there, docs/sweep.md): with stepping (and its 3 cm sideways trigger
+    QP alone holds 13 m/s there, docs/sweep.md): with stepping (and its 3 cm sideways trigger
     margin) no step is taken and the run recovers."""
     r = simulate(_sweep_scenario(6, 90, "--stepping"))
     assert r.extra["steps"] == []
