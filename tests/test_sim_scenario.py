@@ -61,6 +61,16 @@ def test_bad_scenario_file_names_the_key(tmp_path, text, words):
         assert w in str(err.value), (w, str(err.value))
 
 
+def test_a_block_started_inside_the_floor_is_refused_and_one_resting_on_it_is_not():
+    # the run used to start and end 'diverged' (MuJoCo pushing the cube out of the floor)
+    with pytest.raises(
+        ScenarioError, match=r"block_position_m: the block starts 1.05e\+03 mm inside the floor"
+    ):
+        Scenario().with_overrides(block_position_m=(0.0, 0.0, -1.0))
+    resting = Scenario().with_overrides(block_position_m=(1.0, 0.0, 0.05), block_velocity_m_s=(0.0, 0.0, 0.0))
+    assert resting.block_position_m[2] == 0.05  # the cube's bottom on the floor: allowed
+
+
 def test_unknown_key_lists_every_valid_key():
     with pytest.raises(ScenarioError) as err:
         Scenario().with_overrides(mass=1)

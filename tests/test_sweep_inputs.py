@@ -92,6 +92,22 @@ def test_more_workers_than_twice_the_cores_is_refused_before_any_process_starts(
     assert rc == 0
 
 
+@pytest.mark.parametrize("option", ["--mass", "--direction", "--speed", "--duration"])
+def test_an_option_given_a_bare_double_dash_names_the_option(tmp_path, capsys, option):
+    # hypothesis found '--direction=--': argparse passed [] on and the axis parser raised AttributeError
+    rc, line = _status(capsys, ["sweep", "--dry-run", f"{option}=--", "--out", str(tmp_path / "s.parquet")])
+    assert rc == 2 and option in line and "needs a value" in line
+
+
+def test_an_aim_below_half_the_block_is_refused_before_any_trial(tmp_path, capsys):
+    # the block starts at the aim height: 0.02 m put a 10 cm cube 30 mm into the floor, and the
+    # sweep stopped at its first trial with the scenario's error
+    rc, _, err = _sweep(capsys, "--height", "0.02,1", "--out", str(tmp_path / "runs" / "s.parquet"))
+    line = _one_line_error(err)
+    assert rc == 2 and "height_m must be >= 0.05 m" in line and "got 0.02" in line
+    assert not (tmp_path / "runs").exists()
+
+
 def test_an_unknown_plot_type_is_refused_before_the_sweep(tmp_path, capsys):
     out = tmp_path / "runs" / "s.parquet"
     rc, _, err = _sweep(capsys, *tiny_sweep_argv(out, "--plot", str(tmp_path / "x.xyz"))[1:])

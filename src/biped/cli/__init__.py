@@ -77,6 +77,13 @@ def main(argv: list[str] | None = None) -> int:
 
     parser = build_parser()
     args, rest = parser.parse_known_args(argv)
+    words = list(sys.argv[1:] if argv is None else argv)
+    bare = next((w for w in words if w.startswith("-") and w.endswith("=--")), None)
+    if bare is not None:  # argparse hands '--opt=--' on as an empty list, not as the text '--'
+        sub = getattr(args, "_parser", parser)
+        sub.error(
+            f"{bare.split('=', 1)[0]} needs a value; got '--' (which argparse reads as the end of options)"
+        )
     if rest:  # said by the subcommand that got them, with its usage line
         sub = getattr(args, "_parser", parser)
         sub.error(f"unrecognized arguments: {' '.join(rest)}{_extra_values(sub, argv, rest)}")

@@ -152,6 +152,13 @@ def validate(s: Scenario, choices: Mapping[str, tuple[str, ...]]) -> None:
             f"physics step, more than half its smallest edge ({min(s.block_size_m) * 500:g} mm), so it "
             f"could pass through the body unseen; use a smaller physics_timestep_s or speed"
         )
+    bottom = s.block_position_m[2] - s.block_size_m[2] / 2
+    if bottom < 0:
+        raise ScenarioError(
+            f"block_position_m: the block starts {-bottom * 1e3:.3g} mm inside the floor (its centre at "
+            f"z = {s.block_position_m[2]:g} m, half its height {s.block_size_m[2] / 2:g} m); its z must be "
+            f">= {s.block_size_m[2] / 2:g} m"
+        )
     _in_range("joint_noise_deg", _positive(s, "joint_noise_deg", "standard deviation in deg", zero_ok=True))
     _in_range("initial_tilt_deg", _finite("initial_tilt_deg", s.initial_tilt_deg, "deg about -y"), "tilt_deg")
     _in_range(

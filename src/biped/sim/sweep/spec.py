@@ -201,6 +201,13 @@ class SweepSpec:
             for name in AXES
         )
         object.__setattr__(self, "axes", axes)
+        half = self.base.block_size_m[2] / 2
+        low = min(dict(axes)["height_m"])
+        if low < half:  # the block starts at the aim height: below half its edge it is in the floor
+            raise ScenarioError(
+                f"height_m must be >= {half:g} m (half the block's height: it starts at the aim "
+                f"height, so lower would start it inside the floor); got {low:g}"
+            )
         if self.samples is not None:
             _check_int("samples", self.samples, 1)
             if self.samples > MAX_TRIALS:
