@@ -1,14 +1,16 @@
 """Speed of W's push experiment: the closed loop against MuJoCo's own stepping of the same run.
 
 In one process and one run: the scenario (default W's) closed loop (``biped.sim.push``'s loop:
-contact monitor, controller, records, MuJoCo; the controller built outside the timer), then a
+contact monitor, controller, records, MuJoCo; the controller built outside the timer; for W's
+controller the compiled loop of ``biped.sim.fused``), the same closed loop in the Python loop
+(``compiled=False``, what it cost before the compiled loop), then a
 **physics-only** rollout of the same scene from the same initial state driven by the torques the
 closed loop recorded, two ways: ``mj_step(m, d, substeps)`` in a bare Python loop that sets
 ``ctrl`` once per control period, and ``mujoco.rollout`` (no Python at all per step). Both
 reproduce the closed loop's final state bit for bit (checked and printed), so they do exactly the
-same physics work. Also the loop itself driven by the recorded torques (:class:`RecordedTorques`:
-contact monitor, records and foot poses, no controller), which splits the difference into the
-loop's bookkeeping and the controller. The four are interleaved ``--repeat`` times; the medians of wall time and of
+same physics work. Also the Python loop driven by the recorded torques (:class:`RecordedTorques`:
+contact monitor, records and foot poses, no controller), which splits the Python loop's overhead
+into its bookkeeping and the controller. The five are interleaved ``--repeat`` times; the medians of wall time and of
 thread CPU time (less sensitive to other work on a shared machine) are printed with real-time
 factors and the ratios closed loop / physics-only. Goals: closed loop <= 1.25x the bare
 ``mj_step`` loop (``physics = "faithful"``); >= 30x real time with ``--physics fast``.
@@ -83,12 +85,17 @@ def main() -> None:
     result = run_closed_loop(scenario.with_overrides(duration_s=0.02), scene, policy)  # compile, warm caches
     rdata = mujoco.MjData(scene.model)
 
-    runs = {"closed": [], "replay": [], "loop": [], "rollout": []}
-    cpu = {"closed": [], "replay": [], "loop": [], "rollout": []}
+    run_closed_loop(scenario.with_overrides(duration_s=0.02), scene, policy, compiled=False)
+    runs = {"closed": [], "python": [], "replay": [], "loop": [], "rollout": []}
+    cpu = {k: [] for k in runs}
     for _ in range(args.repeat):
         result, w, c = _timed(lambda: run_closed_loop(scenario, scene, policy))
         runs["closed"].append(w)
         cpu["closed"].append(c)
+        py, w, c = _timed(lambda: run_closed_loop(scenario, scene, policy, compiled=False))
+        runs["python"].append(w)
+        cpu["python"].append(c)
+        assert np.array_equal(py.qpos, result.qpos) and py.events == result.events
         steps = len(result.times) - 1  # the closed loop steps after every row but the last
         tq = result.torques
         replay = RecordedTorques(tq, scenario.control_rate_hz)
@@ -129,16 +136,17 @@ def main() -> None:
         f"physics-only reproduces the closed loop's final state exactly: bare loop {same_loop}, "
         f"rollout {same_roll}"
     )
-    print(f"median of {args.repeat}      wall [ms]  x real time   thread CPU [ms]  x real time")
+    print(f"median of {args.repeat}        wall [ms]  x real time   thread CPU [ms]  x real time")
     names = {
         "closed": "closed loop",
-        "replay": "the loop, recorded torques",
+        "python": "closed loop, Python loop",
+        "replay": "Python loop, recorded torques",
         "loop": "physics only, mj_step loop",
         "rollout": "physics only, mujoco.rollout",
     }
     for k, name in names.items():
         print(
-            f"  {name:28s} {med[k] * 1e3:8.1f}  {sim_time / med[k]:8.1f}    "
+            f"  {name:30s} {med[k] * 1e3:8.1f}  {sim_time / med[k]:8.1f}    "
             f"{medc[k] * 1e3:10.1f}    {sim_time / medc[k]:8.1f}"
         )
     print(
@@ -159,9 +167,12 @@ def main() -> None:
         f"records) {(medc['closed'] - medc['loop']) / steps * 1e6:.1f} us"
     )
     print(
-        f"  of which the loop's bookkeeping (contact monitor, records, foot poses; the loop "
-        f"replaying the torques) {(medc['replay'] - medc['loop']) / steps * 1e6:.1f} us and the "
-        f"controller in the loop {(medc['closed'] - medc['replay']) / steps * 1e6:.1f} us"
+        f"  the Python loop (compiled=False, the same result bit for bit): "
+        f"{(medc['python'] - medc['loop']) / steps * 1e6:.1f} us, of which bookkeeping (contact "
+        f"monitor, records, foot poses; the loop replaying the torques) "
+        f"{(medc['replay'] - medc['loop']) / steps * 1e6:.1f} us and the controller "
+        f"{(medc['python'] - medc['replay']) / steps * 1e6:.1f} us; closed loop / Python loop "
+        f"{medc['closed'] / medc['python']:.3f}"
     )
     print(f"W (1997): 3 s in 2066 s = {3 / 2066:.4f}x real time")
 

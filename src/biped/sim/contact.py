@@ -289,6 +289,14 @@ class ContactMonitor:
     def update(self, time_s: float, data) -> bool:
         """Record the contact state at ``time_s``; returns True once the biped has fallen."""
         bits = _contact_bits(data.contact.geom, self.pair_codes) if data.ncon else 0
+        return self.record(time_s, bits, data.xipos[self._central, 2], data)
+
+    def record(self, time_s: float, bits: int, z: float, data) -> bool:
+        """:meth:`update` with the contacts already classified: ``bits`` is the OR of
+        :attr:`pair_codes` over the contacts, ``z`` the central body's COM height [m] at
+        ``time_s``; ``data`` is read only to name a lying geom. (The compiled loop of
+        :mod:`biped.sim.fused` records its bits and feeds the changes through here.)"""
+        bits = int(bits)
         changed = (bits ^ self._bits) & _SOLE_MASK
         if changed:
             if self._started:
@@ -309,9 +317,12 @@ class ContactMonitor:
             if bits & _LYING_BIT:
                 self.fall_time_s = float(time_s)
                 self.fall_reason = f"{self._lying_geom(data)} touched the floor"
-            else:
-                z = data.xipos[self._central, 2]
-                if z < self._fall_height:
-                    self.fall_time_s = float(time_s)
-                    self.fall_reason = f"central-body COM at {z:.3f} m, below {self._fall_height} m"
+            elif z < self._fall_height:
+                self.fall_time_s = float(time_s)
+                self.fall_reason = f"central-body COM at {z:.3f} m, below {self._fall_height} m"
         return self.fall_time_s is not None
+
+    @property
+    def bits(self) -> int:
+        """The last recorded OR of :attr:`pair_codes` over the contacts."""
+        return self._bits

@@ -1,7 +1,8 @@
 """First-run cost of the compiled kernels: know when numba's cache is cold, compile ahead, say so.
 
 W's controller is one numba kernel (:func:`biped.control.recursions.compute_kernel`); the contact
-monitor's classification is another (:func:`biped.sim.contact._contact_bits`). numba compiles
+monitor's classification is another (:func:`biped.sim.contact._contact_bits`), the push loop's
+hot path a third (:func:`biped.sim.fused._run_rows`, which calls the controller's). numba compiles
 them on first use (~15 s for the controller on a 2-core x86_64 machine) and keeps the machine
 code on disk (see :mod:`biped._numba_cache` for where), so every later process loads it in well
 under a second. :func:`cold_kernels` tells, before anything compiles, which kernels have no
@@ -32,6 +33,7 @@ KERNELS = {
     "controller": ("W's controller", 15),
     "qp": ("the contact QP", 5),
     "contact": ("the contact monitor", 1),
+    "loop": ("the compiled push loop", 3),
 }
 
 
@@ -40,7 +42,9 @@ def kernels_for(controller: str, distribution: str = "statics") -> tuple[str, ..
     workspace controller's ``distribution`` uses."""
     if controller != "workspace":
         return ("contact",)
-    return ("controller", "qp", "contact") if distribution == "qp" else ("controller", "contact")
+    if distribution == "qp":
+        return ("controller", "qp", "contact")
+    return ("controller", "loop", "contact")  # the loop calls the controller's kernel
 
 
 def _dispatcher(name: str):
@@ -56,6 +60,10 @@ def _dispatcher(name: str):
         from biped.control.distribution import qp_build
 
         return qp_build
+    if name == "loop":
+        from biped.sim.fused import _run_rows
+
+        return _run_rows
     raise ValueError(f"unknown kernel {name!r}; valid: {', '.join(KERNELS)}")
 
 
@@ -91,6 +99,11 @@ def _compile(name: str) -> None:
         from biped.sim.contact import compile_kernel
 
         compile_kernel()
+        return
+    if name == "loop":
+        from biped.sim.fused import compile_kernel as compile_loop
+
+        compile_loop()
         return
     import biped.models
     from biped.control import WorkspaceController

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 import time
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -36,6 +37,7 @@ from biped.control.policy import PolicyConfig, make_policy, symmetric_limits
 from biped.control.workspace import Gains, Target
 from biped.errors import BipedError, ScenarioError
 from biped.models import subject
+from biped.sim import fused as fused_mod
 from biped.sim.contact import SOLE_GEOMS, ContactMonitor
 from biped.sim.scenario import Scenario
 from biped.sim.scene import Scene, build_scene, initial_state, tilt_quat
@@ -178,13 +180,16 @@ def policy_config(
 
 class ControllerPolicy:
     """A :class:`biped.control.policy.Policy` as a loop policy (the time is not used).
-    ``policy`` is the control-level policy, ``policy.controller`` the controller object."""
+    ``policy`` is the control-level policy, ``policy.controller`` the controller object;
+    ``sensed``: whether it is given the sensed feet (None: not known, which keeps
+    :func:`run_closed_loop` on its Python loop)."""
 
-    __slots__ = ("joint_names", "policy")
+    __slots__ = ("joint_names", "policy", "sensed")
 
-    def __init__(self, policy):
+    def __init__(self, policy, *, sensed: bool | None = None):
         self.policy = policy
         self.joint_names = policy.joint_names
+        self.sensed = sensed
 
     def __call__(self, t: float, qpos: np.ndarray, qvel: np.ndarray, feet) -> np.ndarray:
         return self.policy(qpos, qvel, feet)
@@ -207,7 +212,8 @@ def controller_policy(
         return SteppingController(
             config, SteppingConfig(max_steps=scenario.max_steps), scene.joint_names, tree=tree
         )
-    return ControllerPolicy(make_policy(config, scene.joint_names, tree=tree))
+    sensed = config.support == "sensed" or config.distribution == "qp"  # as make_policy decides
+    return ControllerPolicy(make_policy(config, scene.joint_names, tree=tree), sensed=sensed)
 
 
 class RecordedTorques:
@@ -235,10 +241,15 @@ def _as_slice(index: np.ndarray):
     return index
 
 
+_KINEMATICS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def _feet_poses(scene: Scene, qpos: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(n, 2, 3) positions and (n, 2, 4) quaternions of :data:`FOOT_BODIES` (mj_kinematics)."""
     m = scene.model
-    d = mujoco.MjData(m)
+    d = _KINEMATICS.get(m)
+    if d is None:  # one MjData per model for this (a sweep calls it once a trial)
+        d = _KINEMATICS[m] = mujoco.MjData(m)
     f0, f1 = (m.body(f).id for f in FOOT_BODIES)
     n = len(qpos)
     pos = np.empty((n, 2, 3))
@@ -255,7 +266,13 @@ def _feet_poses(scene: Scene, qpos: np.ndarray) -> tuple[np.ndarray, np.ndarray]
 
 
 def run_closed_loop(
-    scenario: Scenario, scene: Scene, policy, *, progress: Callable[[float], None] | None = None, on_step=None
+    scenario: Scenario,
+    scene: Scene,
+    policy,
+    *,
+    progress: Callable[[float], None] | None = None,
+    on_step=None,
+    compiled: bool | None = None,
 ) -> PushResult:
     """Run ``policy`` (see the module docstring) on ``scene`` from ``scenario``'s initial state
     for ``scenario.duration_s`` and return the :class:`PushResult`.
@@ -265,6 +282,11 @@ def run_closed_loop(
     (``interrupted = True``); a :class:`~biped.errors.BipedError` from the policy ends it with
     ``controller_error`` set. The scenario's ``torque_limits`` are the policy's business
     (:func:`controller_policy` applies them).
+
+    ``compiled``: run the policy (:func:`controller_policy` of W's controller or the joint PD;
+    not the QP, not stepping) in :mod:`biped.sim.fused`'s compiled loop, bit for bit the same
+    result at a fraction of the Python loop's overhead. None (default): when it can (no
+    ``on_step``); False: never; True: or raise ScenarioError.
     """
     m = scene.model
     d = mujoco.MjData(m)
@@ -281,18 +303,15 @@ def run_closed_loop(
         central_body=scene.central_body,
         fall_height_m=scenario.fall_height_m,
     )
-    n_ctrl = scenario.control_steps
-    sub = scenario.control_substeps
-    period = 1.0 / scenario.control_rate_hz
+    n_ctrl, sub, period = scenario.control_steps, scenario.control_substeps, 1.0 / scenario.control_rate_hz
     n = n_ctrl + 1
-    qpos = np.zeros((n, m.nq))
-    qvel = np.zeros((n, m.nv))
-    com = np.zeros((n, 3))
-    torques = np.zeros((n, 12))
+    qpos, qvel, com, torques = np.zeros((n, m.nq)), np.zeros((n, m.nv)), np.zeros((n, 3)), np.zeros((n, 12))
     contacts = np.zeros((n, len(SOLE_GEOMS)), dtype=bool)
-    feet_pos = np.zeros((n, 2, 3))
-    feet_quat = np.zeros((n, 2, 4))
+    bits = np.zeros(n, dtype=np.int64)  # the monitor's contact bits of each row
+    feet_pos, feet_quat = np.zeros((n, 2, 3)), np.zeros((n, 2, 4))
     f0, f1 = (m.body(f).id for f in FOOT_BODIES)
+    records: dict = {"qpos": qpos, "qvel": qvel, "com": com, "torques": torques, "bits": bits}
+    records.update(feet_pos=feet_pos, feet_quat=feet_quat, feet_bodies=(f0, f1))
     feet_rows = 0  # rows whose foot poses were read in the loop
     iq, iv = _as_slice(scene.biped_qpos_index), _as_slice(scene.biped_qvel_index)
     act = scene.actuator_index
@@ -316,11 +335,36 @@ def run_closed_loop(
         policy(0.0, d.qpos[iq], d.qvel[iv], (True, True))
     except BipedError:
         pass
+    fused = None
+    if compiled is not False and on_step is None and live:
+        fused = fused_mod.fused_rows(scene, scenario, policy, m, d, monitor.pair_codes, records)
+    if compiled and fused is None:
+        raise ScenarioError(fused_mod.refusal())
+    synced = 0  # rows [0, synced) went through the monitor
+    chunk = progress_every if progress is not None else 10 * progress_every  # rows a call
     t0 = time.perf_counter()
     try:
-        for k in range(n):
+        k = 0
+        while k < n:
             t = k * period
-            if not live:
+            if fused is not None:  # rows up to the next progress report in one compiled call
+                k, why = fused.run(k, min(n, (k // chunk + 1) * chunk))
+                if why != fused_mod.PYTHON:
+                    rows = min(k + 1, n) if why != fused_mod.DONE else k
+                    feet_rows = k
+                    if why == fused_mod.DONE:
+                        if progress is not None and k % progress_every == 0:
+                            progress(k * period)
+                        continue
+                    if why == fused_mod.DIVERGED:
+                        diverged = fused_mod.diverged_message(k * period, period)
+                    break
+                fused_mod.sync_monitor(monitor, bits, com, period, synced, k, d)
+                synced = k + 1  # row k runs in Python below (the policy's error or retry)
+                t = k * period
+                if not live:
+                    q, v = dq[iq], dv[iv]
+            elif not live:
                 q, v = dq[iq], dv[iv]
             fell = monitor.update(t, d)
             feet = monitor.feet  # (left, right) on the floor
@@ -333,7 +377,7 @@ def run_closed_loop(
             qvel[k] = dv
             com[k] = xipos[cb]
             torques[k] = tau
-            contacts[k] = monitor.flags  # (left heel, left toe, right heel, right toe)
+            bits[k] = monitor.bits
             rows = k + 1
             if fell or controller_error or k == n_ctrl:
                 break
@@ -348,17 +392,18 @@ def run_closed_loop(
                 mujoco.mj_step(m, d, sub - 1)  # = mj_step(m, d, sub): MuJoCo loops the same way
             if warnings[_BADQACC]:  # MuJoCo reset the state: the integration diverged
                 feet_rows = k  # (a reset in the first step left the reset state's kinematics)
-                diverged = (
-                    f"MuJoCo's integration diverged (non-finite accelerations) between "
-                    f"t = {t:.4f} s and {t + period:.4f} s"
-                )
+                diverged = fused_mod.diverged_message(t, period)
                 break
             if on_step is not None:
                 on_step(m, d)
-            if progress is not None and (k + 1) % progress_every == 0:
-                progress((k + 1) * period)
+            k += 1
+            if progress is not None and k % progress_every == 0:
+                progress(k * period)
     except KeyboardInterrupt:
         interrupted = True
+    if fused is not None and synced < rows:
+        fused_mod.sync_monitor(monitor, bits, com, period, synced, rows, d)
+    contacts[:] = (bits[:, None] >> np.arange(len(SOLE_GEOMS))) & 1
     wall = time.perf_counter() - t0
     if progress is not None:
         progress(max(rows - 1, 0) * period)

@@ -1,0 +1,481 @@
+"""The push loop's hot path in one compiled call: contacts, W's controller, records and MuJoCo.
+
+:func:`biped.sim.push.run_closed_loop` runs W's workspace controller (min-norm or printed
+distribution) and the joint-PD baseline (without gravity compensation), clipped by torque limits
+or not (not the QP, not stepping), through :class:`FusedRows`: one numba call runs up to one
+progress interval of control periods, each doing exactly what the Python loop does, in the
+same order: classify MuJoCo's contacts (the OR of
+:attr:`~biped.sim.contact.ContactMonitor.pair_codes` over ``data.contact.geom``), call
+:func:`biped.control.recursions.compute_kernel` (or the joint PD's law) on the live qpos/qvel
+views, record the row, write ``ctrl`` and call MuJoCo's C ``mj_step`` through its function pointer (``libmujoco``'s own
+symbol, the library the Python bindings use). The events, fall and block-hit time are then
+rebuilt from the recorded contact bits by the same :class:`~biped.sim.contact.ContactMonitor`
+state machine, so a result is bit for bit the Python loop's (``tests/test_sim_fused.py``).
+Anything unusual (a controller status other than 0, the contact buffer not where it was) hands
+the row back to the Python loop, which reproduces the policy's own error or retry.
+
+Reading MuJoCo's ``mjData`` from compiled code needs two numbers the bindings do not expose:
+where ``ncon`` lives in the struct (right after the ``timer`` array, whose address the bindings
+do give) and where the contacts are (MuJoCo puts them at the start of the arena, so their address
+is fixed for an ``MjData``; the loop checks the struct's ``contact`` pointer every period).
+:func:`mjdata_layout` derives both and checks them against ``data.ncon`` / ``data.contact``; when
+a check fails (another MuJoCo layout) it returns None and the Python loop runs instead.
+
+Limits: a MuJoCo *error* (not a warning) inside ``mj_step`` cannot unwind through compiled code
+and would abort the process; for this scene MuJoCo raises none (contact and constraint overflow
+are warnings, which reach ``biped.sim.mjlog`` as before; a Python warning handler that raises
+aborts the Python loop too). Ctrl-C is seen between calls (every 0.05 s of simulated time, 0.5 s
+when the run reports no progress).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+
+import mujoco
+import numpy as np
+from numba import njit, types
+
+from biped.control.joint_pd import JointPDController
+from biped.control.recursions import compute_kernel
+from biped.control.workspace import WorkspaceController
+
+_STEP_SIG = types.void(types.uintp, types.uintp)  # mj_step(const mjModel*, mjData*)
+
+# why run_rows returned (low 3 bits of its result; the row is result >> 3)
+DONE, FELL, LAST, DIVERGED, PYTHON = 0, 1, 2, 3, 4
+
+# bits of a contact pair's code: biped.sim.contact's table (repeated to keep this kernel's
+# globals plain ints; tests/test_sim_fused.py checks they agree)
+_LYING_BIT = 1 << 5
+_LEFT_MASK = 0b0011
+_RIGHT_MASK = 0b1100
+
+# p (int params) entries
+P_SUB, P_NCTRL, P_CB, P_F0, P_F1, P_NCON, P_CPTR, P_CBASE, P_SENSED, P_BADQACC, P_NJ, P_CLIP, P_PD = range(13)
+
+_SIGNATURE = types.int64(
+    types.FunctionType(_STEP_SIG),  # mj_step
+    types.uintp,  # mjModel*
+    types.uintp,  # mjData*
+    types.int64,  # first row
+    types.int64,  # end row (exclusive)
+    types.int64[::1],  # p: int params (P_*)
+    types.float64,  # fall height [m]
+    types.int32[::1],  # the mjData struct as int32 (ncon)
+    types.uint64[::1],  # the same as uint64 (the contact pointer)
+    types.int32[:, :],  # the contacts' geom pairs (capacity, 2), a strided view of the arena
+    types.int64[:, ::1],  # pair codes (ngeom, ngeom)
+    types.float64[::1],  # d.qpos
+    types.float64[::1],  # d.qvel
+    types.float64[::1],  # the biped's qpos (a view of d.qpos)
+    types.float64[::1],  # the biped's qvel (a view of d.qvel)
+    types.float64[:, ::1],  # d.xipos
+    types.float64[:, ::1],  # d.xpos
+    types.float64[:, ::1],  # d.xquat
+    types.float64[::1],  # d.ctrl
+    types.int64[::1],  # actuator index of each joint
+    types.int32[:],  # d.warning.number
+    types.float64[::1],  # controller target
+    types.float64[::1],  # controller gains
+    types.int64[::1],  # controller contact flags (2,)
+    types.int64[::1],  # controller ints
+    types.float64[::1],  # controller model
+    types.float64[::1],  # controller work
+    types.float64[::1],  # controller out
+    types.float64[::1],  # torque lower bounds (used when p[P_CLIP])
+    types.float64[::1],  # torque upper bounds
+    types.int64[::1],  # joint PD (when p[P_PD]): qpos address of each joint in the biped's qpos
+    types.int64[::1],  # its qvel address
+    types.float64[:, ::1],  # (4, nj): qpos offset, q_ref, kp, kd
+    types.float64[:, ::1],  # records: qpos
+    types.float64[:, ::1],  # qvel
+    types.float64[:, ::1],  # com
+    types.float64[:, ::1],  # torques
+    types.int64[::1],  # contact bits
+    types.float64[:, :, ::1],  # feet positions
+    types.float64[:, :, ::1],  # feet quaternions
+)
+
+
+# fmt: off
+@njit(cache=True, nogil=False)
+def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
+    step, m, d, k0, k1, p, fall_h, s32, s64, geom, codes, dq, dv, q, v, xipos, xpos, xquat, ctrl, act,
+    warn, target, gains, contact, mi, mf, work, out, lower, upper, pd_q, pd_v, pd, rq, rv, rcom, rtau,
+    rbits, rfpos, rfquat,
+):  # the arguments of _SIGNATURE, in its order
+    # fmt: on
+    sub, n_ctrl, cb, f0, f1 = p[P_SUB], p[P_NCTRL], p[P_CB], p[P_F0], p[P_F1]
+    nj = p[P_NJ]
+    for k in range(k0, k1):
+        ncon = s32[p[P_NCON]]
+        if ncon and s64[p[P_CPTR]] != np.uint64(p[P_CBASE]):
+            return k * 8 + PYTHON  # the contacts moved: the Python loop takes over
+        bits = 0
+        for i in range(ncon):
+            bits |= codes[geom[i, 0], geom[i, 1]]
+        rbits[k] = bits
+        if p[P_SENSED]:
+            contact[0] = 1 if bits & _LEFT_MASK else 0
+            contact[1] = 1 if bits & _RIGHT_MASK else 0
+        if p[P_PD]:  # JointPDController.compute: kp (q_ref - q) - kd qd, q and qd finite
+            finite = True
+            for j in range(nj):
+                qj = q[pd_q[j]] - pd[0, j]
+                qdj = v[pd_v[j]]
+                finite = finite and np.isfinite(qj) and np.isfinite(qdj)
+                out[j] = pd[2, j] * (pd[1, j] - qj) - pd[3, j] * qdj
+            if not finite:
+                return k * 8 + PYTHON  # the policy's own error comes from Python
+        elif compute_kernel(q, v, target, gains, contact, mi, mf, work, out) != 0:
+            return k * 8 + PYTHON  # the policy's own error (or its retry) comes from Python
+        rq[k, :] = dq
+        rv[k, :] = dv
+        rcom[k, :] = xipos[cb]
+        if p[P_CLIP]:  # clip_torques: np.minimum(np.maximum(tau, lower), upper)
+            for j in range(nj):
+                rtau[k, j] = min(max(out[j], lower[j]), upper[j])
+        else:
+            for j in range(nj):
+                rtau[k, j] = out[j]
+        if bits & _LYING_BIT or xipos[cb, 2] < fall_h:
+            return k * 8 + FELL
+        if k == n_ctrl:
+            return k * 8 + LAST
+        for j in range(nj):
+            ctrl[act[j]] = rtau[k, j]
+        step(m, d)  # its forward pass computed the kinematics of row k's qpos
+        rfpos[k, 0, :] = xpos[f0]
+        rfpos[k, 1, :] = xpos[f1]
+        rfquat[k, 0, :] = xquat[f0]
+        rfquat[k, 1, :] = xquat[f1]
+        for _ in range(sub - 1):
+            step(m, d)
+        if warn[p[P_BADQACC]] != 0:
+            return k * 8 + DIVERGED
+    return k1 * 8 + DONE
+
+
+def _key_cache_by_what_it_compiles_in() -> None:
+    """numba keys a cached kernel by its own source file only, but :func:`_run_rows` compiles the
+    controller's kernel into itself: key it by those files too (recursions, statics, buffers,
+    spatial), so that an edit of the controller recompiles the loop instead of loading stale
+    code. Uses numba's cache internals (as :func:`biped.sim.jit.is_cached` does); without them,
+    numba's own key stands."""
+    import biped.control.buffers
+    import biped.control.recursions
+    import biped.control.statics
+    import biped.spatial
+
+    modules = (biped.control.recursions, biped.control.statics, biped.control.buffers, biped.spatial)
+    try:
+        cache_file = _run_rows._cache._cache_file  # type: ignore[attr-defined]
+        stats = [os.stat(str(m.__file__)) for m in modules]
+        extra = tuple((st.st_mtime, st.st_size) for st in stats)
+        cache_file._source_stamp = (cache_file._source_stamp, extra)
+    except (AttributeError, OSError, TypeError):  # pragma: no cover - another numba, or no cache
+        pass
+
+
+_key_cache_by_what_it_compiles_in()
+
+
+class _MjStep(types.WrapperAddressProtocol):
+    """MuJoCo's C ``mj_step`` as a numba first-class function (its address is an argument, so the
+    compiled loop can be cached)."""
+
+    def __init__(self):
+        lib = ctypes.CDLL(os.path.join(os.path.dirname(mujoco.__file__), _libname()))
+        self._address = ctypes.cast(lib.mj_step, ctypes.c_void_p).value
+
+    def __wrapper_address__(self):
+        return self._address
+
+    def signature(self):
+        return _STEP_SIG
+
+
+def _libname() -> str:
+    names = [f for f in os.listdir(os.path.dirname(mujoco.__file__)) if f.startswith("libmujoco.so")]
+    return sorted(names, key=len)[-1] if names else "libmujoco.so"
+
+
+_STEP: list = []
+
+
+def mj_step_function():
+    """The :class:`_MjStep` of this process (made once), or None if libmujoco cannot be found."""
+    if not _STEP:
+        try:
+            _STEP.append(_MjStep())
+        except (OSError, AttributeError):
+            _STEP.append(None)
+    return _STEP[0]
+
+
+def compile_kernel() -> None:
+    """Compile :func:`_run_rows` for its one signature (or load it from numba's cache); a no-op once
+    done, or when numba's JIT is disabled."""
+    if hasattr(_run_rows, "compile") and not _run_rows.signatures:
+        _run_rows.compile(_SIGNATURE)
+        _run_rows.disable_compile()
+
+
+_PROBE_XML = """<mujoco><worldbody><geom name="floor" type="plane" size="1 1 .1"/>
+<body pos="0 0 .05"><freejoint/><geom name="ball" size=".1"/></body></worldbody></mujoco>"""
+
+
+def _struct_views(data, size: int):
+    raw = np.ctypeslib.as_array((ctypes.c_uint8 * size).from_address(int(data._address)))
+    return raw[: size // 4 * 4].view(np.int32), raw[: size // 8 * 8].view(np.uint64)
+
+
+def _offsets():
+    """Byte offsets in ``mjData`` of ``ncon``, the ``arena`` and ``contact`` pointers, and the
+    geom pair in ``mjContact`` and its size, found on a probe (a ball resting on a plane) and
+    checked against what the bindings report; a string saying which check failed otherwise.
+
+    The struct's pointer fields come in mjdata.h's order: ``buffer``, ``arena``, then the buffer's
+    arrays from ``qpos`` on, then the arena's from ``contact`` on. A pointer equal to the
+    contacts' address before ``qpos`` is ``arena``; the last one after it is ``contact`` (an
+    empty array at the end of the buffer may point there too, before ``contact``)."""
+    m = mujoco.MjModel.from_xml_string(_PROBE_XML)
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    if d.ncon < 1:
+        return f"the probe has {d.ncon} contacts"
+    base = int(d._address)
+    timer = d.timer.duration
+    ncon_at = timer.ctypes.data - base + timer.shape[0] * timer.strides[0]
+    if ncon_at % 8:
+        return f"ncon at byte {ncon_at}, not 8-aligned"
+    s32, s64 = _struct_views(d, ncon_at + 4096)
+    if s32[ncon_at // 4] != d.ncon:
+        return f"the int after timer[] is {s32[ncon_at // 4]}, not ncon = {d.ncon}"
+    contact0 = d.contact.dist.ctypes.data  # dist is mjContact's first field
+    qpos = np.flatnonzero(s64 == np.uint64(d.qpos.ctypes.data)) * 8  # buffer (qpos first), qpos
+    at = np.flatnonzero(s64 == np.uint64(contact0)) * 8
+    if len(qpos) == 0 or not np.any(at < qpos[-1]) or not np.any(at > qpos[-1]):
+        return f"pointer fields: qpos at {qpos.tolist()}, the contacts' address at {at.tolist()}"
+    arena_at, contact_at = int(at[at < qpos[-1]][-1]), int(at[-1])
+    geom = d.contact.geom
+    return ncon_at // 4, arena_at, contact_at, geom.ctypes.data - contact0, geom.strides[0]
+
+
+_OFFSETS: list = []
+#: Why :func:`mjdata_layout` last returned None (for diagnosis), or None.
+last_failure: str | None = None
+
+
+def mjdata_layout(model, data):
+    """(int32 view of ``data``'s struct, uint64 view of it, index of the ``contact`` pointer in
+    the second, the contacts' address, (capacity, 2) int32 view of their geom pairs), or None
+    (the reason in :data:`last_failure`) when this MuJoCo's layout does not pass
+    :func:`_offsets`' checks or ``data`` disagrees with the bindings."""
+    global last_failure
+    if not _OFFSETS:
+        found = _offsets()
+        if isinstance(found, str):  # not cached: the next run probes again
+            last_failure = found
+            return None
+        _OFFSETS.append(found)
+    ncon_i, arena_at, contact_at, geom_at, stride = _OFFSETS[0]
+    s32, s64 = _struct_views(data, ncon_i * 4 + 4096)
+    if s32[ncon_i] != data.ncon:
+        last_failure = f"ncon read as {s32[ncon_i]}, the bindings say {data.ncon}"
+        return None
+    contact0 = int(s64[arena_at // 8])
+    capacity = max(1, int(model.narena) // stride)
+    arena = (ctypes.c_uint8 * (capacity * stride)).from_address(contact0)
+    geom = np.ndarray((capacity, 2), dtype=np.int32, buffer=arena, offset=geom_at, strides=(stride, 4))
+    if data.ncon and (
+        int(s64[contact_at // 8]) != contact0 or not np.array_equal(geom[: data.ncon], data.contact.geom)
+    ):
+        last_failure = "the contacts are not at the start of the arena"
+        return None
+    return s32, s64, contact_at // 8, contact0, geom
+
+
+def fused_controller(policy):
+    """(the controller behind a loop ``policy``: a
+    :class:`~biped.control.workspace.WorkspaceController` or a
+    :class:`~biped.control.joint_pd.JointPDController`; whether it takes the sensed feet; its
+    torque limits or None) if the compiled loop can run it (not the QP, not the joint PD's gravity
+    compensation); else None."""
+    sensed = getattr(policy, "sensed", None)
+    inner = getattr(policy, "policy", None)
+    ctrl = getattr(inner, "controller", None)
+    if sensed is None or inner is None:
+        return None
+    if isinstance(ctrl, WorkspaceController):
+        if ctrl.qp is not None:
+            return None
+    elif not isinstance(ctrl, JointPDController) or ctrl.gravity_compensation:
+        return None
+    if tuple(inner.joint_names) != tuple(ctrl.joint_names):
+        return None
+    limits = inner.limits  # in joint_names order (make_policy reorders them)
+    if limits is not None and tuple(limits.joint_names) != tuple(ctrl.joint_names):
+        return None
+    return ctrl, bool(sensed), limits
+
+
+__all__ = [
+    "DIVERGED",
+    "DONE",
+    "FELL",
+    "LAST",
+    "PYTHON",
+    "FusedRows",
+    "compile_kernel",
+    "diverged_message",
+    "fused_controller",
+    "fused_rows",
+    "refusal",
+    "mjdata_layout",
+    "sync_monitor",
+]
+
+
+class FusedRows:
+    """The compiled loop bound to one run's MuJoCo data, controller and record arrays
+    (see :func:`biped.sim.push.run_closed_loop`). ``run(k0, k1)`` -> (row, why)."""
+
+    def __init__(self, *, model, data, scene, scenario, controller, sensed, limits, codes, records):
+        step = mj_step_function()
+        lay = mjdata_layout(model, data) if step is not None else None
+        if lay is None:
+            why = last_failure if step is not None else "libmujoco's mj_step not found"
+            raise LookupError(f"the compiled loop cannot read this MuJoCo's data: {why}")
+        s32, s64, cptr_i, cbase, geom = lay
+        ncon_i = _OFFSETS[0][0]
+        compile_kernel()
+        iq, iv = scene.biped_qpos_index, scene.biped_qvel_index
+        nj = len(controller.joint_names)
+        p = np.zeros(13, dtype=np.int64)
+        p[P_SUB] = scenario.control_substeps
+        p[P_NCTRL] = scenario.control_steps
+        p[P_CB] = scene.central_body
+        p[P_F0], p[P_F1] = records["feet_bodies"]
+        p[P_NCON], p[P_CPTR], p[P_CBASE] = ncon_i, cptr_i, np.int64(np.uint64(cbase).view(np.int64))
+        p[P_SENSED] = 1 if sensed else 0
+        p[P_BADQACC] = int(mujoco.mjtWarning.mjWARN_BADQACC)
+        p[P_NJ] = nj
+        p[P_CLIP] = 0 if limits is None else 1
+        lower = np.full(nj, -np.inf) if limits is None else np.ascontiguousarray(limits.lower, dtype=float)
+        upper = np.full(nj, np.inf) if limits is None else np.ascontiguousarray(limits.upper, dtype=float)
+        pd_q, pd_v, pd = np.zeros(nj, dtype=np.int64), np.zeros(nj, dtype=np.int64), np.zeros((4, nj))
+        if isinstance(controller, WorkspaceController):
+            ws = controller
+        else:  # the joint PD: its own arrays; the workspace controller's are placeholders
+            p[P_PD] = 1
+            pd_q[:], pd_v[:] = controller._qadr, controller._vadr
+            pd[:] = controller._qoff, controller.q_ref, controller.gains.kp, controller.gains.kd
+            ws = WorkspaceController(controller.tree)
+        contact = ws._both.copy() if not sensed else np.ones(2, dtype=np.int64)
+        self._keep = (lay, data)  # the views point into data's memory
+        self._args = (
+            step,
+            int(model._address),
+            int(data._address),
+            p,
+            float(scenario.fall_height_m),
+            s32,
+            s64,
+            geom,
+            codes,
+            data.qpos,
+            data.qvel,
+            data.qpos[int(iq[0]) : int(iq[0]) + len(iq)],
+            data.qvel[int(iv[0]) : int(iv[0]) + len(iv)],
+            data.xipos,
+            data.xpos,
+            data.xquat,
+            data.ctrl,
+            np.ascontiguousarray(scene.actuator_index[:nj], dtype=np.int64),
+            data.warning.number,
+            np.ascontiguousarray(ws.target.array, dtype=float),
+            np.ascontiguousarray(ws.gains.array, dtype=float),
+            contact,
+            ws._mi,
+            ws._mf,
+            ws._work,
+            ws._out,
+            lower,
+            upper,
+            pd_q,
+            pd_v,
+            pd,
+        )
+        self._records = tuple(
+            records[k] for k in ("qpos", "qvel", "com", "torques", "bits", "feet_pos", "feet_quat")
+        )
+        # one call through the dispatcher checks every argument against the signature (no rows
+        # run); later calls go straight to the compiled entry point, without numba's typing of
+        # the arguments (~10 us a call instead of ~27 us)
+        a = self._args
+        _run_rows(a[0], a[1], a[2], 0, 0, *a[3:], *self._records)
+        self._call = _run_rows.overloads[_run_rows.signatures[0]].entry_point  # type: ignore[attr-defined]
+
+    def run(self, k0: int, k1: int) -> tuple[int, int]:
+        a = self._args
+        code = self._call(a[0], a[1], a[2], k0, k1, *a[3:], *self._records)
+        return code >> 3, code & 7
+
+
+def sync_monitor(monitor, bits, com, period: float, a: int, b: int, data) -> None:
+    """Feed rows [a, b) of a compiled run's contact ``bits`` to ``monitor`` (its
+    :meth:`~biped.sim.contact.ContactMonitor.record`) where they can change its state: the first
+    row, a change of bits, the last row (a fall; ``data`` then holds that row's state)."""
+    if b <= a:
+        return
+    seg = bits[a:b]
+    prev = np.empty_like(seg)
+    prev[0] = monitor.bits
+    prev[1:] = seg[:-1]
+    rows = set((np.flatnonzero(seg != prev) + a).tolist())
+    rows.add(b - 1)
+    if a == 0:
+        rows.add(0)
+    for k in sorted(rows):
+        monitor.record(k * period, int(bits[k]), com[k, 2], data)
+
+
+def fused_rows(scene, scenario, policy, model, data, codes, records) -> FusedRows | None:
+    """The :class:`FusedRows` of one run of ``policy`` (see
+    :func:`biped.sim.push.run_closed_loop`), or None if it cannot have one."""
+    found = fused_controller(policy)
+    if found is None or not hasattr(_run_rows, "compile"):  # (NUMBA_DISABLE_JIT=1: Python loop)
+        return None
+    try:
+        return FusedRows(
+            model=model,
+            data=data,
+            scene=scene,
+            scenario=scenario,
+            controller=found[0],
+            sensed=found[1],
+            limits=found[2],
+            codes=codes,
+            records=records,
+        )
+    except LookupError as exc:
+        global last_failure
+        last_failure = str(exc)
+        return None
+
+
+def refusal() -> str:
+    """The error of ``run_closed_loop(..., compiled=True)`` when the run cannot have the loop."""
+    why = f" ({last_failure})" if last_failure else ""
+    return f"this policy or run cannot use the compiled loop (compiled=True){why}"
+
+
+def diverged_message(t: float, period: float) -> str:
+    """``PushResult.diverged`` for a divergence in the control period starting at ``t`` [s]."""
+    return (
+        f"MuJoCo's integration diverged (non-finite accelerations) between "
+        f"t = {t:.4f} s and {t + period:.4f} s"
+    )

@@ -1,0 +1,182 @@
+"""The compiled push loop (biped.sim.fused) against the Python loop it replaces.
+
+The Python loop of ``run_closed_loop`` (``compiled=False``: the ContactMonitor in Python, the
+policy called through its Python wrappers, ``mujoco.mj_step`` from the bindings) is the reference:
+the compiled loop must give the same result bit for bit (every record, the events, the fall and
+its reason), on W's run, with the sensed feet and torque limits, on a fall, on sweep trials, and
+when it hands rows back to Python.
+"""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from biped.control.policy import symmetric_limits
+from biped.sim import Scenario, build_scene, contact, fused
+from biped.sim.push import RecordedTorques, controller_policy, run_closed_loop
+
+ARRAYS = ("times", "qpos", "qvel", "com", "quat", "joint_angles", "torques", "block", "contacts")
+ARRAYS += ("feet_pos", "feet_quat", "block_velocity", "block_momentum_after")
+FIELDS = ("events", "block_contact_time_s", "fell", "fall_time_s", "fall_reason", "recovered")
+FIELDS += ("controller_error", "diverged", "interrupted", "final_com_error_m")
+
+
+def both(scenario: Scenario, **policy_kw):
+    scene = build_scene(scenario)
+    a = run_closed_loop(scenario, scene, controller_policy(scenario, scene, **policy_kw), compiled=True)
+    b = run_closed_loop(scenario, scene, controller_policy(scenario, scene, **policy_kw), compiled=False)
+    return a, b
+
+
+def assert_same(a, b):
+    for name in ARRAYS:
+        x, y = getattr(a, name), getattr(b, name)
+        assert x.shape == y.shape and np.array_equal(x, y), name
+    for name in FIELDS:
+        assert getattr(a, name) == getattr(b, name), name
+
+
+def test_bits_agree_with_the_contact_monitor():
+    assert fused._LYING_BIT == contact._LYING_BIT
+    assert fused._LEFT_MASK | fused._RIGHT_MASK == contact._SOLE_MASK
+    assert all(
+        contact._FEET[b] == (bool(b & fused._LEFT_MASK), bool(b & fused._RIGHT_MASK)) for b in range(16)
+    )
+
+
+def test_cache_key_covers_the_controller_sources():
+    """The loop compiles the controller's kernel in: its cache key names those files too."""
+    import biped.control.recursions
+
+    stamp = fused._run_rows._cache._cache_file._source_stamp
+    own, extra = stamp
+    assert len(extra) == 4
+    assert extra[0][1] == __import__("os").stat(biped.control.recursions.__file__).st_size
+
+
+def test_mjdata_layout_reads_what_the_bindings_read():
+    """ncon and the contacts' geom pairs, read through the struct offsets, equal MuJoCo's own
+    ``data.ncon`` / ``data.contact.geom`` over a run with changing contacts."""
+    sc = Scenario(physics="fast", duration_s=0.3)
+    scene = build_scene(sc)
+    m, d = scene.model, mujoco.MjData(scene.model)
+    from biped.sim.scene import initial_state
+
+    d.qpos[:], d.qvel[:] = initial_state(scene, sc)
+    mujoco.mj_forward(m, d)
+    layout = fused.mjdata_layout(m, d)
+    assert layout is not None, fused.last_failure
+    s32, s64, cptr, c0, geom = layout
+    ncon_i = fused._OFFSETS[0][0]
+    seen = set()
+    for _ in range(300):
+        mujoco.mj_step(m, d, 2)
+        assert s32[ncon_i] == d.ncon
+        if d.ncon:
+            assert int(s64[cptr]) == c0
+            assert np.array_equal(geom[: d.ncon], d.contact.geom)
+        seen.add(d.ncon)
+    assert len(seen) > 2  # the contacts did change
+
+
+@pytest.mark.parametrize("physics", ["fast", "faithful"])
+def test_compiled_loop_is_the_python_loop(physics):
+    """W's run through the block hit (0.082 s) and the heel lifting: identical results."""
+    a, b = both(Scenario(physics=physics, duration_s=0.4))
+    assert a.block_contact_time_s is not None and len(a.events) > 2
+    assert_same(a, b)
+
+
+def test_sensed_feet_and_torque_limits():
+    sc = Scenario(physics="fast", duration_s=0.4, support="sensed", block_velocity_m_s=(-6.0, 0.0, 0.1))
+    a, b = both(sc, torque_limits=symmetric_limits(40.0))
+    assert np.any(np.abs(a.torques) == 40.0) and np.all(np.abs(a.torques) <= 40.0)  # clipped
+    assert_same(a, b)
+
+
+@pytest.mark.parametrize("gain_scale", [1.0, 0.3])
+def test_joint_pd(gain_scale):
+    """The joint-PD baseline (its gains scaled as a sweep does), through the block hit."""
+    sc = Scenario(physics="fast", duration_s=0.4, controller="joint-pd")
+    a, b = both(sc, gain_scale=gain_scale)
+    assert fused.fused_controller(controller_policy(sc, build_scene(sc))) is not None
+    assert a.block_contact_time_s is not None and np.abs(a.torques).max() > 1.0
+    assert_same(a, b)
+
+
+def test_a_fall_and_a_divergence():
+    """A fall (a set point 10 cm lower takes the COM under a raised fall height mid-run) and a
+    divergence (a 20 kg block at 6 m/s): the run stops at the same row with the same reason."""
+    sc = Scenario(physics="fast", duration_s=0.5, target_com_m=(-0.01, 0.0, 1.0), fall_height_m=1.02)
+    a, b = both(sc)
+    assert a.fell and "below" in a.fall_reason and 0.01 < a.fall_time_s < 0.5
+    assert_same(a, b)
+    sc = Scenario(physics="fast", duration_s=0.5, block_mass_kg=20.0, block_velocity_m_s=(-6.0, 0.0, 0.0))
+    a, b = both(sc)
+    assert a.diverged and len(a.times) < 250
+    assert_same(a, b)
+
+
+def test_rows_handed_back_to_python(monkeypatch):
+    """A contact buffer that seems to have moved sends every row with contacts to the Python
+    loop (and the rows without to the compiled one): still the same result."""
+    real = fused.mjdata_layout
+
+    def moved(model, data):
+        s32, s64, cptr, c0, geom = real(model, data)
+        return s32, s64, cptr, c0 + 8, geom
+
+    monkeypatch.setattr(fused, "mjdata_layout", moved)
+    a, b = both(Scenario(physics="fast", duration_s=0.2))
+    assert_same(a, b)
+
+
+def test_other_policies_keep_the_python_loop():
+    sc = Scenario(physics="fast", duration_s=0.02)
+    scene = build_scene(sc)
+    from biped.errors import ScenarioError
+
+    with pytest.raises(ScenarioError, match="compiled loop"):
+        run_closed_loop(sc, scene, RecordedTorques(np.zeros((11, 12)), 500.0), compiled=True)
+    qp = sc.with_overrides(distribution="qp")
+    assert fused.fused_controller(controller_policy(qp, build_scene(qp))) is None
+
+
+def test_sweep_rows_unchanged(monkeypatch):
+    """Sweep trials (``run_trial``: the sweep's scene cache, its policy, its measurements) give
+    the same rows with the compiled loop as with the Python loop."""
+    from biped.sim.sweep import SweepSpec, hold_scenario
+    from biped.sim.sweep.trial import run_trial
+
+    base = hold_scenario(Scenario(physics="fast")).with_overrides(duration_s=0.4)
+    spec = SweepSpec(axes={"speed_m_s": (3.0, 6.0), "direction_deg": (0.0, 90.0, 180.0)}, base=base)
+    pd = SweepSpec(
+        axes={"speed_m_s": 5.0, "direction_deg": (0.0, 90.0)}, base=base.with_overrides(controller="joint-pd")
+    )
+    setups = [spec.setup(t) for t in spec.trials()] + [pd.setup(t) for t in pd.trials()]
+    made = []
+    real = fused.fused_rows
+    monkeypatch.setattr(fused, "fused_rows", lambda *a, **k: made.append(real(*a, **k)) or made[-1])
+    compiled = [run_trial(s) for s in setups]
+    assert len(made) == 8 and all(f is not None for f in made)  # the trials ran compiled
+    monkeypatch.setattr(fused, "fused_rows", lambda *a, **k: None)
+    python = [run_trial(s) for s in setups]
+    assert len(compiled) == 8
+    for a, b in zip(compiled, python, strict=True):
+        assert a.keys() == b.keys()
+        for key in a:
+            same = a[key] == b[key] or (a[key] != a[key] and b[key] != b[key])  # NaN == NaN
+            assert same, (key, a[key], b[key])
+
+
+@pytest.mark.slow
+def test_w_full_run_and_a_sweep_are_unchanged():
+    """W's 3 s run (faithful) and a few sweep trials (fast): the compiled loop's results and
+    events are those of the Python loop."""
+    a, b = both(Scenario())
+    assert_same(a, b)
+    for velocity in ((-3.0, 1.0, 0.3), (-5.0, -2.0, 0.2), (2.0, 0.5, 0.4)):
+        a, b = both(Scenario(physics="fast", block_velocity_m_s=velocity))
+        assert_same(a, b)
