@@ -128,10 +128,32 @@ def test_trigger_hysteresis():
     assert not trig.update(poly, (0.2, 0.0))
 
 
+def test_trigger_lateral_margin_fires_sideways_only():
+    """Two 0.24 x 0.092 m soles 0.168 m apart (y extent +-0.13 m): with lateral_margin 3 cm, xi
+    2 cm inside the side fires, 2 cm inside the front edge does not (the x margin stays 0); the
+    excess of a point is its distance to the polygon's y-extent (here against the plain bounds)."""
+    poly = cp.support_polygon([((0.0, -0.084), 0.0, 0.12, 0.046), ((0.0, 0.084), 0.0, 0.12, 0.046)])
+    ymax = poly[:, 1].max()
+    assert ymax == pytest.approx(0.13)
+    for y in (0.11, -0.11, 0.3):
+        assert cp.excess(poly, (0.0, y))[1] == pytest.approx(abs(y) - 0.13)
+    side = cp.CaptureTrigger(margin_m=0.0, rearm_margin_m=0.02, hold=2, lateral_margin_m=0.03)
+    front = cp.CaptureTrigger(margin_m=0.0, rearm_margin_m=0.02, hold=2, lateral_margin_m=0.03)
+    assert not side.update(poly, (0.0, 0.11)) and side.update(poly, (0.0, 0.11))
+    assert not front.update(poly, (-0.10, 0.0)) and not front.update(poly, (-0.10, 0.0))
+    # re-arms only 2 cm inside the shrunk side: y < 0.13 - 0.03 - 0.02
+    assert not side.update(poly, (0.0, 0.09)) and not side.armed
+    side.update(poly, (0.0, 0.07))
+    assert side.armed
+    with pytest.raises(ScenarioError, match="lateral_margin_m"):
+        cp.CaptureTrigger(margin_m=0.02, lateral_margin_m=0.01)
+
+
+@pytest.mark.parametrize("lim", [cp.StepLimits(), cp.StepLimits(max_step=0.6, max_width=0.6)])
 @settings(max_examples=60, deadline=None)
-@given(st.floats(-1.5, 1.5), st.floats(-1.5, 1.5), st.sampled_from([-1.0, 1.0]))
-def test_clamped_step_respects_reach_and_no_crossover(x, y, side):
-    lim = cp.StepLimits()
+@given(x=st.floats(-1.5, 1.5), y=st.floats(-1.5, 1.5), side=st.sampled_from([-1.0, 1.0]))
+def test_clamped_step_respects_reach_and_no_crossover(x, y, side, lim):
+    """Default limits and the sideways ones (SteppingConfig.lateral_limits)."""
     stance = np.array([0.1, -0.2])
     p = cp.clamp_step(stance + [x, y], stance, side, lim)
     rel = p - stance

@@ -157,3 +157,87 @@ def test_push_beyond_feet_in_place_recovers_with_a_step():
         assert st["touch_down_s"] > st["lift_off_s"]
         assert st["position_m"][2] < 0.07
         t = st["touch_down_s"]
+
+
+def _sweep_scenario(speed, direction, *flags):
+    """The scenario of one `biped sweep --distribution qp` trial (hold task, 1.8 kg block aimed at
+    1.2 m from 0.5 m away, fast physics, 3 s)."""
+    from biped.cli import build_parser
+    from biped.cli.sweep import build_spec
+
+    args = ["sweep", "--speed", str(speed), "--direction", str(direction), "--distribution", "qp", *flags]
+    spec = build_spec(build_parser().parse_args(args))
+    return spec.scenario(spec.trials()[0])
+
+
+def _lowest_sole_z(sc, r, st):
+    """The lowest sole-box corner [m] of the step's foot between lift-off and touchdown (MuJoCo
+    kinematics of the recorded states)."""
+    import mujoco
+
+    from biped.sim.scene import build_scene
+
+    m = build_scene(sc).model
+    d = mujoco.MjData(m)
+    geoms = [m.geom(f"{st['foot']}_{p}").id for p in ("heel", "toe")]
+    signs = np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)])
+    k0 = int(np.searchsorted(r.times, st["lift_off_s"]))
+    k1 = int(np.searchsorted(r.times, st["touch_down_s"]))
+    lowest = np.inf
+    for k in range(k0, k1 + 1):
+        d.qpos[:] = r.qpos[k]
+        mujoco.mj_kinematics(m, d)
+        for g in geoms:
+            corners = d.geom_xpos[g] + (signs * m.geom_size[g]) @ d.geom_xmat[g].reshape(3, 3).T
+            lowest = min(lowest, corners[:, 2].min())
+    return lowest
+
+
+@pytest.mark.slow
+def test_push_just_beyond_the_qp_envelope_from_behind_takes_one_step():
+    """Sweep grid, from behind (180 deg): the QP feet in place holds 9 m/s and falls at 10 m/s
+    (docs/sweep.md); with stepping the 10 m/s push (20 N s) is held with exactly one step and
+    recovered, the step never below the floor, landing within 3 cm of its target."""
+    assert simulate(_sweep_scenario(10, 180)).fell
+    sc = _sweep_scenario(10, 180, "--stepping")
+    r = simulate(sc)
+    steps = r.extra["steps"]
+    assert len(steps) == 1 and not steps[0]["sideways"], steps
+    assert r.recovered and r.extra["final_com_speed_m_s"] < 0.05
+    st = steps[0]
+    assert np.linalg.norm(np.subtract(st["position_m"][:2], st["target_m"][:2])) < 0.03
+    assert _lowest_sole_z(sc, r, st) > -0.005
+
+
+@pytest.mark.slow
+def test_sideways_push_steps_the_push_side_foot_out_and_recovers():
+    """Sweep grid, travel +y (90 deg, the block hits the left side): the QP feet in place falls at
+    14 m/s (27 N s, 81 % of Hof's 33.2 N s); with stepping the right (push-side) foot steps out
+    sideways once, lands within 3 cm of its target and more than 0.3 m from the left foot's
+    sole centre (beyond the 0.22 m limit of a forward step), never below the floor, and the run
+    recovers."""
+    assert simulate(_sweep_scenario(14, 90)).fell
+    sc = _sweep_scenario(14, 90, "--stepping")
+    r = simulate(sc)
+    steps = r.extra["steps"]
+    assert len(steps) == 1, steps
+    st = steps[0]
+    assert st["foot"] == "right" and st["sideways"]
+    assert np.linalg.norm(np.subtract(st["position_m"][:2], st["target_m"][:2])) < 0.03
+    k = int(np.searchsorted(r.times, st["touch_down_s"]))
+    assert st["position_m"][1] - r.feet_pos[k, 0, 1] > 0.3
+    # reach: within the sideways limit of the stance foot (foot frame vs sole centre: 7.5 cm apart)
+    rel = np.subtract(st["position_m"][:2], r.feet_pos[k, 0, :2])
+    assert np.linalg.norm(rel) < SteppingConfig().lateral_limits.max_step + 0.1
+    assert _lowest_sole_z(sc, r, st) > -0.005
+    assert r.recovered and r.extra["final_com_speed_m_s"] < 0.05
+
+
+@pytest.mark.slow
+def test_sideways_push_inside_the_envelope_takes_no_step():
+    """A sideways push well inside the QP's feet-in-place envelope (6 m/s at 90 deg, 12 N s; the
+    QP alone holds 13 m/s there, docs/sweep.md): with stepping (and its 3 cm sideways trigger
+    margin) no step is taken and the run recovers."""
+    r = simulate(_sweep_scenario(6, 90, "--stepping"))
+    assert r.extra["steps"] == []
+    assert r.recovered and r.extra["final_com_speed_m_s"] < 0.05

@@ -17,6 +17,7 @@ al. 2012). Frames: world, z up; 2-vectors are (x, y) on the floor [m], velocitie
 Support polygons are convex, counter-clockwise (p, 2) arrays; :func:`support_polygon` builds one
 from sole rectangles (:class:`biped.model.SoleRectangle` numbers) and foot poses;
 :func:`signed_distance` is > 0 outside, < 0 inside (the distance to the nearest edge line).
+:func:`min_jerk` and :func:`bump` are the swing foot's path pieces (horizontal, vertical).
 """
 
 from __future__ import annotations
@@ -31,10 +32,13 @@ from biped.errors import ScenarioError
 __all__ = [
     "CaptureTrigger",
     "StepLimits",
+    "bump",
     "capture_point",
     "clamp_step",
     "convex_hull",
+    "excess",
     "lipm_state",
+    "min_jerk",
     "omega0",
     "predict_capture_point",
     "shrink_polygon",
@@ -159,28 +163,48 @@ def shrink_polygon(poly, margin: float) -> np.ndarray:
 class CaptureTrigger:
     """Step trigger with hysteresis: fires once the capture point has stayed outside the support
     polygon shrunk by ``margin_m`` for ``hold`` consecutive calls; re-arms only after it has
-    come back inside the polygon shrunk by ``rearm_margin_m`` (> margin_m)."""
+    come back inside the polygon shrunk by ``rearm_margin_m`` (> margin_m).
 
-    def __init__(self, margin_m: float = 0.0, rearm_margin_m: float = 0.02, hold: int = 3):
+    ``lateral_margin_m`` (>= margin_m) shrinks the polygon's extent along world y (the biped's
+    sideways axis) further: sideways the feet-in-place strategy holds the capture point just
+    inside the polygon's edge while the trunk rolls over, so waiting for xi to cross the edge
+    steps too late (:func:`excess` is the test). Re-arming asks for the same extra inside."""
+
+    def __init__(
+        self, margin_m: float = 0.0, rearm_margin_m: float = 0.02, hold: int = 3, lateral_margin_m=None
+    ):
         if rearm_margin_m < margin_m:
             raise ScenarioError(f"rearm_margin_m ({rearm_margin_m}) must be >= margin_m ({margin_m})")
+        lateral = margin_m if lateral_margin_m is None else float(lateral_margin_m)
+        if lateral < margin_m:
+            raise ScenarioError(f"lateral_margin_m ({lateral}) must be >= margin_m ({margin_m})")
         self.margin_m, self.rearm_margin_m, self.hold = margin_m, rearm_margin_m, int(hold)
+        self.lateral_margin_m = lateral
         self.armed = True
         self._count = 0
 
     def update(self, poly, xi) -> bool:
-        d = signed_distance(poly, xi)
+        ex, ey = excess(poly, xi)
+        d = max(ex + self.margin_m, ey + self.lateral_margin_m)  # > 0: outside the shrunk polygon
         if not self.armed:
-            if d < -self.rearm_margin_m:
+            if d < -(self.rearm_margin_m - self.margin_m):
                 self.armed = True
             self._count = 0
             return False
-        self._count = self._count + 1 if d > -self.margin_m else 0
+        self._count = self._count + 1 if d > 0 else 0
         if self._count >= self.hold:
             self.armed = False
             self._count = 0
             return True
         return False
+
+
+def excess(poly, xi) -> tuple[float, float]:
+    """(signed distance of xi to the polygon (:func:`signed_distance`), signed distance of xi's
+    y to the polygon's y-extent [ymin, ymax]) [m]: > 0 outside, < 0 inside."""
+    poly = np.asarray(poly, dtype=float)
+    y = float(np.asarray(xi, dtype=float)[1])
+    return signed_distance(poly, xi), max(y - float(poly[:, 1].max()), float(poly[:, 1].min()) - y)
 
 
 @dataclass(frozen=True)
@@ -236,3 +260,29 @@ def step_target(
     if r > 1e-9:
         xi_td = xi_td + offset_m * d / r
     return clamp_step(xi_td, stance_xy, side, limits)
+
+
+# ---------------------------------------------------------------------------------------------
+# swing path
+
+
+def min_jerk(s: float) -> tuple[float, float, float]:
+    """h(s) = 10 s^3 - 15 s^4 + 6 s^5 and its first two derivatives, s clamped to [0, 1]."""
+    if s <= 0.0:
+        return 0.0, 0.0, 0.0
+    if s >= 1.0:
+        return 1.0, 0.0, 0.0
+    return (s**3 * (10 - 15 * s + 6 * s * s), 30 * s * s * (1 - s) ** 2, 60 * s * (1 - s) * (1 - 2 * s))
+
+
+def bump(s: float) -> tuple[float, float, float]:
+    """64 s^3 (1 - s)^3 (peak 1 at s = 1/2, zero value, slope and curvature at both ends) and its
+    first two derivatives."""
+    if s <= 0.0 or s >= 1.0:
+        return 0.0, 0.0, 0.0
+    u = 1 - s
+    return (
+        64 * s**3 * u**3,
+        192 * s * s * u * u * (u - s),
+        192 * (2 * s * u**3 - 6 * s * s * u * u + 2 * s**3 * u),
+    )

@@ -56,6 +56,9 @@ __all__ = ["SteppingConfig", "SteppingController"]
 
 FEET = ("left", "right")
 FOOT_BODIES = ("left_foot", "right_foot")
+#: With W's fixed support and "qp", a foot whose sole centre is this far above the floor is left
+#: out of the double-support QP [m].
+AIRBORNE_M = 0.10
 
 
 @dataclass(frozen=True)
@@ -84,6 +87,15 @@ class SteppingConfig:
     swing_height_drop_m, swing_tilt_deg: while a foot swings the stance leg holds the body this
     much lower than the set point (reach) and upright but for this tilt about -y (the set point's
     forward tilt moves the hips back, away from a forward step).
+    lateral_margin_m: the trigger's extra margin along y (sideways: the feet-in-place strategy
+    holds xi just inside the polygon's side while the trunk rolls over; waiting steps too late).
+    lateral_offset_m, lateral_swing_time_s, lateral_limits: a *sideways step* (xi further out of
+    the polygon's y-extent than out of its x-extent when the step starts) lands this far beyond
+    the predicted capture point, swings this fast, within these limits (the LIPM capture point
+    of the whole-body COM ignores the trunk's roll from a hit 1.2 m up: a 3 cm offset and the
+    0.22 m width limit left the foot short and the biped fell over it). Sideways the swing foot is
+    always the push-side one (the other, unloaded as the body rolls, could only step inward: no
+    crossover).
     """
 
     max_steps: int = 3
@@ -112,6 +124,11 @@ class SteppingConfig:
     post_step_height_drop_m: float = 0.08
     swing_tilt_deg: float = 0.0
     limits: cp.StepLimits = field(default_factory=cp.StepLimits)
+    lateral_margin_m: float = 0.03
+    lateral_offset_m: float = 0.15
+    lateral_swing_time_s: float = 0.2
+    lateral_rot_gain_scale: float = 4.0
+    lateral_limits: cp.StepLimits = field(default_factory=lambda: cp.StepLimits(max_step=0.6, max_width=0.6))
 
     def __post_init__(self):
         if not (isinstance(self.max_steps, int) and self.max_steps >= 0):
@@ -120,26 +137,9 @@ class SteppingConfig:
             raise ScenarioError(f"swing_time_s must be > 0 s; got {self.swing_time_s!r}")
 
 
-def _min_jerk(s: float) -> tuple[float, float, float]:
-    """h(s) = 10 s^3 - 15 s^4 + 6 s^5 and its first two derivatives, s clamped to [0, 1]."""
-    if s <= 0.0:
-        return 0.0, 0.0, 0.0
-    if s >= 1.0:
-        return 1.0, 0.0, 0.0
-    return (s**3 * (10 - 15 * s + 6 * s * s), 30 * s * s * (1 - s) ** 2, 60 * s * (1 - s) * (1 - 2 * s))
-
-
-def _bump(s: float) -> tuple[float, float, float]:
-    """64 s^3 (1 - s)^3 (peak 1 at s = 1/2, zero value, slope and curvature at both ends) and its
-    first two derivatives."""
-    if s <= 0.0 or s >= 1.0:
-        return 0.0, 0.0, 0.0
-    u = 1 - s
-    return (
-        64 * s**3 * u**3,
-        192 * s * s * u * u * (u - s),
-        192 * (2 * s * u**3 - 6 * s * s * u * u + 2 * s**3 * u),
-    )
+# the swing path's pieces (pure functions in capture.py; the old names kept for the tests)
+_min_jerk = cp.min_jerk
+_bump = cp.bump
 
 
 class SteppingController:
@@ -162,7 +162,9 @@ class SteppingController:
         path = _model_path(config)
         self.model = mujoco.MjModel.from_xml_path(str(path))
         self.data = mujoco.MjData(self.model)
-        inner = replace(config, torque_limits=None)
+        # with "qp" the torque limits are the QP's constraints (as in make_policy); the swing leg's
+        # torques and the min-norm split's are clipped (_out)
+        inner = replace(config, torque_limits=config.torque_limits if config.distribution == "qp" else None)
         if config.distribution == "qp" and self.stepping.qp_moment_weight is not None:
             from biped.control.distribution import QPWeights
 
@@ -172,6 +174,10 @@ class SteppingController:
             )
         self._inner = make_policy(inner, tree=tree)
         self.ctrl = self._inner.controller
+        # before the first step: the scenario's own controller (its QP weights), so that a push
+        # that takes no step runs exactly as without stepping
+        plain = replace(inner, qp_weights=config.qp_weights)
+        self._ctrl_before = make_policy(plain, tree=tree).controller if plain != inner else self.ctrl
         names = tuple(self.ctrl.joint_names)
         self.joint_names = tuple(joint_order) if joint_order is not None else names
         if sorted(self.joint_names) != sorted(names):
@@ -206,19 +212,26 @@ class SteppingController:
         self._gravity = float(-m.opt.gravity[2])
         self.base_target: Target = config.target
         self.gains: Gains = config.gains
-        k = self.stepping.swing_rot_gain_scale
-        self._swing_gains = Gains(
-            kp_com=(0.0, 0.0, self.gains.kp_com[2]),
-            kv_com=(0.0, 0.0, self.gains.kv_com[2]),
-            kp_rot=tuple(k * x for x in self.gains.kp_rot),
-            kv_rot=tuple(math.sqrt(k) * x for x in self.gains.kv_rot),
-        )
+        self._gains_by_mode = {
+            lateral: Gains(
+                kp_com=(0.0, 0.0, self.gains.kp_com[2]),
+                kv_com=(0.0, 0.0, self.gains.kv_com[2]),
+                kp_rot=tuple(k * x for x in self.gains.kp_rot),
+                kv_rot=tuple(math.sqrt(k) * x for x in self.gains.kv_rot),
+            )
+            for lateral, k in (
+                (False, self.stepping.swing_rot_gain_scale),
+                (True, self.stepping.lateral_rot_gain_scale),
+            )
+        }
+        self._swing_gains = self._gains_by_mode[False]
         self.reset()
 
     # ------------------------------------------------------------------ state
     def reset(self) -> None:
         s = self.stepping
-        self.trigger = cp.CaptureTrigger(s.margin_m, s.rearm_margin_m, s.hold)
+        self.trigger = cp.CaptureTrigger(s.margin_m, s.rearm_margin_m, s.hold, s.lateral_margin_m)
+        self._T, self._offset, self._limits = s.swing_time_s, s.offset_m, s.limits
         self.phase = "double"
         self.target = self.base_target
         self.steps: list[dict] = []
@@ -227,6 +240,7 @@ class SteppingController:
         self._t_start = 0.0
         self._p0: np.ndarray | None = None
         self._landing: np.ndarray | None = None
+        self._stance0 = np.zeros(2)  # the stance sole centre when the step started
         self._last_td = -1e9
         self.last_capture_point: np.ndarray | None = None
 
@@ -278,13 +292,23 @@ class SteppingController:
             self._start_step(t, xi, (left, right))
         if self.phase == "swing":
             return self._swing_call(t, qpos, qvel, xi, omega, (left, right))
-        tau = self.ctrl.torques(
+        ctrl = self.ctrl if self.steps else self._ctrl_before
+        tau = ctrl.torques(
             qpos, qvel, target=self.target, gains=self.gains, feet_in_contact=self._flags(left, right)
         )
         return self._out(tau)
 
     def _flags(self, left, right):
-        return (left, right) if self.config.support == "sensed" else None
+        # "sensed" support: the sensed feet. Otherwise (W's fixed support, also with "qp", where
+        # make_policy passes the sensed feet) both feet, except a foot whose sole centre is over
+        # 2 cm above the floor: the sensed feet made the goal push and the 18 m/s push from behind
+        # fall; both feet always made the QP load feet in the air while the biped tumbled after its
+        # last step, and MuJoCo diverged (docs/controller.md, "Stepping")
+        if self.config.support == "sensed":
+            return (left, right)
+        if self.config.distribution != "qp":
+            return None
+        return tuple(bool(f) or self._sole_pose(k)[0][2] < AIRBORNE_M for k, f in enumerate((left, right)))
 
     def _out(self, tau):
         out = np.asarray(tau)[self._order]
@@ -293,9 +317,19 @@ class SteppingController:
         return out
 
     def _start_step(self, t, xi, feet):
+        s = self.stepping
+        poly = self._polygon(feet)
+        ex = max(xi[0] - poly[:, 0].max(), poly[:, 0].min() - xi[0])
+        ey = max(xi[1] - poly[:, 1].max(), poly[:, 1].min() - xi[1])
+        lateral = ey > ex
+        if lateral:
+            self._T, self._offset, self._limits = s.lateral_swing_time_s, s.lateral_offset_m, s.lateral_limits
+        else:
+            self._T, self._offset, self._limits = s.swing_time_s, s.offset_m, s.limits
+        self._swing_gains = self._gains_by_mode[lateral]
         if self.steps:  # later steps alternate feet
             swing = 1 - FEET.index(self.steps[-1]["foot"])
-        elif feet[0] != feet[1]:
+        elif feet[0] != feet[1] and not lateral:
             swing = 0 if not feet[0] else 1
         else:
             dy = [abs(self._sole_pose(i)[0][1] - xi[1]) for i in (0, 1)]
@@ -304,11 +338,14 @@ class SteppingController:
         self.phase = "swing"
         self._t_start = t
         self._p0 = self.data.xpos[self._foot[swing]].copy()
+        self._stance0 = self._sole_pose(1 - swing)[0][:2].copy()
         self._landing = None
         self.steps.append(
             {
                 "foot": FEET[swing],
                 "start_s": t,
+                "sideways": bool(lateral),
+                "stance_slip_m": None,
                 "lift_off_s": None,
                 "touch_down_s": None,
                 "position_m": None,
@@ -325,7 +362,7 @@ class SteppingController:
         el = t - self._t_start
         if step["lift_off_s"] is None and not feet[i]:
             step["lift_off_s"] = t
-        if feet[i] and el > 0.5 * s.swing_time_s:  # touchdown
+        if feet[i] and el > 0.5 * self._T:  # touchdown
             return self._touch_down(t, qpos, qvel, feet)
         stance_c, yaw = self._sole_pose(st)
         # the stance CoP: the point of the stance sole nearest the COM (the QP pushes it there)
@@ -335,16 +372,16 @@ class SteppingController:
         loc = np.clip(loc, [-self._sole[st][1], -self._sole[st][2]], [self._sole[st][1], self._sole[st][2]])
         cop = stance_c[:2] + np.array([c * loc[0] - sn * loc[1], sn * loc[0] + c * loc[1]])
         side = 1.0 if i == 1 else -1.0
-        if self._landing is None or el < s.retarget_until * s.swing_time_s:
+        if self._landing is None or el < s.retarget_until * self._T:
             self._landing = cp.step_target(
-                xi, cop, omega, s.swing_time_s - el, stance_c[:2], side, s.offset_m, s.limits
+                xi, cop, omega, self._T - el, stance_c[:2], side, self._offset, self._limits
             )
         land = self._landing
         step["target_m"] = [float(land[0]), float(land[1]), 0.0]
         # ankle path: the sole centre lands on `land`, flat, zero yaw
         sole_off = self._sole[i][0]
         ankle_land = np.array([land[0] - sole_off[0], land[1] - sole_off[1], -sole_off[2]])
-        T = s.swing_time_s
+        T = self._T
         sc = el / T
         h, hd, hdd = _min_jerk(sc)
         b, bd, bdd = _bump(sc)
@@ -427,6 +464,9 @@ class SteppingController:
         c, _ = self._sole_pose(i)
         step["touch_down_s"] = t
         step["position_m"] = [float(x) for x in c]
+        # how far the stance sole slid while the foot swung (the swing leg's reaction is not in
+        # the stance QP's model: W treats the free leg as passive)
+        step["stance_slip_m"] = float(np.linalg.norm(self._sole_pose(1 - i)[0][:2] - self._stance0))
         if step["lift_off_s"] is None:
             step["lift_off_s"] = step["start_s"]
         mid = 0.5 * (self._sole_pose(0)[0] + self._sole_pose(1)[0])
@@ -445,9 +485,8 @@ class SteppingController:
         self.phase = "double"
         self.swing = None
         self._last_td = t
-        self.trigger = cp.CaptureTrigger(
-            self.stepping.margin_m, self.stepping.rearm_margin_m, self.stepping.hold
-        )
+        s = self.stepping
+        self.trigger = cp.CaptureTrigger(s.margin_m, s.rearm_margin_m, s.hold, s.lateral_margin_m)
         tau = self.ctrl.torques(
             qpos, qvel, target=self.target, gains=self.gains, feet_in_contact=self._flags(*feet)
         )

@@ -23,6 +23,7 @@ from biped.sim.contact import SOLE_GEOMS
 from biped.sim.measure import FEET, RowMeasurements, block_separation, foot_drift, measure_rows
 from biped.sim.push import PushResult, orientation_error_deg
 from biped.sim.scene import Scene, build_scene, tilt_quat
+from biped.viz.footprints import with_footprints
 from biped.viz.push_figures import plot_push
 from biped.viz.push_video import render_push_video
 from biped.viz.replay import replay_from_mujoco, write_replay
@@ -291,6 +292,39 @@ def _markers(result: PushResult) -> list[dict]:
     return out
 
 
+def _footprints(scene: Scene, result: PushResult) -> list[dict]:
+    """One footprint per landed step (stepping runs): the sole rectangle (MJCF sole boxes) at the
+    recorded touchdown position, turned by the foot's yaw in the frame nearest the touchdown."""
+    steps = [s for s in result.extra.get("steps", ()) if s.get("touch_down_s") is not None]
+    if not steps or not len(result.times):
+        return []
+    import mujoco
+
+    from biped.model import sole_rectangles
+
+    m = scene.model
+    soles = dict(zip(FEET, sole_rectangles(m, ("left_foot", "right_foot")), strict=True))
+    d = mujoco.MjData(m)
+    out = []
+    for k, st in enumerate(steps):
+        i = int(np.argmin(np.abs(result.times - st["touch_down_s"])))
+        d.qpos[:] = result.qpos[i]
+        mujoco.mj_kinematics(m, d)
+        R = d.xmat[m.body(f"{st['foot']}_foot").id].reshape(3, 3)
+        sole = soles[st["foot"]]
+        out.append(
+            {
+                "time_s": st["touch_down_s"],
+                "centre_m": st["position_m"][:2],
+                "yaw_rad": math.atan2(R[1, 0], R[0, 0]),
+                "half_length_m": sole.half_length,
+                "half_width_m": sole.half_width,
+                "name": f"footprint {k + 1} ({st['foot']})",
+            }
+        )
+    return out
+
+
 def _render_video(scene: Scene, result: PushResult, path: Path, on_frame):
     """:func:`render_push_video` of the run (slow motion around the hit), reporting frames through
     ``on_frame(done, total)``."""
@@ -385,6 +419,7 @@ def write_outputs(
                 markers=_markers(result),
                 follow="trunk",
             )
+            rp = with_footprints(rp, _footprints(scene, result))
             written["replay"] = write_replay(rp, out / "replay.html") or out / "replay.html"
         except Exception as exc:  # noqa: BLE001
             log(f"replay: not written ({type(exc).__name__}: {exc})")
