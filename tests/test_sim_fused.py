@@ -16,7 +16,7 @@ import pytest
 from biped.control import distribution
 from biped.control.limits import torque_limits
 from biped.control.policy import symmetric_limits
-from biped.sim import Scenario, build_scene, contact, fused
+from biped.sim import Scenario, build_scene, contact, fused, mjdata
 from biped.sim.push import RecordedTorques, controller_policy, run_closed_loop
 
 ARRAYS = ("times", "qpos", "qvel", "com", "quat", "joint_angles", "torques", "block", "contacts")
@@ -69,9 +69,9 @@ def test_mjdata_layout_reads_what_the_bindings_read():
     d.qpos[:], d.qvel[:] = initial_state(scene, sc)
     mujoco.mj_forward(m, d)
     layout = fused.mjdata_layout(m, d)
-    assert layout is not None, fused.last_failure
+    assert layout is not None, mjdata.last_failure
     s32, s64, cptr, c0, geom = layout
-    ncon_i = fused._OFFSETS[0][0]
+    ncon_i = mjdata._OFFSETS[0][0]
     seen = set()
     for _ in range(300):
         mujoco.mj_step(m, d, 2)

@@ -30,7 +30,6 @@ when the run reports no progress).
 
 from __future__ import annotations
 
-import ctypes
 import os
 
 import mujoco
@@ -42,9 +41,9 @@ from biped.control.distribution import qp_build, qp_finish
 from biped.control.joint_pd import JointPDController
 from biped.control.recursions import compute_kernel
 from biped.control.workspace import WorkspaceController
+from biped.sim import mjdata
 from biped.sim.fused_qp import QP_TYPES, call_solve, qp_arguments, register_qp
-
-_STEP_SIG = types.void(types.uintp, types.uintp)  # mj_step(const mjModel*, mjData*)
+from biped.sim.mjdata import STEP_SIG, mj_step_function, mjdata_layout
 
 # why run_rows returned (low 3 bits of its result; the row is result >> 3)
 DONE, FELL, LAST, DIVERGED, PYTHON = 0, 1, 2, 3, 4
@@ -61,7 +60,7 @@ P_QP, P_NLIM, P_SLOT = range(13, 16)  # the QP distribution: on, with torque-lim
 _NP = 16
 
 _SIGNATURE = types.int64(
-    types.FunctionType(_STEP_SIG),  # mj_step
+    types.FunctionType(STEP_SIG),  # mj_step
     types.uintp,  # mjModel*
     types.uintp,  # mjData*
     types.int64,  # first row
@@ -213,37 +212,8 @@ def _key_cache_by_what_it_compiles_in() -> None:
 _key_cache_by_what_it_compiles_in()
 
 
-class _MjStep(types.WrapperAddressProtocol):
-    """MuJoCo's C ``mj_step`` as a numba first-class function (its address is an argument, so the
-    compiled loop can be cached)."""
-
-    def __init__(self):
-        lib = ctypes.CDLL(os.path.join(os.path.dirname(mujoco.__file__), _libname()))
-        self._address = ctypes.cast(lib.mj_step, ctypes.c_void_p).value
-
-    def __wrapper_address__(self):
-        return self._address
-
-    def signature(self):
-        return _STEP_SIG
-
-
-def _libname() -> str:
-    names = [f for f in os.listdir(os.path.dirname(mujoco.__file__)) if f.startswith("libmujoco.so")]
-    return sorted(names, key=len)[-1] if names else "libmujoco.so"
-
-
-_STEP: list = []
-
-
-def mj_step_function():
-    """The :class:`_MjStep` of this process (made once), or None if libmujoco cannot be found."""
-    if not _STEP:
-        try:
-            _STEP.append(_MjStep())
-        except (OSError, AttributeError):
-            _STEP.append(None)
-    return _STEP[0]
+#: Why the compiled loop was last refused for a run (for :func:`refusal`), or None.
+last_failure: str | None = None
 
 
 def compile_kernel() -> None:
@@ -252,81 +222,6 @@ def compile_kernel() -> None:
     if hasattr(_run_rows, "compile") and not _run_rows.signatures:
         _run_rows.compile(_SIGNATURE)
         _run_rows.disable_compile()
-
-
-_PROBE_XML = """<mujoco><worldbody><geom name="floor" type="plane" size="1 1 .1"/>
-<body pos="0 0 .05"><freejoint/><geom name="ball" size=".1"/></body></worldbody></mujoco>"""
-
-
-def _struct_views(data, size: int):
-    raw = np.ctypeslib.as_array((ctypes.c_uint8 * size).from_address(int(data._address)))
-    return raw[: size // 4 * 4].view(np.int32), raw[: size // 8 * 8].view(np.uint64)
-
-
-def _offsets():
-    """Byte offsets in ``mjData`` of ``ncon``, the ``arena`` and ``contact`` pointers, and the
-    geom pair in ``mjContact`` and its size, found on a probe (a ball resting on a plane) and
-    checked against what the bindings report; a string saying which check failed otherwise.
-
-    The struct's pointer fields come in mjdata.h's order: ``buffer``, ``arena``, then the buffer's
-    arrays from ``qpos`` on, then the arena's from ``contact`` on. A pointer equal to the
-    contacts' address before ``qpos`` is ``arena``; the last one after it is ``contact`` (an
-    empty array at the end of the buffer may point there too, before ``contact``)."""
-    m = mujoco.MjModel.from_xml_string(_PROBE_XML)
-    d = mujoco.MjData(m)
-    mujoco.mj_forward(m, d)
-    if d.ncon < 1:
-        return f"the probe has {d.ncon} contacts"
-    base = int(d._address)
-    timer = d.timer.duration
-    ncon_at = timer.ctypes.data - base + timer.shape[0] * timer.strides[0]
-    if ncon_at % 8:
-        return f"ncon at byte {ncon_at}, not 8-aligned"
-    s32, s64 = _struct_views(d, ncon_at + 4096)
-    if s32[ncon_at // 4] != d.ncon:
-        return f"the int after timer[] is {s32[ncon_at // 4]}, not ncon = {d.ncon}"
-    contact0 = d.contact.dist.ctypes.data  # dist is mjContact's first field
-    qpos = np.flatnonzero(s64 == np.uint64(d.qpos.ctypes.data)) * 8  # buffer (qpos first), qpos
-    at = np.flatnonzero(s64 == np.uint64(contact0)) * 8
-    if len(qpos) == 0 or not np.any(at < qpos[-1]) or not np.any(at > qpos[-1]):
-        return f"pointer fields: qpos at {qpos.tolist()}, the contacts' address at {at.tolist()}"
-    arena_at, contact_at = int(at[at < qpos[-1]][-1]), int(at[-1])
-    geom = d.contact.geom
-    return ncon_at // 4, arena_at, contact_at, geom.ctypes.data - contact0, geom.strides[0]
-
-
-_OFFSETS: list = []
-#: Why :func:`mjdata_layout` last returned None (for diagnosis), or None.
-last_failure: str | None = None
-
-
-def mjdata_layout(model, data):
-    """(int32 view of ``data``'s struct, uint64 view of it, index of the ``contact`` pointer in
-    the second, the contacts' address, (capacity, 2) int32 view of their geom pairs), or None
-    (the reason in :data:`last_failure`) when this MuJoCo's layout does not pass
-    :func:`_offsets`' checks or ``data`` disagrees with the bindings."""
-    global last_failure
-    if not _OFFSETS:
-        found = _offsets()
-        if isinstance(found, str):  # not cached: the next run probes again
-            last_failure = found
-            return None
-        _OFFSETS.append(found)
-    ncon_i, arena_at, contact_at, geom_at, stride = _OFFSETS[0]
-    s32, s64 = _struct_views(data, ncon_i * 4 + 4096)
-    if s32[ncon_i] != data.ncon:
-        last_failure = f"ncon read as {s32[ncon_i]}, the bindings say {data.ncon}"
-        return None
-    contact0 = int(s64[arena_at // 8])
-    capacity = max(1, int(model.narena) // stride)
-    arena = (ctypes.c_uint8 * (capacity * stride)).from_address(contact0)
-    geom = np.ndarray((capacity, 2), dtype=np.int32, buffer=arena, offset=geom_at, strides=(stride, 4))
-    if data.ncon and (
-        int(s64[contact_at // 8]) != contact0 or not np.array_equal(geom[: data.ncon], data.contact.geom)
-    ):
-        last_failure = "the contacts are not at the start of the arena"
-        return None
-    return s32, s64, contact_at // 8, contact0, geom
 
 
 def fused_controller(policy):
@@ -377,10 +272,10 @@ class FusedRows:
         step = mj_step_function()
         lay = mjdata_layout(model, data) if step is not None else None
         if lay is None:
-            why = last_failure if step is not None else "libmujoco's mj_step not found"
+            why = mjdata.last_failure if step is not None else "libmujoco's mj_step not found"
             raise LookupError(f"the compiled loop cannot read this MuJoCo's data: {why}")
         s32, s64, cptr_i, cbase, geom = lay
-        ncon_i = _OFFSETS[0][0]
+        ncon_i = mjdata._OFFSETS[0][0]
         compile_kernel()
         iq, iv = scene.biped_qpos_index, scene.biped_qvel_index
         nj = len(controller.joint_names)
