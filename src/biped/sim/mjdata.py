@@ -63,6 +63,10 @@ def _struct_views(data, size: int):
     return raw[: size // 4 * 4].view(np.int32), raw[: size // 8 * 8].view(np.uint64)
 
 
+#: how far past ``ncon`` the probe looks for the ``contact`` pointer [bytes]
+_SCAN_BYTES = 4096
+
+
 def _offsets():
     """Byte offsets in ``mjData`` of ``ncon``, the ``arena`` and ``contact`` pointers, and the
     geom pair in ``mjContact`` and its size, found on a probe (a ball resting on a plane) and
@@ -70,8 +74,11 @@ def _offsets():
 
     The struct's pointer fields come in mjdata.h's order: ``buffer``, ``arena``, then the buffer's
     arrays from ``qpos`` on, then the arena's from ``contact`` on. A pointer equal to the
-    contacts' address before ``qpos`` is ``arena``; the last one after it is ``contact`` (an
-    empty array at the end of the buffer may point there too, before ``contact``)."""
+    contacts' address before ``qpos`` is ``arena``; after it, ``contact`` is the one followed by
+    ``efc_type``'s address (an empty array at the end of the buffer may point there too, before
+    ``contact``). The probe reads the struct word by word and stops there: nothing past the
+    struct's end is read (reading a fixed 4 KB past ``ncon`` did, and once found a stray match
+    in the heap beyond it)."""
     m = mujoco.MjModel.from_xml_string(_PROBE_XML)
     d = mujoco.MjData(m)
     mujoco.mj_forward(m, d)
@@ -82,15 +89,26 @@ def _offsets():
     ncon_at = timer.ctypes.data - base + timer.shape[0] * timer.strides[0]
     if ncon_at % 8:
         return f"ncon at byte {ncon_at}, not 8-aligned"
-    s32, s64 = _struct_views(d, ncon_at + 4096)
+    s32, _ = _struct_views(d, ncon_at + 8)
     if s32[ncon_at // 4] != d.ncon:
         return f"the int after timer[] is {s32[ncon_at // 4]}, not ncon = {d.ncon}"
     contact0 = d.contact.dist.ctypes.data  # dist is mjContact's first field
-    qpos = np.flatnonzero(s64 == np.uint64(d.qpos.ctypes.data)) * 8  # buffer (qpos first), qpos
-    at = np.flatnonzero(s64 == np.uint64(contact0)) * 8
-    if len(qpos) == 0 or not np.any(at < qpos[-1]) or not np.any(at > qpos[-1]):
-        return f"pointer fields: qpos at {qpos.tolist()}, the contacts' address at {at.tolist()}"
-    arena_at, contact_at = int(at[at < qpos[-1]][-1]), int(at[-1])
+    qpos, efc = d.qpos.ctypes.data, d.efc_type.ctypes.data
+    # read word by word and stop at ``contact`` (the contacts' address followed by efc_type's,
+    # mjdata.h's first two arena arrays), so that nothing past the struct's end is ever read
+    arena_at = contact_at = qpos_at = None
+    seen: list[int] = []
+    for off in range(ncon_at + 8, ncon_at + _SCAN_BYTES, 8):
+        w = ctypes.c_uint64.from_address(base + off).value
+        if w == qpos:  # ``buffer`` (qpos is its first array), then ``qpos`` itself
+            qpos_at, arena_at = off, (seen[-1] if seen else None)
+        elif w == contact0:
+            if qpos_at is not None and ctypes.c_uint64.from_address(base + off + 8).value == efc:
+                contact_at = off
+                break
+            seen.append(off)
+    if qpos_at is None or arena_at is None or contact_at is None:
+        return f"pointer fields: qpos at {qpos_at}, arena at {arena_at}, contact at {contact_at}"
     geom = d.contact.geom
     return ncon_at // 4, arena_at, contact_at, geom.ctypes.data - contact0, geom.strides[0]
 
@@ -113,7 +131,7 @@ def mjdata_layout(model, data):
             return None
         _OFFSETS.append(found)
     ncon_i, arena_at, contact_at, geom_at, stride = _OFFSETS[0]
-    s32, s64 = _struct_views(data, ncon_i * 4 + 4096)
+    s32, s64 = _struct_views(data, contact_at + 8)  # up to the contact pointer, within the struct
     if s32[ncon_i] != data.ncon:
         last_failure = f"ncon read as {s32[ncon_i]}, the bindings say {data.ncon}"
         return None
