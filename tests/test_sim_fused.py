@@ -54,7 +54,7 @@ def test_cache_key_covers_the_controller_sources():
 
     stamp = fused._run_rows._cache._cache_file._source_stamp
     own, extra = stamp
-    assert len(extra) == 7  # recursions, statics, buffers, spatial, distribution, fused_qp, cones
+    assert len(extra) == 8  # recursions, statics, buffers, spatial, distribution, fused_qp, cones, daqp_c
     assert extra[0][1] == __import__("os").stat(biped.control.recursions.__file__).st_size
 
 
@@ -183,6 +183,36 @@ def test_qp_torque_limits_and_fallbacks():
     assert qp.fallbacks[distribution.RELAXED] > 0  # (ZEROED: counted alike, not reached here)
     assert a.fell and np.all(np.abs(a.torques) <= 0.5)
     assert_same(a, b)
+
+
+def test_qp_solves_in_c_and_the_objmode_path_still_agrees(monkeypatch):
+    """With the installed daqp (a checked version) the loop solves the QP with daqp's C function,
+    bit for bit the Python path's daqp.solve (the tests above); with the C path refused (as for
+    another daqp version) it goes through objmode, with the same results."""
+    import importlib.metadata
+
+    from biped.sim import daqp_c
+
+    solves = []
+    real = daqp_c.sync_status
+
+    def counting(qp, qstat):
+        solves.append(int(qstat[daqp_c.S_SOLVES]))
+        real(qp, qstat)
+
+    monkeypatch.setattr(fused, "sync_status", counting)
+    sc = Scenario(physics="fast", duration_s=0.3, distribution="qp")
+    a, b, _ = both_qp(sc)
+    assert_same(a, b)
+    if importlib.metadata.version("daqp") in daqp_c.CHECKED_VERSIONS:
+        assert daqp_c.daqp_c() is not None  # the structs passed the check against daqp.solve
+        assert sum(solves) > 100  # every period with a foot down was solved in C
+    solves.clear()
+    monkeypatch.setattr(daqp_c, "_C", [None])  # as if the installed daqp had another layout
+    a2, b2, _ = both_qp(sc)
+    assert solves == []  # no C solve: objmode
+    assert_same(a2, b2)
+    assert_same(a, a2)
 
 
 def test_qp_fall_and_a_foot_in_the_air():

@@ -42,6 +42,7 @@ from biped.control.joint_pd import JointPDController
 from biped.control.recursions import compute_kernel
 from biped.control.workspace import WorkspaceController
 from biped.sim import mjdata
+from biped.sim.daqp_c import C_TYPES, c_arguments, c_solve, sync_status
 from biped.sim.fused_qp import QP_TYPES, call_solve, qp_arguments, register_qp
 from biped.sim.mjdata import STEP_SIG, mj_step_function, mjdata_layout
 
@@ -57,7 +58,8 @@ _RIGHT_MASK = 0b1100
 # p (int params) entries
 P_SUB, P_NCTRL, P_CB, P_F0, P_F1, P_NCON, P_CPTR, P_CBASE, P_SENSED, P_BADQACC, P_NJ, P_CLIP, P_PD = range(13)
 P_QP, P_NLIM, P_SLOT = range(13, 16)  # the QP distribution: on, with torque-limit rows, its slot
-_NP = 16
+P_CSOLVE = 16  # the QP solved by daqp's C function (biped.sim.daqp_c), not through objmode
+_NP = 17
 
 _SIGNATURE = types.int64(
     types.FunctionType(STEP_SIG),  # mj_step
@@ -101,6 +103,7 @@ _SIGNATURE = types.int64(
     types.float64[:, :, ::1],  # feet positions
     types.float64[:, :, ::1],  # feet quaternions
     *QP_TYPES,  # the QP distribution (when p[P_QP]): biped.sim.fused_qp
+    *C_TYPES,  # its solve in C (when p[P_CSOLVE]): biped.sim.daqp_c
 )
 
 
@@ -110,6 +113,7 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
     step, m, d, k0, k1, p, fall_h, s32, s64, geom, codes, dq, dv, q, v, xipos, xpos, xquat, ctrl, act,
     warn, target, gains, contact, mi, mf, work, out, lower, upper, pd_q, pd_v, pd, rq, rv, rcom, rtau,
     rbits, rfpos, rfquat, soles, dims, prm, qlo, qhi, qa, qt, qf, qtau, qcol, qg, qav, qct, qb, qx, qwg,
+    dqfn, dqaddr, dqres, dqsense, dqupper, dqf, dqx, dqstat,
 ):  # the arguments of _SIGNATURE, in its order
     # fmt: on
     sub, n_ctrl, cb, f0, f1 = p[P_SUB], p[P_NCTRL], p[P_CB], p[P_F0], p[P_F1]
@@ -144,6 +148,11 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
             )  # fmt: skip
             if contact[0] == 0 and contact[1] == 0:
                 qx[:] = 0.0
+            elif p[P_CSOLVE]:
+                c_solve(
+                    dqfn, dqaddr, dqres, meq, used, ff0, ff1, dqsense, dqupper, dqf, qav, qct, qb, qx, dqx, dims,
+                    prm, dqstat,
+                )  # fmt: skip
             else:
                 call_solve(p[P_SLOT], meq, used, ff0, ff1)
             qp_finish(
@@ -189,7 +198,7 @@ def _key_cache_by_what_it_compiles_in() -> None:
     import biped.control.recursions
     import biped.control.statics
     import biped.spatial
-    from biped.sim import fused_qp
+    from biped.sim import daqp_c, fused_qp
 
     modules = (
         biped.control.recursions,
@@ -199,6 +208,7 @@ def _key_cache_by_what_it_compiles_in() -> None:
         biped.control.distribution,
         fused_qp,
         biped.control.cones,
+        daqp_c,
     )
     try:
         cache_file = _run_rows._cache._cache_file  # type: ignore[attr-defined]
@@ -301,10 +311,15 @@ class FusedRows:
             ws = WorkspaceController(controller.tree)
         contact = ws._both.copy() if not sensed else np.ones(2, dtype=np.int64)
         qp_args = qp_arguments(ws.qp)
+        keep: list = []
+        csolve, c_args = c_arguments(ws.qp, keep)
+        self._qp = ws.qp if csolve else None
+        self._qstat: np.ndarray = c_args[-1]
         if ws.qp is not None:
             p[P_QP], p[P_NLIM] = 1, 1 if ws.qp.limited else 0
             p[P_SLOT] = register_qp(self, ws.qp)
-        self._keep = (lay, data)  # the views point into data's memory
+            p[P_CSOLVE] = 1 if csolve else 0
+        self._keep = (lay, data, keep)  # the views point into data's memory, the addresses into keep
         self._args = (
             step,
             int(model._address),
@@ -340,7 +355,7 @@ class FusedRows:
         )
         self._records = tuple(
             records[k] for k in ("qpos", "qvel", "com", "torques", "bits", "feet_pos", "feet_quat")
-        ) + qp_args
+        ) + qp_args + c_args
         # one call through the dispatcher checks every argument against the signature (no rows
         # run); later calls go straight to the compiled entry point, without numba's typing of
         # the arguments (~10 us a call instead of ~27 us)
@@ -351,6 +366,8 @@ class FusedRows:
     def run(self, k0: int, k1: int) -> tuple[int, int]:
         a = self._args
         code = self._call(a[0], a[1], a[2], k0, k1, *a[3:], *self._records)
+        if self._qp is not None:  # the C solve's status and fallback counts onto the ContactQP
+            sync_status(self._qp, self._qstat)
         return code >> 3, code & 7
 
 
