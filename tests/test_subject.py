@@ -417,3 +417,21 @@ def test_push_and_sweep_record_the_model(female, tmp_path):
     import hashlib
 
     assert meta[b"biped.model_sha256"].decode() == hashlib.sha256(female.read_bytes()).hexdigest()
+
+
+def test_human_torque_limits_scale_with_the_subjects_mass(female):
+    """`torque_limits = "human"` on a push (and a sweep's human limits) use the subject's own mass,
+    as MuJoCo sums it from the file: a 50 kg subject's limits are 50/73 of W's biped's; W's
+    biped's push limits are the sweep's."""
+    from biped.control.limits import HUMAN_N_M_PER_KG, MODEL_MASS_KG, torque_limits
+    from biped.sim.push import scenario_limits
+
+    mass = float(mujoco.MjModel.from_xml_path(str(female)).body_mass.sum())
+    assert mass == pytest.approx(50.0, abs=1e-3)
+    lim = scenario_limits(Scenario(model=str(female), torque_limits="human"))
+    knee_flex = HUMAN_N_M_PER_KG["knee"][0][1]  # the knee's negative-direction limit [N m/kg]
+    assert lim.lower[3] == pytest.approx(-knee_flex * mass, rel=1e-12)
+    w = scenario_limits(Scenario(torque_limits="human"))
+    ref = torque_limits("human", body_mass_kg=MODEL_MASS_KG)
+    assert np.array_equal(w.lower, ref.lower) and np.array_equal(w.upper, ref.upper)
+    assert np.allclose(lim.upper / w.upper, mass / MODEL_MASS_KG, rtol=1e-12)

@@ -32,7 +32,7 @@ import mujoco
 import numpy as np
 
 from biped.control.distribution import QPWeights
-from biped.control.limits import TorqueLimits
+from biped.control.limits import TorqueLimits, torque_limits
 from biped.control.policy import PolicyConfig, make_policy, symmetric_limits
 from biped.control.workspace import Gains, Target
 from biped.errors import BipedError, ScenarioError
@@ -40,7 +40,7 @@ from biped.models import subject
 from biped.sim import fused as fused_mod
 from biped.sim.contact import SOLE_GEOMS, ContactMonitor
 from biped.sim.scenario import Scenario
-from biped.sim.scene import Scene, build_scene, initial_state, tilt_quat
+from biped.sim.scene import Scene, biped_mass_kg, build_scene, initial_state, tilt_quat
 
 _BADQACC = int(mujoco.mjtWarning.mjWARN_BADQACC)
 
@@ -128,9 +128,11 @@ def orientation_error_deg(quat, target_quat) -> float:
 
 
 def scenario_limits(scenario: Scenario) -> TorqueLimits | None:
-    """The scenario's ``torque_limits`` (``"none"``, one number or 12) as bounds, or None."""
+    """The scenario's ``torque_limits`` ("none", "human" for the model's mass, 1 or 12 numbers)."""
     if scenario.torque_limits == "none":
         return None
+    if scenario.torque_limits == "human":
+        return torque_limits("human", body_mass_kg=biped_mass_kg(scenario.model))
     return symmetric_limits(scenario.torque_limits)
 
 

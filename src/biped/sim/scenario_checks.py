@@ -172,15 +172,15 @@ def validate(s: Scenario, choices: Mapping[str, tuple[str, ...]]) -> None:
     if isinstance(tl, tuple):
         if len(tl) != 12:
             raise ScenarioError(
-                f"torque_limits must be 'none', one number or 12 numbers "
+                f"torque_limits must be 'none', 'human', one number or 12 numbers "
                 f"({', '.join(JOINT_NAMES)}) in N m; got {len(tl)} numbers"
             )
         for i, x in enumerate(tl):
             if _finite(f"torque_limits[{i}]", x, "N m") <= 0:
                 raise ScenarioError(f"torque_limits[{i}] must be > 0 N m; got {x!r}")
-    elif tl != "none" and (not is_number(tl) or not math.isfinite(tl) or tl <= 0):
+    elif tl not in ("none", "human") and (not is_number(tl) or not math.isfinite(tl) or tl <= 0):
         raise ScenarioError(
-            f"torque_limits must be 'none', one positive number or 12 of them in N m; got {tl!r}"
+            f"torque_limits must be 'none', 'human', one positive number or 12 of them in N m; got {tl!r}"
         )
     _in_range("friction", _positive(s, "friction", "Coulomb coefficient", zero_ok=True))
     e = _finite("restitution", s.restitution, "coefficient of restitution")
