@@ -368,32 +368,10 @@ def alg4_desired_wrench(
 
 
 @njit(cache=True)
-def compute_kernel(
-    qpos: np.ndarray,
-    qvel: np.ndarray,
-    target: np.ndarray,
-    gains: np.ndarray,
-    contact: np.ndarray,
-    mi: np.ndarray,
-    mf: np.ndarray,
-    work: np.ndarray,
-    out: np.ndarray,
-) -> int:
-    """One controller call: W Alg. 1-6 on flat buffers (see :func:`layout` and :func:`unpack`);
-    ``contact`` (2,) int flags the (left, right) feet taken as fixed to the ground (W: both).
-    Returns a status code (0 ok, 1 non-finite state, 2 non-finite result, 3 singular wrench
-    distribution, 4 zero root quaternion)."""
-    for i in range(qpos.shape[0]):
-        if not np.isfinite(qpos[i]):
-            return NONFINITE_STATE
-    for i in range(qvel.shape[0]):
-        if not np.isfinite(qvel[i]):
-            return NONFINITE_STATE
-    t, m, w, o = unpack(mi, mf, work, out)
-    r = t.qadr[0]  # qpos address of the root's free joint
-    if qpos[r + 3] ** 2 + qpos[r + 4] ** 2 + qpos[r + 5] ** 2 + qpos[r + 6] ** 2 < 1e-20:
-        return ZERO_QUATERNION
-
+def alg12_kinematics(qpos, qvel, t, m, w):  # pragma: no cover - compiled
+    """W Alg. 1 and Alg. 2 on the unpacked buffers ``t, m, w`` of :func:`unpack` (poses, body
+    velocities and the recursions' velocity terms into ``w``): the first part of
+    :func:`compute_kernel`, and what :func:`kinematics` runs alone."""
     alg1_initialize(
         qpos,
         qvel,
@@ -430,6 +408,43 @@ def compute_kernel(
         w.b,
         w.E,
     )
+
+
+@njit(cache=True)
+def kinematics(qpos, qvel, mi, mf, work, out):  # pragma: no cover - compiled
+    """:func:`alg12_kinematics` on the flat buffers (for the controller's checking methods)."""
+    t, m, w, _ = unpack(mi, mf, work, out)
+    alg12_kinematics(qpos, qvel, t, m, w)
+
+
+@njit(cache=True)
+def compute_kernel(
+    qpos: np.ndarray,
+    qvel: np.ndarray,
+    target: np.ndarray,
+    gains: np.ndarray,
+    contact: np.ndarray,
+    mi: np.ndarray,
+    mf: np.ndarray,
+    work: np.ndarray,
+    out: np.ndarray,
+) -> int:
+    """One controller call: W Alg. 1-6 on flat buffers (see :func:`layout` and :func:`unpack`);
+    ``contact`` (2,) int flags the (left, right) feet taken as fixed to the ground (W: both).
+    Returns a status code (0 ok, 1 non-finite state, 2 non-finite result, 3 singular wrench
+    distribution, 4 zero root quaternion)."""
+    for i in range(qpos.shape[0]):
+        if not np.isfinite(qpos[i]):
+            return NONFINITE_STATE
+    for i in range(qvel.shape[0]):
+        if not np.isfinite(qvel[i]):
+            return NONFINITE_STATE
+    t, m, w, o = unpack(mi, mf, work, out)
+    r = t.qadr[0]  # qpos address of the root's free joint
+    if qpos[r + 3] ** 2 + qpos[r + 4] ** 2 + qpos[r + 5] ** 2 + qpos[r + 6] ** 2 < 1e-20:
+        return ZERO_QUATERNION
+
+    alg12_kinematics(qpos, qvel, t, m, w)
     alg3_workspace_dynamics(
         t.parent,
         m.H,

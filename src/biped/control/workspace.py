@@ -19,10 +19,9 @@ from biped.control.recursions import (
     SINGULAR_DISTRIBUTION,
     STOP_AFTER_ALG4,
     ZERO_QUATERNION,
-    alg1_initialize,
-    alg2_velocity_propagation,
     alg6_torques,
     compute_kernel,
+    kinematics,
     layout,
     unpack,
 )
@@ -368,44 +367,8 @@ class WorkspaceController:
         return (qpos if unit is None else unit), qvel
 
     def _kinematics(self, qpos, qvel):
-        """W Alg. 1 and Alg. 2 alone (the kernel's own functions) into the work buffer."""
-        t, m, w = self.tree, self._m, self._w
-        alg1_initialize(
-            qpos,
-            qvel,
-            t.qpos_adr[0],
-            t.dof_adr[0],
-            m.G0[0],
-            m.root_qbi,
-            m.mass,
-            m.inertia,
-            m.gravity,
-            w.g,
-            w.V,
-            w.a,
-            w.b,
-            w.q_root,
-            w.q01,
-        )
-        alg2_velocity_propagation(
-            qpos,
-            qvel,
-            t.parent,
-            t.qpos_adr,
-            t.dof_adr,
-            m.H,
-            m.G0,
-            m.qref,
-            m.mass,
-            m.inertia,
-            m.gravity,
-            w.g,
-            w.gl,
-            w.V,
-            w.a,
-            w.b,
-            w.E,
-        )
+        """W Alg. 1 and Alg. 2 alone (the kernel's own compiled part) into the work buffer."""
+        kinematics(qpos, qvel, self._mi, self._mf, self._work, self._out)
 
     def link_poses(self, qpos) -> np.ndarray:
         """(n_links, 4, 4) world poses ``g_{0,k}`` of every link's COM principal frame (MuJoCo's
