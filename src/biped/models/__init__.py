@@ -63,9 +63,14 @@ def gravity(name: str = "wendlandt") -> np.ndarray:
     return _compiled(name).opt.gravity.copy()
 
 
-def total_mass_kg(name: str = "wendlandt") -> float:
-    """Total mass [kg] of the shipped model ``name``: the sum of its bodies' masses."""
-    return float(np.sum(_compiled(name).body_mass))
+def total_mass_kg(name: str | Path = "wendlandt") -> float:
+    """Total mass [kg] of the biped ``name``, a shipped model's name or a checked MJCF path (a
+    scenario's ``model``): the sum of its bodies' masses as MuJoCo compiles them."""
+    if isinstance(name, str) and name in names():
+        return float(np.sum(_compiled(name).body_mass))
+    from biped.models.subject import resolve
+
+    return float(np.sum(mujoco.MjModel.from_xml_path(str(resolve(name))).body_mass))
 
 
 __all__ = [

@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
+from biped import models
 from biped.control.distribution import QPWeights
 from biped.control.limits import TorqueLimits, torque_limits
 from biped.control.policy import PolicyConfig, make_policy, symmetric_limits
@@ -40,7 +41,7 @@ from biped.models import subject
 from biped.sim import fused as fused_mod
 from biped.sim.contact import SOLE_GEOMS, ContactMonitor
 from biped.sim.scenario import Scenario
-from biped.sim.scene import Scene, biped_mass_kg, build_scene, initial_state, tilt_quat
+from biped.sim.scene import Scene, build_scene, initial_state, tilt_quat
 
 _BADQACC = int(mujoco.mjtWarning.mjWARN_BADQACC)
 
@@ -132,7 +133,7 @@ def scenario_limits(scenario: Scenario) -> TorqueLimits | None:
     if scenario.torque_limits == "none":
         return None
     if scenario.torque_limits == "human":
-        return torque_limits("human", body_mass_kg=biped_mass_kg(scenario.model))
+        return torque_limits("human", body_mass_kg=models.total_mass_kg(scenario.model))
     return symmetric_limits(scenario.torque_limits)
 
 

@@ -79,16 +79,6 @@ def biped_spec(model: str = BIPED_MODEL) -> mujoco.MjSpec:
     return mujoco.MjSpec.from_file(str(resolve(model)))
 
 
-def biped_mass_kg(model: str = BIPED_MODEL) -> float:
-    """Total mass [kg] of the biped ``model`` (a shipped name or an MJCF path): what ``"human"``
-    torque limits scale with."""
-    from biped import models
-
-    if model in models.names():
-        return models.total_mass_kg(model)
-    return float(biped_spec(model).compile().body_mass.sum())
-
-
 def scene_spec(scenario: Scenario) -> mujoco.MjSpec:
     """Spec of the scene: the biped + floor (z = 0 plane) + block at ``block_position_m``.
 

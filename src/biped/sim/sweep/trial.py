@@ -10,12 +10,13 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from biped import models
 from biped.control.limits import torque_limits
 from biped.model import TreeModel
 from biped.models import subject
 from biped.sim.push import PushResult, controller_policy, run_closed_loop
 from biped.sim.scenario import Scenario
-from biped.sim.scene import Scene, biped_mass_kg, build_scene
+from biped.sim.scene import Scene, build_scene
 from biped.sim.sweep.record import Measured
 from biped.sim.sweep.spec import GRAVITY, TrialSetup
 
@@ -56,7 +57,7 @@ def make_policy(
     :mod:`biped.control.joint_pd` holding the initial joint angles (its gains times
     ``gain_scale``); the sweep's torque limits clip the torques and, with the QP distribution,
     are constraints of the QP."""
-    limits = torque_limits(setup.torque_limits, body_mass_kg=biped_mass_kg(setup.scenario.model))
+    limits = torque_limits(setup.torque_limits, body_mass_kg=models.total_mass_kg(setup.scenario.model))
     tree = _tree(setup.scenario.model) if setup.scenario.controller == "workspace" else None
     return controller_policy(
         setup.scenario,
