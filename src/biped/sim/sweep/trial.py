@@ -22,6 +22,7 @@ from biped.sim.sweep.spec import GRAVITY, TrialSetup
 
 _SCENES: dict[tuple, Scene] = {}
 _TREES: dict[str, TreeModel] = {}
+_MASSES: dict[str, float] = {}
 _CACHE_SIZE = 16
 
 
@@ -48,6 +49,13 @@ def _tree(model: str) -> TreeModel:
     return _TREES[model]
 
 
+def _mass_kg(model: str) -> float:
+    """The model's total mass, once per worker (a path's file is compiled to read it)."""
+    if model not in _MASSES:
+        _MASSES[model] = models.total_mass_kg(model)
+    return _MASSES[model]
+
+
 def make_policy(
     setup: TrialSetup, scene: Scene
 ) -> Callable[[float, np.ndarray, np.ndarray, tuple[bool, bool]], np.ndarray]:
@@ -57,7 +65,7 @@ def make_policy(
     :mod:`biped.control.joint_pd` holding the initial joint angles (its gains times
     ``gain_scale``); the sweep's torque limits clip the torques and, with the QP distribution,
     are constraints of the QP."""
-    limits = torque_limits(setup.torque_limits, body_mass_kg=models.total_mass_kg(setup.scenario.model))
+    limits = torque_limits(setup.torque_limits, body_mass_kg=_mass_kg(setup.scenario.model))
     tree = _tree(setup.scenario.model) if setup.scenario.controller == "workspace" else None
     return controller_policy(
         setup.scenario,
