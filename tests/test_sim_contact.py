@@ -207,11 +207,20 @@ def test_calibration_matches_closed_form_without_clipping_trend():
 class ReferenceMonitor:
     """The contact classification as first written (a role per geom, every contact looked at in
     Python), from MuJoCo's ``geom1`` / ``geom2`` arrays one contact at a time, independently of
-    :class:`biped.sim.contact.ContactMonitor`'s pair table and compiled OR."""
+    :class:`biped.sim.contact.ContactMonitor`'s pair table and compiled OR. A foot's one
+    collision box (physics "fast") stands for the heel or the toe box nearer the contact point
+    along the foot (MuJoCo's ``geom_xpos`` / ``geom_xmat`` of the two boxes)."""
 
     def __init__(self, model, scene, fall_height_m):
         self.model, self.floor, self.block = model, scene.floor_geom, scene.block_geom
         self.sole = {g: i for i, g in enumerate(scene.sole_geoms)}
+        self.boxes = {}  # one collision box -> (heel geom, its index, the toe's index)
+        for foot in ("left", "right"):
+            names = [model.geom(g).name for g in range(model.ngeom)]
+            if f"{foot}_sole_box" in names:
+                heel = model.geom(f"{foot}_heel").id
+                toe = model.geom(f"{foot}_toe").id
+                self.boxes[model.geom(f"{foot}_sole_box").id] = (heel, toe)
         self.biped = set(scene.biped_geoms) - {self.floor, self.block}
         self.central, self.fall_height = scene.central_body, fall_height_m
         self.flags = [False] * 4
@@ -225,6 +234,12 @@ class ReferenceMonitor:
             for x, y in ((a, b), (b, a)):
                 if x == self.floor and y in self.sole:
                     flags[self.sole[y]] = True
+                elif x == self.floor and y in self.boxes:
+                    gap = {}  # how far the contact lies beyond each box's ends along the foot
+                    for g in self.boxes[y]:
+                        along = (d.geom_xmat[g].reshape(3, 3).T @ (d.contact.pos[j] - d.geom_xpos[g]))[0]
+                        gap[g] = max(0.0, abs(along) - self.model.geom_size[g][0])
+                    flags[self.sole[min(gap, key=gap.get)]] = True
                 elif x == self.floor and y in self.biped and lying is None:
                     lying = self.model.geom(y).name
                 if x == self.block and y in self.biped:

@@ -54,13 +54,14 @@ def test_cache_key_covers_the_controller_sources():
 
     stamp = fused._run_rows._cache._cache_file._source_stamp
     own, extra = stamp
-    assert len(extra) == 8  # recursions, statics, buffers, spatial, distribution, fused_qp, cones, daqp_c
+    # recursions, statics, buffers, spatial, distribution, fused_qp, cones, daqp_c, contact
+    assert len(extra) == 9
     assert extra[0][1] == __import__("os").stat(biped.control.recursions.__file__).st_size
 
 
 def test_mjdata_layout_reads_what_the_bindings_read():
-    """ncon and the contacts' geom pairs, read through the struct offsets, equal MuJoCo's own
-    ``data.ncon`` / ``data.contact.geom`` over a run with changing contacts."""
+    """ncon and the contacts' geom pairs and positions, read through the struct offsets, equal
+    MuJoCo's own ``data.ncon`` / ``data.contact.geom`` / ``.pos`` over a run with changing contacts."""
     sc = Scenario(physics="fast", duration_s=0.3)
     scene = build_scene(sc)
     m, d = scene.model, mujoco.MjData(scene.model)
@@ -70,7 +71,7 @@ def test_mjdata_layout_reads_what_the_bindings_read():
     mujoco.mj_forward(m, d)
     layout = fused.mjdata_layout(m, d)
     assert layout is not None, mjdata.last_failure
-    s32, s64, cptr, c0, geom = layout
+    s32, s64, cptr, c0, geom, pos = layout
     ncon_i = mjdata._OFFSETS[0][0]
     seen = set()
     for _ in range(300):
@@ -79,6 +80,7 @@ def test_mjdata_layout_reads_what_the_bindings_read():
         if d.ncon:
             assert int(s64[cptr]) == c0
             assert np.array_equal(geom[: d.ncon], d.contact.geom)
+            assert np.array_equal(pos[: d.ncon], d.contact.pos)
         seen.add(d.ncon)
     assert len(seen) > 2  # the contacts did change
 
@@ -127,8 +129,8 @@ def test_rows_handed_back_to_python(monkeypatch):
     real = fused.mjdata_layout
 
     def moved(model, data):
-        s32, s64, cptr, c0, geom = real(model, data)
-        return s32, s64, cptr, c0 + 8, geom
+        s32, s64, cptr, c0, geom, pos = real(model, data)
+        return s32, s64, cptr, c0 + 8, geom, pos
 
     monkeypatch.setattr(fused, "mjdata_layout", moved)
     a, b = both(Scenario(physics="fast", duration_s=0.2))

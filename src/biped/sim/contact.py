@@ -26,6 +26,8 @@ Events
 :class:`ContactMonitor` classifies every MuJoCo contact by the roles of its two geoms (sole part,
 other biped geom, block, floor) and reports per-foot, per-part ``lift_off`` / ``touch_down``
 transitions, the first block-biped contact and falls (a biped geom other than a sole on the floor).
+A foot that collides as one box (``physics = "fast"``, :func:`biped.sim.scene.scene_spec`) has
+its contacts told apart by the side of the heel/toe seam they lie on.
 """
 
 from __future__ import annotations
@@ -169,9 +171,12 @@ def heel_timeline(events, block_contact_time_s: float | None) -> dict[str, float
 
 
 # Bits of a contact pair's code (:attr:`ContactMonitor.pair_codes`): bit i (0-3) sole part i of
-# SOLE_GEOMS on the floor, then the block on the biped, then another biped geom on the floor.
+# SOLE_GEOMS on the floor, then the block on the biped, then another biped geom on the floor;
+# _SPLIT_BIT marks a foot's one collision box on the floor (Scene.sole_boxes): its code carries
+# both the heel's and the toe's bit, and the contact's side of the seam keeps one of them.
 _BLOCK_BIT = 1 << len(SOLE_GEOMS)
 _LYING_BIT = 1 << (len(SOLE_GEOMS) + 1)
+_SPLIT_BIT = 1 << (len(SOLE_GEOMS) + 2)
 _SOLE_MASK = _BLOCK_BIT - 1
 
 
@@ -190,19 +195,45 @@ _FLAGS = _flag_arrays()
 _FEET = tuple((bool(b & 0b0011), bool(b & 0b1100)) for b in range(1 << len(SOLE_GEOMS)))
 
 
-# One explicit signature: MuJoCo's ``data.contact.geom`` is a strided view (layout "A"), but a
-# C-contiguous one when ncon == 1, which would otherwise compile a second version in the middle of
-# a run. Compiled (or loaded from numba's cache) on first use by :func:`compile_kernel`, not at
-# import, so that :mod:`biped.sim.jit` can tell whether it is cold and say so before it compiles.
-_KERNEL_SIGNATURE = types.int64(types.int32[:, :], types.int64[:, ::1])
+# One explicit signature: MuJoCo's ``data.contact.geom`` / ``.pos`` are strided views (layout
+# "A"), but C-contiguous ones when ncon == 1, which would otherwise compile a second version in
+# the middle of a run. Compiled (or loaded from numba's cache) on first use by
+# :func:`compile_kernel`, not at import, so that :mod:`biped.sim.jit` can tell whether it is cold
+# and say so before it compiles.
+_KERNEL_SIGNATURE = types.int64(
+    types.int32[:, :], types.float64[:, :], types.int64[:, ::1], types.float64[:, ::1], types.float64[:, ::1],
+    types.float64[:, ::1],
+)  # fmt: skip
+
+
+@njit(cache=True, nogil=True, inline="always")
+def contact_code(codes, g0, g1, pos, seams, gxpos, gxmat):  # pragma: no cover - compiled
+    """The code of one contact between geoms ``g0`` and ``g1`` at ``pos`` (3,): ``codes[g0, g1]``,
+    except that a foot's one collision box on the floor keeps only the heel's or the toe's bit,
+    by the side of the seam the contact lies on (``seams[g]`` = (seam on the box's x axis [m],
+    the heel's side +1/-1); ``gxpos`` / ``gxmat``: MuJoCo's ``geom_xpos`` / ``geom_xmat``)."""
+    c = codes[g0, g1]
+    if c & _SPLIT_BIT:
+        g = g1 if np.isnan(seams[g0, 0]) else g0
+        x = (
+            (pos[0] - gxpos[g, 0]) * gxmat[g, 0]
+            + (pos[1] - gxpos[g, 1]) * gxmat[g, 3]
+            + (pos[2] - gxpos[g, 2]) * gxmat[g, 6]
+        )
+        sole = c & _SOLE_MASK
+        heel = sole & -sole  # SOLE_GEOMS lists a foot's heel before its toe
+        part = heel if (x - seams[g, 0]) * seams[g, 1] > 0.0 else sole ^ heel
+        c = (c & ~(_SPLIT_BIT | _SOLE_MASK)) | part
+    return c
 
 
 @njit(cache=True, nogil=True)
-def _contact_bits(geom, codes):  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
-    """OR of ``codes[g0, g1]`` over the rows of ``geom`` (ncon, 2): MuJoCo's contact geom pairs."""
+def _contact_bits(geom, pos, codes, seams, gxpos, gxmat):  # pragma: no cover - compiled
+    """OR of :func:`contact_code` over MuJoCo's contacts: their geom pairs ``geom`` (ncon, 2) and
+    positions ``pos`` (ncon, 3)."""
     bits = 0
     for k in range(geom.shape[0]):
-        bits |= codes[geom[k, 0], geom[k, 1]]
+        bits |= contact_code(codes, geom[k, 0], geom[k, 1], pos[k], seams, gxpos, gxmat)
     return bits
 
 
@@ -224,6 +255,10 @@ class ContactMonitor:
     current sole-part contacts in :data:`SOLE_GEOMS` order (read-only; a new array when they change),
     ``feet`` (left, right) bools: the foot's heel or toe is on the floor.
 
+    ``sole_boxes`` (:attr:`biped.sim.scene.Scene.sole_boxes`): a foot that collides as one box
+    (``physics = "fast"``) has its heel or toe on the floor when a contact of that box lies on the
+    heel's or the toe's side of their seam.
+
     Cost: every geom pair's meaning is tabulated once (``pair_codes`` (ngeom, ngeom), symmetric);
     an update ORs the codes of MuJoCo's ``data.contact.geom`` pairs in one compiled call (a few
     microseconds, next to ~20 us per MuJoCo step) and does Python work only when something changes.
@@ -239,6 +274,7 @@ class ContactMonitor:
         biped_geoms,
         central_body: int,
         fall_height_m: float,
+        sole_boxes=(),
     ):
         ng = model.ngeom
         biped = np.zeros(ng, dtype=bool)
@@ -250,12 +286,19 @@ class ContactMonitor:
         plain = biped.copy()  # biped geoms other than the soles (and not the floor or block)
         plain[soles] = False
         plain[[floor_geom, block_geom]] = False
+        seams = np.full((ng, 2), np.nan)
+        for g, foot, seam, side in sole_boxes:  # a foot's heel and toe as one box (Scene.sole_boxes)
+            codes[floor_geom, g] |= _SPLIT_BIT | 0b11 << 2 * foot
+            plain[g] = False
+            seams[g] = seam, side
         codes[floor_geom, plain] |= _LYING_BIT
         on_biped = biped.copy()
         on_biped[soles] = True
         on_biped[[floor_geom, block_geom]] = False
         codes[block_geom, on_biped] |= _BLOCK_BIT
         self.pair_codes = np.ascontiguousarray(codes | codes.T)  # do not modify
+        #: (ngeom, 2): (seam [m], heel side) of each foot's one collision box, NaN for the others
+        self.seams = seams
         compile_kernel()
         self._floor = floor_geom
         self._plain = plain
@@ -282,18 +325,24 @@ class ContactMonitor:
 
     def classify(self, data) -> tuple[np.ndarray, bool, str | None]:
         """(sole-part flags (4,), block touches the biped, name of a non-sole geom on the floor)."""
-        bits = _contact_bits(data.contact.geom, self.pair_codes) if data.ncon else 0
+        bits = self._bits_of(data)
         lying = self._lying_geom(data) if bits & _LYING_BIT else None
         return _FLAGS[bits & _SOLE_MASK].copy(), bool(bits & _BLOCK_BIT), lying
 
     def update(self, time_s: float, data) -> bool:
         """Record the contact state at ``time_s``; returns True once the biped has fallen."""
-        bits = _contact_bits(data.contact.geom, self.pair_codes) if data.ncon else 0
-        return self.record(time_s, bits, data.xipos[self._central, 2], data)
+        return self.record(time_s, self._bits_of(data), data.xipos[self._central, 2], data)
+
+    def _bits_of(self, data) -> int:
+        """OR of the contacts' codes (:func:`contact_code`) in ``data``."""
+        if not data.ncon:
+            return 0
+        c = data.contact
+        return _contact_bits(c.geom, c.pos, self.pair_codes, self.seams, data.geom_xpos, data.geom_xmat)
 
     def record(self, time_s: float, bits: int, z: float, data) -> bool:
         """:meth:`update` with the contacts already classified: ``bits`` is the OR of
-        :attr:`pair_codes` over the contacts, ``z`` the central body's COM height [m] at
+        :func:`contact_code` over the contacts, ``z`` the central body's COM height [m] at
         ``time_s``; ``data`` is read only to name a lying geom. (The compiled loop of
         :mod:`biped.sim.fused` records its bits and feeds the changes through here.)"""
         bits = int(bits)

@@ -5,7 +5,7 @@ distribution; the QP's solve itself in Python, :mod:`biped.sim.fused_qp`) and th
 baseline (without gravity compensation), clipped by torque limits or not (not stepping),
 through :class:`FusedRows`: one numba call runs up to one progress interval of control
 periods, each doing exactly what the Python loop does, in the same order: classify MuJoCo's contacts (the OR of
-:attr:`~biped.sim.contact.ContactMonitor.pair_codes` over ``data.contact.geom``), call
+:func:`~biped.sim.contact.contact_code` over ``data.contact``), call
 :func:`biped.control.recursions.compute_kernel` (or the joint PD's law) on the live qpos/qvel
 views, record the row, write ``ctrl`` and call MuJoCo's C ``mj_step`` through its function pointer (``libmujoco``'s own
 symbol, the library the Python bindings use). The events, fall and block-hit time are then
@@ -41,7 +41,9 @@ from biped.control.distribution import qp_build, qp_finish
 from biped.control.joint_pd import JointPDController
 from biped.control.recursions import compute_kernel
 from biped.control.workspace import WorkspaceController
+from biped.sim import contact as contact_mod
 from biped.sim import mjdata
+from biped.sim.contact import contact_code
 from biped.sim.daqp_c import C_TYPES, c_arguments, c_solve, sync_status
 from biped.sim.fused_qp import QP_TYPES, call_solve, qp_arguments, register_qp
 from biped.sim.mjdata import STEP_SIG, mj_step_function, mjdata_layout
@@ -72,7 +74,9 @@ _SIGNATURE = types.int64(
     types.int32[::1],  # the mjData struct as int32 (ncon)
     types.uint64[::1],  # the same as uint64 (the contact pointer)
     types.int32[:, :],  # the contacts' geom pairs (capacity, 2), a strided view of the arena
+    types.float64[:, :],  # their positions (capacity, 3), the same
     types.int64[:, ::1],  # pair codes (ngeom, ngeom)
+    types.float64[:, ::1],  # seams (ngeom, 2) of the feet's one collision boxes
     types.float64[::1],  # d.qpos
     types.float64[::1],  # d.qvel
     types.float64[::1],  # the biped's qpos (a view of d.qpos)
@@ -80,6 +84,8 @@ _SIGNATURE = types.int64(
     types.float64[:, ::1],  # d.xipos
     types.float64[:, ::1],  # d.xpos
     types.float64[:, ::1],  # d.xquat
+    types.float64[:, ::1],  # d.geom_xpos
+    types.float64[:, ::1],  # d.geom_xmat
     types.float64[::1],  # d.ctrl
     types.int64[::1],  # actuator index of each joint
     types.int32[:],  # d.warning.number
@@ -110,10 +116,10 @@ _SIGNATURE = types.int64(
 # fmt: off
 @njit(cache=True, nogil=False)
 def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
-    step, m, d, k0, k1, p, fall_h, s32, s64, geom, codes, dq, dv, q, v, xipos, xpos, xquat, ctrl, act,
-    warn, target, gains, contact, mi, mf, work, out, lower, upper, pd_q, pd_v, pd, rq, rv, rcom, rtau,
-    rbits, rfpos, rfquat, soles, dims, prm, qlo, qhi, qa, qt, qf, qtau, qcol, qg, qav, qct, qb, qx, qwg,
-    dqfn, dqaddr, dqres, dqsense, dqupper, dqf, dqx, dqstat,
+    step, m, d, k0, k1, p, fall_h, s32, s64, geom, cpos, codes, seams, dq, dv, q, v, xipos, xpos, xquat,
+    gxpos, gxmat, ctrl, act, warn, target, gains, contact, mi, mf, work, out, lower, upper, pd_q, pd_v, pd,
+    rq, rv, rcom, rtau, rbits, rfpos, rfquat, soles, dims, prm, qlo, qhi, qa, qt, qf, qtau, qcol, qg, qav, qct,
+    qb, qx, qwg, dqfn, dqaddr, dqres, dqsense, dqupper, dqf, dqx, dqstat,
 ):  # the arguments of _SIGNATURE, in its order
     # fmt: on
     sub, n_ctrl, cb, f0, f1 = p[P_SUB], p[P_NCTRL], p[P_CB], p[P_F0], p[P_F1]
@@ -124,7 +130,7 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
             return k * 8 + PYTHON  # the contacts moved: the Python loop takes over
         bits = 0
         for i in range(ncon):
-            bits |= codes[geom[i, 0], geom[i, 1]]
+            bits |= contact_code(codes, geom[i, 0], geom[i, 1], cpos[i], seams, gxpos, gxmat)
         rbits[k] = bits
         if p[P_SENSED]:
             contact[0] = 1 if bits & _LEFT_MASK else 0
@@ -189,7 +195,7 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
 def _key_cache_by_what_it_compiles_in() -> None:
     """numba keys a cached kernel by its own source file only, but :func:`_run_rows` compiles the
     controller's kernel into itself: key it by those files too (recursions, statics, buffers,
-    spatial, distribution, fused_qp, cones), so that an edit of the controller recompiles the loop
+    spatial, distribution, fused_qp, cones, daqp_c, contact), so that an edit of the controller recompiles the loop
     instead of loading stale code. Uses numba's cache internals (as :func:`biped.sim.jit.is_cached` does); without them,
     numba's own key stands."""
     import biped.control.buffers
@@ -209,6 +215,7 @@ def _key_cache_by_what_it_compiles_in() -> None:
         fused_qp,
         biped.control.cones,
         daqp_c,
+        contact_mod,
     )
     try:
         cache_file = _run_rows._cache._cache_file  # type: ignore[attr-defined]
@@ -278,13 +285,13 @@ class FusedRows:
     """The compiled loop bound to one run's MuJoCo data, controller and record arrays
     (see :func:`biped.sim.push.run_closed_loop`). ``run(k0, k1)`` -> (row, why)."""
 
-    def __init__(self, *, model, data, scene, scenario, controller, sensed, limits, codes, records):
+    def __init__(self, *, model, data, scene, scenario, controller, sensed, limits, codes, seams, records):
         step = mj_step_function()
         lay = mjdata_layout(model, data) if step is not None else None
         if lay is None:
             why = mjdata.last_failure if step is not None else "libmujoco's mj_step not found"
             raise LookupError(f"the compiled loop cannot read this MuJoCo's data: {why}")
-        s32, s64, cptr_i, cbase, geom = lay
+        s32, s64, cptr_i, cbase, geom, cpos = lay
         ncon_i = mjdata._OFFSETS[0][0]
         compile_kernel()
         iq, iv = scene.biped_qpos_index, scene.biped_qvel_index
@@ -329,7 +336,9 @@ class FusedRows:
             s32,
             s64,
             geom,
+            cpos,
             codes,
+            seams,
             data.qpos,
             data.qvel,
             data.qpos[int(iq[0]) : int(iq[0]) + len(iq)],
@@ -337,6 +346,8 @@ class FusedRows:
             data.xipos,
             data.xpos,
             data.xquat,
+            data.geom_xpos,
+            data.geom_xmat,
             data.ctrl,
             np.ascontiguousarray(scene.actuator_index[:nj], dtype=np.int64),
             data.warning.number,
@@ -389,7 +400,7 @@ def sync_monitor(monitor, bits, com, period: float, a: int, b: int, data) -> Non
         monitor.record(k * period, int(bits[k]), com[k, 2], data)
 
 
-def fused_rows(scene, scenario, policy, model, data, codes, records) -> FusedRows | None:
+def fused_rows(scene, scenario, policy, model, data, monitor, records) -> FusedRows | None:
     """The :class:`FusedRows` of one run of ``policy`` (see
     :func:`biped.sim.push.run_closed_loop`), or None if it cannot have one."""
     found = fused_controller(policy)
@@ -404,7 +415,8 @@ def fused_rows(scene, scenario, policy, model, data, codes, records) -> FusedRow
             controller=found[0],
             sensed=found[1],
             limits=found[2],
-            codes=codes,
+            codes=monitor.pair_codes,
+            seams=monitor.seams,
             records=records,
         )
     except LookupError as exc:

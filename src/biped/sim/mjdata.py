@@ -109,8 +109,17 @@ def _offsets():
             seen.append(off)
     if qpos_at is None or arena_at is None or contact_at is None:
         return f"pointer fields: qpos at {qpos_at}, arena at {arena_at}, contact at {contact_at}"
-    geom = d.contact.geom
-    return ncon_at // 4, arena_at, contact_at, geom.ctypes.data - contact0, geom.strides[0]
+    geom, pos = d.contact.geom, d.contact.pos
+    if pos.strides != (geom.strides[0], 8):
+        return f"contact.pos strides {pos.strides}, geom stride {geom.strides[0]}"
+    return (
+        ncon_at // 4,
+        arena_at,
+        contact_at,
+        geom.ctypes.data - contact0,
+        geom.strides[0],
+        pos.ctypes.data - contact0,
+    )
 
 
 _OFFSETS: list = []
@@ -120,7 +129,8 @@ last_failure: str | None = None
 
 def mjdata_layout(model, data):
     """(int32 view of ``data``'s struct, uint64 view of it, index of the ``contact`` pointer in
-    the second, the contacts' address, (capacity, 2) int32 view of their geom pairs), or None
+    the second, the contacts' address, (capacity, 2) int32 view of their geom pairs, (capacity, 3)
+    float64 view of their positions), or None
     (the reason in :data:`last_failure`) when this MuJoCo's layout does not pass
     :func:`_offsets`' checks or ``data`` disagrees with the bindings."""
     global last_failure
@@ -130,7 +140,7 @@ def mjdata_layout(model, data):
             last_failure = found
             return None
         _OFFSETS.append(found)
-    ncon_i, arena_at, contact_at, geom_at, stride = _OFFSETS[0]
+    ncon_i, arena_at, contact_at, geom_at, stride, pos_at = _OFFSETS[0]
     s32, s64 = _struct_views(data, contact_at + 8)  # up to the contact pointer, within the struct
     if s32[ncon_i] != data.ncon:
         last_failure = f"ncon read as {s32[ncon_i]}, the bindings say {data.ncon}"
@@ -139,9 +149,13 @@ def mjdata_layout(model, data):
     capacity = max(1, int(model.narena) // stride)
     arena = (ctypes.c_uint8 * (capacity * stride)).from_address(contact0)
     geom = np.ndarray((capacity, 2), dtype=np.int32, buffer=arena, offset=geom_at, strides=(stride, 4))
-    if data.ncon and (
-        int(s64[contact_at // 8]) != contact0 or not np.array_equal(geom[: data.ncon], data.contact.geom)
+    pos = np.ndarray((capacity, 3), dtype=np.float64, buffer=arena, offset=pos_at, strides=(stride, 8))
+    n = data.ncon
+    if n and (
+        int(s64[contact_at // 8]) != contact0
+        or not np.array_equal(geom[:n], data.contact.geom)
+        or not np.array_equal(pos[:n], data.contact.pos)
     ):
         last_failure = "the contacts are not at the start of the arena"
         return None
-    return s32, s64, contact_at // 8, contact0, geom
+    return s32, s64, contact_at // 8, contact0, geom, pos

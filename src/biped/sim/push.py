@@ -305,6 +305,7 @@ def run_closed_loop(
         biped_geoms=scene.biped_geoms,
         central_body=scene.central_body,
         fall_height_m=scenario.fall_height_m,
+        sole_boxes=scene.sole_boxes,
     )
     n_ctrl, sub, period = scenario.control_steps, scenario.control_substeps, 1.0 / scenario.control_rate_hz
     n = n_ctrl + 1
@@ -340,7 +341,7 @@ def run_closed_loop(
         pass
     fused = None
     if compiled is not False and on_step is None and live:
-        fused = fused_mod.fused_rows(scene, scenario, policy, m, d, monitor.pair_codes, records)
+        fused = fused_mod.fused_rows(scene, scenario, policy, m, d, monitor, records)
     if compiled and fused is None:
         raise ScenarioError(fused_mod.refusal())
     synced = 0  # rows [0, synced) went through the monitor

@@ -45,12 +45,22 @@ SUPPORTS = ("fixed", "sensed")
 DISTRIBUTIONS = ("statics", "printed", "qp")
 
 #: Physics presets (key ``physics``): the values they give ``physics_timestep_s`` and
-#: ``contact_timeconst_s`` when those keys are not set, and whether MuJoCo's sleep flag is on.
-#: "faithful" is the reference (0.5 ms step, 5 ms contact time constant); "fast" halves the cost
-#: of a step and is checked against it in docs/sweep.md ("Physics presets").
+#: ``contact_timeconst_s`` when those keys are not set, whether MuJoCo's sleep flag is on, and
+#: whether each foot collides as one box (``sole_box``: the union of its flush heel and toe
+#: boxes, 4 corner contacts instead of 8, two pairs of which sit on the same points of the seam;
+#: see :func:`biped.sim.scene.scene_spec`). "faithful" is the reference (0.5 ms step, 5 ms contact
+#: time constant, the MJCF's heel and toe boxes); "fast" costs about 2.5x less per simulated
+#: second and is checked against it in docs/sweep.md ("Physics presets"). The one box leaves
+#: the feet-in-place envelopes unchanged but lets a stance foot slide twice as far during a
+#: sideways step, so a run with ``stepping`` keeps the heel and toe boxes (:attr:`Scenario.sole_box`).
 PHYSICS_PRESETS = {
-    "faithful": {"physics_timestep_s": 0.0005, "contact_timeconst_s": 0.005, "sleep": False},
-    "fast": {"physics_timestep_s": 0.001, "contact_timeconst_s": 0.0075, "sleep": True},
+    "faithful": {
+        "physics_timestep_s": 0.0005,
+        "contact_timeconst_s": 0.005,
+        "sleep": False,
+        "sole_box": False,
+    },
+    "fast": {"physics_timestep_s": 0.001, "contact_timeconst_s": 0.0075, "sleep": True, "sole_box": True},
 }
 PHYSICS = tuple(PHYSICS_PRESETS)
 _PRESET_KEYS = ("physics_timestep_s", "contact_timeconst_s")
@@ -71,7 +81,7 @@ class Scenario:
     """
 
     duration_s: float = 3.0
-    physics: str = "faithful"  # not in W: "fast" = 1 ms step, 7.5 ms contacts, MuJoCo's sleep
+    physics: str = "faithful"  # not in W: "fast" = 1 ms step, 7.5 ms contacts, ... (PHYSICS_PRESETS)
     physics_timestep_s: float = None  # type: ignore[assignment]  # None: from the preset
     control_rate_hz: float = 500.0
     block_mass_kg: float = 1.8
@@ -193,6 +203,13 @@ class Scenario:
     def sleep(self) -> bool:
         """MuJoCo's sleep flag (bodies at rest stop being simulated): on for ``physics="fast"``."""
         return bool(PHYSICS_PRESETS[self.physics]["sleep"])
+
+    @property
+    def sole_box(self) -> bool:
+        """Each foot collides as one box, the union of its heel and toe boxes: on for
+        ``physics="fast"`` without ``stepping`` (see :data:`PHYSICS_PRESETS` and
+        :func:`biped.sim.scene.scene_spec`)."""
+        return bool(PHYSICS_PRESETS[self.physics]["sole_box"]) and not self.stepping
 
     # ------------------------------------------------------------------ export
     def to_dict(self) -> dict:

@@ -69,6 +69,10 @@ class Scene:
     sole_geoms: tuple
     biped_geoms: tuple
     solref: tuple = field(default=(0.02, 1.0))
+    #: ``((geom, foot, seam_m, heel_side), ...)``: the collision box of each foot whose heel and
+    #: toe collide as one (``scenario.sole_box``), its foot (0 left, 1 right), the heel/toe seam
+    #: on the box's x axis [m] and the side of it the heel lies on (+1 or -1); empty otherwise.
+    sole_boxes: tuple = ()
 
 
 def biped_spec(model: str = BIPED_MODEL) -> mujoco.MjSpec:
@@ -88,8 +92,18 @@ def scene_spec(scenario: Scenario) -> mujoco.MjSpec:
     MJCF's); MuJoCo's sleep flag when ``scenario.sleep`` (``physics = "fast"``): a tree at rest
     stops being simulated until something touches it. Only the block can sleep: MuJoCo never lets
     an actuated tree (the biped) sleep.
+
+    ``scenario.sole_box`` (``physics = "fast"``): each foot whose heel and toe boxes are flush
+    (same body, orientation, width and height, touching end to end) collides as one box, their
+    union (geom ``<foot>_sole_box``, collision only: group 3, transparent, massless); the heel
+    and toe boxes stay for the eye and stop colliding. A box on a plane gives MuJoCo 4 corner
+    contacts: the two boxes gave 8, two pairs of them on the same points of the seam, and a
+    third of a step's cost is these contacts. The support polygon is the same; the contact
+    monitor tells the heel's corners from the toe's by the side of the seam they lie on.
     """
     spec = biped_spec(scenario.model)
+    if scenario.sole_box:
+        _add_sole_boxes(spec, biped_spec(scenario.model).compile())
     spec.modelname = "push_scene"
     spec.option.timestep = scenario.physics_timestep_s
     spec.option.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
@@ -137,6 +151,82 @@ def scene_spec(scenario: Scenario) -> mujoco.MjSpec:
         g.solimp = list(CONTACT_SOLIMP)
         g.solmix = 1.0
     return spec
+
+
+SOLE_BOX = "{foot}_sole_box"
+
+
+def _sole_union(m: mujoco.MjModel, foot: str):
+    """(heel geom, toe geom, pos (3,), quat (4,), size (3,)) of the box that is the union of the
+    foot's heel and toe boxes in model ``m``, or None when they are not two flush boxes (same
+    body, orientation, width and height, touching end to end along their x axis)."""
+    try:
+        h, t = m.geom(f"{foot}_heel").id, m.geom(f"{foot}_toe").id
+    except KeyError:
+        return None
+    box = int(mujoco.mjtGeom.mjGEOM_BOX)
+    if m.geom_type[h] != box or m.geom_type[t] != box or m.geom_bodyid[h] != m.geom_bodyid[t]:
+        return None
+    if not np.allclose(m.geom_quat[h], m.geom_quat[t], atol=1e-12):
+        return None
+    R = np.zeros(9)
+    mujoco.mju_quat2Mat(R, m.geom_quat[h])
+    dx = R.reshape(3, 3).T @ (m.geom_pos[h] - m.geom_pos[t])  # heel centre in the toe box's axes
+    sh, st = m.geom_size[h], m.geom_size[t]
+    tol = 1e-6  # [m]: the shipped model's sizes are printed to 0.1 um
+    if abs(dx[1]) > tol or abs(dx[2]) > tol or np.abs(sh[1:] - st[1:]).max() > tol:
+        return None
+    if abs(abs(dx[0]) - (sh[0] + st[0])) > tol:
+        return None
+    s = np.sign(dx[0])  # the heel's side of the toe on the boxes' x axis
+    half = 0.5 * (abs(dx[0]) + sh[0] + st[0])  # from the toe's outer end to the heel's
+    mid = m.geom_pos[t] + R.reshape(3, 3)[:, 0] * 0.5 * (dx[0] + s * sh[0] - s * st[0])
+    return h, t, mid, m.geom_quat[h].copy(), np.array([half, sh[1], sh[2]])
+
+
+def _add_sole_boxes(spec: mujoco.MjSpec, bm: mujoco.MjModel) -> None:
+    """Give each foot of ``spec`` whose heel and toe are flush boxes (:func:`_sole_union` on its
+    compiled model ``bm``) one collision box, their union; the heel and toe stop colliding."""
+    for foot in ("left", "right"):
+        u = _sole_union(bm, foot)
+        if u is None:
+            continue
+        h, t, pos, quat, size = u
+        heel, toe = spec.geom(f"{foot}_heel"), spec.geom(f"{foot}_toe")
+        body = spec.body(bm.body(bm.geom_bodyid[h]).name)
+        body.add_geom(
+            name=SOLE_BOX.format(foot=foot),
+            type=mujoco.mjtGeom.mjGEOM_BOX,
+            pos=list(pos),
+            quat=list(quat),
+            size=list(size),
+            contype=int(bm.geom_contype[h]),
+            conaffinity=int(bm.geom_conaffinity[h]),
+            condim=int(bm.geom_condim[h]),
+            group=3,
+            rgba=[0.0, 0.0, 0.0, 0.0],
+            mass=0.0,
+        )
+        for g in (heel, toe):
+            g.contype, g.conaffinity = 0, 0
+
+
+def _sole_boxes(model: mujoco.MjModel) -> tuple:
+    """:attr:`Scene.sole_boxes` of a compiled scene."""
+    out = []
+    for i, foot in enumerate(("left", "right")):
+        try:
+            b = model.geom(SOLE_BOX.format(foot=foot)).id
+        except KeyError:
+            continue
+        h = model.geom(f"{foot}_heel").id
+        R = np.zeros(9)
+        mujoco.mju_quat2Mat(R, model.geom_quat[b])
+        xh = float((R.reshape(3, 3).T @ (model.geom_pos[h] - model.geom_pos[b]))[0])  # heel centre on x
+        side = 1.0 if xh > 0 else -1.0
+        seam = xh - side * float(model.geom_size[h][0])
+        out.append((b, i, seam, side))
+    return tuple(out)
 
 
 def _index_of(model, obj, name, kind):
@@ -205,6 +295,7 @@ def build_scene(scenario: Scenario) -> Scene:
         sole_geoms=sole_geoms,
         biped_geoms=biped_geoms,
         solref=tuple(float(x) for x in model.geom_solref[0]),
+        sole_boxes=_sole_boxes(model),
     )
 
 
