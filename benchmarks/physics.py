@@ -2,13 +2,14 @@
 
 Runs one grid (default: 8 directions x block speeds 1-9 m/s, the hold task of ``biped sweep``)
 for each controller under ``physics = "faithful"`` (0.5 ms step, 5 ms contact time constant) and
-``physics = "fast"`` (1 ms, 7.5 ms, MuJoCo's sleep flag), then prints, per direction, the largest
-speed survived before the first fall (the envelope of ``biped.sim.sweep.envelope``) under each
-preset and their difference in grid steps (the criterion: at most one step in every direction),
-as the markdown table of docs/sweep.md. It also prints W's default push under both presets: W's
-timeline (``biped.sim.contact.heel_timeline``: block hit, heels rise, heels back) side by side
-(the criterion: within 10 ms) and every foot event, and the wall time per trial of each preset
-(same run; a shared machine, so only a rough figure).
+``physics = "fast"`` (1 ms, 7.5 ms, MuJoCo's sleep flag, one collision box a sole), then prints,
+per direction, the largest speed survived before the first fall (the envelope of
+``biped.sim.sweep.envelope``) under each preset and their difference in grid steps (the
+criterion: at most one step in every direction), as the markdown table of docs/sweep.md. It also
+prints W's default push under both presets: W's timeline (``biped.sim.contact.heel_timeline``:
+block hit, heels rise, heels back) side by side (the criterion: within 10 ms) and every foot
+event, and the wall time per trial of each preset (same run; a shared machine, so only a rough
+figure).
 
 Sweep files go to ``--out`` (default runs/physics-presets/); run the command again to resume.
 

@@ -133,7 +133,8 @@ def main() -> None:
     print(
         f"scenario: physics {scenario.physics!r} ({scenario.physics_timestep_s * 1e3:g} ms step, "
         f"contact time constant {scenario.contact_timeconst_s * 1e3:g} ms"
-        f"{', sleep' if scenario.sleep else ''}), control {scenario.control_rate_hz:g} Hz, "
+        f"{', sleep' if scenario.sleep else ''}{', one box a sole' if scenario.sole_box else ''})"
+        f", control {scenario.control_rate_hz:g} Hz, "
         f"controller {scenario.controller} ({scenario.distribution}), simulated {sim_time:.3f} s of "
         f"{scenario.duration_s:g} s"
         + (
