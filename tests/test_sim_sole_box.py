@@ -15,7 +15,7 @@ import mujoco
 import numpy as np
 
 from biped.sim import Scenario
-from biped.sim.scene import _sole_union, biped_spec, build_scene, initial_state
+from biped.sim.scene import biped_spec, build_scene, initial_state, sole_union
 
 
 def _corners(m, d, g):
@@ -79,10 +79,10 @@ def test_stepping_keeps_heel_and_toe():
 
 def test_boxes_that_are_not_flush_stay_apart():
     bm = biped_spec("wendlandt").compile()
-    assert _sole_union(bm, "left") is not None
+    assert sole_union(bm, "left") is not None
     toe = bm.geom("left_toe").id
     bm.geom_pos[toe, 0] -= 0.001  # a 1 mm gap at the seam
-    assert _sole_union(bm, "left") is None
+    assert sole_union(bm, "left") is None
     bm.geom_pos[toe, 0] += 0.001
     bm.geom_size[toe, 1] *= 0.9  # a narrower toe
-    assert _sole_union(bm, "left") is None
+    assert sole_union(bm, "left") is None

@@ -14,6 +14,7 @@ the Coulomb limit is the same in every sliding direction.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import mujoco
 import numpy as np
@@ -156,10 +157,22 @@ def scene_spec(scenario: Scenario) -> mujoco.MjSpec:
 SOLE_BOX = "{foot}_sole_box"
 
 
-def _sole_union(m: mujoco.MjModel, foot: str):
-    """(heel geom, toe geom, pos (3,), quat (4,), size (3,)) of the box that is the union of the
-    foot's heel and toe boxes in model ``m``, or None when they are not two flush boxes (same
-    body, orientation, width and height, touching end to end along their x axis)."""
+class SoleUnion(NamedTuple):
+    """The box that is the union of a foot's flush heel and toe boxes (:func:`sole_union`)."""
+
+    heel: int  # geom ids of the two boxes
+    toe: int
+    pos: np.ndarray  # (3,) its centre in the foot body's frame [m]
+    quat: np.ndarray  # (4,) its orientation there (the two boxes')
+    size: np.ndarray  # (3,) its half-sizes [m]
+    seam: float  # where the heel meets the toe on its x axis [m]
+    side: float  # +1 if the heel lies on the +x side of the seam, else -1
+
+
+def sole_union(m: mujoco.MjModel, foot: str) -> SoleUnion | None:
+    """The union of ``foot``'s heel and toe boxes (geoms ``<foot>_heel``, ``<foot>_toe``) in
+    model ``m``, or None when they are not two flush boxes (same body, orientation, width and
+    height, touching end to end along their x axis)."""
     try:
         h, t = m.geom(f"{foot}_heel").id, m.geom(f"{foot}_toe").id
     except KeyError:
@@ -178,36 +191,35 @@ def _sole_union(m: mujoco.MjModel, foot: str):
         return None
     if abs(abs(dx[0]) - (sh[0] + st[0])) > tol:
         return None
-    s = np.sign(dx[0])  # the heel's side of the toe on the boxes' x axis
+    side = float(np.sign(dx[0]))  # the heel's side of the toe
     half = 0.5 * (abs(dx[0]) + sh[0] + st[0])  # from the toe's outer end to the heel's
-    mid = m.geom_pos[t] + R.reshape(3, 3)[:, 0] * 0.5 * (dx[0] + s * sh[0] - s * st[0])
-    return h, t, mid, m.geom_quat[h].copy(), np.array([half, sh[1], sh[2]])
+    mid = m.geom_pos[t] + R.reshape(3, 3)[:, 0] * 0.5 * (dx[0] + side * (sh[0] - st[0]))
+    seam = side * (half - 2.0 * sh[0])  # the heel's outer end less its length
+    return SoleUnion(h, t, mid, m.geom_quat[h].copy(), np.array([half, sh[1], sh[2]]), float(seam), side)
 
 
 def _add_sole_boxes(spec: mujoco.MjSpec, bm: mujoco.MjModel) -> None:
-    """Give each foot of ``spec`` whose heel and toe are flush boxes (:func:`_sole_union` on its
+    """Give each foot of ``spec`` whose heel and toe are flush boxes (:func:`sole_union` on its
     compiled model ``bm``) one collision box, their union; the heel and toe stop colliding."""
     for foot in ("left", "right"):
-        u = _sole_union(bm, foot)
+        u = sole_union(bm, foot)
         if u is None:
             continue
-        h, t, pos, quat, size = u
-        heel, toe = spec.geom(f"{foot}_heel"), spec.geom(f"{foot}_toe")
-        body = spec.body(bm.body(bm.geom_bodyid[h]).name)
+        body = spec.body(bm.body(bm.geom_bodyid[u.heel]).name)
         body.add_geom(
             name=SOLE_BOX.format(foot=foot),
             type=mujoco.mjtGeom.mjGEOM_BOX,
-            pos=list(pos),
-            quat=list(quat),
-            size=list(size),
-            contype=int(bm.geom_contype[h]),
-            conaffinity=int(bm.geom_conaffinity[h]),
-            condim=int(bm.geom_condim[h]),
+            pos=list(u.pos),
+            quat=list(u.quat),
+            size=list(u.size),
+            contype=int(bm.geom_contype[u.heel]),
+            conaffinity=int(bm.geom_conaffinity[u.heel]),
+            condim=int(bm.geom_condim[u.heel]),
             group=3,
             rgba=[0.0, 0.0, 0.0, 0.0],
             mass=0.0,
         )
-        for g in (heel, toe):
+        for g in (spec.geom(f"{foot}_heel"), spec.geom(f"{foot}_toe")):
             g.contype, g.conaffinity = 0, 0
 
 
@@ -219,13 +231,9 @@ def _sole_boxes(model: mujoco.MjModel) -> tuple:
             b = model.geom(SOLE_BOX.format(foot=foot)).id
         except KeyError:
             continue
-        h = model.geom(f"{foot}_heel").id
-        R = np.zeros(9)
-        mujoco.mju_quat2Mat(R, model.geom_quat[b])
-        xh = float((R.reshape(3, 3).T @ (model.geom_pos[h] - model.geom_pos[b]))[0])  # heel centre on x
-        side = 1.0 if xh > 0 else -1.0
-        seam = xh - side * float(model.geom_size[h][0])
-        out.append((b, i, seam, side))
+        u = sole_union(model, foot)
+        assert u is not None  # the scene added the box because the parts are flush
+        out.append((b, i, u.seam, u.side))
     return tuple(out)
 
 
