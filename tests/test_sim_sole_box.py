@@ -3,7 +3,7 @@
 Checked against MuJoCo itself: the box's corners are the outer corners of the two boxes, the
 bodies' mass and inertia do not change, the standing biped touches the floor at those corners
 only (4 contacts a foot instead of 8), and the box is neither drawn nor kept when the trial
-steps. (The heel/toe classification of its contacts is checked against an independent
+steps or is not W's shipped biped. (The heel/toe classification of its contacts is checked against an independent
 reference in tests/test_sim_contact.py; the presets' envelopes in docs/sweep.md.)
 """
 
@@ -75,6 +75,20 @@ def test_stepping_keeps_heel_and_toe():
     scene, m, _ = _standing("fast", stepping=True)
     assert scene.sole_boxes == () and "left_sole_box" not in [m.geom(i).name for i in range(m.ngeom)]
     assert _standing("faithful")[0].sole_boxes == ()
+
+
+def test_other_models_keep_heel_and_toe(tmp_path):
+    """Only W's shipped biped gets the one box (a 55 kg subject's min-norm push diverged with it,
+    docs/sweep.md), even the same file under another path."""
+    from biped import models
+    from biped.models import subject
+    from biped.sim.scenario import W_MODEL
+
+    assert W_MODEL == subject.DEFAULT
+    copy = tmp_path / "w.xml"
+    copy.write_text(models.path(subject.DEFAULT).read_text())
+    sc = Scenario.for_model(copy, physics="fast")
+    assert not sc.sole_box and build_scene(sc).sole_boxes == ()
 
 
 def test_boxes_that_are_not_flush_stay_apart():

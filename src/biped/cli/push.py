@@ -54,7 +54,8 @@ def register(subparsers) -> None:
         "--physics",
         choices=("faithful", "fast"),
         help="physics preset: faithful (default: 0.5 ms step, 5 ms contacts) or fast "
-        "(1 ms, 7.5 ms, sleep, one collision box a sole; checked against faithful in docs/sweep.md)",
+        "(1 ms, 7.5 ms, sleep, one collision box a sole on W's biped; checked against faithful in "
+        "docs/sweep.md)",
     )
     p.add_argument(
         "--distribution",

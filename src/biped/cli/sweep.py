@@ -90,7 +90,7 @@ def register(subparsers) -> None:
         choices=("faithful", "fast"),
         default=None,
         help="physics preset (default fast: 1 ms step, 7.5 ms contacts, sleep, one collision "
-        "box a sole unless stepping; its "
+        "box a sole on W's biped without stepping; its "
         "envelopes are within one grid step of faithful's, docs/sweep.md), unless "
         "the grid file or --set gives physics or the step/contact keys",
     )

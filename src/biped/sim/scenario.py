@@ -50,9 +50,10 @@ DISTRIBUTIONS = ("statics", "printed", "qp")
 #: boxes, 4 corner contacts instead of 8, two pairs of which sit on the same points of the seam;
 #: see :func:`biped.sim.scene.scene_spec`). "faithful" is the reference (0.5 ms step, 5 ms contact
 #: time constant, the MJCF's heel and toe boxes); "fast" costs about 2.5x less per simulated
-#: second and is checked against it in docs/sweep.md ("Physics presets"). The one box leaves
-#: the feet-in-place envelopes unchanged but lets a stance foot slide twice as far during a
-#: sideways step, so a run with ``stepping`` keeps the heel and toe boxes (:attr:`Scenario.sole_box`).
+#: second and is checked against it in docs/sweep.md ("Physics presets"). The one box is used
+#: only where it was checked, W's shipped biped with its feet in place (:attr:`Scenario.sole_box`):
+#: it lets a stance foot slide twice as far during a sideways step, and W's min-norm split on a
+#: 55 kg subject diverges with it where the two boxes held.
 PHYSICS_PRESETS = {
     "faithful": {
         "physics_timestep_s": 0.0005,
@@ -63,6 +64,8 @@ PHYSICS_PRESETS = {
     "fast": {"physics_timestep_s": 0.001, "contact_timeconst_s": 0.0075, "sleep": True, "sole_box": True},
 }
 PHYSICS = tuple(PHYSICS_PRESETS)
+#: The shipped biped of W (key ``model``'s default; ``biped.models.subject.DEFAULT``).
+W_MODEL = "wendlandt"
 _PRESET_KEYS = ("physics_timestep_s", "contact_timeconst_s")
 
 
@@ -120,7 +123,7 @@ class Scenario:
     recovery_orientation_tol_deg: float = 2.0
     seed: int = 0
     # not in W: the biped, a shipped model's name or an MJCF path (see Scenario.for_model)
-    model: str = "wendlandt"
+    model: str = W_MODEL
     # not in W: capture-point steps when the feet cannot hold (biped.control.stepping)
     stepping: bool = False
     max_steps: int = 3  # with stepping: most steps per run
@@ -207,9 +210,10 @@ class Scenario:
     @property
     def sole_box(self) -> bool:
         """Each foot collides as one box, the union of its heel and toe boxes: on for
-        ``physics="fast"`` without ``stepping`` (see :data:`PHYSICS_PRESETS` and
-        :func:`biped.sim.scene.scene_spec`)."""
-        return bool(PHYSICS_PRESETS[self.physics]["sole_box"]) and not self.stepping
+        ``physics="fast"`` on W's shipped biped without ``stepping`` (see :data:`PHYSICS_PRESETS`
+        and :func:`biped.sim.scene.scene_spec`)."""
+        preset = bool(PHYSICS_PRESETS[self.physics]["sole_box"])
+        return preset and not self.stepping and self.model == W_MODEL
 
     # ------------------------------------------------------------------ export
     def to_dict(self) -> dict:

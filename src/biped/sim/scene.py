@@ -94,13 +94,14 @@ def scene_spec(scenario: Scenario) -> mujoco.MjSpec:
     stops being simulated until something touches it. Only the block can sleep: MuJoCo never lets
     an actuated tree (the biped) sleep.
 
-    ``scenario.sole_box`` (``physics = "fast"``): each foot whose heel and toe boxes are flush
-    (same body, orientation, width and height, touching end to end) collides as one box, their
-    union (geom ``<foot>_sole_box``, collision only: group 3, transparent, massless); the heel
-    and toe boxes stay for the eye and stop colliding. A box on a plane gives MuJoCo 4 corner
-    contacts: the two boxes gave 8, two pairs of them on the same points of the seam, and a
-    third of a step's cost is these contacts. The support polygon is the same; the contact
-    monitor tells the heel's corners from the toe's by the side of the seam they lie on.
+    ``scenario.sole_box`` (``physics = "fast"`` on W's biped, feet in place): each foot whose
+    heel and toe boxes are flush (same body, orientation, width and height, touching end to end)
+    collides as one box, their union (geom ``<foot>_sole_box``, collision only: group 3,
+    transparent, massless); the heel and toe boxes stay for the eye and stop colliding. A box on
+    a plane gives MuJoCo 4 corner contacts: the two boxes gave 8, two pairs of them on the same
+    points of the seam, and a third of a step's cost is these contacts. The support polygon is
+    the same; the contact monitor tells the heel's corners from the toe's by the side of the seam
+    they lie on.
     """
     spec = biped_spec(scenario.model)
     if scenario.sole_box:
