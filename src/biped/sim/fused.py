@@ -1,7 +1,8 @@
 """The push loop's hot path in one compiled call: contacts, W's controller, records and MuJoCo.
 
 :func:`biped.sim.push.run_closed_loop` runs W's workspace controller (min-norm, printed or QP
-distribution; the QP's solve itself in Python, :mod:`biped.sim.fused_qp`) and the joint-PD
+distribution; the QP solved by daqp's C function, :mod:`biped.sim.daqp_c`, or through numba's
+objmode, :mod:`biped.sim.fused_qp`) and the joint-PD
 baseline (without gravity compensation), clipped by torque limits or not (not stepping),
 through :class:`FusedRows`: one numba call runs up to one progress interval of control
 periods, each doing exactly what the Python loop does, in the same order: classify MuJoCo's contacts (the OR of
