@@ -214,9 +214,9 @@ class ReferenceMonitor:
     def __init__(self, model, scene, fall_height_m):
         self.model, self.floor, self.block = model, scene.floor_geom, scene.block_geom
         self.sole = {g: i for i, g in enumerate(scene.sole_geoms)}
-        self.boxes = {}  # one collision box -> (heel geom, its index, the toe's index)
+        self.boxes = {}  # one collision box -> (heel geom, toe geom)
+        names = [model.geom(g).name for g in range(model.ngeom)]
         for foot in ("left", "right"):
-            names = [model.geom(g).name for g in range(model.ngeom)]
             if f"{foot}_sole_box" in names:
                 heel = model.geom(f"{foot}_heel").id
                 toe = model.geom(f"{foot}_toe").id

@@ -29,6 +29,7 @@ from biped.models import (
     W_INITIAL_ANGLES_DEG,
     W_INITIAL_COM_M,
     W_INITIAL_TILT_DEG,
+    subject,
 )
 from biped.sim import scenario_checks
 from biped.sim.scenario_checks import INTS, MAX_SEED, RANGES, VECTORS, is_number
@@ -64,8 +65,6 @@ PHYSICS_PRESETS = {
     "fast": {"physics_timestep_s": 0.001, "contact_timeconst_s": 0.0075, "sleep": True, "sole_box": True},
 }
 PHYSICS = tuple(PHYSICS_PRESETS)
-#: The shipped biped of W (key ``model``'s default; ``biped.models.subject.DEFAULT``).
-W_MODEL = "wendlandt"
 _PRESET_KEYS = ("physics_timestep_s", "contact_timeconst_s")
 
 
@@ -123,7 +122,7 @@ class Scenario:
     recovery_orientation_tol_deg: float = 2.0
     seed: int = 0
     # not in W: the biped, a shipped model's name or an MJCF path (see Scenario.for_model)
-    model: str = W_MODEL
+    model: str = subject.DEFAULT
     # not in W: capture-point steps when the feet cannot hold (biped.control.stepping)
     stepping: bool = False
     max_steps: int = 3  # with stepping: most steps per run
@@ -162,8 +161,6 @@ class Scenario:
         initial COM heights, and ``block_mass_kg`` times the ratio of total body masses (W's push
         as momentum per kilogram of body; pass ``block_mass_kg=1.8`` for W's block itself).
         ``model`` is recorded as an absolute path."""
-        from biped.models import subject
-
         if not isinstance(model, (str, Path)) or not str(model).strip():
             raise ScenarioError(
                 f"model must be a shipped model's name ('wendlandt') or the path "
@@ -213,7 +210,7 @@ class Scenario:
         ``physics="fast"`` on W's shipped biped without ``stepping`` (see :data:`PHYSICS_PRESETS`
         and :func:`biped.sim.scene.scene_spec`)."""
         preset = bool(PHYSICS_PRESETS[self.physics]["sole_box"])
-        return preset and not self.stepping and self.model == W_MODEL
+        return preset and not self.stepping and self.model == subject.DEFAULT
 
     # ------------------------------------------------------------------ export
     def to_dict(self) -> dict:
