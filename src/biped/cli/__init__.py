@@ -91,35 +91,51 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return EXIT_BAD_INPUT
     prog = getattr(args, "_prog", None) or f"biped {args.command}"
-    ok = False
+    try:
+        code, ok = _run(args, prog)
+    except BaseException:  # not a status (a bug): close the folders, then let it show
+        finish_runs(False)
+        raise
+    try:
+        finish_runs(ok, prog.removeprefix("biped "))
+    except OSError as exc:  # the run marker could not be written (disk full...)
+        print(f"{prog}: error: {_file_error(exc)}", file=sys.stderr)
+        return EXIT_FAILED
+    return code
+
+
+def _file_error(exc: OSError) -> str:
+    where = f" {exc.filename!r}" if getattr(exc, "filename", None) else ""
+    return f"file system:{where} {exc.strerror or exc}"
+
+
+def _run(args, prog: str) -> tuple[int, bool]:
+    """(exit status, whether the run's folders get their run marker) of the command."""
     terminated = {"by": False}
     previous = _sigterm_as_interrupt(terminated)
     try:
         code = int(args.func(args) or 0)
         if code == EXIT_INTERRUPTED and terminated["by"]:
             code = EXIT_TERMINATED
-        ok = code in (EXIT_OK, EXIT_INTERRUPTED, EXIT_TERMINATED)
-        return code
+        return code, code in (EXIT_OK, EXIT_INTERRUPTED, EXIT_TERMINATED)
     except BipedError as exc:
         print(f"{prog}: error: {_one_line(exc)}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return EXIT_BAD_INPUT, False
     except KeyboardInterrupt:
         print(f"{prog}: {'terminated (SIGTERM)' if terminated['by'] else 'interrupted'}", file=sys.stderr)
-        return EXIT_TERMINATED if terminated["by"] else EXIT_INTERRUPTED
+        return (EXIT_TERMINATED if terminated["by"] else EXIT_INTERRUPTED), False
     except MemoryError:
         print(
             f"{prog}: error: out of memory; use a smaller problem (see --help for the bounds)",
             file=sys.stderr,
         )
-        return EXIT_FAILED
+        return EXIT_FAILED, False
     except OSError as exc:
-        where = f" {exc.filename!r}" if getattr(exc, "filename", None) else ""
-        print(f"{prog}: error: file system:{where} {exc.strerror or exc}", file=sys.stderr)
-        return EXIT_FAILED
+        print(f"{prog}: error: {_one_line(_file_error(exc))}", file=sys.stderr)
+        return EXIT_FAILED, False
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
-        finish_runs(ok, prog.removeprefix("biped "))
 
 
 def _sigterm_as_interrupt(state: dict):

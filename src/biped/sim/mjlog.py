@@ -48,6 +48,10 @@ def _apply(path: str | None) -> None:
 def route_to(path: str | os.PathLike | None) -> None:
     """Append MuJoCo's warnings to ``path`` (None: write no log file) in this process and in
     child processes started afterwards (through :data:`ENV`)."""
+    if path:
+        from biped.files import check_no_link
+
+        check_no_link(path, "the MuJoCo log")
     value = str(Path(path).resolve()) if path else ""
     os.environ[ENV] = value
     _apply(value or None)

@@ -16,9 +16,11 @@
 
 from __future__ import annotations
 
+import errno
 import fcntl
 import json
 import os
+import stat
 import time
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -30,6 +32,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from biped import __version__
+from biped import files as _files
 from biped.errors import ScenarioError
 from biped.sim.scenario import Scenario
 from biped.sim.sweep.record import schema
@@ -64,8 +67,18 @@ class SweepLock:
         self.fd: int | None = None
 
     def acquire(self) -> None:
+        flags = os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
         while True:
-            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+            _files.check_no_link(self.path, "the lock file")
+            try:
+                fd = os.open(self.path, flags | os.O_NONBLOCK, 0o644)
+            except OSError as exc:
+                if exc.errno == errno.ELOOP:  # a link planted between the check and the open
+                    _files.check_no_link(self.path, "the lock file")
+                raise
+            if not stat.S_ISREG(os.fstat(fd).st_mode):
+                os.close(fd)
+                raise ScenarioError(f"the lock file {str(self.path)!r} is not a regular file; remove it")
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except BlockingIOError:
@@ -125,7 +138,9 @@ class PartWriter:
         if not rows:
             return
         if self._writer is None:
-            self._sink = pa.OSFile(str(self.path), "wb")
+            check_parts_dir(self.dir)
+            fd = _files.open_exclusive(self.path)  # a new file, never through a link
+            self._sink = pa.PythonFile(os.fdopen(fd, "wb", buffering=0), mode="w")
             self._writer = pa.ipc.new_stream(self._sink, schema())
         self._writer.write_batch(pa.RecordBatch.from_pylist(rows, schema=schema()))
         self._sink.flush()
@@ -142,11 +157,20 @@ def read_part(path: Path) -> pa.Table:
     """The rows of one part file; a torn last batch (the writer was killed mid-write) is left
     out. Reads the Parquet parts of earlier versions too."""
     if path.suffix == ".parquet":
-        return pq.read_table(path, schema=schema())
+        try:
+            return pq.read_table(path, schema=schema())
+        except Exception as exc:  # noqa: BLE001 - any unreadable part is refused the same way
+            raise _foreign_part(path, f"not a readable Parquet file of this schema: {exc}") from None
+    with open(path, "rb") as f:
+        head = f.read(4)
+    if head and not _STREAM_START.startswith(head):  # not torn: not an Arrow stream at all
+        raise _foreign_part(path, "not an Arrow stream")
     batches = []
     try:
         with pa.OSFile(str(path), "rb") as f:
             reader = pa.ipc.open_stream(f)
+            if not reader.schema.equals(schema(), check_metadata=False):
+                raise _foreign_part(path, "its columns are not those of this version's sweep rows")
             while True:
                 try:
                     batches.append(reader.read_next_batch())
@@ -155,6 +179,17 @@ def read_part(path: Path) -> pa.Table:
     except (pa.ArrowInvalid, OSError, EOFError):
         pass  # empty, or torn at the end: keep the complete batches
     return pa.Table.from_batches(batches, schema=schema())
+
+
+#: The first bytes of every Arrow IPC stream (the continuation marker).
+_STREAM_START = b"\xff\xff\xff\xff"
+
+
+def _foreign_part(path: Path, why: str) -> ScenarioError:
+    return ScenarioError(
+        f"{str(path)!r} is not a part file of a biped sweep ({why}); move it out of "
+        f"{str(path.parent)!r} and run again"
+    )
 
 
 def part_files(directory: Path) -> list[Path]:
@@ -279,11 +314,20 @@ def remove_sweep(out: Path) -> None:
             ) from None
 
 
+def check_parts_dir(pdir: Path) -> None:
+    """Refuse a ``<out>.parts`` that is a link, or something other than a folder."""
+    _files.check_no_link(pdir, "the parts folder")
+    if pdir.exists() and not pdir.is_dir():
+        raise ScenarioError(f"{str(pdir)!r} is not a folder (a sweep keeps its parts there); remove it")
+
+
 def write_manifest(spec: SweepSpec, out: Path) -> None:
     pdir = parts_dir(out)
+    check_parts_dir(pdir)
     pdir.mkdir(exist_ok=True)
-    (pdir / MANIFEST).write_text(
-        json.dumps({"sweep_id": spec.identity, "sweep": spec.to_dict(), "model_sha256": spec.model_sha256})
+    _files.write_text(
+        pdir / MANIFEST,
+        json.dumps({"sweep_id": spec.identity, "sweep": spec.to_dict(), "model_sha256": spec.model_sha256}),
     )
 
 
@@ -311,9 +355,7 @@ def consolidate(spec: SweepSpec, out: Path, trials: Iterable[Trial]) -> int:
             rows.append({**r, "index": index[key]})
     rows.sort(key=lambda r: r["index"])
     result = pa.Table.from_pylist(rows, schema=schema().with_metadata(metadata(spec)))
-    tmp = out.with_name(out.name + ".tmp")
-    pq.write_table(result, tmp)
-    os.replace(tmp, out)
+    _files.write_via(out, lambda tmp: pq.write_table(result, tmp))  # atomic, never through a link
     pdir = parts_dir(out)
     for p in files:
         p.unlink(missing_ok=True)
