@@ -131,7 +131,7 @@ def _run(args, prog: str) -> tuple[int, bool]:
         )
         return EXIT_FAILED, False
     except OSError as exc:
-        print(f"{prog}: error: {_one_line(_file_error(exc))}", file=sys.stderr)
+        print(f"{prog}: error: {' '.join(_file_error(exc).split())}", file=sys.stderr)
         return EXIT_FAILED, False
     finally:
         if previous is not None:

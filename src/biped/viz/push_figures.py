@@ -15,6 +15,7 @@ degrees (roll, pitch, yaw about the set point) beside the quaternion components.
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 import numpy as np
@@ -283,7 +284,7 @@ def plot_push(result, out_dir) -> list[Path]:
             for ext in ("png", "svg"):
                 p = out / f"{name}.{ext}"
                 meta = {"Date": None} if ext == "svg" else None
-                files.write_via(p, lambda tmp, fig=fig, meta=meta: fig.savefig(tmp, dpi=120, metadata=meta))
+                files.write_via(p, functools.partial(fig.savefig, dpi=120, metadata=meta))
                 paths.append(p)
         finally:
             plt.close(fig)
