@@ -28,6 +28,9 @@ from biped.errors import BipedError
 
 SUBCOMMANDS = ("push", "posture", "walk", "sweep", "model")
 
+#: Options naming a file or folder: an empty value is refused (it would read as "not given").
+_PATH_OPTIONS = ("out", "model", "scenario", "grid", "plot", "animation", "video")
+
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_TERMINATED = 0, 1, 2, 130, 143
 
 #: Negative numbers as values, e.g. ``--block-velocity -1e6 0 0`` (argparse's own pattern misses
@@ -90,6 +93,11 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return EXIT_BAD_INPUT
+    empty = next((k for k in _PATH_OPTIONS if getattr(args, k, None) == ""), None)
+    if empty is not None:  # '' would otherwise silently mean the default
+        getattr(args, "_parser", parser).error(
+            f"--{empty.replace('_', '-')} '' is an empty path; name a file or folder, or leave the option out"
+        )
     prog = getattr(args, "_prog", None) or f"biped {args.command}"
     try:
         code, ok = _run(args, prog)

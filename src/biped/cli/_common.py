@@ -128,7 +128,8 @@ def read_marker(path: Path, flag: str = "--out") -> tuple[str, list[str]] | None
             raise refuse(f"lists {f!r}, which is not a file name")
         parts = PurePosixPath(f).parts
         if (
-            PurePosixPath(f).is_absolute()
+            not parts
+            or PurePosixPath(f).is_absolute()
             or any(p in ("..", ".") for p in parts)
             or f != str(PurePosixPath(f))
         ):

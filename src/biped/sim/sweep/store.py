@@ -11,7 +11,10 @@
   file's SHA-256, the package version) and the part files that were read into it are removed.
 - **Same sweep or refused**: a rerun on an existing ``<out>`` must be the same sweep, or one
   whose grid extends it (more values on an axis); anything else is refused naming the difference,
-  unless ``overwrite``.
+  unless ``overwrite``. The model is compared as MuJoCo compiles it (included files count), grid
+  values as numbers to a relative ``GRID_RTOL``.
+- **No links**: the lock, the parts folder, its files and ``<out>`` are never written through a
+  symbolic link (:mod:`biped.files`); ``<out>`` is replaced atomically.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ from __future__ import annotations
 import errno
 import fcntl
 import json
+import math
 import os
 import stat
 import time
@@ -36,7 +40,7 @@ from biped import files as _files
 from biped.errors import ScenarioError
 from biped.sim.scenario import Scenario
 from biped.sim.sweep.record import schema
-from biped.sim.sweep.spec import AXES, SweepSpec, Trial
+from biped.sim.sweep.spec import AXES, GRID_RTOL, SweepSpec, Trial
 
 MANIFEST = "sweep.json"
 
@@ -219,10 +223,26 @@ def _fmt_values(values: list[float]) -> str:
     return f"{len(v)} value{'s' * (len(v) != 1)} [{shown}]"
 
 
-def spec_difference(old: dict, old_model_sha256: str | None, spec: SweepSpec) -> str | None:
+def _same(a: Any, b: Any) -> bool:
+    return (
+        isinstance(a, (int, float)) and isinstance(b, (int, float)) and math.isclose(a, b, rel_tol=GRID_RTOL)
+    )
+
+
+def _missing(old: list, new: list) -> list:
+    """The values of ``old`` that ``new`` lacks (numbers compared to :data:`GRID_RTOL`)."""
+    return [a for a in old if not any(_same(a, b) for b in new)]
+
+
+def spec_difference(
+    old: dict, old_model_sha256: str | None, spec: SweepSpec, old_compiled_sha256: str | None = None
+) -> str | None:
     """``None`` if ``spec`` is the sweep described by ``old`` (a :meth:`SweepSpec.to_dict`) or
-    extends its grid (every old value of every axis is still there, so every old trial is a
-    trial of ``spec``); else what differs, in words."""
+    extends its grid (every old value of every axis is still there, to a relative
+    :data:`~biped.sim.sweep.spec.GRID_RTOL`, so every old trial is a trial of ``spec``); else what
+    differs, in words, naming the first value that differs with all its digits. The model is
+    compared compiled (``old_compiled_sha256``: included files count); a file of an earlier
+    version, without that hash, by the top-level file's SHA-256."""
     new = spec.to_dict()
     diffs = []
     old_scen, new_scen = old.get("scenario", {}), new["scenario"]
@@ -232,26 +252,36 @@ def spec_difference(old: dict, old_model_sha256: str | None, spec: SweepSpec) ->
     for k in ("launch_distance_m", "model", "torque_limits", "samples", "seed"):
         if old.get(k) != new[k]:
             diffs.append(f"{k}: {old.get(k)!r} in the file, {new[k]!r} now")
-    if old_model_sha256 and old_model_sha256 != spec.model_sha256:
+    if old_compiled_sha256:
+        now = spec.model_compiled_sha256
+        if old_compiled_sha256 != now:
+            diffs.append(
+                f"the model {str(spec.model_path)!r} compiles differently (it or a file it includes "
+                f"changed: compiled SHA-256 {old_compiled_sha256[:12]}... in the file, {now[:12]}... now)"
+            )
+    elif old_model_sha256 and old_model_sha256 != spec.model_sha256:
         diffs.append(
             f"the model file {spec.model!r} changed (SHA-256 {old_model_sha256[:12]}... "
             f"in the file, {spec.model_sha256[:12]}... now)"
         )
     old_grid = old.get("grid", {})
     for name in AXES:
-        a, b = old_grid.get(name, []), new["grid"][name]
+        a, b = list(old_grid.get(name, [])), new["grid"][name]
+        lacking = _missing(a, b)
         if new["samples"] is not None:
-            if sorted(a) != sorted(b):
-                diffs.append(f"{name}: {_fmt_values(a)} in the file, {_fmt_values(b)} now")
-        elif not set(a) <= set(b):
+            extra = _missing(b, a)
+            if lacking or extra:
+                first = f"{lacking[0]!r} in the file only" if lacking else f"{extra[0]!r} now only"
+                diffs.append(f"{name}: {_fmt_values(a)} in the file, {_fmt_values(b)} now ({first})")
+        elif lacking:
             diffs.append(
                 f"{name}: {_fmt_values(a)} in the file, {_fmt_values(b)} now, which "
-                f"lacks {len(set(a) - set(b))} of them"
+                f"lacks {len(lacking)} of them (first: {lacking[0]!r})"
             )
     return "; ".join(diffs) or None
 
 
-def _stored_spec(out: Path) -> tuple[dict, str | None] | None:
+def _stored_spec(out: Path) -> tuple[dict, str | None, str | None] | None:
     if not out.exists():
         return None
     try:
@@ -266,7 +296,16 @@ def _stored_spec(out: Path) -> tuple[dict, str | None] | None:
             f"--out {str(out)!r} is not a biped sweep file; choose another path or pass --overwrite"
         )
     sha = meta.get(b"biped.model_sha256")
-    return json.loads(meta[b"biped.sweep"]), sha.decode() if sha else None
+    compiled = meta.get(b"biped.model_compiled_sha256")
+    try:
+        stored = json.loads(meta[b"biped.sweep"])
+    except ValueError:
+        stored = None
+    if not isinstance(stored, dict):
+        raise ScenarioError(
+            f"--out {str(out)!r} holds unreadable sweep metadata; choose another path or pass --overwrite"
+        )
+    return stored, sha.decode() if sha else None, compiled.decode() if compiled else None
 
 
 def check_same_sweep(spec: SweepSpec, out: Path) -> None:
@@ -274,7 +313,7 @@ def check_same_sweep(spec: SweepSpec, out: Path) -> None:
     repeats nor extends. Call under the lock."""
     stored = _stored_spec(out)
     if stored is not None:
-        diff = spec_difference(stored[0], stored[1], spec)
+        diff = spec_difference(stored[0], stored[1], spec, stored[2])
         if diff:
             raise ScenarioError(
                 f"--out {str(out)!r} holds a different sweep ({diff}); a rerun may only add "
@@ -283,10 +322,14 @@ def check_same_sweep(spec: SweepSpec, out: Path) -> None:
     manifest = parts_dir(out) / MANIFEST
     if manifest.exists():
         try:
-            saved = json.loads(manifest.read_text())
-        except (OSError, ValueError):
+            saved = json.loads(_files.read_input(manifest, "sweep manifest"))
+        except (ValueError, ScenarioError):
             saved = {}
-        diff = spec_difference(saved.get("sweep", {}), saved.get("model_sha256"), spec)
+        if not isinstance(saved, dict) or not isinstance(saved.get("sweep", {}), dict):
+            saved = {}
+        diff = spec_difference(
+            saved.get("sweep", {}), saved.get("model_sha256"), spec, saved.get("model_compiled_sha256")
+        )
         if diff:
             raise ScenarioError(
                 f"{str(parts_dir(out))!r} holds the unfinished parts of a different sweep "
@@ -327,7 +370,14 @@ def write_manifest(spec: SweepSpec, out: Path) -> None:
     pdir.mkdir(exist_ok=True)
     _files.write_text(
         pdir / MANIFEST,
-        json.dumps({"sweep_id": spec.identity, "sweep": spec.to_dict(), "model_sha256": spec.model_sha256}),
+        json.dumps(
+            {
+                "sweep_id": spec.identity,
+                "sweep": spec.to_dict(),
+                "model_sha256": spec.model_sha256,
+                "model_compiled_sha256": spec.model_compiled_sha256,
+            }
+        ),
     )
 
 
@@ -337,6 +387,7 @@ def metadata(spec: SweepSpec) -> dict[bytes, bytes]:
         b"biped.scenario": spec.base.to_toml().encode(),
         b"biped.model": (spec.model if spec.base.model == "wendlandt" else spec.base.model).encode(),
         b"biped.model_sha256": spec.model_sha256.encode(),
+        b"biped.model_compiled_sha256": spec.model_compiled_sha256.encode(),
         b"biped.version": __version__.encode(),
         b"biped.sweep_id": spec.identity.encode(),
     }
