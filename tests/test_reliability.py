@@ -459,4 +459,5 @@ def test_nonsense_models_are_refused_naming_the_part(tmp_path, capsys, old, new,
 def test_posture_refuses_an_absurd_initial_state_with_its_range(tmp_path, capsys, x0):
     rc = main(["posture", "pendulum", "--x0", *x0, "--out", str(tmp_path / "r")])
     line = one_line_error(capsys.readouterr().err, "posture pendulum")
-    assert rc == 2 and "--x0" in line and "must be in [" in line and not (tmp_path / "r").exists()
+    assert rc == 2 and "--x0" in line and ("must be in [" in line or "finite" in line)
+    assert not (tmp_path / "r").exists()

@@ -21,6 +21,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
+import re
 import secrets
 import stat
 from collections.abc import Callable, Iterator
@@ -39,6 +40,7 @@ __all__ = [
     "check_no_link",
     "open_exclusive",
     "place",
+    "stale_temps",
     "read_input",
     "temp_path",
     "write_bytes",
@@ -101,6 +103,17 @@ def temp_path(path: str | os.PathLike) -> tuple[int, Path]:
         except FileExistsError:
             continue
     raise FileExistsError(errno.EEXIST, "no free temporary name", str(path))  # pragma: no cover
+
+
+def stale_temps(path: str | os.PathLike) -> list[Path]:
+    """The temporary files of ``path`` (:func:`temp_path`'s names) left beside it by a process
+    killed while writing (SIGKILL runs no cleanup); for a caller that holds ``path``'s lock."""
+    path = Path(path)
+    pattern = re.compile(rf"^\.{re.escape(path.stem)}\.[0-9a-f]{{8}}{re.escape(_TMP_TAG + path.suffix)}$")
+    try:
+        return sorted(p for p in path.parent.iterdir() if pattern.match(p.name) and not p.is_symlink())
+    except OSError:
+        return []
 
 
 def _as_write_error(exc: OSError, path: Path) -> WriteError:

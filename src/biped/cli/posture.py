@@ -187,6 +187,8 @@ def _check_steps(args) -> None:
     check_range("--dt", args.dt, 0.0, 1.0, "time step in s", lo_open=True)
     check_range("--duration", args.duration, 0.0, 1e6, "simulated time in s")
     for i, v in enumerate(getattr(args, "x0", None) or ()):
+        if not math.isfinite(v):
+            raise ScenarioError(f"--x0 values must be finite (the initial state); got {v!r}")
         if i % 2 == 0:
             check_range(f"--x0 (value {i + 1}, an angle)", v, -math.pi, math.pi, "rad: at most half a turn")
         else:

@@ -163,7 +163,7 @@ def connect_scheduler(address: str, timeout_s: float | None = None) -> Any:
         )
     from dask.distributed import Client
 
-    return Client(address, timeout=f"{timeout_s}s", set_as_default=False)
+    return Client(address, timeout=f"{timeout_s}s")
 
 
 def check_setups(spec: SweepSpec) -> None:
@@ -362,6 +362,7 @@ def _run_locked(
     state: dict,
     t_start: float,
 ) -> SweepSummary:
+    store.remove_stale_temps(out)
     if overwrite:
         store.remove_sweep(out)
     else:

@@ -338,6 +338,13 @@ def check_same_sweep(spec: SweepSpec, out: Path) -> None:
             )
 
 
+def remove_stale_temps(out: Path) -> None:
+    """Remove the temporary files that a killed sweep on ``out`` left (of ``out`` and of the
+    parts folder's manifest); call under the lock."""
+    for p in [*_files.stale_temps(out), *_files.stale_temps(parts_dir(out) / MANIFEST)]:
+        p.unlink(missing_ok=True)
+
+
 def remove_sweep(out: Path) -> None:
     """``--overwrite``: remove ``out`` and its parts (call under the lock)."""
     if out.exists():
