@@ -163,6 +163,7 @@ class FigureDims:
         lengths."""
         import mujoco
 
+        from biped.kinematic.dynamics import body_of_joint
         from biped.models.subject import resolve
 
         m = mujoco.MjModel.from_xml_path(str(resolve(model)))
@@ -170,11 +171,8 @@ class FigureDims:
         xb = float(heel.pos[0] + heel.size[0])  # back of the heel, ankle at x = 0
         xf = float(toe.pos[0] - toe.size[0])  # toe tip (the biped faces -x)
 
-        def body_of(joint: str) -> Any:  # by joint: check_biped names joints, not bodies
-            return m.body(int(m.jnt_bodyid[m.joint(joint).id]))
-
-        thigh = -float(body_of("left_knee").pos[2])
-        shank = -float(body_of("left_ankle_inversion").pos[2])
+        thigh = -float(body_of_joint(m, "left_knee").pos[2])
+        shank = -float(body_of_joint(m, "left_ankle_inversion").pos[2])
         d = cls.from_anthropometry()
         k = (thigh + shank) / d.leg
         return cls(
@@ -184,7 +182,7 @@ class FigureDims:
             heel_back=xb,
             ankle_height=-float(heel.pos[2] - heel.size[2]),
             foot_width=2.0 * float(heel.size[1]),
-            hip_half_width=-float(body_of("left_hip_abduction").pos[1]),
+            hip_half_width=-float(body_of_joint(m, "left_hip_abduction").pos[1]),
             lumbar=d.lumbar * k,
             trunk=d.trunk * k,
             head=d.head * k,
