@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import itertools
 import os
 import re
 import secrets
@@ -38,6 +39,7 @@ __all__ = [
     "atomic_open",
     "check_input_file",
     "check_no_link",
+    "mark",
     "open_exclusive",
     "place",
     "stale_temps",
@@ -54,7 +56,8 @@ MAX_TEXT_BYTES = 1 << 20
 #: The largest model file (MJCF) biped reads [bytes].
 MAX_MODEL_BYTES = 16 << 20
 
-_WRITTEN: set[Path] = set()
+_WRITTEN: dict[Path, int] = {}  # absolute path -> when it was last written (a counter)
+_CLOCK = itertools.count(1)
 _TMP_TAG = ".biped-tmp"
 
 
@@ -66,9 +69,15 @@ class WriteError(OSError):
     """A file could not be written (full disk, permissions); the previous file, if any, is kept."""
 
 
-def written() -> set[Path]:
-    """Absolute paths of every file written through this module in this process."""
-    return set(_WRITTEN)
+def mark() -> int:
+    """The current write counter, for :func:`written`'s ``since``."""
+    return next(_CLOCK)
+
+
+def written(since: int = 0) -> set[Path]:
+    """Absolute paths of every file written through this module in this process after
+    :func:`mark` returned ``since``."""
+    return {p for p, t in _WRITTEN.items() if t > since}
 
 
 def check_no_link(path: str | os.PathLike, what: str = "output") -> Path:
@@ -127,7 +136,7 @@ def place(tmp: Path, path: Path) -> None:
     if path.is_dir():
         raise ScenarioError(f"{str(path)!r} is a folder where biped would write a file; remove it")
     os.replace(tmp, path)
-    _WRITTEN.add(path.absolute())
+    _WRITTEN[path.absolute()] = next(_CLOCK)
 
 
 @contextlib.contextmanager

@@ -80,6 +80,7 @@ class _RunFolder:
         self.path = path
         self.command = command
         self.before = before  # files (relative paths) present before the run and kept
+        self.since = _files.mark()  # files written through biped.files after this are the run's
         self.created: list[Path] = []  # folders this run created (deepest last)
 
 
@@ -279,12 +280,11 @@ def finish_runs(ok: bool, command: str = "") -> None:
     (a write error raises OSError, after every folder was closed); on failure remove the
     folders the run created if they are still empty."""
     error: OSError | None = None
-    written = _files.written()
     while _OPEN:
         folder = _OPEN.pop()
         if ok:
             root = folder.path.absolute()
-            mine = {str(p.relative_to(root)) for p in written if p.is_relative_to(root)}
+            mine = {str(p.relative_to(root)) for p in _files.written(folder.since) if p.is_relative_to(root)}
             now = _all_files(folder.path)
             names = sorted(((now - folder.before) | (mine & now)) - {MANIFEST})
             try:

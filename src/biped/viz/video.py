@@ -18,6 +18,7 @@ Mesa's ``libegl-mesa0`` and ``libgl1-mesa-dri`` it renders on the CPU), ``osmesa
 
 from __future__ import annotations
 
+import errno
 import functools
 import json
 import math
@@ -307,6 +308,8 @@ def _render_to(model, qpos, idx, path, dest, backend, progress, cfg) -> VideoRes
             code, err = _run_child(tmp, backend, len(idx), progress)
         except subprocess.TimeoutExpired:
             return VideoResult(None, f"no video: rendering with MUJOCO_GL={backend} timed out", backend)
+    if code != 0 and any(w in err for w in ("No space left on device", "Disk quota exceeded")):
+        raise files.WriteError(errno.ENOSPC, "No space left on device", str(path))  # not a note: exit 1
     if code != 0 or not dest.is_file() or dest.stat().st_size == 0:
         return VideoResult(
             None, f"no video: rendering with MUJOCO_GL={backend} failed: {_last_line(err)}", backend
