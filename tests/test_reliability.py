@@ -409,6 +409,17 @@ def test_a_part_file_that_is_not_a_part_is_named(tmp_path, kind):
     assert str(bad) in str(info.value) and bad.exists()
 
 
+@pytest.mark.parametrize("content", ["[1, 2]", "{not json", '{"sweep": null}'])
+def test_a_manifest_that_is_not_a_sweeps_is_named(tmp_path, capsys, content):
+    out = tmp_path / "s.parquet"
+    parts_dir(out).mkdir()
+    (parts_dir(out) / "sweep.json").write_text(content)
+    before = _tree(tmp_path)
+    rc = main(["sweep", "--speed", "2", "--direction", "0", "--dry-run", "--out", str(out)])
+    assert rc == 2 and "not a biped sweep's manifest" in one_line_error(capsys.readouterr().err, "sweep")
+    assert _tree(tmp_path) == before
+
+
 def test_walk_reads_a_model_with_other_body_names(tmp_path, capsys):
     """The model check names joints, not bodies: walk (its figure and its inverse dynamics) finds
     the leg by its joints, so a model that passes the check runs, with the same figure."""

@@ -324,9 +324,13 @@ def check_same_sweep(spec: SweepSpec, out: Path) -> None:
         try:
             saved = json.loads(_files.read_input(manifest, "sweep manifest"))
         except (ValueError, ScenarioError):
-            saved = {}
-        if not isinstance(saved, dict) or not isinstance(saved.get("sweep", {}), dict):
-            saved = {}
+            saved = None
+        if not isinstance(saved, dict) or not isinstance(saved.get("sweep"), dict):
+            raise ScenarioError(
+                f"{str(manifest)!r} is not a biped sweep's manifest, so the parts beside it cannot "
+                f"be matched to this sweep; move {str(parts_dir(out))!r} away, or pass --overwrite "
+                f"to discard it"
+            )
         diff = spec_difference(
             saved.get("sweep", {}), saved.get("model_sha256"), spec, saved.get("model_compiled_sha256")
         )
