@@ -319,7 +319,8 @@ class SweepSpec:
 
     @property
     def model_sha256(self) -> str:
-        """SHA-256 of the top-level model file's bytes (recorded; the identity uses
+        """SHA-256 of the top-level model file's bytes (in the trial keys, so that a file of an
+        earlier version resumes; whether a rerun is the same sweep is decided on
         :attr:`model_compiled_sha256`)."""
         return hashlib.sha256(self.model_path.read_bytes()).hexdigest()
 
@@ -327,7 +328,9 @@ class SweepSpec:
     def model_compiled_sha256(self) -> str:
         """SHA-256 of the compiled model (:func:`biped.models.compiled_sha256`): every included
         file, asset and default folded in, so a change in an ``<include>``d file is a change of
-        the sweep's model."""
+        the sweep's model. Recorded in the sweep's file and manifest; a rerun whose compiled model
+        differs is refused (:func:`biped.sim.sweep.store.spec_difference`), so no file ever holds
+        rows of two models."""
         return models.compiled_sha256(self.model_path)
 
     @property
@@ -336,7 +339,7 @@ class SweepSpec:
         ident = {
             "scenario": self.base.to_dict(),
             "launch_distance_m": self.launch_distance_m,
-            "model_sha256": self.model_compiled_sha256,
+            "model_sha256": self.model_sha256,
             "torque_limits": self.torque_limits,
             "schema": SCHEMA_VERSION,
         }
