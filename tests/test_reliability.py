@@ -192,6 +192,29 @@ def test_a_full_disk_during_a_run_is_exit_1_in_one_line_with_no_empty_files(tmp_
     assert not any("biped-tmp" in p.name for p in left)
 
 
+def test_a_full_disk_at_a_sweeps_end_keeps_every_finished_trial(tmp_path, monkeypatch):
+    """The consolidated file cannot be written: the write error propagates (exit 1 on the CLI),
+    no half file is in place, and every finished trial is still in the parts for a rerun."""
+    out = tmp_path / "s.parquet"
+    spec = SweepSpec(axes={"speed_m_s": (1.0, 3.0), "direction_deg": (0.0, 90.0)})
+
+    real = os.fsync
+
+    def full(fd):  # the disk is full when the sweep's file is written (its temporary)
+        if os.readlink(f"/proc/self/fd/{fd}").endswith(".parquet"):
+            raise OSError(errno.ENOSPC, "No space left on device")
+        real(fd)
+
+    with monkeypatch.context() as m:
+        m.setattr(files.os, "fsync", full)
+        with pytest.raises(files.WriteError):
+            run_sweep(spec, out, workers=1, trial_fn=toy_trial, progress=False)
+    assert not out.exists() and not [p for p in tmp_path.iterdir() if "biped-tmp" in p.name]
+    again = run_sweep(spec, out, workers=1, trial_fn=toy_trial, progress=False)
+    assert again.complete and again.skipped == 4 and again.ran == 0
+    assert pq.read_table(out).column("index").to_pylist() == [0, 1, 2, 3]
+
+
 def test_a_real_full_tmpfs_keeps_the_previous_file(tmp_path):
     """On a 64 KiB tmpfs (needs root and mount; skipped elsewhere): ENOSPC from the kernel."""
     mnt = tmp_path / "small"

@@ -189,10 +189,17 @@ def write_via(path: str | os.PathLike, make: Callable[[Path], Any]) -> Any:
     try:
         try:
             result = make(tmp)
+            if not tmp.is_file() or tmp.is_symlink():
+                raise WriteError(errno.EIO, "the writer left no file", str(path))
+            fd = os.open(tmp, os.O_RDONLY | _nofollow())
+            try:
+                os.fsync(fd)  # on disk before it replaces the previous file
+            finally:
+                os.close(fd)
+        except WriteError:
+            raise
         except OSError as exc:
             raise _as_write_error(exc, path) from None
-        if not tmp.is_file() or tmp.is_symlink():
-            raise WriteError(errno.EIO, "the writer left no file", str(path))
         place(tmp, path)
         return result
     finally:
