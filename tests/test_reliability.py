@@ -389,6 +389,8 @@ def test_a_scheduler_that_is_not_dask_is_refused_in_time_leaving_nothing(tmp_pat
         ["--plot", "p.png", "--compare", "corrupt.parquet"],
         ["--out", ""],
         ["--model", ""],
+        ["--out", "linked.parquet"],
+        ["--out", "logged.parquet"],
     ],
 )
 @pytest.mark.parametrize("dry", [False, True])
@@ -396,6 +398,8 @@ def test_bad_sweep_inputs_are_refused_before_anything_exists(tmp_path, capsys, m
     monkeypatch.chdir(tmp_path)
     Path("FILE").write_text("a file, not a folder")
     Path("corrupt.parquet").write_bytes(b"PAR1 not really")
+    Path("linked.parquet.lock").symlink_to("FILE")  # links where the sweep would write
+    Path("logged.mujoco.log").symlink_to("FILE")
     before = _tree(tmp_path)
     argv = ["sweep", "--duration", "0.02", "--workers", "1", "--quiet", "--out", "s.parquet", *bad]
     assert _main([*argv, *(["--dry-run"] if dry else [])]) == 2

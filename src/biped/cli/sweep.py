@@ -283,6 +283,7 @@ def _run(args) -> int:
     check_run_args(out, workers=args.workers, batch=args.batch)
     check_file_writable(out)  # a probe file, not os.access (which says yes to root everywhere)
     check_no_link(lock_path(out), "the lock file")
+    check_no_link(out.with_suffix(".mujoco.log"), "the MuJoCo log")
     check_parts_dir(parts_dir(out))
     if not args.overwrite:
         check_same_sweep(spec, out)  # again under the lock: another sweep may finish meanwhile
