@@ -73,7 +73,7 @@ def test_overwrite_keeps_a_users_files_in_a_run_folder(tmp_path, capsys):
         '{"files": null}',
         '["."]',
         "not json",
-        '{"command": "rm", "files": ["victim.txt"]}',
+        '{"command": "rm -rf /", "files": ["victim.txt"]}',
         '{"command": "push", "files": ["../victim.txt"]}',
         '{"command": "push", "files": ["/etc/hostname"]}',
         '{"command": "push", "files": ["."]}',

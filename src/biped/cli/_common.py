@@ -31,6 +31,7 @@ import datetime as _dt
 import json
 import math
 import os
+import re
 import tempfile
 from pathlib import Path, PurePosixPath
 
@@ -69,8 +70,8 @@ KNOWN_OUTPUTS = (
 )
 #: A folder holds a run (of a version without run markers) if it has one of these.
 _RUN_MARKERS = (MANIFEST, "summary.json", "gains.json")
-#: The commands that write run markers (the marker's "command" starts with one of them).
-_COMMANDS = ("push", "walk", "posture")
+#: A run marker's "command": the words of a biped subcommand ("push", "posture pendulum", ...).
+_COMMAND = re.compile(r"^[a-z][a-z0-9_-]*( [a-z0-9_-]+)*$")
 
 _OPEN: list[_RunFolder] = []
 
@@ -124,7 +125,7 @@ def read_marker(path: Path, flag: str = "--out") -> tuple[str, list[str]] | None
     if not isinstance(data, dict) or not isinstance(data.get("files"), list):
         raise refuse("is not biped's (no list of files)")
     command = data.get("command")
-    if not isinstance(command, str) or command.split(" ")[0] not in _COMMANDS:
+    if not isinstance(command, str) or not _COMMAND.match(command):
         raise refuse(f"is not biped's (command {command!r})")
     listed = []
     for f in data["files"]:
