@@ -133,6 +133,27 @@ async def _dask_identity(address: str, timeout_s: float) -> Any:
         comm.abort()
 
 
+def _in_own_loop(coro: Any, timeout_s: float) -> Any:
+    """Run ``coro`` to its end in a new event loop on a thread of its own (a caller inside a
+    running loop, e.g. Jupyter, cannot ``asyncio.run``), with a hard limit of ``timeout_s``."""
+    box: dict[str, Any] = {}
+
+    def run() -> None:
+        try:
+            box["value"] = asyncio.run(asyncio.wait_for(coro, timeout_s))
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller
+            box["error"] = exc
+
+    thread = threading.Thread(target=run, name="biped-dask-probe", daemon=True)
+    thread.start()
+    thread.join(timeout_s + 1.0)
+    if thread.is_alive():
+        raise TimeoutError
+    if "error" in box:
+        raise box["error"]
+    return box["value"]
+
+
 def connect_scheduler(address: str, timeout_s: float | None = None) -> Any:
     """A ``dask.distributed.Client`` of the scheduler at ``address``, or a one-line
     :class:`ScenarioError` within ``2 * timeout_s`` seconds when nothing listens there or the
@@ -143,7 +164,7 @@ def connect_scheduler(address: str, timeout_s: float | None = None) -> Any:
     timeout_s = SCHEDULER_TIMEOUT_S if timeout_s is None else timeout_s
     check_scheduler(address, timeout_s)
     try:
-        reply = asyncio.run(asyncio.wait_for(_dask_identity(address, timeout_s), 2 * timeout_s))
+        reply = _in_own_loop(_dask_identity(address, timeout_s), 2 * timeout_s)
     except TimeoutError:
         raise ScenarioError(
             f"--scheduler {address!r}: something listens there but no Dask scheduler answered "
