@@ -78,6 +78,9 @@ def test_an_out_where_nothing_can_be_written_is_refused_before_the_simulation(
 def test_a_failed_run_removes_the_folders_it_created(tmp_path, capsys):
     out = tmp_path / "a" / "b" / "c"
     # the closed loop blows up after the folder was made: status 2, and no empty folders remain
-    rc, err = _posture(capsys, out, "--x0", "1e300", "0", "--no-animation")
+    # (absurd gains: an --x0 of 1e300 is now refused before the folder, with its range)
+    rc = main(["posture", "pendulum", "--dt", "0.02", "--duration", "1", "--gains", "1e15", "1e12",
+               "--out", str(out), "--no-animation"])  # fmt: skip
+    err = capsys.readouterr().err
     assert rc == 2 and "diverged" in err
     assert not (tmp_path / "a").exists()

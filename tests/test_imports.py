@@ -21,6 +21,7 @@ PACKAGE = Path(biped.__file__).parent
 LAYERS = {
     "": 0,  # biped/__init__.py
     "errors": 0,
+    "files": 0,  # every file biped writes or reads from the user (imports errors only)
     "_numba_cache": 0,  # where numba caches the kernels; imports nothing from biped
     "spatial": 0,
     "model": 0,

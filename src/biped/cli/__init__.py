@@ -28,6 +28,9 @@ from biped.errors import BipedError
 
 SUBCOMMANDS = ("push", "posture", "walk", "sweep", "model")
 
+#: Options naming a file or folder: an empty value is refused (it would read as "not given").
+_PATH_OPTIONS = ("out", "model", "scenario", "grid", "plot", "animation", "video")
+
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_TERMINATED = 0, 1, 2, 130, 143
 
 #: Negative numbers as values, e.g. ``--block-velocity -1e6 0 0`` (argparse's own pattern misses
@@ -90,36 +93,57 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return EXIT_BAD_INPUT
+    empty = next((k for k in _PATH_OPTIONS if getattr(args, k, None) == ""), None)
+    if empty is not None:  # '' would otherwise silently mean the default
+        getattr(args, "_parser", parser).error(
+            f"--{empty.replace('_', '-')} '' is an empty path; name a file or folder, or leave the option out"
+        )
     prog = getattr(args, "_prog", None) or f"biped {args.command}"
-    ok = False
+    try:
+        code, ok = _run(args, prog)
+    except BaseException:  # not a status (a bug): close the folders, then let it show
+        finish_runs(False)
+        raise
+    try:
+        finish_runs(ok, prog.removeprefix("biped "))
+    except OSError as exc:  # the run marker could not be written (disk full...)
+        print(f"{prog}: error: {_file_error(exc)}", file=sys.stderr)
+        return EXIT_FAILED
+    return code
+
+
+def _file_error(exc: OSError) -> str:
+    where = f" {exc.filename!r}" if getattr(exc, "filename", None) else ""
+    return f"file system:{where} {exc.strerror or exc}"
+
+
+def _run(args, prog: str) -> tuple[int, bool]:
+    """(exit status, whether the run's folders get their run marker) of the command."""
     terminated = {"by": False}
     previous = _sigterm_as_interrupt(terminated)
     try:
         code = int(args.func(args) or 0)
         if code == EXIT_INTERRUPTED and terminated["by"]:
             code = EXIT_TERMINATED
-        ok = code in (EXIT_OK, EXIT_INTERRUPTED, EXIT_TERMINATED)
-        return code
+        return code, code in (EXIT_OK, EXIT_INTERRUPTED, EXIT_TERMINATED)
     except BipedError as exc:
         print(f"{prog}: error: {_one_line(exc)}", file=sys.stderr)
-        return EXIT_BAD_INPUT
+        return EXIT_BAD_INPUT, False
     except KeyboardInterrupt:
         print(f"{prog}: {'terminated (SIGTERM)' if terminated['by'] else 'interrupted'}", file=sys.stderr)
-        return EXIT_TERMINATED if terminated["by"] else EXIT_INTERRUPTED
+        return (EXIT_TERMINATED if terminated["by"] else EXIT_INTERRUPTED), False
     except MemoryError:
         print(
             f"{prog}: error: out of memory; use a smaller problem (see --help for the bounds)",
             file=sys.stderr,
         )
-        return EXIT_FAILED
+        return EXIT_FAILED, False
     except OSError as exc:
-        where = f" {exc.filename!r}" if getattr(exc, "filename", None) else ""
-        print(f"{prog}: error: file system:{where} {exc.strerror or exc}", file=sys.stderr)
-        return EXIT_FAILED
+        print(f"{prog}: error: {' '.join(_file_error(exc).split())}", file=sys.stderr)
+        return EXIT_FAILED, False
     finally:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
-        finish_runs(ok, prog.removeprefix("biped "))
 
 
 def _sigterm_as_interrupt(state: dict):

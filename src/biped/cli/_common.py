@@ -5,14 +5,21 @@ Output folders (every command that writes a folder: push, walk, posture):
 
 - ``--out DIR`` may be new, empty, or hold a previous biped run. A folder that holds another run,
   or files that are not a biped run, is refused unless ``--overwrite``.
-- ``--overwrite`` removes the previous run's files (those its manifest lists, or the known output
-  names of a run without one) before the new run writes, so no stale video, replay or figure
-  survives; files that biped did not write are never removed.
+- ``--overwrite`` removes exactly the files the folder's run marker ``.biped-run.json`` lists
+  as written by the previous run (and folders that this leaves empty), after checking the
+  marker: one that is not biped's (not a table of a command and a list of files), or lists a
+  path outside the folder or through a symbolic link, is refused in one line and nothing is
+  removed. Files the marker does not list are never removed (a folder without a marker loses
+  nothing; the new run's files replace the same names).
+- Every file is written to a temporary file in its folder and moved into place
+  (:mod:`biped.files`); a symbolic link where a file or a subfolder of the run would go is
+  refused, never followed.
 - The folder is checked before any work: an existing file, or a place where nothing can be written,
   is a one-line error before anything is simulated.
 - A run that ends in an error leaves no empty folders behind (the folders it created are removed
   again if they are still empty).
-- A finished run records the files it wrote in ``.biped-run.json`` (its manifest).
+- A finished run records the files it wrote in ``.biped-run.json`` (its run marker): the files
+  that were not there before the run and those it replaced, never a file it did not write.
 
 ``run_dir`` registers the folder; :func:`biped.cli.main` calls :func:`finish_runs` when the
 command returns or fails.
@@ -24,23 +31,29 @@ import datetime as _dt
 import json
 import math
 import os
-import shutil
+import re
 import tempfile
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 
+from biped import files as _files
 from biped.errors import ScenarioError
 
-#: The manifest a finished run leaves in its folder: the command and the files it wrote.
+#: The run marker a finished run leaves in its folder: the command and the files it wrote.
 MANIFEST = ".biped-run.json"
 
-#: Files and folders the commands write (for folders of runs made before manifests existed).
+#: Files and folders the commands write at the top of a run folder (a symbolic link at one of
+#: these names is refused before the run).
 KNOWN_OUTPUTS = (
     "summary.json",
     "trajectory.csv",
     "figures",
     "video.mp4",
     "replay.html",
+    "scenario.toml",
     "inverse_dynamics.csv",
+    "inverse_dynamics.png",
+    "joint_angles.png",
+    "feet.png",
     "columns.json",
     "animation.gif",
     "animation.mp4",
@@ -52,20 +65,23 @@ KNOWN_OUTPUTS = (
     "gains.json",
     "stability_map.npz",
     "stability_map.png",
-    "run.log",
     "mujoco.log",
+    MANIFEST,
 )
-#: A folder holds a run (of a version without manifests) if it has one of these.
+#: A folder holds a run (of a version without run markers) if it has one of these.
 _RUN_MARKERS = (MANIFEST, "summary.json", "gains.json")
+#: A run marker's "command": the words of a biped subcommand ("push", "posture pendulum", ...).
+_COMMAND = re.compile(r"^[a-z][a-z0-9_-]*( [a-z0-9_-]+)*$")
 
 _OPEN: list[_RunFolder] = []
 
 
 class _RunFolder:
-    def __init__(self, path: Path, command: str, existing: set[str]):
+    def __init__(self, path: Path, command: str, before: set[str]):
         self.path = path
         self.command = command
-        self.foreign = existing  # top-level entries present before the run and kept
+        self.before = before  # files (relative paths) present before the run and kept
+        self.since = _files.mark()  # files written through biped.files after this are the run's
         self.created: list[Path] = []  # folders this run created (deepest last)
 
 
@@ -76,22 +92,83 @@ def _entries(path: Path) -> set[str]:
         return set()
 
 
-def _previous_run_files(path: Path, entries: set[str]) -> set[str]:
-    """Top-level entries of ``path`` that a previous biped run wrote."""
-    files = set()
-    if MANIFEST in entries:
-        files.add(MANIFEST)
+def _all_files(path: Path) -> set[str]:
+    """Relative paths of every file (or link) under ``path``, not following links."""
+    out = set()
+    for root, dirs, names in os.walk(path):
+        rel = Path(root).relative_to(path)
+        out |= {str(rel / n) for n in names}
+        out |= {str(rel / d) for d in dirs if (Path(root) / d).is_symlink()}
+    return out
+
+
+def read_marker(path: Path, flag: str = "--out") -> tuple[str, list[str]] | None:
+    """``(command, files)`` of the run marker in ``path`` (None without one), checked: a marker
+    that is not biped's, or lists a path outside ``path`` or through a symbolic link, raises a
+    one-line :class:`ScenarioError` (and nothing is removed)."""
+    marker = path / MANIFEST
+    if not marker.exists() and not marker.is_symlink():
+        return None
+
+    def refuse(why: str) -> ScenarioError:
+        return ScenarioError(
+            f"{flag} {str(path)!r}: its run marker {MANIFEST} {why}, so biped cannot tell which "
+            f"files it wrote; remove the marker yourself, or choose another folder"
+        )
+
+    if marker.is_symlink() or not marker.is_file():
+        raise refuse("is not a regular file")
+    try:
+        data = json.loads(_files.read_input(marker, "run marker", _files.MAX_TEXT_BYTES))
+    except (ValueError, ScenarioError):
+        raise refuse("is not biped's (not readable JSON)") from None
+    if not isinstance(data, dict) or not isinstance(data.get("files"), list):
+        raise refuse("is not biped's (no list of files)")
+    command = data.get("command")
+    if not isinstance(command, str) or not _COMMAND.match(command):
+        raise refuse(f"is not biped's (command {command!r})")
+    listed = []
+    for f in data["files"]:
+        if not isinstance(f, str) or not f or "\x00" in f or "\\" in f:
+            raise refuse(f"lists {f!r}, which is not a file name")
+        parts = PurePosixPath(f).parts
+        if (
+            not parts
+            or PurePosixPath(f).is_absolute()
+            or any(p in ("..", ".") for p in parts)
+            or f != str(PurePosixPath(f))
+        ):
+            raise refuse(f"lists {f!r}, which is outside the folder")
+        if parts[0] == MANIFEST:
+            raise refuse(f"lists {f!r}, the marker itself")
+        p = path
+        for part in parts[:-1]:
+            p = p / part
+            if p.is_symlink() or (p.exists() and not p.is_dir()):
+                raise refuse(f"lists {f!r}, which is reached through a link or a file ({str(p)!r})")
+        listed.append(f)
+    return command, listed
+
+
+def _remove_previous(path: Path, listed: list[str]) -> None:
+    """``--overwrite``: remove the files the marker listed (never a folder, never through a
+    link), the folders that leaves empty, and the marker."""
+    dirs = set()
+    for f in [*listed, MANIFEST]:
+        target = path / f
         try:
-            listed = json.loads((path / MANIFEST).read_text(encoding="utf-8")).get("files", [])
-            files |= {
-                Path(f).parts[0]
-                for f in listed
-                if isinstance(f, str) and f and not Path(f).is_absolute() and ".." not in Path(f).parts
-            }
-        except (OSError, ValueError, AttributeError):
+            if target.is_symlink() or target.is_file():
+                target.unlink()
+            dirs |= set(list(Path(f).parents)[:-1])
+        except OSError as exc:
+            raise ScenarioError(
+                f"--overwrite: cannot remove {str(target)!r} ({exc.strerror or exc})"
+            ) from None
+    for d in sorted(dirs, key=lambda d: -len(d.parts)):
+        try:
+            (path / d).rmdir()  # only if empty
+        except OSError:
             pass
-    files |= entries & set(KNOWN_OUTPUTS)
-    return files & entries
 
 
 def _check_writable(path: Path, flag: str, shown: Path | None = None) -> Path | None:
@@ -124,8 +201,12 @@ def _check_writable(path: Path, flag: str, shown: Path | None = None) -> Path | 
 
 def check_file_writable(path: str | os.PathLike, flag: str = "--out") -> Path:
     """Raise a one-line error before any work if the file ``path`` cannot be written: its folder
-    (or the nearest existing ancestor, the folders are created later) must accept a new file."""
+    (or the nearest existing ancestor, the folders are created later) must accept a new file,
+    and ``path`` must not be a symbolic link (or an empty path)."""
+    if str(path) == "":
+        raise ScenarioError(f"{flag} '' is an empty path; name a file")
     path = Path(path)
+    _files.check_no_link(path, flag)
     if path.is_dir():
         raise ScenarioError(f"{flag} {str(path)!r} is a folder; name a file")
     _check_writable(path.parent, flag, shown=path)
@@ -138,8 +219,12 @@ def run_dir(
     """The output folder of a run, checked before any work: ``out`` if given (see the module's
     rule), else a new ``runs/<prefix>-<date>-<time>[-k]``. Creates the folder (removed again if the
     command fails and leaves it empty); with ``overwrite`` removes the previous run's files."""
-    if out is not None and str(out) != "":
+    if out is not None and str(out) == "":
+        raise ScenarioError(f"{flag} '' is an empty path; name a folder (or leave {flag} out)")
+    if out is not None:
         path = Path(out)
+        if path.is_symlink() and path.is_dir():  # the user's own link to a folder: its target
+            path = path.resolve()
     else:
         stamp = _dt.datetime.now().strftime("%Y%m%d-%H%M%S")
         path = Path("runs") / f"{prefix}-{stamp}"
@@ -149,14 +234,12 @@ def run_dir(
             path = Path("runs") / f"{prefix}-{stamp}-{k}"
     _check_writable(path, flag)
     entries = _entries(path) if path.is_dir() else set()
-    previous = _previous_run_files(path, entries)
-    foreign = entries - previous
+    marker = read_marker(path, flag) if entries else None
     if entries and not overwrite:
-        if previous & set(_RUN_MARKERS):
+        if marker is not None or entries & set(_RUN_MARKERS):
             what = "already holds a run"
-            kind = _previous_command(path)
-            if kind:
-                what += f" of 'biped {kind}'"
+            if marker is not None:
+                what += f" of 'biped {marker[0]}'"
         else:
             shown = sorted(entries)[:3]
             what = (
@@ -165,10 +248,15 @@ def run_dir(
             )
         raise ScenarioError(
             f"{flag} {str(path)!r} {what}; choose a new or empty folder, or pass "
-            f"--overwrite (removes the previous run's files, keeps files biped did "
-            f"not write)"
+            f"--overwrite (removes the files the previous run's marker {MANIFEST} lists, keeps "
+            f"every other file)"
         )
-    folder = _RunFolder(path, prefix, foreign)
+    linked = sorted(n for n in entries & set(KNOWN_OUTPUTS) if (path / n).is_symlink())
+    if linked:
+        raise _files.LinkError(
+            f"{flag} {str(path)!r}: {linked[0]} is a symbolic link where biped writes; biped "
+            f"does not write through links (remove it, or choose another folder)"
+        )
     missing = []
     p = path
     while not p.exists():
@@ -180,55 +268,41 @@ def run_dir(
         raise ScenarioError(
             f"{flag} {str(path)!r}: cannot create the folder ({exc.strerror or exc})"
         ) from None
+    if marker is not None:  # --overwrite: nothing of the previous run survives
+        _remove_previous(path, marker[1])
+    folder = _RunFolder(path, prefix, _all_files(path))
     folder.created = missing[::-1]
-    for name in previous:  # --overwrite: nothing of the previous run survives
-        target = path / name
-        try:
-            if target.is_dir() and not target.is_symlink():
-                shutil.rmtree(target)
-            else:
-                target.unlink()
-        except OSError as exc:
-            raise ScenarioError(
-                f"--overwrite: cannot remove {str(target)!r} ({exc.strerror or exc})"
-            ) from None
     _OPEN.append(folder)
     return path
 
 
-def _previous_command(path: Path) -> str:
-    try:
-        return str(json.loads((path / MANIFEST).read_text(encoding="utf-8")).get("command", ""))
-    except (OSError, ValueError, AttributeError):
-        return ""
-
-
 def finish_runs(ok: bool, command: str = "") -> None:
-    """Close the folders registered by :func:`run_dir`: on success write each one's manifest; on
-    failure remove the folders the run created if they are still empty."""
+    """Close the folders registered by :func:`run_dir`: on success write each one's run marker
+    (a write error raises OSError, after every folder was closed); on failure remove the
+    folders the run created if they are still empty."""
+    error: OSError | None = None
     while _OPEN:
         folder = _OPEN.pop()
         if ok:
-            files = sorted(
-                str(p.relative_to(folder.path))
-                for p in folder.path.rglob("*")
-                if p.is_file()
-                and p.relative_to(folder.path).parts[0] not in folder.foreign
-                and p.name != MANIFEST
-            )
+            root = folder.path.absolute()
+            mine = {str(p.relative_to(root)) for p in _files.written(folder.since) if p.is_relative_to(root)}
+            now = _all_files(folder.path)
+            names = sorted(((now - folder.before) | (mine & now)) - {MANIFEST})
             try:
-                (folder.path / MANIFEST).write_text(
-                    json.dumps({"command": command or folder.command, "files": files}, indent=1) + "\n",
-                    encoding="utf-8",
+                _files.write_text(
+                    folder.path / MANIFEST,
+                    json.dumps({"command": command or folder.command, "files": names}, indent=1) + "\n",
                 )
-            except OSError:
-                pass
+            except OSError as exc:
+                error = error or exc
         else:
             for p in reversed(folder.created):
                 try:
                     p.rmdir()  # only if empty
                 except OSError:
                     break
+    if error is not None:
+        raise error
 
 
 def check_range(flag: str, value: float, lo: float, hi: float, what: str, *, lo_open: bool = False) -> float:

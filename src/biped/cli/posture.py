@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 
 import numpy as np
 
@@ -176,11 +177,22 @@ def _run_gains(args) -> int:
     return 0
 
 
+#: The largest initial angular rate ``--x0`` accepts [rad/s] (a fall is ~10 rad/s).
+MAX_RATE = 1000.0
+
+
 def _check_steps(args) -> None:
     """Bound the integration before any work: finite positive dt, duration >= 0, and at most
     MAX_STEPS steps."""
     check_range("--dt", args.dt, 0.0, 1.0, "time step in s", lo_open=True)
     check_range("--duration", args.duration, 0.0, 1e6, "simulated time in s")
+    for i, v in enumerate(getattr(args, "x0", None) or ()):
+        if not math.isfinite(v):
+            raise ScenarioError(f"--x0 values must be finite (the initial state); got {v!r}")
+        if i % 2 == 0:
+            check_range(f"--x0 (value {i + 1}, an angle)", v, -math.pi, math.pi, "rad: at most half a turn")
+        else:
+            check_range(f"--x0 (value {i + 1}, a rate)", v, -MAX_RATE, MAX_RATE, "rad/s")
     steps = args.duration / args.dt
     if steps > MAX_STEPS:
         raise ScenarioError(

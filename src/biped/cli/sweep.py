@@ -145,10 +145,9 @@ def _grid_scenario_keys(path) -> set:
     """The keys of a sweep file's [scenario] table (empty without a file)."""
     if not path:
         return set()
-    import tomllib
+    from biped.sim.scenario import read_toml
 
-    with open(path, "rb") as f:
-        return set(tomllib.load(f).get("scenario", {}))
+    return set(read_toml(path, "sweep").get("scenario", {}))
 
 
 def build_spec(args):
@@ -220,9 +219,9 @@ def _grid_file(grid) -> tuple[dict, dict]:
     """The [scenario] keys and [grid] axes the sweep file sets (validated by SweepSpec.from_toml)."""
     if not grid:
         return {}, {}
-    import tomllib
+    from biped.sim.scenario import read_toml
 
-    values = tomllib.loads(Path(grid).read_text(encoding="utf-8"))
+    values = read_toml(grid, "sweep")
     scenario = dict(values.get("scenario", {}))
     scenario.pop("model", None)
     return scenario, dict(values.get("grid", {}))
@@ -246,6 +245,13 @@ def _check_plot(path: str | None, compare: list[str]) -> None:
     for other in compare:
         if Path(other).suffix != ".parquet" or not Path(other).is_file():
             raise ScenarioError(f"--compare {other!r}: no finished sweep file (.parquet) there")
+        from biped.sim.sweep import load
+
+        try:
+            load(other)  # readable, and a biped sweep: before the sweep runs, not after
+        except ScenarioError as exc:
+            raise ScenarioError(f"--compare {other!r}: {exc}") from None
+    check_file_writable(path, "--plot")
 
 
 def run(args) -> int:
@@ -257,11 +263,15 @@ def run(args) -> int:
 
 
 def _run(args) -> int:
-    from biped.analysis import survived
-    from biped.sim.sweep import Terminated, check_run_args, load, parts_dir, run_sweep
+    from biped.files import check_no_link
+    from biped.sim.sweep import check_run_args, check_setups, connect_scheduler, parts_dir
+    from biped.sim.sweep.store import check_parts_dir, check_same_sweep, lock_path
 
+    # every input is checked here, before any lock, manifest, trial or file exists; --dry-run
+    # runs exactly these checks
     _check_plot(args.plot, args.compare)
     spec = build_spec(args)
+    check_setups(spec)  # every axis value makes a valid push (--mass 1000 is refused here)
     out = (
         Path(args.out)
         if args.out
@@ -270,15 +280,32 @@ def _run(args) -> int:
     )
     n = spec.n_trials
     where = args.scheduler or f"{args.workers or 'all'} local worker(s)"
-    check_run_args(out, workers=args.workers, batch=args.batch, scheduler=args.scheduler)
+    check_run_args(out, workers=args.workers, batch=args.batch)
     check_file_writable(out)  # a probe file, not os.access (which says yes to root everywhere)
-    if args.dry_run:
-        print(
-            f"biped sweep (dry run): {n} trials of {spec.base.duration_s:g} s, controller "
-            f"{spec.base.controller}, torque limits {spec.torque_limits}, on {where} -> {out}"
-        )
-        return 0
+    check_no_link(lock_path(out), "the lock file")
+    check_no_link(out.with_suffix(".mujoco.log"), "the MuJoCo log")
+    check_parts_dir(parts_dir(out))
+    if not args.overwrite:
+        check_same_sweep(spec, out)  # again under the lock: another sweep may finish meanwhile
+    client = connect_scheduler(args.scheduler) if args.scheduler else None
+    try:
+        if args.dry_run:
+            print(
+                f"biped sweep (dry run): {n} trials of {spec.base.duration_s:g} s, controller "
+                f"{spec.base.controller}, torque limits {spec.torque_limits}, on {where} -> {out}"
+            )
+            return 0
+        return _sweep(args, spec, out, n, where, client)
+    finally:
+        if client is not None:
+            client.close()
+
+
+def _sweep(args, spec, out: Path, n: int, where: str, client) -> int:
+    """The sweep itself, its inputs checked (:func:`_run`)."""
+    from biped.analysis import survived
     from biped.sim.mjlog import route_to
+    from biped.sim.sweep import Terminated, load, parts_dir, run_sweep
 
     route_to(out.with_suffix(".mujoco.log"))  # MuJoCo's warnings (workers too) beside the results
     print(
@@ -299,7 +326,7 @@ def _run(args) -> int:
             spec,
             out,
             workers=args.workers,
-            scheduler=args.scheduler,
+            scheduler=client,
             progress=not args.quiet,
             retry_failed=args.retry_failed,
             overwrite=args.overwrite,

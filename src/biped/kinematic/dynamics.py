@@ -93,7 +93,7 @@ class _Names:
         self.root_body = int(model.jnt_bodyid[root])
         self.foot = {sd: bid(f"{sd}_foot") for sd in SIDES}
         # central body COM above the mid-hip point, along the body z axis
-        self.com_above_hips = -float(model.body("left_hip_1").pos[2])
+        self.com_above_hips = -float(body_of_joint(model, "left_hip_abduction").pos[2])
         # sole centre in the foot frame, from the heel and toe sole boxes
         self.sole = {}
         for sd in SIDES:
@@ -104,12 +104,18 @@ class _Names:
             self.sole_half = (0.5 * abs(xb - xf), float(heel.size[1]))
 
 
+def body_of_joint(model, joint: str):
+    """The body the hinge ``joint`` moves: the model check names joints, not bodies, so a model
+    whose bodies are named otherwise is found by its joints."""
+    return model.body(int(model.jnt_bodyid[model.joint(joint).id]))
+
+
 def _check_dims(model, names: _Names, dims) -> None:
     """The figure must have the biped's leg geometry, or its feet would not land on the floor."""
     pairs = {
-        "hip_half_width": (-float(model.body("left_hip_1").pos[1]), dims.hip_half_width),
-        "thigh": (-float(model.body("left_shank").pos[2]), dims.thigh),
-        "shank": (-float(model.body("left_ankle_1").pos[2]), dims.shank),
+        "hip_half_width": (-float(body_of_joint(model, "left_hip_abduction").pos[1]), dims.hip_half_width),
+        "thigh": (-float(body_of_joint(model, "left_knee").pos[2]), dims.thigh),
+        "shank": (-float(body_of_joint(model, "left_ankle_inversion").pos[2]), dims.shank),
         "ankle_height": (-float(names.sole["left"][2]), dims.ankle_height),
     }
     for k, (b, f) in pairs.items():

@@ -163,14 +163,16 @@ class FigureDims:
         lengths."""
         import mujoco
 
+        from biped.kinematic.dynamics import body_of_joint
         from biped.models.subject import resolve
 
         m = mujoco.MjModel.from_xml_path(str(resolve(model)))
         heel, toe = m.geom("left_heel"), m.geom("left_toe")
         xb = float(heel.pos[0] + heel.size[0])  # back of the heel, ankle at x = 0
         xf = float(toe.pos[0] - toe.size[0])  # toe tip (the biped faces -x)
-        thigh = -float(m.body("left_shank").pos[2])
-        shank = -float(m.body("left_ankle_1").pos[2])
+
+        thigh = -float(body_of_joint(m, "left_knee").pos[2])
+        shank = -float(body_of_joint(m, "left_ankle_inversion").pos[2])
         d = cls.from_anthropometry()
         k = (thigh + shank) / d.leg
         return cls(
@@ -180,7 +182,7 @@ class FigureDims:
             heel_back=xb,
             ankle_height=-float(heel.pos[2] - heel.size[2]),
             foot_width=2.0 * float(heel.size[1]),
-            hip_half_width=-float(m.body("left_hip_1").pos[1]),
+            hip_half_width=-float(body_of_joint(m, "left_hip_abduction").pos[1]),
             lumbar=d.lumbar * k,
             trunk=d.trunk * k,
             head=d.head * k,

@@ -58,6 +58,18 @@ def _compiled(name: str) -> mujoco.MjModel:
     return mujoco.MjModel.from_xml_path(str(path(name)))
 
 
+def compiled_sha256(model_file: str | Path) -> str:
+    """SHA-256 of the model as MuJoCo compiles it (``mj_saveModel``'s binary: every included
+    file, mesh, default and compiler setting folded in), not of the top-level file's bytes. The
+    same file gives the same hash with the same MuJoCo version."""
+    import hashlib
+
+    m = mujoco.MjModel.from_xml_path(str(model_file))
+    buf = np.zeros(mujoco.mj_sizeModel(m), dtype=np.uint8)
+    mujoco.mj_saveModel(m, None, buf)
+    return hashlib.sha256(buf.tobytes()).hexdigest()
+
+
 def gravity(name: str = "wendlandt") -> np.ndarray:
     """(3,) gravity [m/s^2], world frame, of the shipped model ``name`` (its ``<option>``)."""
     return _compiled(name).opt.gravity.copy()
@@ -74,6 +86,7 @@ def total_mass_kg(name: str | Path = "wendlandt") -> float:
 
 
 __all__ = [
+    "compiled_sha256",
     "JOINT_NAMES",
     "LEG_JOINTS",
     "W_INITIAL_ANGLES_DEG",

@@ -29,6 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
+from biped import files
 from biped.models import LEG_JOINTS, W_INITIAL_ANGLES_DEG, W_INITIAL_COM_M, W_INITIAL_TILT_DEG
 
 #: de Leva (1996) Table 4, males: (length at 1.741 m [m], mass fraction, CM from proximal end,
@@ -438,7 +439,7 @@ def build_xml(subject: Subject | None = None) -> str:
 def write(path: Path | None = None, subject: Subject | None = None) -> Path:
     """Write :func:`build_xml` of ``subject`` to ``path`` (default: the shipped ``wendlandt.xml``)."""
     path = path or Path(__file__).with_name("wendlandt.xml")
-    path.write_text(build_xml(subject))
+    files.write_text(path, build_xml(subject))
     return path
 
 

@@ -48,8 +48,15 @@ EXPECTED = (
     "W's biped structure as `biped model` writes it: body 'central_body' on a free joint "
     "'root'; per leg (left_, right_) one hinge per body in the chain hip_abduction -> "
     "hip_flexion -> hip_rotation -> knee -> ankle_inversion -> ankle_dorsiflexion ending at "
-    "body '<side>_foot' with box geoms '<side>_heel' and '<side>_toe'; a motor per hinge"
+    "body '<side>_foot' with box geoms '<side>_heel' and '<side>_toe'; a box geom 'trunk' on "
+    "'central_body'; a motor per hinge; finite positions, sizes and masses (sizes and positions "
+    "within 100 m, each body's mass within 1000 kg)"
 )
+
+#: The largest geom size or body / geom position [m] and the largest body mass [kg] a model may
+#: have: a human-sized biped is ~1 m and ~100 kg; 1e30 m is a typo, not a biped.
+MAX_LENGTH_M = 100.0
+MAX_BODY_MASS_KG = 1000.0
 
 
 def _shipped() -> list[str]:
@@ -84,15 +91,18 @@ def check_biped(model: str | Path):
     import mujoco
 
     HINGE, FREE = int(mujoco.mjtJoint.mjJNT_HINGE), int(mujoco.mjtJoint.mjJNT_FREE)
-    path = Path(model)
+    from biped import files
+
     shipped = ", ".join(map(repr, _shipped()))
+    if str(model) == "":
+        raise ModelError(f"model '' is an empty path; give a shipped model ({shipped}) or an MJCF file")
+    path = Path(model)
     if not path.exists():
         raise ModelError(
             f"model file {str(path)!r} not found; give a shipped model ({shipped}) or "
             f"the path of an MJCF file (e.g. written by `biped model`)"
         )
-    if not path.is_file():
-        raise ModelError(f"model {str(path)!r} is a folder, not an MJCF file")
+    files.check_input_file(path, "model", files.MAX_MODEL_BYTES, ModelError)
     problem = _xml_problem(path)
     if problem:
         raise ModelError(f"model file {str(path)!r} {problem}; expected an MJCF file with {EXPECTED}")
@@ -155,7 +165,46 @@ def check_biped(model: str | Path):
     missing = [h for h in HINGES if h not in driven]
     if missing:
         fail(f"hinges without a motor: {missing}")
+    g = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "trunk")
+    if g < 0 or m.geom_bodyid[g] != root_body or int(m.geom_type[g]) != int(mujoco.mjtGeom.mjGEOM_BOX):
+        fail("no box geom 'trunk' on body 'central_body' (the replay's camera follows it)")
+    problem = _physical_problem(m)
+    if problem:
+        fail(problem)
     return path
+
+
+def _physical_problem(m) -> str | None:
+    """The first body with a non-finite or absurd position, size or mass, in words (else None)."""
+    for b in range(1, m.nbody):
+        name = m.body(b).name or f"#{b}"
+        values = {
+            "pos": m.body_pos[b],
+            "quat": m.body_quat[b],
+            "mass": m.body_mass[b : b + 1],
+            "inertia": m.body_inertia[b],
+            "centre of mass": m.body_ipos[b],
+        }
+        for what, v in values.items():
+            if not np.all(np.isfinite(v)):
+                return f"body {name!r} has a non-finite {what} ({v.tolist()})"
+        if np.max(np.abs(m.body_pos[b])) > MAX_LENGTH_M:
+            return (
+                f"body {name!r} sits {np.max(np.abs(m.body_pos[b])):.3g} m away (at most {MAX_LENGTH_M:g} m)"
+            )
+        if m.body_mass[b] > MAX_BODY_MASS_KG:
+            return f"body {name!r} has a mass of {m.body_mass[b]:.3g} kg (at most {MAX_BODY_MASS_KG:g} kg)"
+    for gi in range(m.ngeom):
+        b = int(m.geom_bodyid[gi])
+        if b == 0:
+            continue
+        where = f"geom {m.geom(gi).name or '#' + str(gi)!r} of body {m.body(b).name!r}"
+        for what, v in (("size", m.geom_size[gi]), ("pos", m.geom_pos[gi])):
+            if not np.all(np.isfinite(v)):
+                return f"{where} has a non-finite {what} ({v.tolist()})"
+            if np.max(np.abs(v)) > MAX_LENGTH_M:
+                return f"{where} has a {what} of {np.max(np.abs(v)):.3g} m (at most {MAX_LENGTH_M:g} m)"
+    return None
 
 
 # ---------------------------------------------------------------------------------------------

@@ -1,4 +1,5 @@
-"""JSON as every run writes it: strict (no NaN / Infinity, which JSON does not have), atomic.
+"""JSON as every run writes it: strict (no NaN / Infinity, which JSON does not have), atomic
+(:mod:`biped.files`: a temporary file moved into place, never written through a link).
 
 A non-finite float (a quantity that does not exist for this run, e.g. the centre of pressure of a
 foot in the air, or an error of a run that stopped before its first row) is written as ``null``.
@@ -12,6 +13,8 @@ import math
 from pathlib import Path
 
 import numpy as np
+
+from biped.files import write_text
 
 __all__ = ["finite_json", "write_json"]
 
@@ -43,10 +46,8 @@ def finite_json(obj):
 
 def write_json(path: str | Path, obj) -> Path:
     """Write ``obj`` (see :func:`finite_json`) to ``path`` as strict JSON, atomically (a
-    ``.part`` file renamed over it). Raises TypeError for an object JSON cannot hold."""
+    temporary file moved over it, :func:`biped.files.write_text`). Raises TypeError for an object JSON cannot hold."""
     path = Path(path)
     text = json.dumps(finite_json(obj), indent=2, allow_nan=False) + "\n"
-    tmp = path.with_name(path.name + ".part")
-    tmp.write_text(text, encoding="utf-8")
-    tmp.replace(path)
+    write_text(path, text)
     return path

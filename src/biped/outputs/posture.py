@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from biped import files
 from biped.errors import StateError
 from biped.outputs._json import write_json
 from biped.planar import analysis, runs
@@ -37,7 +38,7 @@ __all__ = ["UNITS", "compare_forms", "run_gains", "run_model"]
 
 
 def _write_csv(path: Path, header: list[str], columns: list[np.ndarray]) -> None:
-    with open(path, "w", newline="") as fh:
+    with files.atomic_open(path, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(header)
         for row in zip(*columns, strict=True):
@@ -123,7 +124,7 @@ def run_model(
     _write_json(out / "summary.json", summary)
     write_trajectory_csv(traj, out / "trajectory.csv")
     for name, fig in figs.items():
-        fig.savefig(out / name)
+        files.write_via(out / name, fig.savefig)
     if animation:
         viz.animate(traj, out / "animation.gif")
     return traj, lin
@@ -147,7 +148,7 @@ def compare_forms(params, gains, x0, alpha, common: dict, out: Path) -> dict:
                 zip(tr.state_names, d.tolist(), strict=True)
             )
         result.setdefault("wall_time_s", {})[name] = tr.wall_time
-    viz.comparison_figure(trajs).savefig(out / "comparison.png")
+    files.write_via(out / "comparison.png", viz.comparison_figure(trajs).savefig)
     _write_json(out / "comparison.json", result)
     return result
 
@@ -191,11 +192,11 @@ def run_gains(params, *, out: Path, grid: int, k1_max: float, k2_max: float, rat
     k1 = np.linspace(0.0, k1_max, grid)
     k2 = np.linspace(0.0, k2_max, grid)
     smap = analysis.stability_map(params, k1, k2, *rate_gains)
-    np.savez(out / "stability_map.npz", k_theta1=k1, k_theta2=k2, margin=smap.margin,
-             rate_gains=np.array(rate_gains))  # fmt: skip
+    files.write_via(out / "stability_map.npz", lambda tmp: np.savez(
+        tmp, k_theta1=k1, k_theta2=k2, margin=smap.margin, rate_gains=np.array(rate_gains)))  # fmt: skip
     result["stability_map"] = {"file": "stability_map.npz", "rate_gains": list(rate_gains),
                                "stable_fraction": float(np.mean(smap.margin > 0))}  # fmt: skip
     marks = {"K2 = 4000 (eq. 3.83)": (25000.0, 4000.0), "K2 = 40000 (eq. 5.7)": (25000.0, 40000.0)}
-    viz.stability_map_figure(smap, marks, best=best).savefig(out / "stability_map.png")
+    files.write_via(out / "stability_map.png", viz.stability_map_figure(smap, marks, best=best).savefig)
     _write_json(out / "gains.json", result)
     return result, best

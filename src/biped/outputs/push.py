@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from biped import files
 from biped.outputs._json import write_json
 from biped.sim.contact import SOLE_GEOMS
 from biped.sim.measure import FEET, RowMeasurements, block_separation, foot_drift, measure_rows
@@ -158,9 +159,7 @@ def write_trajectory_csv(
             *(str(int(c)) for c in result.contacts[k]),
         ]
         lines.append(",".join(vals))
-    tmp = path.with_suffix(".csv.part")
-    tmp.write_text("\n".join(lines) + "\n")
-    tmp.replace(path)
+    files.write_text(path, "\n".join(lines) + "\n")
     return path
 
 
@@ -345,6 +344,11 @@ def _frame_log(log: Callable[[str], None], step: float = 0.25):
     return progress
 
 
+#: Errors an optional output does not swallow: a write that failed (full disk: exit 1, the
+#: previous file kept) or a link where a file would go (refused).
+_REFUSED = (files.WriteError, files.LinkError)
+
+
 def write_outputs(
     result: PushResult,
     out_dir: str | Path,
@@ -361,7 +365,8 @@ def write_outputs(
 
     Order: ``trajectory.csv`` and ``summary.json`` first (atomic writes), then ``scenario.toml``,
     ``figures/``, ``video.mp4``, ``replay.html``. A failing optional output (no OpenGL, no
-    ffmpeg...) is reported through ``log`` in one line and never removes what was written.
+    ffmpeg...) is reported through ``log`` in one line and never removes what was written; a
+    write error (full disk) or a link where a file would go raises (:mod:`biped.files`).
     ``on_stage(name)`` is called before each product ("trajectory.csv", "figures", "video.mp4",
     "replay.html"); ``on_frame(done, total)`` while the video renders (when the renderer reports
     frames).
@@ -381,12 +386,14 @@ def write_outputs(
         "columns": write_json(out / "columns.json", column_dictionary(result.joint_names)),
         "summary": write_summary(result, out / "summary.json", rows=rows),
     }
-    (out / "scenario.toml").write_text(result.scenario.to_toml())
+    files.write_text(out / "scenario.toml", result.scenario.to_toml())
     written["scenario"] = out / "scenario.toml"
     if figures:
         stage("figures")
         try:
             written["figures"] = plot_push(result, out / "figures")
+        except _REFUSED:
+            raise
         except Exception as exc:  # noqa: BLE001 - an optional output must not lose the run
             log(f"figures: not written ({type(exc).__name__}: {exc})")
     if video:
@@ -399,6 +406,8 @@ def write_outputs(
                 written["video"] = Path(res.path)
             else:
                 log(f"video: not written ({res.reason})")
+        except _REFUSED:
+            raise
         except Exception as exc:  # noqa: BLE001 - an optional output must not lose the run
             log(f"video: not written ({type(exc).__name__}: {exc})")
     if replay:
@@ -421,6 +430,8 @@ def write_outputs(
             )
             rp = with_footprints(rp, _footprints(scene, result))
             written["replay"] = write_replay(rp, out / "replay.html") or out / "replay.html"
+        except _REFUSED:
+            raise
         except Exception as exc:  # noqa: BLE001
             log(f"replay: not written ({type(exc).__name__}: {exc})")
     return written

@@ -19,6 +19,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from biped import files
 from biped.kinematic.dynamics import InverseDynamics, inverse_dynamics, load_biped
 from biped.kinematic.figure import (
     JOINT_NAMES,
@@ -83,7 +84,7 @@ def write_trajectory_csv(motion, landmarks: dict, path) -> Path:
     cols += [landmarks[p] for p in _POINTS]
     cols.append(motion.stance.astype(float))
     table = np.hstack(cols)
-    with path.open("w", newline="") as fh:
+    with files.atomic_open(path, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(CSV_COLUMNS)
         for row in table:
@@ -144,7 +145,7 @@ def write_inverse_dynamics_csv(idyn, path) -> Path:
         ]
     cols.append(idyn.residual)
     table = np.hstack(cols)
-    with path.open("w", newline="") as fh:
+    with files.atomic_open(path, "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow([c[0] for c in inverse_dynamics_columns(idyn.joint_names)])
         for row in table:

@@ -39,7 +39,8 @@ def _apply(path: str | None) -> None:
     def handler(msg: str) -> None:
         print(f"WARNING: {msg}")
         if path:
-            with open(path, "a", encoding="utf-8") as fh:
+            flags = os.O_WRONLY | os.O_APPEND | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0)
+            with os.fdopen(os.open(path, flags, 0o644), "a", encoding="utf-8") as fh:  # never a link
                 fh.write(f"WARNING: {msg}\n")
 
     mujoco.set_mju_user_warning(handler)
@@ -48,6 +49,10 @@ def _apply(path: str | None) -> None:
 def route_to(path: str | os.PathLike | None) -> None:
     """Append MuJoCo's warnings to ``path`` (None: write no log file) in this process and in
     child processes started afterwards (through :data:`ENV`)."""
+    if path:
+        from biped.files import check_no_link
+
+        check_no_link(path, "the MuJoCo log")
     value = str(Path(path).resolve()) if path else ""
     os.environ[ENV] = value
     _apply(value or None)

@@ -242,12 +242,15 @@ class Scenario:
 
 def read_toml(path: str | os.PathLike, kind: str) -> dict:
     """The table of the TOML file ``path``; a file that cannot be read, is not UTF-8 or is not
-    TOML is a one-line :class:`ScenarioError` naming the ``kind`` of file ("scenario", "sweep")."""
+    TOML is a one-line :class:`ScenarioError` naming the ``kind`` of file ("scenario", "sweep"),
+    and so is anything but a regular file of at most :data:`biped.files.MAX_TEXT_BYTES` (a device
+    such as ``/dev/zero``, a fifo, a folder)."""
+    from biped.files import MAX_TEXT_BYTES, read_input
+
     path = Path(path)
+    data = read_input(path, kind, MAX_TEXT_BYTES)  # a regular file of at most 1 MiB
     try:
-        return tomllib.loads(path.read_text(encoding="utf-8"))
-    except OSError as exc:
-        raise ScenarioError(f"cannot read {kind} file {str(path)!r}: {exc.strerror or exc}") from None
+        return tomllib.loads(data.decode("utf-8"))
     except UnicodeDecodeError as exc:
         raise ScenarioError(
             f"{kind} file {str(path)!r} is not UTF-8 text (byte "

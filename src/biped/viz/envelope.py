@@ -29,6 +29,7 @@ from typing import Any
 import matplotlib
 import numpy as np
 
+from biped import files
 from biped.analysis import envelope, feet_in_place_bound, survived, sweep_data
 from biped.errors import ScenarioError
 
@@ -226,7 +227,7 @@ def plot_comparison(
     if out is not None:
         out = Path(out)
         out.parent.mkdir(parents=True, exist_ok=True)
-        fig.savefig(out, dpi=80)
+        files.write_via(out, lambda tmp: fig.savefig(tmp, dpi=80))
     return fig
 
 

@@ -13,6 +13,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from biped import files
 from biped.errors import ScenarioError
 from biped.planar import body_leg as bl
 from biped.planar import pendulum as pd
@@ -171,12 +172,12 @@ def _write_animation(images: list, path: Path, fps: float) -> None:
             Image.fromarray(im[..., :3]).convert("P", palette=Image.Palette.WEB, dither=Image.Dither.NONE)
             for im in images
         ]
-        frames[0].save(path, save_all=True, append_images=frames[1:],
-                       duration=round(1000 / fps), loop=0)  # fmt: skip
+        files.write_via(path, lambda tmp: frames[0].save(
+            tmp, save_all=True, append_images=frames[1:], duration=round(1000 / fps), loop=0))  # fmt: skip
     elif suffix == ".mp4":
         import imageio.v2 as imageio
 
-        imageio.mimsave(path, [im[..., :3] for im in images], fps=fps)
+        files.write_via(path, lambda tmp: imageio.mimsave(tmp, [im[..., :3] for im in images], fps=fps))
     else:
         raise ScenarioError(f"animation file must end in .gif or .mp4, got {path.name!r}")
 

@@ -15,10 +15,12 @@ degrees (roll, pitch, yaw about the set point) beside the quaternion components.
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 import numpy as np
 
+from biped import files
 from biped.models import LEG_JOINTS as _LEG_JOINTS
 
 _LEG_LABELS = tuple(j.replace("_", " ") for j in _LEG_JOINTS)
@@ -281,7 +283,8 @@ def plot_push(result, out_dir) -> list[Path]:
         try:
             for ext in ("png", "svg"):
                 p = out / f"{name}.{ext}"
-                fig.savefig(p, dpi=120, metadata={"Date": None} if ext == "svg" else None)
+                meta = {"Date": None} if ext == "svg" else None
+                files.write_via(p, functools.partial(fig.savefig, dpi=120, metadata=meta))
                 paths.append(p)
         finally:
             plt.close(fig)

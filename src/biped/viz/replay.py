@@ -33,6 +33,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from biped import files
 from biped.errors import BipedError, ModelError, StateError, unknown_name
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -470,5 +471,5 @@ def write_replay(replay: Replay, path) -> pathlib.Path:
     }
     # one pass, so nothing inserted is scanned for placeholders again
     page = re.sub(r"@@([A-Z_]+)@@", lambda m: parts[m.group(1)], template)
-    path.write_text(page, encoding="utf-8")
+    files.write_text(path, page)  # atomic, never through a link
     return path.resolve()

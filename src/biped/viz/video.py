@@ -18,6 +18,7 @@ Mesa's ``libegl-mesa0`` and ``libgl1-mesa-dri`` it renders on the CPU), ``osmesa
 
 from __future__ import annotations
 
+import errno
 import functools
 import json
 import math
@@ -30,6 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from biped import files
 from biped.errors import ModelError, ScenarioError, StateError, unknown_name
 from biped.viz.timeline import frame_indices
 
@@ -261,23 +263,19 @@ def render_video(
     ok, backend = gl_available()
     if not ok:
         return VideoResult(None, backend)
-    import mujoco
 
     path.parent.mkdir(parents=True, exist_ok=True)
     idx = frame_indices(times, fps, slow_motion)
-    with tempfile.TemporaryDirectory(prefix="biped-video-") as tmp_name:
-        tmp = pathlib.Path(tmp_name)
-        mujoco.mj_saveModel(model, str(tmp / "model.mjb"), None)
-        np.save(tmp / "qpos.npy", qpos[idx])
-        extent = float(model.stat.extent) if model.stat.extent > 0 else 1.0
-        cfg = {
-            "out": str(path.resolve()),
+    fd, dest = files.temp_path(files.check_no_link(path))  # ffmpeg writes here, then it moves
+    os.close(fd)
+    try:
+        return _render_to(model, qpos, idx, path, dest, backend, progress, {
             "fps": float(fps),
             "width": int(width),
             "height": int(height),
             "body_id": -1 if lookat is not None else int(body_id),
             "lookat": None if lookat is None else lookat.tolist(),
-            "distance": float(distance) if distance is not None else 1.5 * extent,
+            "distance": distance,
             "azimuth": float(azimuth),
             "elevation": float(elevation),
             "shadows": shadows,
@@ -285,16 +283,38 @@ def render_video(
             "captions": captions if overlay else None,
             "title": title or "",
             "font": _font_file(),
+        })  # fmt: skip
+    finally:
+        dest.unlink(missing_ok=True)
+
+
+def _render_to(model, qpos, idx, path, dest, backend, progress, cfg) -> VideoResult:
+    """Render into the temporary file ``dest`` in a child process, then move it to ``path``."""
+    import mujoco
+
+    with tempfile.TemporaryDirectory(prefix="biped-video-") as tmp_name:
+        tmp = pathlib.Path(tmp_name)
+        mujoco.mj_saveModel(model, str(tmp / "model.mjb"), None)
+        np.save(tmp / "qpos.npy", qpos[idx])
+        extent = float(model.stat.extent) if model.stat.extent > 0 else 1.0
+        distance = cfg["distance"]
+        cfg = {
+            **cfg,
+            "out": str(dest.resolve()),
+            "distance": float(distance) if distance is not None else 1.5 * extent,
         }
         (tmp / "job.json").write_text(json.dumps(cfg))
         try:
             code, err = _run_child(tmp, backend, len(idx), progress)
         except subprocess.TimeoutExpired:
             return VideoResult(None, f"no video: rendering with MUJOCO_GL={backend} timed out", backend)
-    if code != 0 or not path.is_file():
+    if code != 0 and any(w in err for w in ("No space left on device", "Disk quota exceeded")):
+        raise files.WriteError(errno.ENOSPC, "No space left on device", str(path))  # not a note: exit 1
+    if code != 0 or not dest.is_file() or dest.stat().st_size == 0:
         return VideoResult(
             None, f"no video: rendering with MUJOCO_GL={backend} failed: {_last_line(err)}", backend
         )
+    files.place(dest, path)
     return VideoResult(path.resolve(), None, backend, len(idx))
 
 

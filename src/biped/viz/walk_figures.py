@@ -16,6 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
+from biped import files
+
 __all__ = ["inverse_dynamics_figure", "plot_feet", "plot_inverse_dynamics", "plot_joint_angles"]
 
 _SIDE_COLOURS = {"left": "tab:blue", "right": "tab:red"}
@@ -60,7 +62,7 @@ def _stance_bands(ax, times, stance):
 def _save(fig, path) -> Path:
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path, dpi=110)
+    files.write_via(path, lambda tmp: fig.savefig(tmp, dpi=110))
     _pyplot().close(fig)
     return path
 

@@ -12,6 +12,7 @@ to finish: done trials are skipped.
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import os
 import signal
@@ -24,6 +25,7 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
 
+from biped import files
 from biped.errors import ScenarioError
 from biped.sim.sweep import store
 from biped.sim.sweep.pool import LocalPool
@@ -119,6 +121,101 @@ def check_scheduler(address: str, timeout_s: float = SCHEDULER_TIMEOUT_S) -> Non
         ) from None
 
 
+async def _dask_identity(address: str, timeout_s: float) -> Any:
+    """What the peer at ``address`` says to Dask's ``identity`` request."""
+    from distributed.comm import connect
+
+    comm = await connect(address, timeout=timeout_s)
+    try:
+        await comm.write({"op": "identity", "reply": True})
+        return await asyncio.wait_for(comm.read(), timeout_s)
+    finally:
+        comm.abort()
+
+
+def _in_own_loop(coro: Any, timeout_s: float) -> Any:
+    """Run ``coro`` to its end in a new event loop on a thread of its own (a caller inside a
+    running loop, e.g. Jupyter, cannot ``asyncio.run``), with a hard limit of ``timeout_s``."""
+    box: dict[str, Any] = {}
+
+    def run() -> None:
+        try:
+            box["value"] = asyncio.run(asyncio.wait_for(coro, timeout_s))
+        except BaseException as exc:  # noqa: BLE001 - handed to the caller
+            box["error"] = exc
+
+    thread = threading.Thread(target=run, name="biped-dask-probe", daemon=True)
+    thread.start()
+    thread.join(timeout_s + 1.0)
+    if thread.is_alive():
+        raise TimeoutError
+    if "error" in box:
+        raise box["error"]
+    return box["value"]
+
+
+def connect_scheduler(address: str, timeout_s: float | None = None) -> Any:
+    """A ``dask.distributed.Client`` of the scheduler at ``address``, or a one-line
+    :class:`ScenarioError` within ``2 * timeout_s`` seconds when nothing listens there or the
+    peer is not a Dask scheduler (it says nothing, or something else). The client's own timeout
+    is not honoured by a peer that accepts and stays silent, so the peer is first asked Dask's
+    ``identity`` under a hard limit, and only a scheduler gets a client. ``timeout_s``: default
+    :data:`SCHEDULER_TIMEOUT_S`."""
+    timeout_s = SCHEDULER_TIMEOUT_S if timeout_s is None else timeout_s
+    check_scheduler(address, timeout_s)
+    try:
+        reply = _in_own_loop(_dask_identity(address, timeout_s), 2 * timeout_s)
+    except TimeoutError:
+        raise ScenarioError(
+            f"--scheduler {address!r}: something listens there but no Dask scheduler answered "
+            f"within {2 * timeout_s:g} s; give the address of a running `dask scheduler`"
+        ) from None
+    except Exception as exc:  # noqa: BLE001 - a peer speaking garbage can raise anything
+        first = (str(exc).strip().splitlines() or [""])[0][:200]
+        raise ScenarioError(
+            f"--scheduler {address!r} is not a Dask scheduler ({type(exc).__name__}"
+            f"{': ' + first if first else ''}); give the address of a running `dask scheduler`"
+        ) from None
+    if not isinstance(reply, dict) or reply.get("type") != "Scheduler":
+        what = reply.get("type") if isinstance(reply, dict) else type(reply).__name__
+        raise ScenarioError(
+            f"--scheduler {address!r} is not a Dask scheduler (it says it is {what!r}); give the "
+            f"address of a running `dask scheduler`"
+        )
+    from dask.distributed import Client
+
+    return Client(address, timeout=f"{timeout_s}s")
+
+
+def check_setups(spec: SweepSpec) -> None:
+    """Build the scenario of every extreme trial of ``spec`` (each axis's smallest and largest
+    value, every direction of a grid, the quarter turns within a sampled direction range), so that
+    a value out of a scenario's range (``--mass 1000``, ``--speed 500``) is refused before any
+    lock, manifest or trial exists. The checks are monotonic in each axis but the direction, so
+    the extremes stand for every trial."""
+    import itertools
+
+    from biped.sim.sweep.spec import AXES, Trial
+
+    values = dict(spec.axes)
+    cand: dict[str, list[float]] = {n: sorted({min(values[n]), max(values[n])}) for n in AXES}
+    dirs = sorted(set(values["direction_deg"]))
+    if spec.samples is None and len(dirs) <= 360:
+        cand["direction_deg"] = dirs
+    else:
+        lo, hi = min(dirs), max(dirs)
+        quarter = [q for q in range(-720, 721, 90) if lo <= q <= hi]
+        cand["direction_deg"] = sorted({lo, hi, *map(float, quarter)})
+    names = list(AXES)
+    for combo in itertools.product(*(cand[n] for n in names)):
+        params = dict(zip(names, combo, strict=True))
+        try:
+            spec.setup(Trial(index=0, key="check", **params))
+        except ScenarioError as exc:
+            shown = ", ".join(f"{n} = {v:g}" for n, v in params.items())
+            raise ScenarioError(f"the sweep's trial with {shown} is not a valid push: {exc}") from None
+
+
 def max_local_workers() -> int:
     """The most local worker processes a sweep accepts: twice the cores (at least 4). Each worker
     is a process holding MuJoCo, numba and the compiled controller; more than the cores only
@@ -133,6 +230,11 @@ def check_run_args(
     returns ``out`` as a Path. A scheduler address must answer within
     :data:`SCHEDULER_TIMEOUT_S`."""
     out = Path(out)
+    if str(out) in ("", "."):
+        raise ScenarioError("--out is an empty path; name a .parquet file")
+    files.check_no_link(out, "--out")
+    files.check_no_link(store.lock_path(out), "the lock file")
+    store.check_parts_dir(store.parts_dir(out))
     if out.suffix != ".parquet":
         raise ScenarioError(f"--out must name a .parquet file; got {str(out)!r}")
     if out.is_dir():
@@ -206,11 +308,37 @@ def run_sweep(
     """
     t_start = time.perf_counter()
     out = check_run_args(out, workers=workers, batch=batch, scheduler=scheduler)
+    check_setups(spec)
     if trial_fn is None:
         from biped.sim.sweep.trial import run_trial  # the MuJoCo trial, only when it is used
 
         trial_fn = run_trial
     trials = spec.trials()
+    own_client = None
+    if isinstance(scheduler, str):  # connected before anything exists on disk
+        scheduler = own_client = connect_scheduler(scheduler)
+    try:
+        return _run_unlocked(
+            spec, out, trials, trial_fn, workers, scheduler, progress, retry_failed, overwrite, batch, t_start
+        )
+    finally:
+        if own_client is not None:
+            own_client.close()
+
+
+def _run_unlocked(
+    spec: SweepSpec,
+    out: Path,
+    trials: tuple,
+    trial_fn: Callable,
+    workers: int | None,
+    scheduler: Any,
+    progress: bool,
+    retry_failed: bool,
+    overwrite: bool,
+    batch: int,
+    t_start: float,
+) -> SweepSummary:
     made_parent = not out.parent.exists()
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
@@ -255,6 +383,7 @@ def _run_locked(
     state: dict,
     t_start: float,
 ) -> SweepSummary:
+    store.remove_stale_temps(out)
     if overwrite:
         store.remove_sweep(out)
     else:
@@ -341,11 +470,7 @@ def _run_dask(
     if isinstance(scheduler, Client):
         client, own = scheduler, False
     else:
-        try:
-            client = Client(scheduler, timeout=f"{SCHEDULER_TIMEOUT_S}s")
-        except OSError as exc:
-            raise ScenarioError(f"cannot connect to the Dask scheduler at {scheduler!r}: {exc}") from None
-        own = True
+        client, own = connect_scheduler(str(scheduler)), True
     lost = 0
     try:
         futures = {
@@ -374,6 +499,8 @@ __all__ = [
     "Terminated",
     "check_run_args",
     "check_scheduler",
+    "check_setups",
+    "connect_scheduler",
     "default_workers",
     "execute_trial",
     "run_sweep",

@@ -40,6 +40,12 @@ AXES: dict[str, str] = {
 #: W's throw (section 4) in sweep coordinates: 1.8 kg at 4.5 m/s along -x, 1.2 m high.
 W_THROW = {"speed_m_s": 4.5, "direction_deg": 180.0, "block_mass_kg": 1.8, "height_m": 1.2, "gain_scale": 1.0}
 
+#: Axis values are kept to this many significant digits, so that ``1:2:11`` and the same values
+#: typed as a list (1.7, not 1.7000000000000002) are the same trials; two sweeps' values are the
+#: same when they agree to :data:`GRID_RTOL` (relative).
+AXIS_DIGITS = 12
+GRID_RTOL = 1e-9
+
 #: The most trials one sweep may hold (a grid's product or ``samples``): a bound on the work and
 #: the memory asked for by a typo such as ``num = 100000000``. Split larger studies into sweeps.
 MAX_TRIALS = 1_000_000
@@ -100,7 +106,7 @@ def _axis_values(name: str, value: Any) -> tuple[float, ...]:
     for v in value:
         if not _is_number(v) or not math.isfinite(float(v)):
             raise ScenarioError(f"sweep axis {name} ({AXES[name]}) must hold finite numbers; got {v!r}")
-        out.append(float(v))
+        out.append(float(f"{float(v):.{AXIS_DIGITS}g}"))
         if len(out) > MAX_TRIALS:
             raise ScenarioError(
                 f"sweep axis {name} has more than {MAX_TRIALS} values (the most a sweep may hold)"
@@ -108,6 +114,9 @@ def _axis_values(name: str, value: Any) -> tuple[float, ...]:
     if not out:
         raise ScenarioError(f"sweep axis {name} ({AXES[name]}) is empty; give at least one value")
     lo = min(out)
+    if name == "direction_deg" and max(abs(lo), abs(max(out))) > 360:
+        bad = lo if abs(lo) > 360 else max(out)
+        raise ScenarioError(f"sweep axis {name} ({AXES[name]}) must be in [-360, 360] deg; got {bad:g}")
     if name in ("speed_m_s", "block_mass_kg", "height_m", "gain_scale") and lo <= 0:
         raise ScenarioError(f"sweep axis {name} ({AXES[name]}) must be > 0; got {lo:g}")
     return tuple(out)
@@ -310,7 +319,19 @@ class SweepSpec:
 
     @property
     def model_sha256(self) -> str:
+        """SHA-256 of the top-level model file's bytes (in the trial keys, so that a file of an
+        earlier version resumes; whether a rerun is the same sweep is decided on
+        :attr:`model_compiled_sha256`)."""
         return hashlib.sha256(self.model_path.read_bytes()).hexdigest()
+
+    @property
+    def model_compiled_sha256(self) -> str:
+        """SHA-256 of the compiled model (:func:`biped.models.compiled_sha256`): every included
+        file, asset and default folded in, so a change in an ``<include>``d file is a change of
+        the sweep's model. Recorded in the sweep's file and manifest; a rerun whose compiled model
+        differs is refused (:func:`biped.sim.sweep.store.spec_difference`), so no file ever holds
+        rows of two models."""
+        return models.compiled_sha256(self.model_path)
 
     @property
     def identity(self) -> str:
@@ -421,6 +442,8 @@ def trial_scenario(base: Scenario, trial: Trial, *, launch_distance_m: float = 0
 
 __all__ = [
     "AXES",
+    "AXIS_DIGITS",
+    "GRID_RTOL",
     "MAX_TRIALS",
     "W_THROW",
     "SweepSpec",

@@ -11,14 +11,20 @@
   file's SHA-256, the package version) and the part files that were read into it are removed.
 - **Same sweep or refused**: a rerun on an existing ``<out>`` must be the same sweep, or one
   whose grid extends it (more values on an axis); anything else is refused naming the difference,
-  unless ``overwrite``.
+  unless ``overwrite``. The model is compared as MuJoCo compiles it (included files count), grid
+  values as numbers to a relative ``GRID_RTOL``.
+- **No links**: the lock, the parts folder, its files and ``<out>`` are never written through a
+  symbolic link (:mod:`biped.files`); ``<out>`` is replaced atomically.
 """
 
 from __future__ import annotations
 
+import errno
 import fcntl
 import json
+import math
 import os
+import stat
 import time
 from collections.abc import Iterable
 from dataclasses import dataclass
@@ -30,10 +36,11 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from biped import __version__
+from biped import files as _files
 from biped.errors import ScenarioError
 from biped.sim.scenario import Scenario
 from biped.sim.sweep.record import schema
-from biped.sim.sweep.spec import AXES, SweepSpec, Trial
+from biped.sim.sweep.spec import AXES, GRID_RTOL, SweepSpec, Trial
 
 MANIFEST = "sweep.json"
 
@@ -64,8 +71,18 @@ class SweepLock:
         self.fd: int | None = None
 
     def acquire(self) -> None:
+        flags = os.O_RDWR | os.O_CREAT | getattr(os, "O_NOFOLLOW", 0) | getattr(os, "O_CLOEXEC", 0)
         while True:
-            fd = os.open(self.path, os.O_RDWR | os.O_CREAT, 0o644)
+            _files.check_no_link(self.path, "the lock file")
+            try:
+                fd = os.open(self.path, flags | os.O_NONBLOCK, 0o644)
+            except OSError as exc:
+                if exc.errno == errno.ELOOP:  # a link planted between the check and the open
+                    _files.check_no_link(self.path, "the lock file")
+                raise
+            if not stat.S_ISREG(os.fstat(fd).st_mode):
+                os.close(fd)
+                raise ScenarioError(f"the lock file {str(self.path)!r} is not a regular file; remove it")
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except BlockingIOError:
@@ -125,7 +142,9 @@ class PartWriter:
         if not rows:
             return
         if self._writer is None:
-            self._sink = pa.OSFile(str(self.path), "wb")
+            check_parts_dir(self.dir)
+            fd = _files.open_exclusive(self.path)  # a new file, never through a link
+            self._sink = pa.PythonFile(os.fdopen(fd, "wb", buffering=0), mode="w")
             self._writer = pa.ipc.new_stream(self._sink, schema())
         self._writer.write_batch(pa.RecordBatch.from_pylist(rows, schema=schema()))
         self._sink.flush()
@@ -142,11 +161,20 @@ def read_part(path: Path) -> pa.Table:
     """The rows of one part file; a torn last batch (the writer was killed mid-write) is left
     out. Reads the Parquet parts of earlier versions too."""
     if path.suffix == ".parquet":
-        return pq.read_table(path, schema=schema())
+        try:
+            return pq.read_table(path, schema=schema())
+        except Exception as exc:  # noqa: BLE001 - any unreadable part is refused the same way
+            raise _foreign_part(path, f"not a readable Parquet file of this schema: {exc}") from None
+    with open(path, "rb") as f:
+        head = f.read(4)
+    if head and not _STREAM_START.startswith(head):  # not torn: not an Arrow stream at all
+        raise _foreign_part(path, "not an Arrow stream")
     batches = []
     try:
         with pa.OSFile(str(path), "rb") as f:
             reader = pa.ipc.open_stream(f)
+            if not reader.schema.equals(schema(), check_metadata=False):
+                raise _foreign_part(path, "its columns are not those of this version's sweep rows")
             while True:
                 try:
                     batches.append(reader.read_next_batch())
@@ -155,6 +183,17 @@ def read_part(path: Path) -> pa.Table:
     except (pa.ArrowInvalid, OSError, EOFError):
         pass  # empty, or torn at the end: keep the complete batches
     return pa.Table.from_batches(batches, schema=schema())
+
+
+#: The first bytes of every Arrow IPC stream (the continuation marker).
+_STREAM_START = b"\xff\xff\xff\xff"
+
+
+def _foreign_part(path: Path, why: str) -> ScenarioError:
+    return ScenarioError(
+        f"{str(path)!r} is not a part file of a biped sweep ({why}); move it out of "
+        f"{str(path.parent)!r} and run again"
+    )
 
 
 def part_files(directory: Path) -> list[Path]:
@@ -184,10 +223,26 @@ def _fmt_values(values: list[float]) -> str:
     return f"{len(v)} value{'s' * (len(v) != 1)} [{shown}]"
 
 
-def spec_difference(old: dict, old_model_sha256: str | None, spec: SweepSpec) -> str | None:
+def _same(a: Any, b: Any) -> bool:
+    return (
+        isinstance(a, (int, float)) and isinstance(b, (int, float)) and math.isclose(a, b, rel_tol=GRID_RTOL)
+    )
+
+
+def _missing(old: list, new: list) -> list:
+    """The values of ``old`` that ``new`` lacks (numbers compared to :data:`GRID_RTOL`)."""
+    return [a for a in old if not any(_same(a, b) for b in new)]
+
+
+def spec_difference(
+    old: dict, old_model_sha256: str | None, spec: SweepSpec, old_compiled_sha256: str | None = None
+) -> str | None:
     """``None`` if ``spec`` is the sweep described by ``old`` (a :meth:`SweepSpec.to_dict`) or
-    extends its grid (every old value of every axis is still there, so every old trial is a
-    trial of ``spec``); else what differs, in words."""
+    extends its grid (every old value of every axis is still there, to a relative
+    :data:`~biped.sim.sweep.spec.GRID_RTOL`, so every old trial is a trial of ``spec``); else what
+    differs, in words, naming the first value that differs with all its digits. The model is
+    compared compiled (``old_compiled_sha256``: included files count); a file of an earlier
+    version, without that hash, by the top-level file's SHA-256."""
     new = spec.to_dict()
     diffs = []
     old_scen, new_scen = old.get("scenario", {}), new["scenario"]
@@ -197,26 +252,36 @@ def spec_difference(old: dict, old_model_sha256: str | None, spec: SweepSpec) ->
     for k in ("launch_distance_m", "model", "torque_limits", "samples", "seed"):
         if old.get(k) != new[k]:
             diffs.append(f"{k}: {old.get(k)!r} in the file, {new[k]!r} now")
-    if old_model_sha256 and old_model_sha256 != spec.model_sha256:
+    if old_compiled_sha256:
+        now = spec.model_compiled_sha256
+        if old_compiled_sha256 != now:
+            diffs.append(
+                f"the model {str(spec.model_path)!r} compiles differently (it or a file it includes "
+                f"changed: compiled SHA-256 {old_compiled_sha256[:12]}... in the file, {now[:12]}... now)"
+            )
+    elif old_model_sha256 and old_model_sha256 != spec.model_sha256:
         diffs.append(
             f"the model file {spec.model!r} changed (SHA-256 {old_model_sha256[:12]}... "
             f"in the file, {spec.model_sha256[:12]}... now)"
         )
     old_grid = old.get("grid", {})
     for name in AXES:
-        a, b = old_grid.get(name, []), new["grid"][name]
+        a, b = list(old_grid.get(name, [])), new["grid"][name]
+        lacking = _missing(a, b)
         if new["samples"] is not None:
-            if sorted(a) != sorted(b):
-                diffs.append(f"{name}: {_fmt_values(a)} in the file, {_fmt_values(b)} now")
-        elif not set(a) <= set(b):
+            extra = _missing(b, a)
+            if lacking or extra:
+                first = f"{lacking[0]!r} in the file only" if lacking else f"{extra[0]!r} now only"
+                diffs.append(f"{name}: {_fmt_values(a)} in the file, {_fmt_values(b)} now ({first})")
+        elif lacking:
             diffs.append(
                 f"{name}: {_fmt_values(a)} in the file, {_fmt_values(b)} now, which "
-                f"lacks {len(set(a) - set(b))} of them"
+                f"lacks {len(lacking)} of them (first: {lacking[0]!r})"
             )
     return "; ".join(diffs) or None
 
 
-def _stored_spec(out: Path) -> tuple[dict, str | None] | None:
+def _stored_spec(out: Path) -> tuple[dict, str | None, str | None] | None:
     if not out.exists():
         return None
     try:
@@ -231,7 +296,16 @@ def _stored_spec(out: Path) -> tuple[dict, str | None] | None:
             f"--out {str(out)!r} is not a biped sweep file; choose another path or pass --overwrite"
         )
     sha = meta.get(b"biped.model_sha256")
-    return json.loads(meta[b"biped.sweep"]), sha.decode() if sha else None
+    compiled = meta.get(b"biped.model_compiled_sha256")
+    try:
+        stored = json.loads(meta[b"biped.sweep"])
+    except ValueError:
+        stored = None
+    if not isinstance(stored, dict):
+        raise ScenarioError(
+            f"--out {str(out)!r} holds unreadable sweep metadata; choose another path or pass --overwrite"
+        )
+    return stored, sha.decode() if sha else None, compiled.decode() if compiled else None
 
 
 def check_same_sweep(spec: SweepSpec, out: Path) -> None:
@@ -239,7 +313,7 @@ def check_same_sweep(spec: SweepSpec, out: Path) -> None:
     repeats nor extends. Call under the lock."""
     stored = _stored_spec(out)
     if stored is not None:
-        diff = spec_difference(stored[0], stored[1], spec)
+        diff = spec_difference(stored[0], stored[1], spec, stored[2])
         if diff:
             raise ScenarioError(
                 f"--out {str(out)!r} holds a different sweep ({diff}); a rerun may only add "
@@ -248,16 +322,31 @@ def check_same_sweep(spec: SweepSpec, out: Path) -> None:
     manifest = parts_dir(out) / MANIFEST
     if manifest.exists():
         try:
-            saved = json.loads(manifest.read_text())
-        except (OSError, ValueError):
-            saved = {}
-        diff = spec_difference(saved.get("sweep", {}), saved.get("model_sha256"), spec)
+            saved = json.loads(_files.read_input(manifest, "sweep manifest"))
+        except (ValueError, ScenarioError):
+            saved = None
+        if not isinstance(saved, dict) or not isinstance(saved.get("sweep"), dict):
+            raise ScenarioError(
+                f"{str(manifest)!r} is not a biped sweep's manifest, so the parts beside it cannot "
+                f"be matched to this sweep; move {str(parts_dir(out))!r} away, or pass --overwrite "
+                f"to discard it"
+            )
+        diff = spec_difference(
+            saved.get("sweep", {}), saved.get("model_sha256"), spec, saved.get("model_compiled_sha256")
+        )
         if diff:
             raise ScenarioError(
                 f"{str(parts_dir(out))!r} holds the unfinished parts of a different sweep "
                 f"({diff}). Finish it with its own command, choose another --out, or pass "
                 f"--overwrite to discard it"
             )
+
+
+def remove_stale_temps(out: Path) -> None:
+    """Remove the temporary files that a killed sweep on ``out`` left (of ``out`` and of the
+    parts folder's manifest); call under the lock."""
+    for p in [*_files.stale_temps(out), *_files.stale_temps(parts_dir(out) / MANIFEST)]:
+        p.unlink(missing_ok=True)
 
 
 def remove_sweep(out: Path) -> None:
@@ -279,11 +368,27 @@ def remove_sweep(out: Path) -> None:
             ) from None
 
 
+def check_parts_dir(pdir: Path) -> None:
+    """Refuse a ``<out>.parts`` that is a link, or something other than a folder."""
+    _files.check_no_link(pdir, "the parts folder")
+    if pdir.exists() and not pdir.is_dir():
+        raise ScenarioError(f"{str(pdir)!r} is not a folder (a sweep keeps its parts there); remove it")
+
+
 def write_manifest(spec: SweepSpec, out: Path) -> None:
     pdir = parts_dir(out)
+    check_parts_dir(pdir)
     pdir.mkdir(exist_ok=True)
-    (pdir / MANIFEST).write_text(
-        json.dumps({"sweep_id": spec.identity, "sweep": spec.to_dict(), "model_sha256": spec.model_sha256})
+    _files.write_text(
+        pdir / MANIFEST,
+        json.dumps(
+            {
+                "sweep_id": spec.identity,
+                "sweep": spec.to_dict(),
+                "model_sha256": spec.model_sha256,
+                "model_compiled_sha256": spec.model_compiled_sha256,
+            }
+        ),
     )
 
 
@@ -293,6 +398,7 @@ def metadata(spec: SweepSpec) -> dict[bytes, bytes]:
         b"biped.scenario": spec.base.to_toml().encode(),
         b"biped.model": (spec.model if spec.base.model == "wendlandt" else spec.base.model).encode(),
         b"biped.model_sha256": spec.model_sha256.encode(),
+        b"biped.model_compiled_sha256": spec.model_compiled_sha256.encode(),
         b"biped.version": __version__.encode(),
         b"biped.sweep_id": spec.identity.encode(),
     }
@@ -311,9 +417,7 @@ def consolidate(spec: SweepSpec, out: Path, trials: Iterable[Trial]) -> int:
             rows.append({**r, "index": index[key]})
     rows.sort(key=lambda r: r["index"])
     result = pa.Table.from_pylist(rows, schema=schema().with_metadata(metadata(spec)))
-    tmp = out.with_name(out.name + ".tmp")
-    pq.write_table(result, tmp)
-    os.replace(tmp, out)
+    _files.write_via(out, lambda tmp: pq.write_table(result, tmp))  # atomic, never through a link
     pdir = parts_dir(out)
     for p in files:
         p.unlink(missing_ok=True)
