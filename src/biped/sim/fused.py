@@ -32,6 +32,7 @@ when the run reports no progress).
 from __future__ import annotations
 
 import os
+import threading
 
 import mujoco
 import numpy as np
@@ -234,10 +235,17 @@ _key_cache_by_what_it_compiles_in()
 last_failure: str | None = None
 
 
+_COMPILE_LOCK = threading.Lock()
+
+
 def compile_kernel() -> None:
     """Compile :func:`_run_rows` for its one signature (or load it from numba's cache); a no-op once
     done, or when numba's JIT is disabled."""
-    if hasattr(_run_rows, "compile") and not _run_rows.signatures:
+    # a lock: two threads of one process (a Dask worker's) would race between the check and
+    # disable_compile(), and the second one's compile() then raises "compilation disabled"
+    with _COMPILE_LOCK:
+        if not hasattr(_run_rows, "compile") or _run_rows.signatures:
+            return
         _run_rows.compile(_SIGNATURE)
         _run_rows.disable_compile()
 
