@@ -34,12 +34,14 @@ import numpy as np
 from biped import models
 from biped.control.distribution import QPWeights
 from biped.control.limits import TorqueLimits, torque_limits
+from biped.control.neuromotor import OLDER_STRENGTH_FACTOR
 from biped.control.policy import PolicyConfig, make_policy, symmetric_limits
 from biped.control.workspace import Gains, Target
 from biped.errors import BipedError, ScenarioError
 from biped.models import subject
 from biped.sim import fused as fused_mod
 from biped.sim.contact import SOLE_GEOMS, ContactMonitor
+from biped.sim.neuro import neuro_loop
 from biped.sim.scenario import Scenario
 from biped.sim.scene import Scene, build_scene, initial_state, tilt_quat
 
@@ -132,8 +134,13 @@ def scenario_limits(scenario: Scenario) -> TorqueLimits | None:
     """The scenario's ``torque_limits`` ("none", "human" for the model's mass, 1 or 12 numbers)."""
     if scenario.torque_limits == "none":
         return None
-    if scenario.torque_limits == "human":
-        return torque_limits("human", body_mass_kg=models.total_mass_kg(scenario.model))
+    if scenario.torque_limits in ("human", "human-older"):  # older: times OLDER_STRENGTH_FACTOR
+        lim = torque_limits("human", body_mass_kg=models.total_mass_kg(scenario.model))
+        if scenario.torque_limits == "human":
+            return lim
+        assert lim.lower is not None and lim.upper is not None
+        f = OLDER_STRENGTH_FACTOR
+        return TorqueLimits("human-older", lim.joint_names, lim.lower * f, lim.upper * f)
     return symmetric_limits(scenario.torque_limits)
 
 
@@ -340,6 +347,8 @@ def run_closed_loop(
     except BipedError:
         pass
     fused = None
+    neuro = neuro_loop(scenario, scene)  # None: W's ideal controller (no delay, lag or rate limit)
+    records["neuro"] = neuro
     if compiled is not False and on_step is None and live:
         fused = fused_mod.fused_rows(scene, scenario, policy, m, d, monitor, records)
     if compiled and fused is None:
@@ -373,7 +382,11 @@ def run_closed_loop(
             fell = monitor.update(t, d)
             feet = monitor.feet  # (left, right) on the floor
             try:
-                tau = policy(t, q, v, feet)
+                if neuro is None:
+                    tau = policy(t, q, v, feet)
+                else:  # the state of feedback_delay_s ago, the torques filtered
+                    neuro.command(k, t, q, v, monitor.bits, policy, torques[k])
+                    tau = torques[k]
             except BipedError as exc:  # a singular state is a result, like a fall
                 controller_error = f"t = {t:.3f} s: {exc}"
                 tau = np.zeros(12)

@@ -20,7 +20,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from biped.control import Gains, Target
+from biped.control import Target
+from biped.control.neuromotor import NEUROMOTOR
+from biped.control.neuromotor import PRESET_KEYS as NEURO_PRESET_KEYS
+from biped.control.neuromotor import PRESETS as NEUROMOTOR_PRESETS
 from biped.control.workspace import TARGET_AXES, W_TARGET_AXIS, W_TARGET_TILT_DEG
 from biped.errors import ScenarioError
 from biped.models import (
@@ -97,10 +100,11 @@ class Scenario:
     target_com_m: tuple = Target().com
     target_tilt_deg: float = W_TARGET_TILT_DEG
     target_axis: str = W_TARGET_AXIS
-    kp_com: tuple = Gains().kp_com
-    kv_com: tuple = Gains().kv_com
-    kp_rot: tuple = Gains().kp_rot
-    kv_rot: tuple = Gains().kv_rot
+    # W's gains, or the neuromotor preset's when None (NEUROMOTOR_PRESETS)
+    kp_com: tuple = None  # type: ignore[assignment]
+    kv_com: tuple = None  # type: ignore[assignment]
+    kp_rot: tuple = None  # type: ignore[assignment]
+    kv_rot: tuple = None  # type: ignore[assignment]
     controller: str = "workspace"
     support: str = "fixed"  # not in W: "sensed" drops a foot off the floor from Alg. 3 and 5
     distribution: str = "statics"  # W's Alg. 5; "qp": not in W (docs/controller.md)
@@ -108,7 +112,7 @@ class Scenario:
     qp_min_normal_n: float = 10.0  # "qp": minimum normal force of a foot in contact [N]
     qp_cop_scale: float = 1.0  # "qp": the CoP stays in the sole shrunk by this factor
     qp_leg_weight: float = 1.0  # "qp": share of the legs' weight in the cones (0 with stepping = true)
-    torque_limits: Any = "none"
+    torque_limits: Any = None  # None: the neuromotor preset's ("none" for "ideal", W)
     friction: float = 0.3
     restitution: float = 0.2
     # not in W (Impulse is rigid): MuJoCo's contact stiffness [s]; None: from the preset
@@ -126,6 +130,15 @@ class Scenario:
     # not in W: capture-point steps when the feet cannot hold (biped.control.stepping)
     stepping: bool = False
     max_steps: int = 3  # with stepping: most steps per run
+    # not in W: a human nervous system (biped.control.neuromotor; docs/validate.md). The preset
+    # fills feedback_delay_s, torque_rate_limit_n_m_s, activation_time_s, torque_limits and the
+    # four gains when they are not given; "ideal" is W's controller
+    neuromotor: str = "ideal"
+    feedback_delay_s: float = None  # type: ignore[assignment]  # [s], a whole number of periods
+    torque_rate_limit_n_m_s: Any = None  # "none", "human", "human-older", 1 or 12 numbers [N m/s]
+    activation_time_s: float = None  # type: ignore[assignment]  # first-order lag [s], 0 = none
+    # hips and knees held at their initial angles by stiff joint springs, the ankles balance
+    ankle_only: bool = False
 
     def __post_init__(self):
         preset = PHYSICS_PRESETS.get(self.physics) if isinstance(self.physics, str) else None
@@ -136,6 +149,14 @@ class Scenario:
         for key in _PRESET_KEYS:
             if getattr(self, key) is None:
                 object.__setattr__(self, key, preset[key])
+        neuro = NEUROMOTOR_PRESETS.get(self.neuromotor) if isinstance(self.neuromotor, str) else None
+        if neuro is None:
+            raise ScenarioError(
+                f"neuromotor must be one of {', '.join(map(repr, NEUROMOTOR))}; got {self.neuromotor!r}"
+            )
+        for key in NEURO_PRESET_KEYS:
+            if getattr(self, key) is None:
+                object.__setattr__(self, key, neuro[key])
         validate(self)
 
     # ------------------------------------------------------------------ construction
@@ -197,6 +218,9 @@ class Scenario:
         if "physics" in changes:
             for key in _PRESET_KEYS:
                 changes.setdefault(key, None)
+        if "neuromotor" in changes:
+            for key in NEURO_PRESET_KEYS:
+                changes.setdefault(key, None)
         return dataclasses.replace(self, **changes)
 
     @property
@@ -233,6 +257,20 @@ class Scenario:
     def control_substeps(self) -> int:
         """Physics steps per control period (the zero-order hold)."""
         return round(1.0 / (self.control_rate_hz * self.physics_timestep_s))
+
+    @property
+    def delay_steps(self) -> int:
+        """Control periods of ``feedback_delay_s``."""
+        return round(self.feedback_delay_s * self.control_rate_hz)
+
+    @property
+    def neuro_ideal(self) -> bool:
+        """No delay, no activation lag, no rate limit: W's controller acts on the state at once."""
+        return (
+            self.feedback_delay_s == 0
+            and self.activation_time_s == 0
+            and self.torque_rate_limit_n_m_s == "none"
+        )
 
     @property
     def control_steps(self) -> int:
@@ -283,6 +321,7 @@ _STRINGS = {
     "support": SUPPORTS,
     "physics": PHYSICS,
     "distribution": DISTRIBUTIONS,
+    "neuromotor": NEUROMOTOR,
 }
 
 
@@ -307,11 +346,13 @@ def _coerce(key: str, v):
         if isinstance(v, (str, bytes)) or not hasattr(v, "__len__"):
             raise ScenarioError(f"{key} must be {n} numbers, {what}; got {v!r}")
         return tuple(float(x) if is_number(x) else x for x in v)
-    if key == "torque_limits":
+    if key in ("torque_limits", "torque_rate_limit_n_m_s"):
         if isinstance(v, (list, tuple)):
             return tuple(float(x) if is_number(x) else x for x in v)
         return float(v) if is_number(v) else v
-    if key in _STRINGS or key in INTS or key == "stepping":  # a bool is checked, not converted
+    if (
+        key in _STRINGS or key in INTS or key in ("stepping", "ankle_only")
+    ):  # a bool is checked, not converted
         return v
     if key == "model":
         return str(v) if isinstance(v, Path) else v

@@ -64,6 +64,9 @@ RANGES = {
     "recovery_orientation_tol_deg": (0.0, 180.0, "orientation error in deg"),
 }
 MAX_SEED = 2**63 - 1
+#: The words ``torque_limits`` and ``torque_rate_limit_n_m_s`` take besides numbers: none, the
+#: human set (young adults) and the older adults' (biped.control.neuromotor).
+LIMIT_WORDS = ("none", "human", "human-older")
 
 
 def is_number(v) -> bool:
@@ -172,16 +175,18 @@ def validate(s: Scenario, choices: Mapping[str, tuple[str, ...]]) -> None:
     if isinstance(tl, tuple):
         if len(tl) != 12:
             raise ScenarioError(
-                f"torque_limits must be 'none', 'human', one number or 12 numbers "
+                f"torque_limits must be 'none', 'human', 'human-older', one number or 12 numbers "
                 f"({', '.join(JOINT_NAMES)}) in N m; got {len(tl)} numbers"
             )
         for i, x in enumerate(tl):
             if _finite(f"torque_limits[{i}]", x, "N m") <= 0:
                 raise ScenarioError(f"torque_limits[{i}] must be > 0 N m; got {x!r}")
-    elif tl not in ("none", "human") and (not is_number(tl) or not math.isfinite(tl) or tl <= 0):
+    elif tl not in LIMIT_WORDS and (not is_number(tl) or not math.isfinite(tl) or tl <= 0):
         raise ScenarioError(
-            f"torque_limits must be 'none', 'human', one positive number or 12 of them in N m; got {tl!r}"
+            f"torque_limits must be 'none', 'human', 'human-older', one positive number or 12 of them "
+            f"in N m; got {tl!r}"
         )
+    _check_neuromotor(s)
     _in_range("friction", _positive(s, "friction", "Coulomb coefficient", zero_ok=True))
     e = _finite("restitution", s.restitution, "coefficient of restitution")
     if not 0.0 <= e <= 0.8:
@@ -223,4 +228,38 @@ def validate(s: Scenario, choices: Mapping[str, tuple[str, ...]]) -> None:
     if not isinstance(s.model, str) or not s.model.strip():
         raise ScenarioError(
             f"model must be a shipped model's name ('wendlandt') or the path of an MJCF file; got {s.model!r}"
+        )
+
+
+def _check_neuromotor(s: Scenario) -> None:
+    """The neuromotor keys: delay, rate limits, activation lag, ankle_only."""
+    delay = _positive(s, "feedback_delay_s", "feedback delay in s", zero_ok=True)
+    if delay > 1.0:
+        raise ScenarioError(f"feedback_delay_s must be in [0, 1] s (human delays are ~0.1 s); got {delay!r}")
+    steps = delay * s.control_rate_hz
+    if abs(steps - round(steps)) > 1e-6:
+        raise ScenarioError(
+            f"feedback_delay_s must be a whole number of control periods (1 / control_rate_hz = "
+            f"{1.0 / s.control_rate_hz:g} s); got {delay!r} s, i.e. {steps:.6g} periods"
+        )
+    act = _positive(s, "activation_time_s", "first-order activation time constant in s", zero_ok=True)
+    if act > 1.0:
+        raise ScenarioError(f"activation_time_s must be in [0, 1] s (muscle: ~0.01-0.1 s); got {act!r}")
+    rl = s.torque_rate_limit_n_m_s
+    what = "'none', 'human', 'human-older', one positive number or 12 of them in N m/s"
+    if isinstance(rl, tuple):
+        if len(rl) != 12:
+            raise ScenarioError(
+                f"torque_rate_limit_n_m_s must be {what} ({', '.join(JOINT_NAMES)}); got {len(rl)} numbers"
+            )
+        for i, x in enumerate(rl):
+            if _finite(f"torque_rate_limit_n_m_s[{i}]", x, "N m/s") <= 0:
+                raise ScenarioError(f"torque_rate_limit_n_m_s[{i}] must be > 0 N m/s; got {x!r}")
+    elif rl not in LIMIT_WORDS and (not is_number(rl) or not math.isfinite(rl) or rl <= 0):
+        raise ScenarioError(f"torque_rate_limit_n_m_s must be {what}; got {rl!r}")
+    if not isinstance(s.ankle_only, bool):
+        raise ScenarioError(f"ankle_only must be true or false; got {s.ankle_only!r}")
+    if s.ankle_only and s.stepping:
+        raise ScenarioError(
+            "ankle_only = true holds the hips and knees: it cannot be used with stepping = true"
         )

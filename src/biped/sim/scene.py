@@ -13,6 +13,7 @@ the Coulomb limit is the same in every sliding direction.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -147,12 +148,32 @@ def scene_spec(scenario: Scenario) -> mujoco.MjSpec:
     for j in spec.joints:  # the plant's passive damping (the controller does not model it)
         if j.type == mujoco.mjtJoint.mjJNT_HINGE:
             j.damping = [scenario.joint_damping_n_m_s, *list(j.damping)[1:]]
+    if scenario.ankle_only:
+        _lock_hips_and_knees(spec, scenario)
     for g in spec.geoms:
         g.friction = [scenario.friction, g.friction[1], g.friction[2]]
         g.solref = list(solref)
         g.solimp = list(CONTACT_SOLIMP)
         g.solmix = 1.0
     return spec
+
+
+#: ``ankle_only``: the stiffness [N m/rad] and damping [N m s/rad] of the springs that hold every
+#: hip and knee joint at its initial angle (the controller's torques still act on them).
+LOCK_STIFFNESS_N_M_RAD = 5000.0
+LOCK_DAMPING_N_M_S = 100.0
+
+
+def _lock_hips_and_knees(spec: mujoco.MjSpec, scenario: Scenario) -> None:
+    """``ankle_only``: a stiff spring-damper at every hip and knee hinge, at rest at the
+    scenario's initial angle (co-contracted muscle's intrinsic stiffness: no delay), so the body
+    above the ankles moves as one: B's inverted pendulum on the feet, balanced by the ankles."""
+    angles = dict(zip(JOINT_NAMES, scenario.initial_joint_angles_deg, strict=True))
+    for j in spec.joints:
+        if j.type == mujoco.mjtJoint.mjJNT_HINGE and j.name in angles and "ankle" not in j.name:
+            j.stiffness = [LOCK_STIFFNESS_N_M_RAD, *list(j.stiffness)[1:]]
+            j.springref = math.radians(angles[j.name])
+            j.damping = [LOCK_DAMPING_N_M_S, *list(j.damping)[1:]]
 
 
 SOLE_BOX = "{foot}_sole_box"
