@@ -84,6 +84,13 @@ OLDER_RATE_FACTOR = 577.5 / 881.7
 #: al. 1996: 20-40 %.
 OLDER_STRENGTH_FACTOR = 0.71
 
+#: Intrinsic (undelayed) joint damping of muscle [N m s/rad per hinge]: the identified intrinsic
+#: ankle damping of stance, 68.8 N m s/rad (PMC5664365, Table 1) and 10.9 N m s/rad (J NeuroEng
+#: Rehabil 2017, Table 3) for both ankles together; their mean, per joint (68.8 + 10.9) / 4,
+#: given to every hinge (the plant's ``joint_damping_n_m_s``, W's run: 1). Without it the
+#: delayed biped's trunk drifted and fell in quiet stance (docs/validate.md).
+INTRINSIC_DAMPING_N_M_S = 19.9
+
 #: Body geometry for the gains (shipped model, W's set point): whole-body COM and W's controlled
 #: point (the central body's COM) above the ankle axes [m].
 BODY_COM_HEIGHT_M = 0.80
@@ -136,6 +143,7 @@ def _preset(delay: float, rate: str, strength: str) -> dict:
         "torque_rate_limit_n_m_s": rate,
         "activation_time_s": ACTIVATION_TIME_S,
         "torque_limits": strength,
+        "joint_damping_n_m_s": INTRINSIC_DAMPING_N_M_S,
         "kp_com": (round(kp, 4), round(kp, 4), VERTICAL_KP),
         "kv_com": (round(kv, 4), round(kv, 4), VERTICAL_KV),
         "kp_rot": TRUNK_KP,
@@ -151,6 +159,7 @@ PRESETS: dict[str, dict] = {
         "torque_rate_limit_n_m_s": "none",
         "activation_time_s": 0.0,
         "torque_limits": "none",
+        "joint_damping_n_m_s": 1.0,
         "kp_com": Gains().kp_com,
         "kv_com": Gains().kv_com,
         "kp_rot": Gains().kp_rot,

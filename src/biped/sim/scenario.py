@@ -119,8 +119,9 @@ class Scenario:
     contact_timeconst_s: float = None  # type: ignore[assignment]
     # passive damping of every hinge [N m s/rad], as in the shipped models (W: none). Measured
     # (docs/controller.md): W's push recovers without it, but a falling biped's limp, undamped
-    # ankles spin up until MuJoCo diverges (2 of 120 QP sweep trials); with 1.0 they are falls
-    joint_damping_n_m_s: float = 1.0
+    # ankles spin up until MuJoCo diverges (2 of 120 QP sweep trials); with 1.0 they are falls.
+    # None: the neuromotor preset's (1.0 for "ideal"; muscle's intrinsic damping for the others)
+    joint_damping_n_m_s: float = None  # type: ignore[assignment]
     fall_height_m: float = 0.6  # central-body COM below this height = fall
     recovery_com_tol_m: float = 0.02
     recovery_orientation_tol_deg: float = 2.0
