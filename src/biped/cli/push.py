@@ -70,6 +70,12 @@ def register(subparsers) -> None:
         help="take capture-point steps when the feet cannot hold the push (not in W; "
         "docs/controller.md, 'Stepping')",
     )
+    p.add_argument(
+        "--perturbation",
+        choices=("block", "force", "platform", "release"),
+        help="the experiment: W's thrown block (default), a force pulse, a platform translation or a "
+        "lean-and-release; its keys with --set (docs/perturbations.md)",
+    )
     p.add_argument("--timestep", type=float, metavar="S", help="physics step [s], <= 0.001")
     p.add_argument("--seed", type=int, help="seed of the initial-state noise (joint_noise_deg)")
     p.add_argument(
@@ -107,6 +113,7 @@ def build_scenario(args):
         "distribution": args.distribution,
         "seed": args.seed,
         "stepping": getattr(args, "stepping", None),
+        "perturbation": getattr(args, "perturbation", None),
     }
     values.update({k: v for k, v in named.items() if v is not None})
     model = getattr(args, "model", None) or values.pop("model", None)
