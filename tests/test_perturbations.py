@@ -163,3 +163,63 @@ def test_release_refuses_a_lean_friction_cannot_hold():
     before the run."""
     with pytest.raises(ScenarioError, match="more than friction = 0.3 lets the feet hold"):
         _run(perturbation="release", release_lean_deg=8.0, duration_s=0.1)
+
+
+def _swaying(hip_factor: float):
+    """Hand-made sway, 1 s at 100 Hz: the legs turn theta(t) = 3 deg sin(2 pi t) about the
+    ankles, forward (-x); the trunk then turns about the hips by hip_factor * theta (0: the body
+    as one inverted pendulum, the ankle strategy; -3: the trunk against the legs, the hip
+    strategy). Each foot stays where it stood (the legs' joints solved)."""
+    from biped.sim.perturbations.release import turn_body
+
+    sc = Scenario(perturbation="force")
+    scene = build_scene(sc)
+    m = scene.model
+    q0 = initial_state(scene, sc)[0]
+    d = mujoco.MjData(m)
+    qs = []
+    for t in np.arange(0, 1.0, 0.01):
+        th = np.radians(3.0) * np.sin(2 * np.pi * t)
+        q = q0.copy()
+        assert turn_body(scene, q, _ankles(m, d, q), (0.0, 1.0, 0.0), -th)  # top toward -x
+        if hip_factor:
+            assert turn_body(scene, q, _hips(m, d, q), (0.0, 1.0, 0.0), -hip_factor * th)
+        qs.append(q)
+    return scene, np.array(qs)
+
+
+def _mid(m, d, q, name):
+    d.qpos[:] = q
+    mujoco.mj_kinematics(m, d)
+    return np.mean([d.xpos[m.body(f"{s}_{name}").id] for s in ("left", "right")], axis=0)
+
+
+def _ankles(m, d, q):
+    return _mid(m, d, q, "ankle_1")
+
+
+def _hips(m, d, q):
+    return _mid(m, d, q, "hip_1")
+
+
+@pytest.mark.parametrize(("hip_factor", "label"), [(0.0, "ankle"), (-3.0, "hip")])
+def test_strategy_rule_labels_hand_made_motions(hip_factor, label):
+    """The rule of biped.sim.response on MuJoCo's kinematics of hand-made motions: the body
+    swaying as one piece about the ankles is 'ankle'; the trunk counter-rotating is 'hip'."""
+    from biped.sim.response import body_angles, strategy_from_angles
+
+    scene, qs = _swaying(hip_factor)
+    leg, trunk = body_angles(scene, qs, (-1.0, 0.0))
+    got, corr, pt, pl = strategy_from_angles(leg, trunk)
+    assert got == label
+    assert abs(pl - 3.0) < 0.05  # the legs' sway, read back
+    assert abs(pt - abs(1 + hip_factor) * 3.0) < 0.1  # the trunk's: 3 deg, or 2 deg against the legs
+    assert (corr > 0.99) if hip_factor == 0 else (corr < -0.99)
+
+
+def test_margin_of_stability_against_a_square():
+    from biped.sim.response import margin
+
+    sq = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    got = margin(np.array([[0.5, 0.5], [0.9, 0.5], [1.5, 0.5], [2.0, 2.0]]), sq)
+    assert np.allclose(got, [0.5, 0.1, -0.5, -np.sqrt(2)])

@@ -16,6 +16,11 @@ at four places, and nowhere else:
    Python loop and the compiled loop of :func:`biped.sim.push.run_closed_loop` call it at the same
    rows (the compiled loop stops before each), so the two loops stay bit for bit the same.
 
+Every paradigm but the block starts from quiet stance: the soles on the floor (W's pose starts
+them 5 mm up) and, with W's workspace controller, its set point moved to the starting pose at row
+0 (the sweep's "hold" task), so the response measured is the perturbation's alone, not W's rise
+from the crouch to the scenario's set point (``target_com_m``, ``target_tilt_deg`` are then unused).
+
 A paradigm with no rows costs the loop nothing; W's block has none, so its runs are unchanged.
 """
 
@@ -88,9 +93,11 @@ class Perturbation:
         park_block(spec)
 
     def initial_state(self, scene: Scene, qpos: np.ndarray, qvel: np.ndarray) -> None:
-        """Change the scene's initial ``qpos``/``qvel`` in place (the block is parked)."""
+        """Change the scene's initial ``qpos``/``qvel`` in place: the block parked, the soles put
+        on the floor (quiet stance: W's pose starts them 5 mm up)."""
         qpos[scene.block_qpos_index] = [*PARKED_BLOCK_M, 1.0, 0.0, 0.0, 0.0]
         qvel[scene.block_qvel_index] = 0.0
+        onto_floor(scene, qpos)
 
     def driver(self, scene: Scene, model: mujoco.MjModel, data: mujoco.MjData, policy: Any) -> Driver | None:
         """The run's :class:`Driver` (None: nothing to do during the run)."""
@@ -105,6 +112,38 @@ class Perturbation:
         """The scenario keys that give ``base`` this magnitude (in :attr:`unit`) and push
         direction (deg from +x toward +y, world frame)."""
         raise NotImplementedError
+
+
+def onto_floor(scene: Scene, qpos: np.ndarray) -> None:
+    """Lower the biped of ``qpos`` (scene layout, in place) so that its lowest sole point is on
+    the floor, z = 0."""
+    m = scene.model
+    d = mujoco.MjData(m)
+    d.qpos[:] = qpos
+    mujoco.mj_kinematics(m, d)
+    low = np.inf
+    for g in scene.sole_geoms:
+        R = d.geom_xmat[g].reshape(3, 3)
+        low = min(low, float(d.geom_xpos[g, 2] - np.abs(R[2]) @ m.geom_size[g]))
+    qpos[scene.biped_qpos_index[2]] -= low
+
+
+def hold_here(controller, data: mujoco.MjData, body: int) -> tuple[np.ndarray, np.ndarray]:
+    """Quiet stance: the controller's set point becomes the central body's (``body``) COM and
+    orientation in ``data`` (zero velocity and acceleration), written into the array the Python
+    and the compiled loop read; returns that (COM, quaternion)."""
+    com, quat = data.xipos[body].copy(), data.xquat[body].copy()
+    set_target(controller, com, quat)
+    return com, quat
+
+
+def set_target(controller, com, quat) -> None:
+    """Write a still set point (COM, quaternion) into ``controller.target.array`` in place."""
+    arr = controller.target.array
+    arr[0:3] = com
+    arr[3:9] = 0.0
+    arr[9:13] = quat
+    arr[13:19] = 0.0
 
 
 def workspace_controller(policy: Any):

@@ -8,6 +8,9 @@ Keys: ``force_n`` (3,) the peak force [N], world frame; ``force_start_s``; ``for
 central body); ``force_point_m`` the point of application in that body's frame [m] or
 ``"pelvis"`` (default: the midpoint of the hip joints, the central body's point at hip-joint height).
 
+The run starts from quiet stance (the soles on the floor, the controller's set point the starting
+pose; :mod:`biped.sim.perturbations.base`), so the response is the pulse's alone.
+
 How: MuJoCo's ``xfrc_applied`` of the body, the force at the body's COM plus the moment
 ``(p - c) x F`` of the application point p about it, recomputed every control period while the
 pulse acts (the body turns), held over the period's physics steps. The pulse starts and ends on
@@ -26,8 +29,10 @@ from biped.sim.perturbations.base import (
     Driver,
     Perturbation,
     Size,
+    hold_here,
     horizontal,
     pelvis_point,
+    workspace_controller,
     world_direction_deg,
 )
 
@@ -50,11 +55,14 @@ def shape_factor(shape: str, k: int, k0: int, k1: int) -> float:
 
 
 class ForceDriver(Driver):
-    def __init__(self, scenario, model: mujoco.MjModel, body: int, point: np.ndarray):
+    """Row 0: quiet stance (the controller holds the starting pose); the pulse's rows: the force."""
+
+    def __init__(self, scenario, model, body: int, point: np.ndarray, controller=None, central: int = 0):
         self.k0, self.k1 = pulse_rows(
             scenario.force_start_s, scenario.force_duration_s, scenario.control_rate_hz
         )
-        self.rows = np.arange(self.k0, self.k1 + 1, dtype=np.int64)
+        self.rows = np.unique(np.r_[0, np.arange(self.k0, self.k1 + 1)]).astype(np.int64)
+        self.controller, self.central = controller, central
         self.body, self.point = body, np.asarray(point, dtype=float)
         self.force = np.asarray(scenario.force_n, dtype=float)
         self.shape = scenario.force_shape
@@ -62,6 +70,10 @@ class ForceDriver(Driver):
         self.impulse = np.zeros(3)  # the pulse as applied [N s]
 
     def apply(self, k: int, t: float, data: mujoco.MjData) -> None:
+        if k == 0 and self.controller is not None:
+            self.final_target = hold_here(self.controller, data, self.central)
+        if not self.k0 <= k <= self.k1:
+            return
         f = shape_factor(self.shape, k, self.k0, self.k1) * self.force
         b = self.body
         R = data.xmat[b].reshape(3, 3)
@@ -89,7 +101,8 @@ class Force(Perturbation):
 
     def driver(self, scene, model, data, policy):
         body, point = self.body_and_point(model)
-        return ForceDriver(self.scenario, model, body, point)
+        ctrl = workspace_controller(policy)
+        return ForceDriver(self.scenario, model, body, point, ctrl, scene.central_body)
 
     def applied_impulse(self) -> np.ndarray:
         """(3,) the impulse of the pulse as the loop applies it [N s]."""

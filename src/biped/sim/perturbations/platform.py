@@ -16,6 +16,9 @@ bounded acceleration ``a = v / (T / 4)`` instead of an impulse, which MuJoCo's s
 turn into an artificial jolt. The biped's first reaction is to that acceleration, the body
 being carried by the feet; its COM moves relative to the feet at up to ``-v``.
 
+The run starts from quiet stance (the soles on the floor, the controller's set point the starting
+pose; :mod:`biped.sim.perturbations.base`).
+
 Drive: a stiff servo, not a teleported pose. Three actuators on the slide joint: a position
 servo (kp = M w^2, w = 2 pi 15 Hz) and a velocity servo (kv = 2 M w) that MuJoCo evaluates at
 every physics step, and a motor carrying the feed-forward force ``M a(t)``. The references are
@@ -34,6 +37,7 @@ from biped.sim.perturbations.base import (
     Driver,
     Perturbation,
     Size,
+    hold_here,
     horizontal,
     workspace_controller,
     world_direction_deg,
@@ -80,12 +84,12 @@ class PlatformDriver(Driver):
     own measured displacement, each period of the ramp): the set point is where the biped wants
     its COM over its feet, and the feet have moved."""
 
-    def __init__(self, scenario, model: mujoco.MjModel, controller=None):
+    def __init__(self, scenario, model: mujoco.MjModel, controller=None, central: int = 0):
         s = scenario
         self.period = 1.0 / s.control_rate_hz
         self.k0 = round(s.platform_start_s * s.control_rate_hz)
         self.k1 = self.k0 + max(1, round(s.platform_duration_s * s.control_rate_hz))
-        self.rows = np.arange(self.k0, self.k1 + 1, dtype=np.int64)
+        self.rows = np.unique(np.r_[0, np.arange(self.k0, self.k1 + 1)]).astype(np.int64)
         self.distance = math.hypot(*s.platform_displacement_m)
         self.duration = (self.k1 - self.k0) * self.period
         self.act = [model.actuator(f"{PLATFORM}_{n}").id for n in ("position", "velocity", "force")]
@@ -93,12 +97,14 @@ class PlatformDriver(Driver):
         self.axis = np.array(model.jnt_axis[model.joint(PLATFORM_JOINT).id])
         self.controller = controller
         self.target0 = np.zeros(3)
-        if controller is not None:
-            self.target0 = controller.target.array[:3].copy()
-            end = self.target0 + self.distance * self.axis
-            self.final_target = (end, controller.target.array[9:13].copy())
+        self.central = central
 
     def apply(self, k: int, t: float, data: mujoco.MjData) -> None:
+        if k == 0 and self.controller is not None:  # quiet stance: hold the starting pose
+            self.target0, quat = hold_here(self.controller, data, self.central)
+            self.final_target = (self.target0 + self.distance * self.axis, quat)
+        if not self.k0 <= k <= self.k1:
+            return
         # the references at the middle of the period they hold over
         tm = (k - self.k0 + 0.5) * self.period if k < self.k1 else self.duration
         x, v, a = profile(tm, self.distance, self.duration)
@@ -160,7 +166,7 @@ class Platform(Perturbation):
             )
 
     def driver(self, scene, model, data, policy):
-        return PlatformDriver(self.scenario, model, workspace_controller(policy))
+        return PlatformDriver(self.scenario, model, workspace_controller(policy), scene.central_body)
 
     def size(self, total_mass_kg: float) -> Size:
         s = self.scenario

@@ -24,6 +24,8 @@ The held state, a static equilibrium by construction:
    zero (the controller's statics), so nothing moves while the tether holds
    (``tests/test_perturbations.py``).
 
+Like every paradigm but the block, the run starts from quiet stance (the soles on the floor, the
+set point the starting pose; :mod:`biped.sim.perturbations.base`).
 At ``release_time_s`` the tether's force goes to zero and the set point returns to the unleaned
 pose's (the central body's COM and orientation before the lean): the biped wants to stand
 upright again, and must catch the lean's fall to do it.
@@ -42,7 +44,9 @@ from biped.sim.perturbations.base import (
     Perturbation,
     Size,
     horizontal,
+    onto_floor,
     pelvis_point,
+    set_target,
     workspace_controller,
 )
 
@@ -64,46 +68,46 @@ def _conj(q) -> np.ndarray:
     return np.array([q[0], -q[1], -q[2], -q[3]])
 
 
-def sole_bottom(model: mujoco.MjModel, data: mujoco.MjData, geoms) -> float:
-    """The lowest point [m] of the box ``geoms`` (world z) at ``data``'s kinematics."""
-    low = np.inf
-    for g in geoms:
-        R = data.geom_xmat[g].reshape(3, 3)
-        h = model.geom_size[g]
-        low = min(low, float(data.geom_xpos[g, 2] - np.abs(R[2]) @ h))
-    return low
-
-
 def lean_pose(scene, qpos: np.ndarray, lean_deg: float, direction_world_deg: float) -> dict:
     """Lower ``qpos`` (scene layout, changed in place) onto the floor and lean it (module
     docstring, step 1); returns the upright pose's central-body COM and quaternion, the ankles'
     midpoint and the lean's unit direction."""
     m = scene.model
     d = mujoco.MjData(m)
-    d.qpos[:] = qpos
-    mujoco.mj_kinematics(m, d)
-    root = scene.biped_qpos_index[:7]
-    qpos[root[2]] -= sole_bottom(m, d, scene.sole_geoms)  # the soles on the floor, z = 0
+    onto_floor(scene, qpos)  # the soles on the floor, z = 0
     d.qpos[:] = qpos
     mujoco.mj_kinematics(m, d)
     cb = scene.central_body
     upright_com, upright_quat = d.xipos[cb].copy(), d.xquat[cb].copy()
-    feet = [m.body(f"{leg}_foot").id for leg in _LEGS]
-    feet_pos = [d.xpos[f].copy() for f in feet]
-    feet_quat = [d.xquat[f].copy() for f in feet]
     ankles = np.mean([d.xpos[m.body(f"{leg}_ankle_1").id] for leg in _LEGS], axis=0)
     u = horizontal(direction_world_deg)
-    axis = np.cross([0.0, 0.0, 1.0], u)
+    if not turn_body(scene, qpos, ankles, np.cross([0.0, 0.0, 1.0], u), math.radians(lean_deg)):
+        raise ScenarioError(
+            f"release_lean_deg = {lean_deg:g}: a foot cannot stay flat where it stood at this lean "
+            "(its leg's joints found no solution); use a smaller lean"
+        )
+    return {"upright_com": upright_com, "upright_quat": upright_quat, "ankles": ankles, "direction": u}
+
+
+def turn_body(scene, qpos: np.ndarray, point, axis, angle_rad: float) -> bool:
+    """Turn the central body of ``qpos`` (in place) by ``angle_rad`` about ``axis`` through
+    ``point`` (world), then solve each leg's six joints (Newton on MuJoCo's body Jacobian) to put
+    its foot back where it was, position and orientation; False if a leg finds no solution."""
+    m = scene.model
+    d = mujoco.MjData(m)
+    d.qpos[:] = qpos
+    mujoco.mj_kinematics(m, d)
+    feet = [m.body(f"{leg}_foot").id for leg in _LEGS]
+    goals = [(d.xpos[f].copy(), d.xquat[f].copy()) for f in feet]
+    root = scene.biped_qpos_index[:7]
     ql = np.zeros(4)
-    mujoco.mju_axisAngle2Quat(ql, axis, math.radians(lean_deg))
+    mujoco.mju_axisAngle2Quat(ql, np.asarray(axis, dtype=float), angle_rad)
     r9 = np.zeros(9)
     mujoco.mju_quat2Mat(r9, ql)
-    Rl = r9.reshape(3, 3)
-    p = qpos[root[:3]]
-    qpos[root[:3]] = ankles + Rl @ (p - ankles)
+    point = np.asarray(point, dtype=float)
+    qpos[root[:3]] = point + r9.reshape(3, 3) @ (qpos[root[:3]] - point)
     qpos[root[3:]] = _quat_mul(ql, qpos[root[3:]])
-    # each leg's six joints put its foot back (Newton on MuJoCo's body Jacobian)
-    for leg, f, fp, fq in zip(_LEGS, feet, feet_pos, feet_quat, strict=True):
+    for leg, f, (fp, fq) in zip(_LEGS, feet, goals, strict=True):
         joints = [m.joint(n).id for n in scene.joint_names if n.startswith(leg)]
         qa = m.jnt_qposadr[joints]
         va = m.jnt_dofadr[joints]
@@ -119,14 +123,10 @@ def lean_pose(scene, qpos: np.ndarray, lean_deg: float, direction_world_deg: flo
             if np.abs(err).max() < 1e-12:
                 break
             mujoco.mj_jacBody(m, d, jp, jr, f)
-            J = np.vstack([jp[:, va], jr[:, va]])
-            qpos[qa] += np.linalg.solve(J, err)
+            qpos[qa] += np.linalg.solve(np.vstack([jp[:, va], jr[:, va]]), err)
         else:
-            raise ScenarioError(
-                f"release_lean_deg = {lean_deg:g}: the {leg} foot cannot stay flat where it stood "
-                "at this lean (its leg's joints found no solution); use a smaller lean"
-            )
-    return {"upright_com": upright_com, "upright_quat": upright_quat, "ankles": ankles, "direction": u}
+            return False
+    return True
 
 
 class ReleaseDriver(Driver):
@@ -143,11 +143,7 @@ class ReleaseDriver(Driver):
         self.final_target = (hold["upright_com"], hold["upright_quat"]) if 0 < self.k_release <= n else None
 
     def _set_target(self, com, quat) -> None:
-        arr = self.controller.target.array  # the array the Python and the compiled loop read
-        arr[0:3] = com
-        arr[3:9] = 0.0
-        arr[9:13] = quat
-        arr[13:19] = 0.0
+        set_target(self.controller, com, quat)
 
     def apply(self, k: int, t: float, data: mujoco.MjData) -> None:
         h = self.hold
@@ -173,7 +169,7 @@ class Release(Perturbation):
     unit = "deg"
 
     def initial_state(self, scene, qpos, qvel) -> None:
-        super().initial_state(scene, qpos, qvel)
+        super().initial_state(scene, qpos, qvel)  # parks the block, soles on the floor
         s = self.scenario
         lean_pose(scene, qpos, s.release_lean_deg, world_direction(s.release_direction_deg))
         qvel[scene.biped_qvel_index] = 0.0
