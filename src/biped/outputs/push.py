@@ -19,9 +19,11 @@ from typing import Any
 import numpy as np
 
 from biped.outputs._json import write_json
+from biped.sim import perturbations
 from biped.sim.contact import SOLE_GEOMS
 from biped.sim.measure import FEET, RowMeasurements, block_separation, foot_drift, measure_rows
 from biped.sim.push import PushResult, orientation_error_deg
+from biped.sim.response import measure_response
 from biped.sim.scene import Scene, build_scene, tilt_quat
 from biped.viz.footprints import with_footprints
 from biped.viz.push_figures import plot_push
@@ -261,6 +263,24 @@ def summary_dict(result: PushResult, rows: RowMeasurements | None = None) -> dic
     }
 
 
+def response_entries(scene: Scene, result: PushResult, rows: RowMeasurements) -> dict:
+    """``summary.json``'s ``perturbation`` (the paradigm, its size and what it measured of itself)
+    and ``response`` (:func:`biped.sim.response.measure_response`: strategy, excursions, margin of
+    stability, peak torques, time to rest, steps) entries; docs/perturbations.md."""
+    size = perturbations.of(result.scenario).size(rows.biped_mass_kg)
+    info = {
+        "paradigm": size.paradigm,
+        "magnitude": size.magnitude,
+        "unit": size.unit,
+        "direction_deg": size.direction_deg,
+        "impulse_horizontal_n_s": size.impulse_horizontal_n_s,
+        "com_velocity_change_m_s": size.com_velocity_change_m_s,
+        **size.extra,
+    }
+    info.update(result.extra.get("perturbation", {}))
+    return {"perturbation": info, "response": measure_response(scene, result, rows).to_dict()}
+
+
 def write_summary(
     result: PushResult, path: str | Path, extra: dict | None = None, *, rows: RowMeasurements | None = None
 ) -> Path:
@@ -379,7 +399,9 @@ def write_outputs(
     written: dict[str, Any] = {
         "trajectory": write_trajectory_csv(result, out / "trajectory.csv", rows=rows),
         "columns": write_json(out / "columns.json", column_dictionary(result.joint_names)),
-        "summary": write_summary(result, out / "summary.json", rows=rows),
+        "summary": write_summary(
+            result, out / "summary.json", response_entries(scene, result, rows), rows=rows
+        ),
     }
     (out / "scenario.toml").write_text(result.scenario.to_toml())
     written["scenario"] = out / "scenario.toml"

@@ -40,6 +40,7 @@ from biped.control.workspace import Gains, Target
 from biped.errors import BipedError, ScenarioError
 from biped.models import subject
 from biped.sim import fused as fused_mod
+from biped.sim import perturbations
 from biped.sim.contact import SOLE_GEOMS, ContactMonitor
 from biped.sim.neuro import neuro_loop
 from biped.sim.scenario import Scenario
@@ -346,6 +347,9 @@ def run_closed_loop(
         policy(0.0, d.qpos[iq], d.qvel[iv], (True, True))
     except BipedError:
         pass
+    driver = perturbations.of(scenario).driver(scene, m, d, policy)  # the paradigm's run (or None)
+    events = driver.rows[driver.rows <= n_ctrl] if driver is not None else np.zeros(0, dtype=np.int64)
+    ev = 0  # the next of the rows where the driver acts (before the row's physics steps)
     fused = None
     neuro = neuro_loop(scenario, scene)  # None: W's ideal controller (no delay, lag or rate limit)
     records["neuro"] = neuro
@@ -360,8 +364,15 @@ def run_closed_loop(
         k = 0
         while k < n:
             t = k * period
-            if fused is not None:  # rows up to the next progress report in one compiled call
-                k, why = fused.run(k, min(n, (k // chunk + 1) * chunk))
+            while ev < len(events) and events[ev] <= k:  # the perturbation's inputs from this row on
+                if events[ev] == k:
+                    driver.apply(k, t, d)  # type: ignore[union-attr]
+                ev += 1
+            if fused is not None:  # rows up to the next progress report (or perturbation row) in one call
+                stop = min(n, (k // chunk + 1) * chunk)
+                if ev < len(events):
+                    stop = min(stop, int(events[ev]))
+                k, why = fused.run(k, stop)
                 if why != fused_mod.PYTHON:
                     rows = min(k + 1, n) if why != fused_mod.DONE else k
                     feet_rows = k
@@ -432,6 +443,8 @@ def run_closed_loop(
     block_vel = qvel[:, bv]
     target_com = np.array(scenario.target_com_m)
     target_quat = tilt_quat(scenario.target_axis, scenario.target_tilt_deg)
+    if driver is not None and driver.final_target is not None:  # a paradigm that moves the set point
+        target_com, target_quat = (np.array(x, dtype=float) for x in driver.final_target)
     if rows:
         com_err = float(np.linalg.norm(com[rows - 1] - target_com))
         ori_err = orientation_error_deg(quat[rows - 1], target_quat)
@@ -480,12 +493,34 @@ def run_closed_loop(
         block_velocity=block_vel[sl],
         feet_pos=feet_pos[sl],
         feet_quat=feet_quat[sl],
+        extra=_perturbation_extra(scenario, scene, driver, d),
     )
     if hasattr(policy, "steps"):  # a stepping policy: its steps and its own recovered rule
         from biped.sim.stepping import stepping_outcome
 
         result = stepping_outcome(result, policy, complete=complete)
     return result
+
+
+def _perturbation_extra(scenario: Scenario, scene: Scene, driver, d) -> dict:
+    """``PushResult.extra`` of a run: ``{"perturbation": {...}}`` (its paradigm, size and what
+    its driver measured) for every paradigm but W's block, whose result stays as it was."""
+    if scenario.perturbation == "block":
+        return {}
+    mass = float(scene.model.body_subtreemass[scene.model.body_rootid[scene.central_body]])
+    size = perturbations.of(scenario).size(mass)
+    info = {
+        "paradigm": size.paradigm,
+        "magnitude": size.magnitude,
+        "unit": size.unit,
+        "direction_deg": size.direction_deg,
+        "impulse_horizontal_n_s": size.impulse_horizontal_n_s,
+        "com_velocity_change_m_s": size.com_velocity_change_m_s,
+        **size.extra,
+    }
+    if driver is not None:
+        info.update(driver.finish(d))
+    return {"perturbation": info}
 
 
 def simulate(

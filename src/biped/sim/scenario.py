@@ -34,7 +34,8 @@ from biped.models import (
     W_INITIAL_TILT_DEG,
     subject,
 )
-from biped.sim import scenario_checks
+from biped.sim import perturbations, scenario_checks
+from biped.sim.perturbations.force import SHAPES as FORCE_SHAPES
 from biped.sim.scenario_checks import INTS, MAX_SEED, RANGES, VECTORS, is_number
 
 #: W's initial joint angles theta_2..theta_13 [deg] (:data:`biped.models.W_INITIAL_ANGLES_DEG`).
@@ -140,6 +141,21 @@ class Scenario:
     activation_time_s: float = None  # type: ignore[assignment]  # first-order lag [s], 0 = none
     # hips and knees held at their initial angles by stiff joint springs, the ankles balance
     ankle_only: bool = False
+    # not in W: the perturbation paradigm (biped.sim.perturbations, docs/perturbations.md); the
+    # block_* keys are the block's, force_* the force pulse's, platform_* and release_* likewise
+    perturbation: str = "block"
+    force_n: tuple = (-60.0, 0.0, 0.0)  # peak force [N], world frame (-x: pushes the biped forward)
+    force_start_s: float = 0.1
+    force_duration_s: float = 0.15
+    force_shape: str = "rectangular"  # or "half-sine"
+    force_body: str = "central_body"  # a body of the biped
+    force_point_m: Any = "pelvis"  # "pelvis" or (x, y, z) in force_body's frame [m]
+    platform_displacement_m: tuple = (0.05, 0.0)  # (x, y) [m]: +x moves the feet backward
+    platform_start_s: float = 0.1
+    platform_duration_s: float = 0.3  # the ramp [s]
+    release_lean_deg: float = 5.0
+    release_direction_deg: float = 0.0  # 0 forward (world -x), 90 to the biped's left (world -y)
+    release_time_s: float = 0.1  # >= duration_s: the tether never goes
 
     def __post_init__(self):
         preset = PHYSICS_PRESETS.get(self.physics) if isinstance(self.physics, str) else None
@@ -323,6 +339,8 @@ _STRINGS = {
     "physics": PHYSICS,
     "distribution": DISTRIBUTIONS,
     "neuromotor": NEUROMOTOR,
+    "perturbation": perturbations.NAMES,
+    "force_shape": FORCE_SHAPES,
 }
 
 
@@ -347,7 +365,7 @@ def _coerce(key: str, v):
         if isinstance(v, (str, bytes)) or not hasattr(v, "__len__"):
             raise ScenarioError(f"{key} must be {n} numbers, {what}; got {v!r}")
         return tuple(float(x) if is_number(x) else x for x in v)
-    if key in ("torque_limits", "torque_rate_limit_n_m_s"):
+    if key in ("torque_limits", "torque_rate_limit_n_m_s", "force_point_m"):
         if isinstance(v, (list, tuple)):
             return tuple(float(x) if is_number(x) else x for x in v)
         return float(v) if is_number(v) else v
@@ -355,7 +373,7 @@ def _coerce(key: str, v):
         key in _STRINGS or key in INTS or key in ("stepping", "ankle_only")
     ):  # a bool is checked, not converted
         return v
-    if key == "model":
+    if key in ("model", "force_body"):
         return str(v) if isinstance(v, Path) else v
     return float(v) if is_number(v) else v
 

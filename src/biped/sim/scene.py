@@ -22,6 +22,7 @@ import numpy as np
 
 from biped.errors import ModelError, unknown_name
 from biped.models import JOINT_NAMES
+from biped.sim import perturbations
 from biped.sim.contact import CONTACT_SOLIMP, SOLE_GEOMS, contact_solref
 from biped.sim.scenario import Scenario
 from biped.spatial import axis_angle_quat
@@ -155,6 +156,7 @@ def scene_spec(scenario: Scenario) -> mujoco.MjSpec:
         g.solref = list(solref)
         g.solimp = list(CONTACT_SOLIMP)
         g.solmix = 1.0
+    perturbations.of(scenario).edit_spec(spec)  # after the contact parameters: a platform gets its own
     return spec
 
 
@@ -320,7 +322,7 @@ def build_scene(scenario: Scenario) -> Scene:
         block_qvel_index=model.jnt_dofadr[bj] + np.arange(6),
         central_body=central,
         block_body=block_body,
-        floor_geom=_index_of(model, "geom", FLOOR, "geom"),
+        floor_geom=_index_of(model, "geom", getattr(perturbations.of(scenario), "floor_geom", FLOOR), "geom"),
         block_geom=_index_of(model, "geom", BLOCK, "geom"),
         sole_geoms=sole_geoms,
         biped_geoms=biped_geoms,
@@ -336,6 +338,15 @@ def tilt_quat(axis: str, tilt_deg: float) -> np.ndarray:
 
 
 def initial_state(scene: Scene, scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
+    """Scene ``(qpos (nq,), qvel (nv,))`` of the initial state of ``scenario``: W's
+    (:func:`w_initial_state`), then its perturbation's (the block parked, the lean of ``release``;
+    :meth:`biped.sim.perturbations.Perturbation.initial_state`)."""
+    qpos, qvel = w_initial_state(scene, scenario)
+    perturbations.of(scenario).initial_state(scene, qpos, qvel)
+    return qpos, qvel
+
+
+def w_initial_state(scene: Scene, scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
     """Scene ``(qpos (nq,), qvel (nv,))`` of W's initial state for ``scenario``.
 
     Central-body COM at ``initial_com_m`` turned ``initial_tilt_deg`` about -y, joint angles

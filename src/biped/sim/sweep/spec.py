@@ -35,10 +35,21 @@ AXES: dict[str, str] = {
     "height_m": "height of the block's aim point above the floor [m]",
     "gain_scale": "factor s on the stiffness gains (kp * s) and sqrt(s) on the damping gains "
     "(kv * sqrt(s)), which keeps every damping ratio",
+    "magnitude": "the perturbation's size in its own unit: force N (peak), platform m, release deg "
+    "(the block's is speed_m_s; scenario key perturbation, docs/perturbations.md)",
 }
 
 #: W's throw (section 4) in sweep coordinates: 1.8 kg at 4.5 m/s along -x, 1.2 m high.
-W_THROW = {"speed_m_s": 4.5, "direction_deg": 180.0, "block_mass_kg": 1.8, "height_m": 1.2, "gain_scale": 1.0}
+W_THROW = {
+    "speed_m_s": 4.5,
+    "direction_deg": 180.0,
+    "block_mass_kg": 1.8,
+    "height_m": 1.2,
+    "gain_scale": 1.0,
+    "magnitude": 0.0,  # unused by the block; another paradigm's default: its base scenario's size
+}
+#: The axes a block sweep's trial keys hash (those before the paradigms existed: its keys stay).
+BLOCK_AXES = ("speed_m_s", "direction_deg", "block_mass_kg", "height_m", "gain_scale")
 
 #: The most trials one sweep may hold (a grid's product or ``samples``): a bound on the work and
 #: the memory asked for by a typo such as ``num = 100000000``. Split larger studies into sweeps.
@@ -64,6 +75,7 @@ class Trial:
     height_m: float
     gain_scale: float
     key: str
+    magnitude: float = 0.0
 
     def params(self) -> dict[str, float]:
         return {name: getattr(self, name) for name in AXES}
@@ -110,6 +122,8 @@ def _axis_values(name: str, value: Any) -> tuple[float, ...]:
     lo = min(out)
     if name in ("speed_m_s", "block_mass_kg", "height_m", "gain_scale") and lo <= 0:
         raise ScenarioError(f"sweep axis {name} ({AXES[name]}) must be > 0; got {lo:g}")
+    if name == "magnitude" and lo < 0:
+        raise ScenarioError(f"sweep axis {name} ({AXES[name]}) must be >= 0; got {lo:g}")
     return tuple(out)
 
 
@@ -196,6 +210,10 @@ class SweepSpec:
         for name, value in given.items():
             _axis_values(name, value)  # unknown names and bad values raise here
         defaults = dict(W_THROW, block_mass_kg=self.base.block_mass_kg)
+        if self.base.perturbation != "block":
+            from biped.sim.perturbations import of
+
+            defaults["magnitude"] = of(self.base).size(1.0).magnitude
         axes = tuple(
             (name, _axis_values(name, given[name]) if name in given else (float(defaults[name]),))
             for name in AXES
@@ -315,8 +333,17 @@ class SweepSpec:
     @property
     def identity(self) -> str:
         """Hash of what makes two trials with equal parameters the same experiment."""
+        scen = self.base.to_dict()
+        if self.base.perturbation == "block":  # a block sweep's identity as before the paradigms
+            from biped.sim.perturbations import PARADIGMS
+
+            for cls in PARADIGMS.values():
+                if cls.name != "block":
+                    for k in cls.keys:
+                        scen.pop(k, None)
+            scen.pop("perturbation", None)
         ident = {
-            "scenario": self.base.to_dict(),
+            "scenario": scen,
             "launch_distance_m": self.launch_distance_m,
             "model_sha256": self.model_sha256,
             "torque_limits": self.torque_limits,
@@ -338,7 +365,7 @@ class SweepSpec:
         values = dict(self.axes)
         if self.samples is None:
             # direction fastest, then speed, mass, height, gain: a partial sweep covers the polar map
-            order = ["gain_scale", "height_m", "block_mass_kg", "speed_m_s", "direction_deg"]
+            order = ["magnitude", "gain_scale", "height_m", "block_mass_kg", "speed_m_s", "direction_deg"]
             points = [
                 dict(zip(order, combo, strict=True))
                 for combo in itertools.product(*(values[n] for n in order))
@@ -348,10 +375,11 @@ class SweepSpec:
             draws = {n: rng.uniform(min(values[n]), max(values[n]), self.samples) for n in names}
             points = [{n: float(draws[n][i]) for n in names} for i in range(self.samples)]
         ident = self.identity
+        hashed = BLOCK_AXES if self.base.perturbation == "block" else names
         out = []
         for i, p in enumerate(points):
             p = {n: float(p[n]) for n in names}
-            key = hashlib.sha256(json.dumps([ident, [repr(p[n]) for n in names]]).encode()).hexdigest()[:20]
+            key = hashlib.sha256(json.dumps([ident, [repr(p[n]) for n in hashed]]).encode()).hexdigest()[:20]
             out.append(Trial(index=i, key=key, **p))
         return tuple(out)
 
@@ -403,7 +431,22 @@ def aim_block(
 
 
 def trial_scenario(base: Scenario, trial: Trial, *, launch_distance_m: float = 0.5) -> Scenario:
-    """``base`` with the block of ``trial`` aimed at the initial COM line and the gains scaled."""
+    """``base`` with the block of ``trial`` aimed at the initial COM line and the gains scaled;
+    for another paradigm (``base.perturbation``), its keys set to the trial's magnitude and
+    direction (:meth:`biped.sim.perturbations.Perturbation.sized`; the direction is the way the
+    perturbation pushes the body, as the block's travel) and the gains scaled."""
+    s, r = trial.gain_scale, math.sqrt(trial.gain_scale)
+    gains = {
+        "kp_com": tuple(k * s for k in base.kp_com),
+        "kv_com": tuple(k * r for k in base.kv_com),
+        "kp_rot": tuple(k * s for k in base.kp_rot),
+        "kv_rot": tuple(k * r for k in base.kv_rot),
+    }
+    if base.perturbation != "block":
+        from biped.sim.perturbations import PARADIGMS
+
+        keys = PARADIGMS[base.perturbation].sized(base, trial.magnitude, trial.direction_deg)
+        return base.with_overrides(**keys, **gains)
     p0, v0 = aim_block(
         base.initial_com_m[:2], trial.speed_m_s, trial.direction_deg, trial.height_m, launch_distance_m
     )

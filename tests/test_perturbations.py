@@ -1,0 +1,225 @@
+"""The perturbation paradigms (biped.sim.perturbations, docs/perturbations.md), each against a
+reference the project does not compute: MuJoCo's own momentum for the force pulse, the held
+state's stillness for the tether, the feet's displacement against the platform's."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from biped.errors import ScenarioError
+from biped.sim import Scenario, build_scene
+from biped.sim.perturbations import of
+from biped.sim.perturbations.platform import profile
+from biped.sim.push import controller_policy, run_closed_loop
+from biped.sim.scene import initial_state
+
+
+def _run(compiled=None, **keys):
+    sc = Scenario(physics="fast", distribution="qp", **keys)
+    scene = build_scene(sc)
+    return run_closed_loop(sc, scene, controller_policy(sc, scene), compiled=compiled), scene
+
+
+@pytest.mark.parametrize("shape", ["rectangular", "half-sine"])
+def test_force_pulse_delivers_its_impulse_to_the_free_body(shape):
+    """MuJoCo's own momentum of the biped, floating without gravity, changes by the pulse's
+    impulse: F T for the rectangle, 2 F T / pi for the half sine (to 1 %)."""
+    F, T = np.array([-80.0, 30.0, 10.0]), 0.15
+    sc = Scenario(
+        physics="fast", perturbation="force", force_n=tuple(F), force_start_s=0.02, force_duration_s=T,
+        force_shape=shape,
+    )  # fmt: skip
+    scene = build_scene(sc)
+    m = scene.model
+    m.opt.gravity[:] = 0.0
+    d = mujoco.MjData(m)
+    q, v = initial_state(scene, sc)
+    q[scene.biped_qpos_index[2]] += 1.0  # in the air: no contacts
+    d.qpos[:], d.qvel[:] = q, v
+    mujoco.mj_forward(m, d)
+    mujoco.mj_subtreeVel(m, d)
+    driver = of(sc).driver(scene, m, d, None)
+    root = m.body_rootid[scene.central_body]
+    mass = m.body_subtreemass[root]
+    p0 = mass * d.subtree_linvel[root].copy()
+    rows = set(driver.rows.tolist())
+    for k in range(round(0.3 * sc.control_rate_hz)):
+        if k in rows:
+            driver.apply(k, k / sc.control_rate_hz, d)
+        mujoco.mj_step(m, d, sc.control_substeps)
+    mujoco.mj_forward(m, d)
+    mujoco.mj_subtreeVel(m, d)
+    dp = mass * d.subtree_linvel[root] - p0
+    want = F * T * (1.0 if shape == "rectangular" else 2.0 / np.pi)
+    assert np.linalg.norm(dp - want) < 0.01 * np.linalg.norm(want), (dp, want)
+
+
+@pytest.mark.parametrize("direction", [0.0, 90.0])
+def test_release_held_by_the_tether_stays_put(direction):
+    """With the tether kept (release after the run), the leaned biped is a static equilibrium:
+    over 1 s its central body moves less than 0.2 mm and turns less than 0.1 deg (exact with the
+    feet fixed), its feet less than 3 mm: the creep of MuJoCo's soft friction, which the same
+    biped standing unleaned, with no tether, shows too (1.4 mm in 1 s, 2.6 mm here). Friction 1:
+    the tether's 211 N is 0.29 of the weight, which W's friction 0.3 would barely hold."""
+    r, _ = _run(perturbation="release", release_lean_deg=8.0, release_direction_deg=direction,
+                release_time_s=10.0, duration_s=1.0, friction=1.0)  # fmt: skip
+    assert not r.fell and len(r.times) == 501
+    drift = np.linalg.norm(r.com - r.com[0], axis=1).max()
+    turn = max(np.degrees(2 * np.arccos(min(1.0, abs(float(q @ r.quat[0]))))) for q in r.quat)
+    feet = np.abs(r.feet_pos - r.feet_pos[0]).max()
+    assert drift < 2e-4 and turn < 0.1 and feet < 3e-3, (drift, turn, feet)
+    # it leans: the central body's COM is 8 deg ahead of the ankles, forward (-x) or left (-y)
+    axis = 0 if direction == 0.0 else 1
+    assert r.com[0, axis] < -0.1
+
+
+def test_release_lean_is_straight_and_the_feet_flat():
+    """The held pose leans the body about the ankles (COM ahead of the ankles by tan(lean) of its
+    height) with both feet where they stood, flat."""
+    sc = Scenario(perturbation="release", release_lean_deg=10.0)
+    scene = build_scene(sc)
+    up = Scenario()
+    m = scene.model
+    d0, d1 = mujoco.MjData(m), mujoco.MjData(m)
+    d0.qpos[:] = initial_state(scene, up.with_overrides(perturbation="force"))[0]
+    d1.qpos[:] = initial_state(scene, sc)[0]
+    mujoco.mj_kinematics(m, d0)
+    mujoco.mj_kinematics(m, d1)
+    for f in ("left_foot", "right_foot"):
+        b = m.body(f).id
+        assert np.allclose(d1.xpos[b][:2], d0.xpos[b][:2], atol=1e-9)
+        assert abs(abs(float(d1.xquat[b] @ d0.xquat[b])) - 1) < 1e-12
+    a = m.body("left_ankle_1").id
+    c0, c1 = d0.xipos[scene.central_body] - d0.xpos[a], d1.xipos[scene.central_body] - d1.xpos[a]
+    tilt = np.degrees(np.arctan2(-c1[0], c1[2]) - np.arctan2(-c0[0], c0[2]))
+    assert abs(tilt - 10.0) < 1e-6
+
+
+def test_platform_carries_the_feet():
+    """A 10 cm platform move at friction 1 carries both feet with it (within 1 cm)."""
+    r, scene = _run(perturbation="platform", platform_displacement_m=(0.1, 0.0), friction=1.0, duration_s=1.0)
+    assert not r.fell
+    moved = r.feet_pos[-1, :, :2] - r.feet_pos[0, :, :2]
+    assert np.abs(moved - [0.1, 0.0]).max() < 0.01, moved
+    m = scene.model
+    slide = m.jnt_qposadr[m.joint("platform_slide").id]
+    assert abs(r.qpos[-1, slide] - 0.1) < 1e-3  # the servo holds the platform at the end
+
+
+def test_platform_profile_is_a_ramp_and_hold():
+    t = np.linspace(-0.1, 0.5, 6001)
+    x, v, a = profile(t, 0.1, 0.3)
+    assert x[0] == 0 and x[-1] == 0.1 and np.all(np.diff(x) >= 0)
+    # its velocity and acceleration are its position's derivatives (finite differences)
+    dt = t[1] - t[0]
+    assert np.abs(np.gradient(x, dt) - v).max() < 1e-2 * v.max()
+    assert abs(v.max() - 0.1 / (0.75 * 0.3)) < 1e-12
+
+
+@pytest.mark.parametrize(
+    "keys",
+    [
+        {"perturbation": "force", "duration_s": 0.3},
+        {
+            "perturbation": "force",
+            "force_shape": "half-sine",
+            "force_point_m": (0.0, 0.05, 0.1),
+            "duration_s": 0.3,
+        },
+        {"perturbation": "platform", "duration_s": 0.5},
+        {"perturbation": "release", "duration_s": 0.3},
+    ],
+)
+def test_compiled_loop_is_the_python_loop(keys):
+    """Every paradigm runs in the compiled loop, bit for bit the Python loop's run."""
+    a, _ = _run(compiled=True, **keys)
+    b, _ = _run(compiled=False, **keys)
+    assert np.array_equal(a.qpos, b.qpos) and np.array_equal(a.torques, b.torques)
+
+
+@pytest.mark.parametrize(
+    ("keys", "words"),
+    [
+        ({"force_duration_s": -0.1}, "force_duration_s must be > 0"),
+        ({"release_lean_deg": 50.0}, "release_lean_deg must be in [0, 45]"),
+        ({"platform_displacement_m": (1.5, 0.0)}, "platform_displacement_m must be at most"),
+        ({"perturbation": "force", "force_body": "tail"}, "force_body 'tail' is not a body"),
+        ({"perturbation": "wave"}, "perturbation must be one of"),
+        ({"force_shape": "square"}, "force_shape must be one of"),
+        ({"force_point_m": "hip"}, "force_point_m must be 'pelvis'"),
+        ({"perturbation": "release", "controller": "joint-pd"}, "needs controller = 'workspace'"),
+    ],
+)
+def test_bad_keys_are_one_line_errors(keys, words):
+    with pytest.raises(ScenarioError) as exc:
+        Scenario.from_dict(keys)
+    assert words in str(exc.value) and "\n" not in str(exc.value)
+
+
+def test_release_refuses_a_lean_friction_cannot_hold():
+    """An 8 deg lean at W's friction 0.3: the tether's pull would slide the feet; a one-line error
+    before the run."""
+    with pytest.raises(ScenarioError, match="more than friction = 0.3 lets the feet hold"):
+        _run(perturbation="release", release_lean_deg=8.0, duration_s=0.1)
+
+
+def _swaying(hip_factor: float):
+    """Hand-made sway, 1 s at 100 Hz: the legs turn theta(t) = 3 deg sin(2 pi t) about the
+    ankles, forward (-x); the trunk then turns about the hips by hip_factor * theta (0: the body
+    as one inverted pendulum, the ankle strategy; -3: the trunk against the legs, the hip
+    strategy). Each foot stays where it stood (the legs' joints solved)."""
+    from biped.sim.perturbations.release import turn_body
+
+    sc = Scenario(perturbation="force")
+    scene = build_scene(sc)
+    m = scene.model
+    q0 = initial_state(scene, sc)[0]
+    d = mujoco.MjData(m)
+    qs = []
+    for t in np.arange(0, 1.0, 0.01):
+        th = np.radians(3.0) * np.sin(2 * np.pi * t)
+        q = q0.copy()
+        assert turn_body(scene, q, _ankles(m, d, q), (0.0, 1.0, 0.0), -th)  # top toward -x
+        if hip_factor:
+            assert turn_body(scene, q, _hips(m, d, q), (0.0, 1.0, 0.0), -hip_factor * th)
+        qs.append(q)
+    return scene, np.array(qs)
+
+
+def _mid(m, d, q, name):
+    d.qpos[:] = q
+    mujoco.mj_kinematics(m, d)
+    return np.mean([d.xpos[m.body(f"{s}_{name}").id] for s in ("left", "right")], axis=0)
+
+
+def _ankles(m, d, q):
+    return _mid(m, d, q, "ankle_1")
+
+
+def _hips(m, d, q):
+    return _mid(m, d, q, "hip_1")
+
+
+@pytest.mark.parametrize(("hip_factor", "label"), [(0.0, "ankle"), (-3.0, "hip")])
+def test_strategy_rule_labels_hand_made_motions(hip_factor, label):
+    """The rule of biped.sim.response on MuJoCo's kinematics of hand-made motions: the body
+    swaying as one piece about the ankles is 'ankle'; the trunk counter-rotating is 'hip'."""
+    from biped.sim.response import body_angles, strategy_from_angles
+
+    scene, qs = _swaying(hip_factor)
+    leg, trunk = body_angles(scene, qs, (-1.0, 0.0))
+    got, corr, pt, pl = strategy_from_angles(leg, trunk)
+    assert got == label
+    assert abs(pl - 3.0) < 0.05  # the legs' sway, read back
+    assert abs(pt - abs(1 + hip_factor) * 3.0) < 0.1  # the trunk's: 3 deg, or 2 deg against the legs
+    assert (corr > 0.99) if hip_factor == 0 else (corr < -0.99)
+
+
+def test_margin_of_stability_against_a_square():
+    from biped.sim.response import margin
+
+    sq = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    got = margin(np.array([[0.5, 0.5], [0.9, 0.5], [1.5, 0.5], [2.0, 2.0]]), sq)
+    assert np.allclose(got, [0.5, 0.1, -0.5, -np.sqrt(2)])
