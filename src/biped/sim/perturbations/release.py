@@ -18,11 +18,13 @@ The held state, a static equilibrium by construction:
    pulling against the lean, of the size that puts the centre of pressure under the ankles'
    midpoint, the relaxed ankles of the experiments: ``T = m g e / h`` with e the whole-body COM's
    lean ahead of the ankles and h the pelvis height.
-3. the controller "already holding the rest of the body": its set point is offset so that its
-   desired wrench (W eq. 3.10, ``F = P_1 X + z_1``) cancels the tether's wrench on the central
-   body exactly, ``X = -P_1^{-1} W_tether``. With the feet in place the accelerations are then
-   zero (the controller's statics), so nothing moves while the tether holds
-   (``tests/test_perturbations.py``).
+3. the controller "already holding the rest of the body": its set point is the leaned pose and
+   its desired acceleration a feed-forward ``X = -P_1^{-1} W_tether`` (the target's ``pddot_d``
+   and ``wdot_d``, W Alg. 4), so that its desired wrench (W eq. 3.10, ``F = P_1 X + z_1``)
+   cancels the tether's wrench on the central body exactly, whatever the gains (an offset set
+   point, ``X / kp``, could not hold a lean with the soft gains of a human-like controller). With
+   the feet in place the accelerations are then zero (the controller's statics), so nothing
+   moves while the tether holds (``tests/test_perturbations.py``).
 
 Like every paradigm but the block, the run starts from quiet stance (the soles on the floor, the
 set point the starting pose; :mod:`biped.sim.perturbations.base`).
@@ -134,27 +136,38 @@ class ReleaseDriver(Driver):
 
     def __init__(self, scenario, model, data, controller, hold: dict):
         self.k_release = round(scenario.release_time_s * scenario.control_rate_hz)
+        # the nervous system learns of the release from the state it sees, feedback_delay_s late:
+        # the set point returns upright then (the same row without a delay)
+        self.k_sense = self.k_release + scenario.delay_steps
         n = scenario.control_steps
-        self.rows = np.array([0] + ([self.k_release] if 0 < self.k_release <= n else []), dtype=np.int64)
+        rows = [0] + ([self.k_release] if 0 < self.k_release <= n else [])
+        if 0 < self.k_release < self.k_sense <= n:
+            rows.append(self.k_sense)
+        self.rows = np.array(rows, dtype=np.int64)
         self.controller = controller
         self.hold = hold
         self.body = hold["body"]
         self.released_at: float | None = None
         self.final_target = (hold["upright_com"], hold["upright_quat"]) if 0 < self.k_release <= n else None
 
-    def _set_target(self, com, quat) -> None:
+    def _set_target(self, com, quat, acc=None) -> None:
         set_target(self.controller, com, quat)
+        if acc is not None:  # the feed-forward accelerations (world frame) that hold the lean
+            arr = self.controller.target.array
+            arr[6:9] = acc[:3]
+            arr[16:19] = acc[3:]
 
     def apply(self, k: int, t: float, data: mujoco.MjData) -> None:
         h = self.hold
         if k == 0 and self.k_release > 0:
             data.xfrc_applied[self.body, :3] = h["tether_force"]
             data.xfrc_applied[self.body, 3:] = h["tether_moment"]
-            self._set_target(h["hold_com"], h["hold_quat"])
+            self._set_target(h["hold_com"], h["hold_quat"], h["hold_acc"])
         if k == self.k_release:
             data.xfrc_applied[self.body] = 0.0
-            self._set_target(h["upright_com"], h["upright_quat"])
             self.released_at = t
+        if k == self.k_sense and self.k_release > 0:
+            self._set_target(h["upright_com"], h["upright_quat"])
 
     def finish(self, data) -> dict:
         return {
@@ -230,22 +243,12 @@ def hold_state(scene, model, data, ctrl, pose: dict) -> dict:
     R = data.ximat[cb].reshape(3, 3)
     W = np.concatenate([R.T @ f, R.T @ moment])  # the tether's wrench, body COM frame
     X = -np.linalg.solve(out.P1, W)
-    gains = ctrl.gains.array
-    kp_com, kp_rot = gains[0:3], gains[6:9]
-    if np.any(kp_com == 0) or np.any(kp_rot == 0):
-        raise ScenarioError(
-            "perturbation = 'release' needs kp_com and kp_rot > 0 (the set point holds the lean)"
-        )
-    hold_com = c + (R @ X[:3]) / kp_com
-    v = -(R @ X[3:]) / kp_rot
-    if float(v @ v) >= 1.0:
-        raise ScenarioError(
-            "release_lean_deg: the lean is too large for the controller to hold with these gains"
-        )
-    qe = np.array([math.sqrt(1.0 - float(v @ v)), *v])
-    q01 = data.xquat[cb].copy()
-    hold_quat = _quat_mul(_conj(qe), q01)
+    # at the set point (the pose itself, at rest) W Alg. 4 gives X^b = R^T pddot_d, R^T wdot_d
+    hold_acc = np.concatenate([R @ X[:3], R @ X[3:]])
+    hold_com = c.copy()
+    hold_quat = data.xquat[cb].copy()
     return {
+        "hold_acc": hold_acc,
         "body": cb,
         "tether_force": f,
         "tether_moment": moment,
