@@ -18,7 +18,7 @@ root reaches the imaginary axis, from the frequencies where ``|L(i w)| = 1``); `
 test_neuromotor_delay.py`` checks it against python-control's Pade approximation of the delay.
 
 >>> round(delay_margin(a=0.0, kp=1.0, kv=2.0), 4)     # double integrator, critically damped
-1.1185
+0.6474
 """
 
 from __future__ import annotations
