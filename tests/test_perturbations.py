@@ -241,3 +241,48 @@ def test_margin_of_stability_against_a_square():
     sq = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     got = margin(np.array([[0.5, 0.5], [0.9, 0.5], [1.5, 0.5], [2.0, 2.0]]), sq)
     assert np.allclose(got, [0.5, 0.1, -0.5, -np.sqrt(2)])
+
+
+def test_block_sweep_keys_are_those_of_before_the_paradigms():
+    """A block sweep's identity and trial keys are unchanged (a rerun resumes an older file):
+    the values main's code gave before the paradigms existed."""
+    from biped.sim.sweep import SweepSpec
+
+    s = SweepSpec(axes={"speed_m_s": (2.0, 4.0), "direction_deg": (0.0, 90.0)})
+    assert s.identity == "6c9f08c3bb9e9a7b"
+    assert [t.key for t in s.trials()][:2] == ["67abf38466ab22b14368", "5e3e011cc73543e70e10"]
+
+
+@pytest.mark.parametrize(
+    ("paradigm", "magnitude", "key", "want"),
+    [
+        ("force", 100.0, "force_n", (0.0, -100.0, 0.0)),  # pushes toward -y: the force points there
+        ("platform", 0.1, "platform_displacement_m", (0.0, 0.1)),  # the floor moves the other way
+        ("release", 10.0, "release_direction_deg", 90.0),  # world -y is the biped's left
+    ],
+)
+def test_sweep_magnitude_and_direction_set_the_paradigm(paradigm, magnitude, key, want):
+    """--magnitude M --direction 270 (toward world -y) in each paradigm's own keys."""
+    from biped.sim.sweep import SweepSpec
+
+    base = Scenario(perturbation=paradigm)
+    spec = SweepSpec(axes={"magnitude": magnitude, "direction_deg": 270.0}, base=base)
+    (trial,) = spec.trials()
+    sc = spec.scenario(trial)
+    assert np.allclose(getattr(sc, key), want, atol=1e-9)
+    size = of(sc).size(70.0)
+    assert size.magnitude == pytest.approx(magnitude) and size.direction_deg == pytest.approx(270.0)
+
+
+def test_push_command_runs_a_paradigm_and_names_its_strategy(tmp_path):
+    from biped.cli import main
+
+    out = tmp_path / "run"
+    argv = ["push", "--perturbation", "force", "--duration", "0.4", "--set", 'physics="fast"', "--quiet"]
+    assert main([*argv, "--no-video", "--no-replay", "--no-figures", "--out", str(out)]) == 0
+    import json
+
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["perturbation"]["paradigm"] == "force"
+    assert summary["perturbation"]["impulse_applied_n_s"] == pytest.approx([-9.0, 0.0, 0.0])
+    assert summary["response"]["strategy"] in ("ankle", "hip")
