@@ -47,6 +47,7 @@ from biped.sim.perturbations.base import (
     horizontal,
     onto_floor,
     pelvis_point,
+    point_track,
     set_target,
     workspace_controller,
 )
@@ -196,6 +197,26 @@ class Release(Perturbation):
         pose = lean_pose(scene, w_initial_state(scene, s)[0], s.release_lean_deg,
                          world_direction(s.release_direction_deg))  # fmt: skip
         return ReleaseDriver(self.scenario, model, data, ctrl, hold_state(scene, model, data, ctrl, pose))
+
+    def markers(self) -> list[tuple[float, str]]:
+        s = self.scenario
+        k = round(s.release_time_s * s.control_rate_hz)
+        return [(k / s.control_rate_hz, f"tether released ({s.release_lean_deg:g} deg lean)")]
+
+    def arrows(self, scene, result) -> np.ndarray | None:
+        """The tether while it holds: from the pelvis 0.5 m back against the lean."""
+        s = self.scenario
+        n = len(result.times)
+        out = np.full((n, 2, 3), np.nan)
+        rows = np.arange(0, min(n, round(s.release_time_s * s.control_rate_hz)))
+        if not len(rows) or s.release_lean_deg == 0:
+            return out
+        cb = scene.central_body
+        p = point_track(scene, result.qpos, cb, pelvis_point(scene.model, cb), rows)
+        back = -horizontal(world_direction(s.release_direction_deg))
+        out[rows, 0] = p
+        out[rows, 1] = p + 0.5 * back
+        return out
 
     def size(self, total_mass_kg: float) -> Size:
         s = self.scenario
