@@ -292,7 +292,8 @@ def write_summary(
 
 
 def _markers(result: PushResult) -> list[dict]:
-    out = []
+    end = result.times[-1] if len(result.times) else 0.0
+    out = [{"time_s": t, "label": lab} for t, lab in perturbations.of(result.scenario).markers() if t <= end]
     if result.block_contact_time_s is not None:
         out.append({"time_s": result.block_contact_time_s, "label": "block hits the body"})
     for e in result.events:
@@ -348,7 +349,8 @@ def _footprints(scene: Scene, result: PushResult) -> list[dict]:
 def _render_video(scene: Scene, result: PushResult, path: Path, on_frame):
     """:func:`render_push_video` of the run (slow motion around the hit), reporting frames through
     ``on_frame(done, total)``."""
-    return render_push_video(scene.model, result, path, progress=on_frame)
+    arrows = perturbations.of(result.scenario).arrows(scene, result)  # a push, the tether
+    return render_push_video(scene.model, result, path, progress=on_frame, arrows=arrows)
 
 
 def _frame_log(log: Callable[[str], None], step: float = 0.25):
@@ -436,7 +438,9 @@ def write_outputs(
                 scene.model,
                 result.times,
                 result.qpos,
-                title="W section 4: push recovery",
+                title="W section 4: push recovery"
+                if result.scenario.perturbation == "block"
+                else f"perturbation: {result.scenario.perturbation}",
                 info=info,
                 markers=_markers(result),
                 follow="trunk",

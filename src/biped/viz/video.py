@@ -207,6 +207,7 @@ def render_video(
     shadows="follow",
     shadow_radius_m=3.0,
     progress=None,
+    arrows=None,
 ) -> VideoResult:
     """Render the trajectory ``(times, qpos)`` of ``model`` to an H.264 MP4 file.
 
@@ -269,6 +270,8 @@ def render_video(
         tmp = pathlib.Path(tmp_name)
         mujoco.mj_saveModel(model, str(tmp / "model.mjb"), None)
         np.save(tmp / "qpos.npy", qpos[idx])
+        if arrows is not None:  # (T, 2, 3) from/to of one arrow a sample (NaN: none), e.g. a push
+            np.save(tmp / "arrows.npy", np.asarray(arrows, dtype=float)[idx])
         extent = float(model.stat.extent) if model.stat.extent > 0 else 1.0
         cfg = {
             "out": str(path.resolve()),

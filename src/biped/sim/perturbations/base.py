@@ -38,7 +38,7 @@ if TYPE_CHECKING:
     from biped.sim.scene import Scene
 
 #: Where the block waits when another paradigm runs: off the floor's far corner, not colliding,
-#: its weight compensated (gravcomp), so it costs no contacts and never moves.
+#: its weight compensated (gravcomp), so it costs no contacts and never moves; not drawn.
 PARKED_BLOCK_M = (9.0, 9.0, 0.5)
 
 
@@ -103,6 +103,15 @@ class Perturbation:
         """The run's :class:`Driver` (None: nothing to do during the run)."""
         return None
 
+    def markers(self) -> list[tuple[float, str]]:
+        """(time [s], label) of the perturbation's moments, for the replay's timeline."""
+        return []
+
+    def arrows(self, scene: Scene, result: Any) -> np.ndarray | None:
+        """(n, 2, 3) an arrow per row of ``result`` to draw (from, to; world [m]; NaN: none), the
+        push or the tether, for the video; None: nothing to draw."""
+        return None
+
     def size(self, total_mass_kg: float) -> Size:  # pragma: no cover - interface
         raise NotImplementedError
 
@@ -114,9 +123,22 @@ class Perturbation:
         raise NotImplementedError
 
 
+def point_track(scene: Scene, qpos: np.ndarray, body: int, point, rows) -> np.ndarray:
+    """(len(rows), 3) the world position of ``point`` (``body``'s frame) at each of ``rows`` of
+    ``qpos`` (MuJoCo kinematics)."""
+    m = scene.model
+    d = mujoco.MjData(m)
+    out = np.zeros((len(rows), 3))
+    for i, k in enumerate(rows):
+        d.qpos[:] = qpos[k]
+        mujoco.mj_kinematics(m, d)
+        out[i] = d.xpos[body] + d.xmat[body].reshape(3, 3) @ np.asarray(point, dtype=float)
+    return out
+
+
 def onto_floor(scene: Scene, qpos: np.ndarray) -> None:
     """Lower the biped of ``qpos`` (scene layout, in place) so that its lowest sole point is on
-    the floor, z = 0."""
+    the floor, z = 0 (10 um into it, so that the first control period already has the contacts)."""
     m = scene.model
     d = mujoco.MjData(m)
     d.qpos[:] = qpos
@@ -125,7 +147,7 @@ def onto_floor(scene: Scene, qpos: np.ndarray) -> None:
     for g in scene.sole_geoms:
         R = d.geom_xmat[g].reshape(3, 3)
         low = min(low, float(d.geom_xpos[g, 2] - np.abs(R[2]) @ m.geom_size[g]))
-    qpos[scene.biped_qpos_index[2]] -= low
+    qpos[scene.biped_qpos_index[2]] -= low + 1e-5  # 10 um in: MuJoCo sees the contacts at once
 
 
 def hold_here(controller, data: mujoco.MjData, body: int) -> tuple[np.ndarray, np.ndarray]:
@@ -163,6 +185,7 @@ def park_block(spec: mujoco.MjSpec) -> None:
     body.gravcomp = 1.0
     g = spec.geom(BLOCK)
     g.contype, g.conaffinity = 0, 0
+    g.rgba = [0.9, 0.6, 0.1, 0.0]  # not drawn
 
 
 def pelvis_point(model: mujoco.MjModel, body: int) -> np.ndarray:

@@ -32,6 +32,7 @@ from biped.sim.perturbations.base import (
     hold_here,
     horizontal,
     pelvis_point,
+    point_track,
     workspace_controller,
     world_direction_deg,
 )
@@ -103,6 +104,33 @@ class Force(Perturbation):
         body, point = self.body_and_point(model)
         ctrl = workspace_controller(policy)
         return ForceDriver(self.scenario, model, body, point, ctrl, scene.central_body)
+
+    def markers(self) -> list[tuple[float, str]]:
+        s = self.scenario
+        k0, k1 = pulse_rows(s.force_start_s, s.force_duration_s, s.control_rate_hz)
+        f = float(np.linalg.norm(s.force_n))
+        return [
+            (k0 / s.control_rate_hz, f"force pulse starts ({f:.0f} N)"),
+            (k1 / s.control_rate_hz, "force pulse ends"),
+        ]
+
+    def arrows(self, scene, result) -> np.ndarray | None:
+        """The push while it acts: an arrow ending at the application point, 0.4 m long at the
+        peak force, along the force."""
+        s = self.scenario
+        n = len(result.times)
+        out = np.full((n, 2, 3), np.nan)
+        k0, k1 = pulse_rows(s.force_start_s, s.force_duration_s, s.control_rate_hz)
+        rows = np.arange(k0, min(k1, n))
+        f = np.asarray(s.force_n, dtype=float)
+        if not len(rows) or not np.linalg.norm(f):
+            return out
+        body, point = self.body_and_point(scene.model)
+        p = point_track(scene, result.qpos, body, point, rows)
+        u = f / np.linalg.norm(f)
+        for i, k in enumerate(rows):
+            out[k] = p[i] - 0.4 * shape_factor(s.force_shape, int(k), k0, k1) * u, p[i]
+        return out
 
     def applied_impulse(self) -> np.ndarray:
         """(3,) the impulse of the pulse as the loop applies it [N s]."""

@@ -133,6 +133,7 @@ class Platform(Perturbation):
 
         floor = spec.geom(FLOOR)
         floor.contype, floor.conaffinity = 0, 0  # the platform is the floor
+        floor.pos = [0.0, 0.0, -0.101]  # drawn under the slab, not through its top
         body = spec.worldbody.add_body(name=PLATFORM, pos=[0.0, 0.0, 0.0])
         body.add_joint(name=PLATFORM_JOINT, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=list(self.axis()))
         h = PLATFORM_HALF_M
@@ -164,6 +165,15 @@ class Platform(Perturbation):
                 biasprm=bias + [0.0] * 7,
                 ctrllimited=0,
             )
+
+    def markers(self) -> list[tuple[float, str]]:
+        s = self.scenario
+        k0 = round(s.platform_start_s * s.control_rate_hz)
+        k1 = k0 + max(1, round(s.platform_duration_s * s.control_rate_hz))
+        return [
+            (k0 / s.control_rate_hz, "platform starts moving"),
+            (k1 / s.control_rate_hz, "platform stops"),
+        ]
 
     def driver(self, scene, model, data, policy):
         return PlatformDriver(self.scenario, model, workspace_controller(policy), scene.central_body)

@@ -15,9 +15,10 @@ The held state, a static equilibrium by construction:
    (Newton on MuJoCo's Jacobians) to put its foot back where it stood, flat. A forward or backward
    lean turns the ankles only (the body straight); a sideways one is a parallelogram of the legs.
 2. the tether: a constant horizontal force T at the pelvis (the midpoint of the hip joints),
-   pulling against the lean, of the size that puts the centre of pressure under the ankles'
-   midpoint, the relaxed ankles of the experiments: ``T = m g e / h`` with e the whole-body COM's
-   lean ahead of the ankles and h the pelvis height.
+   pulling against the lean, of the size that keeps the centre of pressure where it was in the
+   upright pose (under its whole-body COM): the tether carries the whole of the lean's extra
+   gravity moment, the ankles only what upright stance needs, ``T = m g e / h`` with e the
+   whole-body COM's move along the lean and h the pelvis height. No lean, no tether force.
 3. the controller "already holding the rest of the body": its set point is the leaned pose and
    its desired acceleration a feed-forward ``X = -P_1^{-1} W_tether`` (the target's ``pddot_d``
    and ``wdot_d``, W Alg. 4), so that its desired wrench (W eq. 3.10, ``F = P_1 X + z_1``)
@@ -48,6 +49,7 @@ from biped.sim.perturbations.base import (
     horizontal,
     onto_floor,
     pelvis_point,
+    point_track,
     set_target,
     workspace_controller,
 )
@@ -79,8 +81,10 @@ def lean_pose(scene, qpos: np.ndarray, lean_deg: float, direction_world_deg: flo
     onto_floor(scene, qpos)  # the soles on the floor, z = 0
     d.qpos[:] = qpos
     mujoco.mj_kinematics(m, d)
+    mujoco.mj_comPos(m, d)
     cb = scene.central_body
     upright_com, upright_quat = d.xipos[cb].copy(), d.xquat[cb].copy()
+    upright_body_com = d.subtree_com[m.body_rootid[cb]].copy()
     ankles = np.mean([d.xpos[m.body(f"{leg}_ankle_1").id] for leg in _LEGS], axis=0)
     u = horizontal(direction_world_deg)
     if not turn_body(scene, qpos, ankles, np.cross([0.0, 0.0, 1.0], u), math.radians(lean_deg)):
@@ -88,7 +92,13 @@ def lean_pose(scene, qpos: np.ndarray, lean_deg: float, direction_world_deg: flo
             f"release_lean_deg = {lean_deg:g}: a foot cannot stay flat where it stood at this lean "
             "(its leg's joints found no solution); use a smaller lean"
         )
-    return {"upright_com": upright_com, "upright_quat": upright_quat, "ankles": ankles, "direction": u}
+    return {
+        "upright_com": upright_com,
+        "upright_quat": upright_quat,
+        "upright_body_com": upright_body_com,
+        "ankles": ankles,
+        "direction": u,
+    }
 
 
 def turn_body(scene, qpos: np.ndarray, point, axis, angle_rad: float) -> bool:
@@ -201,6 +211,26 @@ class Release(Perturbation):
                          world_direction(s.release_direction_deg))  # fmt: skip
         return ReleaseDriver(self.scenario, model, data, ctrl, hold_state(scene, model, data, ctrl, pose))
 
+    def markers(self) -> list[tuple[float, str]]:
+        s = self.scenario
+        k = round(s.release_time_s * s.control_rate_hz)
+        return [(k / s.control_rate_hz, f"tether released ({s.release_lean_deg:g} deg lean)")]
+
+    def arrows(self, scene, result) -> np.ndarray | None:
+        """The tether while it holds: from the pelvis 0.5 m back against the lean."""
+        s = self.scenario
+        n = len(result.times)
+        out = np.full((n, 2, 3), np.nan)
+        rows = np.arange(0, min(n, round(s.release_time_s * s.control_rate_hz)))
+        if not len(rows) or s.release_lean_deg == 0:
+            return out
+        cb = scene.central_body
+        p = point_track(scene, result.qpos, cb, pelvis_point(scene.model, cb), rows)
+        back = -horizontal(world_direction(s.release_direction_deg))
+        out[rows, 0] = p
+        out[rows, 1] = p + 0.5 * back
+        return out
+
     def size(self, total_mass_kg: float) -> Size:
         s = self.scenario
         return Size(self.name, s.release_lean_deg, self.unit, world_direction(s.release_direction_deg),
@@ -215,8 +245,8 @@ class Release(Perturbation):
 
 
 def hold_state(scene, model, data, ctrl, pose: dict) -> dict:
-    """The tether's force and moment on the central body and the controller's offset set point
-    (module docstring, steps 2 and 3) at ``data``'s state (the leaned pose, at rest)."""
+    """The tether's force and moment on the central body and the controller's set point and
+    feed-forward acceleration (module docstring, steps 2 and 3) at ``data``'s state (the leaned pose, at rest)."""
     mujoco.mj_forward(model, data)
     cb = scene.central_body
     root_body = model.body_rootid[cb]
@@ -225,7 +255,7 @@ def hold_state(scene, model, data, ctrl, pose: dict) -> dict:
     com = data.subtree_com[root_body]
     u = pose["direction"]
     p = data.xpos[cb] + data.xmat[cb].reshape(3, 3) @ pelvis_point(model, cb)  # the pelvis, world
-    lean = float((com - pose["ankles"]) @ u)  # the COM ahead of the ankles along the lean [m]
+    lean = float((com - pose["upright_body_com"]) @ u)  # the whole-body COM's move along the lean [m]
     T = total * g * lean / float(p[2])
     f = -T * u
     mu = float(model.geom_friction[scene.sole_geoms[0], 0])

@@ -60,6 +60,8 @@ class Measured:
     strategy_torque: str = ""  # the second reading (hip/ankle torque ratio)
     strategy_agree: bool = False
     trunk_leg_correlation: float = math.nan
+    peak_trunk_change_deg: float = math.nan
+    peak_leg_change_deg: float = math.nan
     hip_ankle_torque_ratio: float = math.nan
     peak_com_excursion_m: float = math.nan
     peak_com_excursion_time_s: float = math.nan

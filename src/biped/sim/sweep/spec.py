@@ -342,6 +342,11 @@ class SweepSpec:
                     for k in cls.keys:
                         scen.pop(k, None)
             scen.pop("perturbation", None)
+        # the nervous system's keys at W's ideal values: the identity as before they existed
+        for k, ideal in (("neuromotor", "ideal"), ("feedback_delay_s", 0.0), ("activation_time_s", 0.0),
+                         ("torque_rate_limit_n_m_s", "none"), ("ankle_only", False)):  # fmt: skip
+            if scen.get(k) == ideal:
+                scen.pop(k)
         ident = {
             "scenario": scen,
             "launch_distance_m": self.launch_distance_m,
