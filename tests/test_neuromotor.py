@@ -214,3 +214,22 @@ def test_ankle_only_holds_hips_and_knees_within_a_degree_in_a_small_push():
     assert moved[:, ankles].max() > 2 * moved[:, hips_knees].max()  # the ankles do the balancing
     free = _run(s.with_overrides(ankle_only=False))
     assert np.degrees(np.abs(free.joint_angles - free.joint_angles[0]))[:, hips_knees].max() > 1.0
+
+
+def test_ankle_only_lean_release_moves_no_hip_or_knee_by_a_degree():
+    s = Scenario(
+        perturbation="release",
+        release_lean_deg=2.0,
+        release_time_s=0.1,
+        duration_s=1.5,
+        friction=0.8,
+        neuromotor="young",
+        ankle_only=True,
+    )
+    r = _run(s)
+    assert not r.fell and r.extra["perturbation"]["released_at_s"] == pytest.approx(0.1)
+    hips_knees = [i for i, n in enumerate(r.joint_names) if "ankle" not in n]
+    ankles = [i for i, n in enumerate(r.joint_names) if "ankle_dorsiflexion" in n]
+    moved = np.degrees(np.abs(r.joint_angles - r.joint_angles[0]))
+    assert moved[:, hips_knees].max() < 1.0
+    assert moved[:, ankles].max() > 5 * moved[:, hips_knees].max()  # the lean is caught at the ankles
