@@ -214,6 +214,8 @@ def run_trial(exp: Experiment, neuromotor: str, magnitude: float) -> Trial:
     t = time.perf_counter()
     r = simulate(s)
     wall = time.perf_counter() - t
+    if r.interrupted:  # Ctrl-C / SIGTERM inside the run: not a fall, the end of the bisection
+        raise KeyboardInterrupt
     survived = not r.fell and r.diverged is None and r.controller_error is None and not r.interrupted
     peak, onset, motion = _ankle_measures(r, s)
     return Trial(exp.key, neuromotor, float(magnitude), exp.unit, bool(survived), r.fall_time_s, peak, onset,

@@ -54,23 +54,32 @@ def run(args) -> int:
     t0 = time.perf_counter()
     results: dict = {}
     n = 0
-    for name in names:
-        results[name] = {}
-        for preset in presets:
-            th = run_experiment(EXPERIMENTS[name], preset, iterations)
-            results[name][preset] = th
-            n += len(th.trials)
-            print(
-                f"  {name:<18} {preset:<6} threshold {th.bound}{th.value:.4g} {th.unit} ({len(th.trials)} trials)"
-            )
+    interrupted = False
+    try:
+        for name in names:
+            per: dict = {}
+            results[name] = per
+            for preset in presets:
+                th = run_experiment(EXPERIMENTS[name], preset, iterations)
+                per[preset] = th
+                n += len(th.trials)
+                print(
+                    f"  {name:<18} {preset:<6} threshold {th.bound}{th.value:.4g} {th.unit} ({len(th.trials)} trials)"
+                )
+    except KeyboardInterrupt:  # Ctrl-C / SIGTERM: write the finished thresholds, then stop
+        interrupted = True
+        results = {k: v for k, v in results.items() if v}
     wall = time.perf_counter() - t0
     note = (
         "Each threshold is the largest magnitude the biped survived (bisection on a log scale; '<' "
         "below the searched range, '>' above it). Presets: biped.control.neuromotor, docs/validate.md."
     )
     meta = {"mode": "quick" if args.quick else "full", "iterations": iterations, "presets": presets,
-            "trials": n, "wall_time_s": wall, "note": note}  # fmt: skip
-    write_validation(out, results, meta)
+            "trials": n, "wall_time_s": wall, "note": note, "interrupted": interrupted}  # fmt: skip
+    if results:
+        write_validation(out, results, meta)
+    if interrupted:
+        raise KeyboardInterrupt
     print(
         f"  wrote {out}/validation.md, validation.json, trials.parquet, figures/ ({n} trials, {wall:.1f} s)"
     )

@@ -74,14 +74,15 @@ def _markdown(rows: list[dict], presets: list[str], meta: dict) -> str:
             cells = ["not run"] * len(presets) + ["-"] * len(presets)
             lines.append(f"| {r['quantity']} [{r['unit']}] | {hum} | " + " | ".join(cells) + " |")
             continue
-        vals = [_fmt(r[p]["value"], r[p]["bound"]) for p in presets]
+        vals = [_fmt(r[p]["value"], r[p]["bound"]) if p in r else "not run" for p in presets]
         ins = []
         for p in presets:
-            v = r[p]["inside_2sd"]
+            v = r[p]["inside_2sd"] if p in r else None
             ins.append("n/a" if v is None else ("yes" if v else "no"))
         lines.append(f"| {r['quantity']} [{r['unit']}] | {hum} | " + " | ".join(vals + ins) + " |")
     lines += ["", "Not run:"] + [f"- {k}: {v}" for k, v in NOT_RUN.items()]
-    lines += ["", f"Trials: {meta['trials']} in {meta['wall_time_s']:.1f} s ({meta['mode']})."]
+    mode = meta["mode"] + (", interrupted" if meta.get("interrupted") else "")
+    lines += ["", f"Trials: {meta['trials']} in {meta['wall_time_s']:.1f} s ({mode})."]
     return "\n".join(lines) + "\n"
 
 
@@ -90,7 +91,7 @@ def write_validation(out: Path, results: dict[str, dict[str, Threshold]], meta: 
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    presets = list(next(iter(results.values())))
+    presets = list(meta.get("presets") or next(iter(results.values())))
     rows = table_rows(results)
     written = [write_json(out / "validation.json", {"meta": meta, "rows": rows, "experiments": {
         k: {"title": EXPERIMENTS[k].title, "protocol": EXPERIMENTS[k].protocol, "unit": EXPERIMENTS[k].unit,
