@@ -234,3 +234,13 @@ def test_ankle_only_lean_release_moves_no_hip_or_knee_by_a_degree():
     moved = np.degrees(np.abs(r.joint_angles - r.joint_angles[0]))
     assert moved[:, hips_knees].max() < 1.0
     assert moved[:, ankles].max() > 5 * moved[:, hips_knees].max()  # the lean is caught at the ankles
+
+
+def test_a_replay_of_a_young_run_reproduces_it():
+    """The recorded torques are what the joints got (delayed, lagged, rate-limited): replayed open
+    loop, MuJoCo retraces the run exactly (the replay does not filter them again)."""
+    from biped.sim.push import replay_torques
+
+    run = _run(Scenario(duration_s=0.3, neuromotor="young"))
+    again = replay_torques(run)
+    assert np.array_equal(run.qpos, again.qpos)

@@ -351,7 +351,8 @@ def run_closed_loop(
     events = driver.rows[driver.rows <= n_ctrl] if driver is not None else np.zeros(0, dtype=np.int64)
     ev = 0  # the next of the rows where the driver acts (before the row's physics steps)
     fused = None
-    neuro = neuro_loop(scenario, scene)  # None: W's ideal controller (no delay, lag or rate limit)
+    # None: W's ideal controller (no delay, lag or rate limit), or a replay of recorded torques
+    neuro = None if isinstance(policy, RecordedTorques) else neuro_loop(scenario, scene)
     records["neuro"] = neuro
     if compiled is not False and on_step is None and live:
         fused = fused_mod.fused_rows(scene, scenario, policy, m, d, monitor, records)
