@@ -254,11 +254,13 @@ class SweepSpec:
                 f"{', '.join(map(repr, TORQUE_LIMIT_KINDS))}; "
                 f"got {self.torque_limits!r}"
             )
-        if self.base.torque_limits != "none":
+        if self.base.torque_limits != "none" and self.torque_limits != "none":
+            # the scenario's own limits (its key, or a neuromotor preset's) apply when the sweep
+            # sets none; both at once would be two sets of limits
             raise ScenarioError(
-                "set the sweep's torque limits with torque_limits = 'none' | "
-                "'human' (SweepSpec / --torque-limits), not the scenario's "
-                f"torque_limits key (got {self.base.torque_limits!r})"
+                "give the sweep's torque limits once: the sweep's torque_limits (SweepSpec / "
+                "--torque-limits) or the scenario's torque_limits key (here "
+                f"{self.base.torque_limits!r}, e.g. from neuromotor = {self.base.neuromotor!r}), not both"
             )
 
     # ------------------------------------------------------------------ construction
