@@ -286,3 +286,17 @@ def test_push_command_runs_a_paradigm_and_names_its_strategy(tmp_path):
     assert summary["perturbation"]["paradigm"] == "force"
     assert summary["perturbation"]["impulse_applied_n_s"] == pytest.approx([-9.0, 0.0, 0.0])
     assert summary["response"]["strategy"] in ("ankle", "hip")
+
+
+@pytest.mark.parametrize(
+    ("perturbation", "axes", "words"),
+    [
+        ("force", {"speed_m_s": 3.0}, "sweep axis speed_m_s is the block's"),
+        ("block", {"magnitude": 3.0}, "sweep axis magnitude is for perturbation"),
+    ],
+)
+def test_sweep_refuses_the_other_paradigms_axes(perturbation, axes, words):
+    from biped.sim.sweep import SweepSpec
+
+    with pytest.raises(ScenarioError, match=words):
+        SweepSpec(axes=axes, base=Scenario(perturbation=perturbation))

@@ -209,6 +209,17 @@ class SweepSpec:
         given = dict(self.axes.items() if isinstance(self.axes, Mapping) else self.axes)
         for name, value in given.items():
             _axis_values(name, value)  # unknown names and bad values raise here
+        block_only = [n for n in ("speed_m_s", "block_mass_kg", "height_m") if n in given]
+        if self.base.perturbation != "block" and block_only:
+            raise ScenarioError(
+                f"sweep axis {block_only[0]} is the block's; perturbation = {self.base.perturbation!r} is "
+                "swept by magnitude (--magnitude, in its own unit) and direction_deg"
+            )
+        if self.base.perturbation == "block" and "magnitude" in given:
+            raise ScenarioError(
+                "sweep axis magnitude is for perturbation = 'force', 'platform' or 'release'; the block's "
+                "size is speed_m_s (--speed)"
+            )
         defaults = dict(W_THROW, block_mass_kg=self.base.block_mass_kg)
         if self.base.perturbation != "block":
             from biped.sim.perturbations import of
