@@ -300,3 +300,22 @@ def test_sweep_refuses_the_other_paradigms_axes(perturbation, axes, words):
 
     with pytest.raises(ScenarioError, match=words):
         SweepSpec(axes=axes, base=Scenario(perturbation=perturbation))
+
+
+def test_held_lean_loads_the_feet_as_the_tether_says():
+    """MuJoCo's contact forces in the held lean (measure_rows, which applies the run's tether force
+    again): the floor pushes the feet forward by exactly the tether's pull, carries the weight, and
+    the centre of pressure stays where upright stance had it (the tether holds the lean's moment)."""
+    from biped.sim.measure import measure_rows
+
+    r, scene = _run(perturbation="release", release_lean_deg=6.0, release_time_s=10.0, duration_s=0.2)
+    rows = measure_rows(scene, r)
+    k = len(r.times) - 1
+    T = r.extra["perturbation"]["tether_force_n"]
+    total = rows.grf[k].sum(axis=0)
+    assert total[0] == pytest.approx(-T, rel=0.02) and abs(total[1]) < 1.0
+    assert total[2] == pytest.approx(rows.biped_mass_kg * 9.81, rel=0.01)
+    up, _ = _run(perturbation="force", force_n=(0.0, 0.0, 0.0), duration_s=0.2)
+    up_rows = measure_rows(scene, up)
+    cop = (rows.cop[k] * rows.grf[k, :, 2:]).sum(axis=0) / rows.grf[k, :, 2].sum()
+    assert abs(cop[0] - up_rows.whole_body_com[0, 0]) < 0.005

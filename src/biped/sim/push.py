@@ -343,6 +343,7 @@ def run_closed_loop(
     driver = perturbations.of(scenario).driver(scene, m, d, policy)  # the paradigm's run (or None)
     events = driver.rows[driver.rows <= n_ctrl] if driver is not None else np.zeros(0, dtype=np.int64)
     ev = 0  # the next of the rows where the driver acts (before the row's physics steps)
+    inputs: list = []  # (row, ctrl, xfrc_applied) after each of its acts: PushResult.extra["inputs"]
     fused = None
     if compiled is not False and on_step is None and live:
         fused = fused_mod.fused_rows(scene, scenario, policy, m, d, monitor, records)
@@ -358,6 +359,7 @@ def run_closed_loop(
             while ev < len(events) and events[ev] <= k:  # the perturbation's inputs from this row on
                 if events[ev] == k:
                     driver.apply(k, t, d)  # type: ignore[union-attr]
+                    inputs.append((k, d.ctrl.copy(), d.xfrc_applied.copy()))
                 ev += 1
             if fused is not None:  # rows up to the next progress report (or perturbation row) in one call
                 stop = min(n, (k // chunk + 1) * chunk)
@@ -480,7 +482,7 @@ def run_closed_loop(
         block_velocity=block_vel[sl],
         feet_pos=feet_pos[sl],
         feet_quat=feet_quat[sl],
-        extra=_perturbation_extra(scenario, scene, driver, d),
+        extra=_perturbation_extra(scenario, scene, driver, d, inputs),
     )
     if hasattr(policy, "steps"):  # a stepping policy: its steps and its own recovered rule
         from biped.sim.stepping import stepping_outcome
@@ -489,9 +491,12 @@ def run_closed_loop(
     return result
 
 
-def _perturbation_extra(scenario: Scenario, scene: Scene, driver, d) -> dict:
+def _perturbation_extra(scenario: Scenario, scene: Scene, driver, d, inputs: list) -> dict:
     """``PushResult.extra`` of a run: ``{"perturbation": {...}}`` (its paradigm, size and what
-    its driver measured) for every paradigm but W's block, whose result stays as it was."""
+    its driver measured) and ``"inputs"`` (what the driver set: ``rows`` (m,), ``ctrl`` (m, nu),
+    ``xfrc`` (m, nbody, 6), each holding from its row on, which
+    :func:`biped.sim.measure.measure_rows` applies again) for every paradigm but W's block, whose
+    result stays as it was."""
     if scenario.perturbation == "block":
         return {}
     mass = float(scene.model.body_subtreemass[scene.model.body_rootid[scene.central_body]])
@@ -507,7 +512,14 @@ def _perturbation_extra(scenario: Scenario, scene: Scene, driver, d) -> dict:
     }
     if driver is not None:
         info.update(driver.finish(d))
-    return {"perturbation": info}
+    out: dict = {"perturbation": info}
+    if inputs:
+        out["inputs"] = {
+            "rows": np.array([k for k, _, _ in inputs], dtype=np.int64),
+            "ctrl": np.array([c for _, c, _ in inputs]),
+            "xfrc": np.array([x for _, _, x in inputs]),
+        }
+    return out
 
 
 def simulate(

@@ -213,6 +213,54 @@ def _sole_corners(m: mujoco.MjModel, scene) -> list:
     return out
 
 
+@dataclass(frozen=True, eq=False)
+class Traces:
+    """The response along the push direction ``u`` (2,), per row [m], from the feet's midpoint at
+    the onset: whole-body COM, net CoP, Hof's extrapolated COM xi, and the base of support's
+    front (along u) and back edges (NaN with no foot on the floor); ``omega0`` [1/s]."""
+
+    times: np.ndarray
+    u: np.ndarray
+    com: np.ndarray
+    cop: np.ndarray
+    xi: np.ndarray
+    bos_front: np.ndarray
+    bos_back: np.ndarray
+    onset_s: float
+    omega0: float
+
+
+def traces(scene, result, rows: RowMeasurements | None = None) -> Traces:
+    """:class:`Traces` of ``result`` (W's Fig. 5 style: COM, CoP and xi against the base of support)."""
+    rows = rows if rows is not None else measure_rows(scene, result)
+    n = len(result.times)
+    t0 = onset_s(result)
+    k0 = min(int(np.searchsorted(result.times, t0 - 1e-9)), max(n - 1, 0))
+    u = push_direction(result)
+    origin = result.feet_pos[k0, :, :2].mean(axis=0)
+    g = float(np.linalg.norm(rows.gravity))
+    w0 = math.sqrt(g / float(rows.whole_body_com[k0, 2]))
+    com = (rows.whole_body_com[:, :2] - origin) @ u
+    xi = (rows.whole_body_com[:, :2] + rows.whole_body_com_vel[:, :2] / w0 - origin) @ u
+    fz = rows.grf[:, :, 2]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cop = ((np.nan_to_num(rows.cop) * fz[:, :, None]).sum(axis=1) / fz.sum(axis=1)[:, None] - origin) @ u
+    front, back = np.full(n, np.nan), np.full(n, np.nan)
+    corners = _sole_corners(scene.model, scene)
+    on = (result.left_contact, result.right_contact)
+    for k in range(n):
+        pts = []
+        for i in range(2):
+            if on[i][k]:
+                R = np.zeros(9)
+                mujoco.mju_quat2Mat(R, result.feet_quat[k, i])
+                pts.append((result.feet_pos[k, i] + corners[i] @ R.reshape(3, 3).T)[:, :2])
+        if pts:
+            proj = (np.vstack(pts) - origin) @ u
+            front[k], back[k] = proj.max(), proj.min()
+    return Traces(result.times, u, com, cop, xi, front, back, t0, w0)
+
+
 def measure_response(scene, result, rows: RowMeasurements | None = None) -> Response:
     """The :class:`Response` of ``result`` (``rows``: its :func:`measure_rows`, computed if None)."""
     n = len(result.times)
@@ -331,6 +379,8 @@ def measure_response(scene, result, rows: RowMeasurements | None = None) -> Resp
 
 __all__ = [
     "Response",
+    "Traces",
+    "traces",
     "body_angles",
     "margin",
     "measure_response",
