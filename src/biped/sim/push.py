@@ -482,44 +482,13 @@ def run_closed_loop(
         block_velocity=block_vel[sl],
         feet_pos=feet_pos[sl],
         feet_quat=feet_quat[sl],
-        extra=_perturbation_extra(scenario, scene, driver, d, inputs),
+        extra=perturbations.run_extra(scenario, scene, driver, d, inputs),
     )
     if hasattr(policy, "steps"):  # a stepping policy: its steps and its own recovered rule
         from biped.sim.stepping import stepping_outcome
 
         result = stepping_outcome(result, policy, complete=complete)
     return result
-
-
-def _perturbation_extra(scenario: Scenario, scene: Scene, driver, d, inputs: list) -> dict:
-    """``PushResult.extra`` of a run: ``{"perturbation": {...}}`` (its paradigm, size and what
-    its driver measured) and ``"inputs"`` (what the driver set: ``rows`` (m,), ``ctrl`` (m, nu),
-    ``xfrc`` (m, nbody, 6), each holding from its row on, which
-    :func:`biped.sim.measure.measure_rows` applies again) for every paradigm but W's block, whose
-    result stays as it was."""
-    if scenario.perturbation == "block":
-        return {}
-    mass = float(scene.model.body_subtreemass[scene.model.body_rootid[scene.central_body]])
-    size = perturbations.of(scenario).size(mass)
-    info = {
-        "paradigm": size.paradigm,
-        "magnitude": size.magnitude,
-        "unit": size.unit,
-        "direction_deg": size.direction_deg,
-        "impulse_horizontal_n_s": size.impulse_horizontal_n_s,
-        "com_velocity_change_m_s": size.com_velocity_change_m_s,
-        **size.extra,
-    }
-    if driver is not None:
-        info.update(driver.finish(d))
-    out: dict = {"perturbation": info}
-    if inputs:
-        out["inputs"] = {
-            "rows": np.array([k for k, _, _ in inputs], dtype=np.int64),
-            "ctrl": np.array([c for _, c, _ in inputs]),
-            "xfrc": np.array([x for _, _, x in inputs]),
-        }
-    return out
 
 
 def simulate(
