@@ -319,3 +319,16 @@ def test_held_lean_loads_the_feet_as_the_tether_says():
     up_rows = measure_rows(scene, up)
     cop = (rows.cop[k] * rows.grf[k, :, 2:]).sum(axis=0) / rows.grf[k, :, 2].sum()
     assert abs(cop[0] - up_rows.whole_body_com[0, 0]) < 0.005
+
+
+def test_a_step_is_measured_as_the_stepping_controller_took_it():
+    """A 300 N push with capture-point stepping: the response reads a step whose touchdown (from
+    the contacts) is the stepping controller's own record of it, within one control period."""
+    from biped.sim.response import measure_response
+
+    r, scene = _run(perturbation="force", force_n=(-300.0, 0.0, 0.0), stepping=True, duration_s=1.0)
+    resp = measure_response(scene, r)
+    (step,) = r.extra["steps"]
+    assert resp.strategy == "step" and resp.step_needed
+    assert abs(resp.time_to_foot_contact_s - (step["touch_down_s"] - 0.1)) <= 0.0021
+    assert 0.1 < resp.step_length_m < 0.6

@@ -41,6 +41,8 @@ from biped.sim.perturbations import of as perturbation_of
 WINDOW_S = 1.0
 #: a step: the feet's relative placement changes by more than this [m]
 STEP_M = 0.02
+#: a swing: a foot off the floor (heel and toe) at least this long [s]
+SWING_S = 0.02
 #: at rest: whole-body COM speed below this [m/s]
 REST_M_S = 0.01
 
@@ -261,6 +263,35 @@ def traces(scene, result, rows: RowMeasurements | None = None) -> Traces:
     return Traces(result.times, u, com, cop, xi, front, back, t0, w0)
 
 
+def _first_swing(result, k0: int, on, t0: float) -> tuple[float, float]:
+    """(step length [m], time from the onset to its touchdown [s]) of the first swing after row
+    ``k0``: a foot off the floor (heel and toe) for at least :data:`SWING_S`, then down again;
+    the length is that foot's horizontal displacement over the swing. NaN, NaN if none lands."""
+    t = result.times
+    need = max(1, round(SWING_S * result.scenario.control_rate_hz))
+    best = None
+    for i in range(2):
+        air = ~np.asarray(on[i][k0:], dtype=bool)
+        k = 0
+        while k < len(air):
+            if not air[k]:
+                k += 1
+                continue
+            j = k
+            while j < len(air) and air[j]:
+                j += 1
+            if j - k >= need and j < len(air):  # a swing that lands at row k0 + j
+                if best is None or k0 + j < best[0]:
+                    best = (k0 + j, i, k0 + k)
+                break
+            k = j
+    if best is None:
+        return math.nan, math.nan
+    land, foot, lift = best
+    length = float(np.linalg.norm(result.feet_pos[land, foot, :2] - result.feet_pos[lift, foot, :2]))
+    return length, float(t[land] - t0)
+
+
 def measure_response(scene, result, rows: RowMeasurements | None = None) -> Response:
     """The :class:`Response` of ``result`` (``rows``: its :func:`measure_rows`, computed if None)."""
     n = len(result.times)
@@ -330,14 +361,8 @@ def measure_response(scene, result, rows: RowMeasurements | None = None) -> Resp
     moved = float(np.linalg.norm(rel[after] - rel[k0], axis=1).max())
     stepped = bool(airborne.any() and moved > STEP_M) or bool(result.extra.get("steps"))
     step_len, contact_t = math.nan, math.nan
-    if stepped:
-        disp = np.linalg.norm(result.feet_pos[after, :, :2] - result.feet_pos[k0, :, :2], axis=1)
-        step_len = float(disp[-1].max())
-        lifts = [e for e in result.events if e.kind == "lift_off" and e.time_s >= t0]
-        if lifts:
-            downs = [e for e in result.events if e.kind == "touch_down" and e.time_s > lifts[0].time_s]
-            if downs:
-                contact_t = float(downs[0].time_s - t0)
+    if stepped:  # the first swing: a foot off the floor (heel and toe) for >= SWING_S, then down
+        step_len, contact_t = _first_swing(result, k0, on, t0)
     leg, trunk = body_angles(scene, result.qpos[win], u)
     label, corr, pt, pl = strategy_from_angles(leg, trunk)
     tlabel, ratio = strategy_by_torque(result.torques[win], names)
