@@ -286,3 +286,49 @@ def test_push_command_runs_a_paradigm_and_names_its_strategy(tmp_path):
     assert summary["perturbation"]["paradigm"] == "force"
     assert summary["perturbation"]["impulse_applied_n_s"] == pytest.approx([-9.0, 0.0, 0.0])
     assert summary["response"]["strategy"] in ("ankle", "hip")
+
+
+@pytest.mark.parametrize(
+    ("perturbation", "axes", "words"),
+    [
+        ("force", {"speed_m_s": 3.0}, "sweep axis speed_m_s is the block's"),
+        ("block", {"magnitude": 3.0}, "sweep axis magnitude is for perturbation"),
+    ],
+)
+def test_sweep_refuses_the_other_paradigms_axes(perturbation, axes, words):
+    from biped.sim.sweep import SweepSpec
+
+    with pytest.raises(ScenarioError, match=words):
+        SweepSpec(axes=axes, base=Scenario(perturbation=perturbation))
+
+
+def test_held_lean_loads_the_feet_as_the_tether_says():
+    """MuJoCo's contact forces in the held lean (measure_rows, which applies the run's tether force
+    again): the floor pushes the feet forward by exactly the tether's pull, carries the weight, and
+    the centre of pressure stays where upright stance had it (the tether holds the lean's moment)."""
+    from biped.sim.measure import measure_rows
+
+    r, scene = _run(perturbation="release", release_lean_deg=6.0, release_time_s=10.0, duration_s=0.2)
+    rows = measure_rows(scene, r)
+    k = len(r.times) - 1
+    T = r.extra["perturbation"]["tether_force_n"]
+    total = rows.grf[k].sum(axis=0)
+    assert total[0] == pytest.approx(-T, rel=0.02) and abs(total[1]) < 1.0
+    assert total[2] == pytest.approx(rows.biped_mass_kg * 9.81, rel=0.01)
+    up, _ = _run(perturbation="force", force_n=(0.0, 0.0, 0.0), duration_s=0.2)
+    up_rows = measure_rows(scene, up)
+    cop = (rows.cop[k] * rows.grf[k, :, 2:]).sum(axis=0) / rows.grf[k, :, 2].sum()
+    assert abs(cop[0] - up_rows.whole_body_com[0, 0]) < 0.005
+
+
+def test_a_step_is_measured_as_the_stepping_controller_took_it():
+    """A 300 N push with capture-point stepping: the response reads a step whose touchdown (from
+    the contacts) is the stepping controller's own record of it, within one control period."""
+    from biped.sim.response import measure_response
+
+    r, scene = _run(perturbation="force", force_n=(-300.0, 0.0, 0.0), stepping=True, duration_s=1.0)
+    resp = measure_response(scene, r)
+    (step,) = r.extra["steps"]
+    assert resp.strategy == "step" and resp.step_needed
+    assert abs(resp.time_to_foot_contact_s - (step["touch_down_s"] - 0.1)) <= 0.0021
+    assert 0.1 < resp.step_length_m < 0.6

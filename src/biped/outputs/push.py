@@ -281,6 +281,12 @@ def response_entries(scene: Scene, result: PushResult, rows: RowMeasurements) ->
     return {"perturbation": info, "response": measure_response(scene, result, rows).to_dict()}
 
 
+def response_title(result: PushResult) -> str:
+    """The response figure's title: the paradigm and its size."""
+    size = perturbations.of(result.scenario).size(1.0)
+    return f"{size.paradigm}: {size.magnitude:.4g} {size.unit} toward {size.direction_deg:.0f} deg"
+
+
 def write_summary(
     result: PushResult, path: str | Path, extra: dict | None = None, *, rows: RowMeasurements | None = None
 ) -> Path:
@@ -411,6 +417,12 @@ def write_outputs(
         stage("figures")
         try:
             written["figures"] = plot_push(result, out / "figures")
+            if result.scenario.perturbation != "block":  # the response against the base of support
+                from biped.sim.response import traces
+                from biped.viz.response_figure import plot_response
+
+                size = response_title(result)
+                written["figures"] += plot_response(traces(scene, result, rows), out / "figures", title=size)
         except Exception as exc:  # noqa: BLE001 - an optional output must not lose the run
             log(f"figures: not written ({type(exc).__name__}: {exc})")
     if video:

@@ -350,6 +350,7 @@ def run_closed_loop(
     driver = perturbations.of(scenario).driver(scene, m, d, policy)  # the paradigm's run (or None)
     events = driver.rows[driver.rows <= n_ctrl] if driver is not None else np.zeros(0, dtype=np.int64)
     ev = 0  # the next of the rows where the driver acts (before the row's physics steps)
+    inputs: list = []  # (row, ctrl, xfrc_applied) after each of its acts: PushResult.extra["inputs"]
     fused = None
     # None: W's ideal controller (no delay, lag or rate limit), or a replay of recorded torques
     neuro = None if isinstance(policy, RecordedTorques) else neuro_loop(scenario, scene)
@@ -368,6 +369,7 @@ def run_closed_loop(
             while ev < len(events) and events[ev] <= k:  # the perturbation's inputs from this row on
                 if events[ev] == k:
                     driver.apply(k, t, d)  # type: ignore[union-attr]
+                    inputs.append((k, d.ctrl.copy(), d.xfrc_applied.copy()))
                 ev += 1
             if fused is not None:  # rows up to the next progress report (or perturbation row) in one call
                 stop = min(n, (k // chunk + 1) * chunk)
@@ -494,34 +496,13 @@ def run_closed_loop(
         block_velocity=block_vel[sl],
         feet_pos=feet_pos[sl],
         feet_quat=feet_quat[sl],
-        extra=_perturbation_extra(scenario, scene, driver, d),
+        extra=perturbations.run_extra(scenario, scene, driver, d, inputs),
     )
     if hasattr(policy, "steps"):  # a stepping policy: its steps and its own recovered rule
         from biped.sim.stepping import stepping_outcome
 
         result = stepping_outcome(result, policy, complete=complete)
     return result
-
-
-def _perturbation_extra(scenario: Scenario, scene: Scene, driver, d) -> dict:
-    """``PushResult.extra`` of a run: ``{"perturbation": {...}}`` (its paradigm, size and what
-    its driver measured) for every paradigm but W's block, whose result stays as it was."""
-    if scenario.perturbation == "block":
-        return {}
-    mass = float(scene.model.body_subtreemass[scene.model.body_rootid[scene.central_body]])
-    size = perturbations.of(scenario).size(mass)
-    info = {
-        "paradigm": size.paradigm,
-        "magnitude": size.magnitude,
-        "unit": size.unit,
-        "direction_deg": size.direction_deg,
-        "impulse_horizontal_n_s": size.impulse_horizontal_n_s,
-        "com_velocity_change_m_s": size.com_velocity_change_m_s,
-        **size.extra,
-    }
-    if driver is not None:
-        info.update(driver.finish(d))
-    return {"perturbation": info}
 
 
 def simulate(

@@ -41,6 +41,8 @@ from biped.sim.perturbations import of as perturbation_of
 WINDOW_S = 1.0
 #: a step: the feet's relative placement changes by more than this [m]
 STEP_M = 0.02
+#: a swing: a foot off the floor (heel and toe) at least this long [s]
+SWING_S = 0.02
 #: at rest: whole-body COM speed below this [m/s]
 REST_M_S = 0.01
 
@@ -213,6 +215,83 @@ def _sole_corners(m: mujoco.MjModel, scene) -> list:
     return out
 
 
+@dataclass(frozen=True, eq=False)
+class Traces:
+    """The response along the push direction ``u`` (2,), per row [m], from the feet's midpoint at
+    the onset: whole-body COM, net CoP, Hof's extrapolated COM xi, and the base of support's
+    front (along u) and back edges (NaN with no foot on the floor); ``omega0`` [1/s]."""
+
+    times: np.ndarray
+    u: np.ndarray
+    com: np.ndarray
+    cop: np.ndarray
+    xi: np.ndarray
+    bos_front: np.ndarray
+    bos_back: np.ndarray
+    onset_s: float
+    omega0: float
+
+
+def traces(scene, result, rows: RowMeasurements | None = None) -> Traces:
+    """:class:`Traces` of ``result`` (W's Fig. 5 style: COM, CoP and xi against the base of support)."""
+    rows = rows if rows is not None else measure_rows(scene, result)
+    n = len(result.times)
+    t0 = onset_s(result)
+    k0 = min(int(np.searchsorted(result.times, t0 - 1e-9)), max(n - 1, 0))
+    u = push_direction(result)
+    origin = result.feet_pos[k0, :, :2].mean(axis=0)
+    g = float(np.linalg.norm(rows.gravity))
+    w0 = math.sqrt(g / float(rows.whole_body_com[k0, 2]))
+    com = (rows.whole_body_com[:, :2] - origin) @ u
+    xi = (rows.whole_body_com[:, :2] + rows.whole_body_com_vel[:, :2] / w0 - origin) @ u
+    fz = rows.grf[:, :, 2]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        cop = ((np.nan_to_num(rows.cop) * fz[:, :, None]).sum(axis=1) / fz.sum(axis=1)[:, None] - origin) @ u
+    front, back = np.full(n, np.nan), np.full(n, np.nan)
+    corners = _sole_corners(scene.model, scene)
+    on = (result.left_contact, result.right_contact)
+    for k in range(n):
+        pts = []
+        for i in range(2):
+            if on[i][k]:
+                R = np.zeros(9)
+                mujoco.mju_quat2Mat(R, result.feet_quat[k, i])
+                pts.append((result.feet_pos[k, i] + corners[i] @ R.reshape(3, 3).T)[:, :2])
+        if pts:
+            proj = (np.vstack(pts) - origin) @ u
+            front[k], back[k] = proj.max(), proj.min()
+    return Traces(result.times, u, com, cop, xi, front, back, t0, w0)
+
+
+def _first_swing(result, k0: int, on, t0: float) -> tuple[float, float]:
+    """(step length [m], time from the onset to its touchdown [s]) of the first swing after row
+    ``k0``: a foot off the floor (heel and toe) for at least :data:`SWING_S`, then down again;
+    the length is that foot's horizontal displacement over the swing. NaN, NaN if none lands."""
+    t = result.times
+    need = max(1, round(SWING_S * result.scenario.control_rate_hz))
+    best = None
+    for i in range(2):
+        air = ~np.asarray(on[i][k0:], dtype=bool)
+        k = 0
+        while k < len(air):
+            if not air[k]:
+                k += 1
+                continue
+            j = k
+            while j < len(air) and air[j]:
+                j += 1
+            if j - k >= need and j < len(air):  # a swing that lands at row k0 + j
+                if best is None or k0 + j < best[0]:
+                    best = (k0 + j, i, k0 + k)
+                break
+            k = j
+    if best is None:
+        return math.nan, math.nan
+    land, foot, lift = best
+    length = float(np.linalg.norm(result.feet_pos[land, foot, :2] - result.feet_pos[lift, foot, :2]))
+    return length, float(t[land] - t0)
+
+
 def measure_response(scene, result, rows: RowMeasurements | None = None) -> Response:
     """The :class:`Response` of ``result`` (``rows``: its :func:`measure_rows`, computed if None)."""
     n = len(result.times)
@@ -282,14 +361,8 @@ def measure_response(scene, result, rows: RowMeasurements | None = None) -> Resp
     moved = float(np.linalg.norm(rel[after] - rel[k0], axis=1).max())
     stepped = bool(airborne.any() and moved > STEP_M) or bool(result.extra.get("steps"))
     step_len, contact_t = math.nan, math.nan
-    if stepped:
-        disp = np.linalg.norm(result.feet_pos[after, :, :2] - result.feet_pos[k0, :, :2], axis=1)
-        step_len = float(disp[-1].max())
-        lifts = [e for e in result.events if e.kind == "lift_off" and e.time_s >= t0]
-        if lifts:
-            downs = [e for e in result.events if e.kind == "touch_down" and e.time_s > lifts[0].time_s]
-            if downs:
-                contact_t = float(downs[0].time_s - t0)
+    if stepped:  # the first swing: a foot off the floor (heel and toe) for >= SWING_S, then down
+        step_len, contact_t = _first_swing(result, k0, on, t0)
     leg, trunk = body_angles(scene, result.qpos[win], u)
     label, corr, pt, pl = strategy_from_angles(leg, trunk)
     tlabel, ratio = strategy_by_torque(result.torques[win], names)
@@ -331,6 +404,8 @@ def measure_response(scene, result, rows: RowMeasurements | None = None) -> Resp
 
 __all__ = [
     "Response",
+    "Traces",
+    "traces",
     "body_angles",
     "margin",
     "measure_response",

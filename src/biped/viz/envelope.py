@@ -235,7 +235,8 @@ def plot_comparison(
         frameon=False,
         bbox_to_anchor=(0.5, 0.06),
     )
-    note = textwrap.fill(FACING_NOTE, width=int(95 * min(panels, 2) / 2 + 10 * (panels > 1)))
+    note = FACING_NOTE if by == "speed_m_s" or by.startswith("impulse") else PARADIGM_NOTE
+    note = textwrap.fill(note, width=int(95 * min(panels, 2) / 2 + 10 * (panels > 1)))
     fig.text(0.5, 0.01, note, ha="center", va="bottom", fontsize=8)
     fig.tight_layout(rect=(0, 0.17, 1, 0.93))
     if out is not None:
@@ -245,4 +246,10 @@ def plot_comparison(
     return fig
 
 
-__all__ = ["FACING_NOTE", "plot_comparison", "plot_envelope"]
+#: the angle's note for a paradigm's envelope (docs/perturbations.md)
+PARADIGM_NOTE = (
+    "angle: the way the perturbation pushes the body (0 deg = +x). The biped faces -x (180 deg), "
+    "left side toward -y: 180 deg pushes it forward."
+)
+
+__all__ = ["FACING_NOTE", "PARADIGM_NOTE", "plot_comparison", "plot_envelope"]

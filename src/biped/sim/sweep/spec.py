@@ -209,6 +209,27 @@ class SweepSpec:
         given = dict(self.axes.items() if isinstance(self.axes, Mapping) else self.axes)
         for name, value in given.items():
             _axis_values(name, value)  # unknown names and bad values raise here
+        # the other paradigm's axes, unless at their defaults (a spec's own axes read back)
+        unused = {**W_THROW, "block_mass_kg": self.base.block_mass_kg}
+        block_only = [
+            n
+            for n in ("speed_m_s", "block_mass_kg", "height_m")
+            if n in given and _axis_values(n, given[n]) != (float(unused[n]),)
+        ]
+        if self.base.perturbation != "block" and block_only:
+            raise ScenarioError(
+                f"sweep axis {block_only[0]} is the block's; perturbation = {self.base.perturbation!r} is "
+                "swept by magnitude (--magnitude, in its own unit) and direction_deg"
+            )
+        if (
+            self.base.perturbation == "block"
+            and "magnitude" in given
+            and _axis_values("magnitude", given["magnitude"]) != (0.0,)
+        ):
+            raise ScenarioError(
+                "sweep axis magnitude is for perturbation = 'force', 'platform' or 'release'; the block's "
+                "size is speed_m_s (--speed)"
+            )
         defaults = dict(W_THROW, block_mass_kg=self.base.block_mass_kg)
         if self.base.perturbation != "block":
             from biped.sim.perturbations import of
