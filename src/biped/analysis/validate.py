@@ -13,6 +13,7 @@ project's notes; nothing here reads them at run time from anywhere else. docs/va
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from collections.abc import Callable
@@ -65,6 +66,16 @@ HUMAN = {
         "peak ankle torque in that recovery", "N m", 116.0, 32.0, ROBINOVITCH
     ),
     "ankle_release.onset_ms": HumanValue("ankle torque onset after release", "ms", 99.0, 13.0, ROBINOVITCH),
+    "waist_pull.percent_bos": HumanValue(
+        "forward pelvis displacement of the largest fast pull survived without a step, % of the "
+        "ankle-to-toe length",
+        "% BoS",
+        72.0,
+        14.4,
+        "Mille et al. 2003, J Neurophysiol 90:666-674: young adults never stepped below 72 % BoS (fast "
+        "pulls, TH), always above 107 % (slow, TL); BoS taken as ankle to toe",
+        sd_assumed=True,
+    ),
     "step_release.lean_deg": HumanValue(
         "largest forward lean recovered with one step, young women",
         "deg",
@@ -155,6 +166,7 @@ EXPERIMENTS = {
         "N",
         5.0,
         2000.0,
+        ("waist_pull.threshold", "waist_pull.percent_bos"),
     ),
 }
 
@@ -173,6 +185,7 @@ class Trial:
     onset_ms: float
     hip_knee_motion_deg: float
     wall_time_s: float
+    percent_bos: float = math.nan  # peak forward central-body displacement, % ankle-to-toe length
 
     def row(self) -> dict:
         return dict(self.__dict__)
@@ -219,8 +232,32 @@ def run_trial(exp: Experiment, neuromotor: str, magnitude: float) -> Trial:
         raise KeyboardInterrupt
     survived = not r.fell and r.diverged is None and r.controller_error is None and not r.interrupted
     peak, onset, motion = _ankle_measures(r, s)
+    forward = float(np.max(r.com[0, 0] - r.com[:, 0]))  # the biped faces -x
+    bos = 100.0 * forward / ankle_to_toe_m(s.model)
     return Trial(exp.key, neuromotor, float(magnitude), exp.unit, bool(survived), r.fall_time_s, peak, onset,
-                 motion, wall)  # fmt: skip
+                 motion, wall, bos)  # fmt: skip
+
+
+@functools.lru_cache(maxsize=4)
+def ankle_to_toe_m(model: str) -> float:
+    """Forward distance [m] from the ankle joints to the front of the toe boxes at the model's
+    keyframe (W's biped: 0.199 m of a 0.249 m foot), the base of support ahead of the ankles."""
+    import mujoco
+
+    from biped.models.subject import resolve
+
+    m = mujoco.MjModel.from_xml_path(str(resolve(model)))
+    d = mujoco.MjData(m)
+    mujoco.mj_resetDataKeyframe(m, d, 0)
+    mujoco.mj_forward(m, d)
+    out = []
+    for side in ("left", "right"):
+        g = m.geom(f"{side}_toe").id
+        R = d.geom_xmat[g].reshape(3, 3)
+        corners = [d.geom_xpos[g] + R @ (m.geom_size[g] * (2 * np.array(c) - 1)) for c in np.ndindex(2, 2, 2)]
+        front = min(float(c[0]) for c in corners)
+        out.append(float(d.xpos[m.body(f"{side}_ankle_1").id][0]) - front)
+    return float(np.mean(out))
 
 
 def run_experiment(exp: Experiment, neuromotor: str, iterations: int) -> Threshold:

@@ -42,6 +42,8 @@ def table_rows(results: dict[str, dict[str, Threshold]]) -> list[dict]:
                     value, bound = math.nan, ""
                 elif field == "peak_ankle_torque_n_m":
                     value, bound = th.at.peak_ankle_torque_n_m, ""
+                elif field == "percent_bos":
+                    value, bound = th.at.percent_bos, ""
                 else:
                     value, bound = th.at.onset_ms, ""
                 row[preset] = {"value": value, "bound": bound,
