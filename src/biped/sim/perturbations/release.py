@@ -158,7 +158,7 @@ class ReleaseDriver(Driver):
         self.hold = hold
         self.body = hold["body"]
         self.released_at: float | None = None
-        self.final_target = (hold["upright_com"], hold["upright_quat"]) if 0 < self.k_release <= n else None
+        self.final_target = (hold["upright_com"], hold["upright_quat"]) if self.k_release <= n else None
 
     def _set_target(self, com, quat, acc=None) -> None:
         set_target(self.controller, com, quat)
