@@ -244,3 +244,18 @@ def test_a_replay_of_a_young_run_reproduces_it():
     run = _run(Scenario(duration_s=0.3, neuromotor="young"))
     again = replay_torques(run)
     assert np.array_equal(run.qpos, again.qpos)
+
+
+def test_a_sweep_file_of_before_the_nervous_system_is_the_same_experiment():
+    """A block sweep written without the neuromotor keys (main's) is extended, not refused, while
+    the keys sit at W's ideal values; a young sweep is another experiment."""
+    from biped.sim.sweep import SweepSpec
+    from biped.sim.sweep.store import spec_difference
+
+    spec = SweepSpec(axes={"speed_m_s": (2.0,), "direction_deg": (0.0,)})
+    old = spec.to_dict()
+    for k in ("neuromotor", "feedback_delay_s", "torque_rate_limit_n_m_s", "activation_time_s", "ankle_only"):
+        old["scenario"].pop(k)
+    assert spec_difference(old, spec.model_sha256, spec) is None
+    young = SweepSpec(axes={"speed_m_s": (2.0,), "direction_deg": (0.0,)}, base=Scenario(neuromotor="young"))
+    assert "neuromotor" in (spec_difference(old, spec.model_sha256, young) or "")

@@ -185,12 +185,14 @@ def _fmt_values(values: list[float]) -> str:
 
 
 def _defaults_of_new_keys() -> dict:
-    """The perturbation paradigms' scenario keys (added after sweeps existed) at their defaults."""
+    """The perturbation paradigms' and the nervous system's scenario keys (added after sweeps
+    existed) at their defaults."""
     from biped.sim.perturbations import PARADIGMS
     from biped.sim.scenario import Scenario
 
     d = Scenario().to_dict()
     keys = {"perturbation", *(k for cls in PARADIGMS.values() if cls.name != "block" for k in cls.keys)}
+    keys |= {"neuromotor", "feedback_delay_s", "torque_rate_limit_n_m_s", "activation_time_s", "ankle_only"}
     return {k: d[k] for k in keys}
 
 
