@@ -17,7 +17,12 @@ factors and the ratios closed loop / physics-only. Goals: closed loop <= 1.25x t
 W's 3 s run took 2066 s on a 100 MHz SGI R4000 (0.0015x real time).
 
     python benchmarks/push.py [--repeat 7] [--physics faithful|fast] [--distribution statics|printed|qp]
-                              [--set KEY=VALUE ...]
+                              [--set KEY=VALUE ...] [--paradigms]
+
+``--paradigms``: instead, the compiled closed loop of each perturbation paradigm
+(docs/perturbations.md; block = W's run, force 60 N x 0.15 s, platform 5 cm in 0.3 s, release
+4 deg) on the same preset, interleaved, medians, and each one's cost over the block's
+(goal <= 1.2x).
 """
 
 from __future__ import annotations
@@ -85,7 +90,11 @@ def main() -> None:
         help="W's controller's wrench distribution (qp: its solve runs in Python inside the compiled loop)",
     )
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    ap.add_argument("--paradigms", action="store_true", help="time every perturbation paradigm instead")
     args = ap.parse_args()
+    if args.paradigms:
+        paradigms(args)
+        return
     scenario = Scenario(physics=args.physics, distribution=args.distribution)
     scenario = scenario.with_overrides(**dict(parse_assignment(a) for a in args.set))
     scene = build_scene(scenario)
@@ -186,6 +195,53 @@ def main() -> None:
         f"{medc['closed'] / medc['python']:.3f}"
     )
     print(f"W (1997): 3 s in 2066 s = {3 / 2066:.4f}x real time")
+
+
+#: the paradigms' runs of --paradigms (small moves, recovered: every run simulates its 3 s)
+PARADIGM_RUNS = {
+    "block": {},
+    "force": {"perturbation": "force"},
+    "platform": {"perturbation": "platform", "platform_displacement_m": (0.05, 0.0)},
+    "release": {"perturbation": "release", "release_lean_deg": 4.0},
+}
+
+
+def paradigms(args) -> None:
+    """Wall and thread-CPU medians of the compiled closed loop of each paradigm, and each one's
+    ratio to the block's (W's run) on the same preset."""
+    base = Scenario(physics=args.physics, distribution=args.distribution)
+    base = base.with_overrides(**dict(parse_assignment(a) for a in args.set))
+    setups = {}
+    for name, keys in PARADIGM_RUNS.items():
+        sc = base.with_overrides(**keys)
+        scene = build_scene(sc)
+        run_closed_loop(sc.with_overrides(duration_s=0.1), scene, controller_policy(sc, scene))  # warm
+        setups[name] = (sc, scene)
+    wall: dict = {k: [] for k in setups}
+    cpu: dict = {k: [] for k in setups}
+    results = {}
+    for _ in range(args.repeat):
+        for name, (sc, scene) in setups.items():
+            policy = controller_policy(sc, scene)  # built outside the timer
+            results[name], w, c = _timed(lambda: run_closed_loop(sc, scene, policy))  # noqa: B023
+            wall[name].append(w)
+            cpu[name].append(c)
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    print(
+        f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; load average "
+        f"{load:.1f} at the end (shared machine); physics {base.physics!r}, distribution "
+        f"{base.distribution!r}, {base.duration_s:g} s runs, median of {args.repeat}"
+    )
+    print("  paradigm    wall [ms]  CPU [ms]  CPU / block's  simulated [s]  recovered")
+    ref = statistics.median(cpu["block"])
+    for name in setups:
+        r = results[name]
+        mc = statistics.median(cpu[name])
+        print(
+            f"  {name:10s} {statistics.median(wall[name]) * 1e3:9.1f} {mc * 1e3:9.1f} {mc / ref:12.3f}"
+            f"   {r.times[-1]:12.3f}  {r.recovered}"
+        )
+    print("goal: every paradigm <= 1.2x the block's run (issue #20)")
 
 
 if __name__ == "__main__":

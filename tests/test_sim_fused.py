@@ -54,8 +54,8 @@ def test_cache_key_covers_the_controller_sources():
 
     stamp = fused._run_rows._cache._cache_file._source_stamp
     own, extra = stamp
-    # recursions, statics, buffers, spatial, distribution, fused_qp, cones, daqp_c, contact
-    assert len(extra) == 9
+    # recursions, statics, buffers, spatial, distribution, fused_qp, cones, daqp_c, contact, neuromotor
+    assert len(extra) == 10
     assert extra[0][1] == __import__("os").stat(biped.control.recursions.__file__).st_size
 
 

@@ -65,8 +65,17 @@ def envelope(
     """The recovery envelope of a sweep (see :class:`Envelope`); ``by`` is ``"speed_m_s"`` or
     ``"impulse_n_s"`` (rows without a measured impulse are left out). ``bin_deg`` groups the
     directions of a random sample into bins of that width (a grid needs none)."""
-    if by not in ("speed_m_s", "impulse_n_s", "impulse_horizontal_n_s"):
-        raise ScenarioError(f"by must be 'speed_m_s', 'impulse_n_s' or 'impulse_horizontal_n_s'; got {by!r}")
+    if by not in (
+        "speed_m_s",
+        "impulse_n_s",
+        "impulse_horizontal_n_s",
+        "magnitude",
+        "horizontal_impulse_n_s",
+    ):
+        raise ScenarioError(
+            "by must be 'speed_m_s', 'impulse_n_s', 'impulse_horizontal_n_s', 'magnitude' or "
+            f"'horizontal_impulse_n_s'; got {by!r}"
+        )
     cols = _columns(table_or_data)
     ok = survived(cols, criterion)
     direction = np.mod(np.array(cols["direction_deg"], dtype=float), 360.0)

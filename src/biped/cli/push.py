@@ -70,6 +70,12 @@ def register(subparsers) -> None:
         help="take capture-point steps when the feet cannot hold the push (not in W; "
         "docs/controller.md, 'Stepping')",
     )
+    p.add_argument(
+        "--perturbation",
+        choices=("block", "force", "platform", "release"),
+        help="the experiment: W's thrown block (default), a force pulse, a platform translation or a "
+        "lean-and-release; its keys with --set (docs/perturbations.md)",
+    )
     p.add_argument("--timestep", type=float, metavar="S", help="physics step [s], <= 0.001")
     p.add_argument("--seed", type=int, help="seed of the initial-state noise (joint_noise_deg)")
     p.add_argument(
@@ -107,6 +113,7 @@ def build_scenario(args):
         "distribution": args.distribution,
         "seed": args.seed,
         "stepping": getattr(args, "stepping", None),
+        "perturbation": getattr(args, "perturbation", None),
     }
     values.update({k: v for k, v in named.items() if v is not None})
     model = getattr(args, "model", None) or values.pop("model", None)
@@ -234,6 +241,14 @@ def _table(result, out: Path, paths: dict, times: dict | None = None) -> str:
             else f"lands {st['touch_down_s']:.3f} s at ({pos[0]:.3f}, {pos[1]:.3f}) m"
         )
         rows.append((f"step {k}", f"{st['foot']} foot, lifts {f(st.get('lift_off_s'), '.3f')} s, {where}"))
+    resp = _response(out)
+    if resp is not None:
+        pert, r = resp
+        if pert.get("paradigm") != "block":
+            rows.insert(0, ("perturbation", f"{pert['paradigm']}, {pert['magnitude']:.4g} {pert['unit']} toward "
+                                            f"{pert['direction_deg']:.0f} deg"))  # fmt: skip
+        rows.insert(1, ("strategy", f"{r['strategy']} (torque reading: {r['strategy_torque']}); "
+                                    f"margin of stability min {f(r['mos_min_m'], '.3f')} m"))  # fmt: skip
     rows.append(("outputs", str(out)))
     if times:
         rows.append(
@@ -248,6 +263,17 @@ def _table(result, out: Path, paths: dict, times: dict | None = None) -> str:
         )
     w = max(len(k) for k, _ in rows)
     return "\n".join(f"  {k:<{w}}  {v}" for k, v in rows)
+
+
+def _response(out: Path):
+    """(perturbation, response) entries of the run's summary.json, or None."""
+    import json
+
+    try:
+        data = json.loads((out / "summary.json").read_text())
+        return data["perturbation"], data["response"]
+    except (OSError, ValueError, KeyError):
+        return None
 
 
 def _writer_progress(quiet: bool):

@@ -19,6 +19,7 @@ _AXIS_OPTIONS = (
     ("mass", "block_mass_kg", "block mass [kg]"),
     ("height", "height_m", "aim height [m]"),
     ("gain_scale", "gain_scale", "gain factor (kp * s, kv * sqrt(s))"),
+    ("magnitude", "magnitude", "the perturbation's size: force N (peak), platform m, release deg"),
 )
 
 
@@ -39,6 +40,13 @@ def register(subparsers) -> None:
     )
     for opt, _, what in _AXIS_OPTIONS:
         p.add_argument(f"--{opt.replace('_', '-')}", metavar="VALUES", dest=opt, help=what)
+    p.add_argument(
+        "--perturbation",
+        choices=("block", "force", "platform", "release"),
+        help="the experiment swept: W's thrown block (default; --speed), a force pulse, a platform "
+        "translation or a lean-and-release (--magnitude in its unit; --direction: the way it pushes the "
+        "body, from +x toward +y); docs/perturbations.md",
+    )
     p.add_argument(
         "--samples",
         type=int,
@@ -129,7 +137,11 @@ def register(subparsers) -> None:
         help="with --plot: draw these finished sweeps side by side (repeatable)",
     )
     p.add_argument(
-        "--by", choices=("speed_m_s", "impulse_n_s"), default="speed_m_s", help="radius of the polar plot"
+        "--by",
+        choices=("speed_m_s", "impulse_n_s", "magnitude", "horizontal_impulse_n_s"),
+        default=None,
+        help="radius of the polar plot (default: speed_m_s for the block, else magnitude, the "
+        "paradigm's own unit)",
     )
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.add_argument(
@@ -175,6 +187,8 @@ def build_spec(args):
         overrides["distribution"] = args.distribution
     if getattr(args, "stepping", None):
         overrides["stepping"] = True
+    if getattr(args, "perturbation", None):
+        overrides["perturbation"] = args.perturbation
     if args.duration is not None:
         overrides["duration_s"] = args.duration
     if args.physics:
@@ -189,7 +203,9 @@ def build_spec(args):
         if text is not None:
             axes[name] = parse_axis(name, text)
     if not spec and not any(getattr(args, opt) for opt, _, _ in _AXIS_OPTIONS):
-        axes.update(speed_m_s=(2.0, 4.0, 6.0), direction_deg=tuple(range(0, 360, 45)))
+        axes.update(direction_deg=tuple(range(0, 360, 45)))
+        if base.perturbation == "block":
+            axes.update(speed_m_s=(2.0, 4.0, 6.0))
     if model and not args.height and "height_m" not in _grid_file(args.grid)[1]:
         axes["height_m"] = (base.block_position_m[2],)  # W's aim height moved onto the model
     samples = args.samples if args.samples is not None else (spec.samples if spec else None)
@@ -212,7 +228,8 @@ def _variant_suffix(base) -> str:
     dist = (
         f"-{base.distribution}" if base.controller == "workspace" and base.distribution != "statics" else ""
     )
-    return dist + ("-stepping" if base.stepping else "")
+    pert = f"-{base.perturbation}" if base.perturbation != "block" else ""
+    return pert + dist + ("-stepping" if base.stepping else "")
 
 
 def _grid_file(grid) -> tuple[dict, dict]:
@@ -359,6 +376,7 @@ def _sweep(args, spec, out: Path, n: int, where: str, client) -> int:
     if args.plot:
         from biped.viz.envelope import plot_comparison
 
-        plot_comparison([out, *args.compare], by=args.by, out=args.plot)
+        by = args.by or ("speed_m_s" if spec.base.perturbation == "block" else "magnitude")
+        plot_comparison([out, *args.compare], by=by, out=args.plot)
         print(f"envelope plot: {args.plot}")
     return 0

@@ -20,9 +20,11 @@ import numpy as np
 
 from biped import files
 from biped.outputs._json import write_json
+from biped.sim import perturbations
 from biped.sim.contact import SOLE_GEOMS
 from biped.sim.measure import FEET, RowMeasurements, block_separation, foot_drift, measure_rows
 from biped.sim.push import PushResult, orientation_error_deg
+from biped.sim.response import measure_response
 from biped.sim.scene import Scene, build_scene, tilt_quat
 from biped.viz.footprints import with_footprints
 from biped.viz.push_figures import plot_push
@@ -260,6 +262,30 @@ def summary_dict(result: PushResult, rows: RowMeasurements | None = None) -> dic
     }
 
 
+def response_entries(scene: Scene, result: PushResult, rows: RowMeasurements) -> dict:
+    """``summary.json``'s ``perturbation`` (the paradigm, its size and what it measured of itself)
+    and ``response`` (:func:`biped.sim.response.measure_response`: strategy, excursions, margin of
+    stability, peak torques, time to rest, steps) entries; docs/perturbations.md."""
+    size = perturbations.of(result.scenario).size(rows.biped_mass_kg)
+    info = {
+        "paradigm": size.paradigm,
+        "magnitude": size.magnitude,
+        "unit": size.unit,
+        "direction_deg": size.direction_deg,
+        "impulse_horizontal_n_s": size.impulse_horizontal_n_s,
+        "com_velocity_change_m_s": size.com_velocity_change_m_s,
+        **size.extra,
+    }
+    info.update(result.extra.get("perturbation", {}))
+    return {"perturbation": info, "response": measure_response(scene, result, rows).to_dict()}
+
+
+def response_title(result: PushResult) -> str:
+    """The response figure's title: the paradigm and its size."""
+    size = perturbations.of(result.scenario).size(1.0)
+    return f"{size.paradigm}: {size.magnitude:.4g} {size.unit} toward {size.direction_deg:.0f} deg"
+
+
 def write_summary(
     result: PushResult, path: str | Path, extra: dict | None = None, *, rows: RowMeasurements | None = None
 ) -> Path:
@@ -271,7 +297,8 @@ def write_summary(
 
 
 def _markers(result: PushResult) -> list[dict]:
-    out = []
+    end = result.times[-1] if len(result.times) else 0.0
+    out = [{"time_s": t, "label": lab} for t, lab in perturbations.of(result.scenario).markers() if t <= end]
     if result.block_contact_time_s is not None:
         out.append({"time_s": result.block_contact_time_s, "label": "block hits the body"})
     for e in result.events:
@@ -327,7 +354,8 @@ def _footprints(scene: Scene, result: PushResult) -> list[dict]:
 def _render_video(scene: Scene, result: PushResult, path: Path, on_frame):
     """:func:`render_push_video` of the run (slow motion around the hit), reporting frames through
     ``on_frame(done, total)``."""
-    return render_push_video(scene.model, result, path, progress=on_frame)
+    arrows = perturbations.of(result.scenario).arrows(scene, result)  # a push, the tether
+    return render_push_video(scene.model, result, path, progress=on_frame, arrows=arrows)
 
 
 def _frame_log(log: Callable[[str], None], step: float = 0.25):
@@ -384,7 +412,9 @@ def write_outputs(
     written: dict[str, Any] = {
         "trajectory": write_trajectory_csv(result, out / "trajectory.csv", rows=rows),
         "columns": write_json(out / "columns.json", column_dictionary(result.joint_names)),
-        "summary": write_summary(result, out / "summary.json", rows=rows),
+        "summary": write_summary(
+            result, out / "summary.json", response_entries(scene, result, rows), rows=rows
+        ),
     }
     files.write_text(out / "scenario.toml", result.scenario.to_toml())
     written["scenario"] = out / "scenario.toml"
@@ -392,6 +422,12 @@ def write_outputs(
         stage("figures")
         try:
             written["figures"] = plot_push(result, out / "figures")
+            if result.scenario.perturbation != "block":  # the response against the base of support
+                from biped.sim.response import traces
+                from biped.viz.response_figure import plot_response
+
+                size = response_title(result)
+                written["figures"] += plot_response(traces(scene, result, rows), out / "figures", title=size)
         except _REFUSED:
             raise
         except Exception as exc:  # noqa: BLE001 - an optional output must not lose the run
@@ -423,7 +459,9 @@ def write_outputs(
                 scene.model,
                 result.times,
                 result.qpos,
-                title="W section 4: push recovery",
+                title="W section 4: push recovery"
+                if result.scenario.perturbation == "block"
+                else f"perturbation: {result.scenario.perturbation}",
                 info=info,
                 markers=_markers(result),
                 follow="trunk",

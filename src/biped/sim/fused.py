@@ -41,6 +41,7 @@ from numba import njit, types
 from biped.control.buffers import unpack
 from biped.control.distribution import qp_build, qp_finish
 from biped.control.joint_pd import JointPDController
+from biped.control.neuromotor import neural_filter
 from biped.control.recursions import compute_kernel
 from biped.control.workspace import WorkspaceController
 from biped.sim import contact as contact_mod
@@ -58,12 +59,14 @@ DONE, FELL, LAST, DIVERGED, PYTHON = 0, 1, 2, 3, 4
 _LYING_BIT = 1 << 5
 _LEFT_MASK = 0b0011
 _RIGHT_MASK = 0b1100
+_STANDING = 0b1111  # biped.sim.neuro.STANDING
 
 # p (int params) entries
 P_SUB, P_NCTRL, P_CB, P_F0, P_F1, P_NCON, P_CPTR, P_CBASE, P_SENSED, P_BADQACC, P_NJ, P_CLIP, P_PD = range(13)
 P_QP, P_NLIM, P_SLOT = range(13, 16)  # the QP distribution: on, with torque-limit rows, its slot
 P_CSOLVE = 16  # the QP solved by daqp's C function (biped.sim.daqp_c), not through objmode
-_NP = 17
+P_DELAY, P_NEURO = 17, 18  # feedback delay [periods], the neural filter on (biped.sim.neuro)
+_NP = 19
 
 _SIGNATURE = types.int64(
     types.FunctionType(STEP_SIG),  # mj_step
@@ -110,6 +113,12 @@ _SIGNATURE = types.int64(
     types.int64[::1],  # contact bits
     types.float64[:, :, ::1],  # feet positions
     types.float64[:, :, ::1],  # feet quaternions
+    types.float64[:, ::1],  # neuro (biped.sim.neuro.NeuroLoop): ring of the biped's qpos
+    types.float64[:, ::1],  # ring of its qvel
+    types.int64[::1],  # ring of the contact bits
+    types.float64[::1],  # the neural filter's state (nj,)
+    types.float64,  # its lag step alpha
+    types.float64[::1],  # its rate step per joint [N m]
     *QP_TYPES,  # the QP distribution (when p[P_QP]): biped.sim.fused_qp
     *C_TYPES,  # its solve in C (when p[P_CSOLVE]): biped.sim.daqp_c
 )
@@ -120,12 +129,14 @@ _SIGNATURE = types.int64(
 def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
     step, m, d, k0, k1, p, fall_h, s32, s64, geom, cpos, codes, seams, dq, dv, q, v, xipos, xpos, xquat,
     gxpos, gxmat, ctrl, act, warn, target, gains, contact, mi, mf, work, out, lower, upper, pd_q, pd_v, pd,
-    rq, rv, rcom, rtau, rbits, rfpos, rfquat, soles, dims, prm, qlo, qhi, qa, qt, qf, qtau, qcol, qg, qav, qct,
-    qb, qx, qwg, dqfn, dqaddr, dqres, dqsense, dqupper, dqf, dqx, dqstat,
+    rq, rv, rcom, rtau, rbits, rfpos, rfquat, nrq, nrv, nrb, nact, nalpha, nrate, soles, dims, prm, qlo, qhi,
+    qa, qt, qf, qtau, qcol, qg, qav, qct, qb, qx, qwg, dqfn, dqaddr, dqres, dqsense, dqupper, dqf, dqx, dqstat,
 ):  # the arguments of _SIGNATURE, in its order
     # fmt: on
     sub, n_ctrl, cb, f0, f1 = p[P_SUB], p[P_NCTRL], p[P_CB], p[P_F0], p[P_F1]
     nj = p[P_NJ]
+    nd = p[P_DELAY]
+    nring = nrb.shape[0]
     for k in range(k0, k1):
         ncon = s32[p[P_NCON]]
         if ncon and s64[p[P_CPTR]] != np.uint64(p[P_CBASE]):
@@ -134,19 +145,26 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
         for i in range(ncon):
             bits |= contact_code(codes, geom[i, 0], geom[i, 1], cpos[i], seams, gxpos, gxmat)
         rbits[k] = bits
+        qs, vs, sbits = q, v, bits  # the state the controller sees: now, or feedback_delay_s ago
+        if p[P_NEURO]:  # biped.sim.neuro.NeuroLoop.command
+            nrq[k % nring, :] = q
+            nrv[k % nring, :] = v
+            nrb[k % nring] = bits
+            jd = max(k - nd, 0) % nring
+            qs, vs, sbits = nrq[jd], nrv[jd], nrb[jd] if k >= nd else _STANDING
         if p[P_SENSED]:
-            contact[0] = 1 if bits & _LEFT_MASK else 0
-            contact[1] = 1 if bits & _RIGHT_MASK else 0
+            contact[0] = 1 if sbits & _LEFT_MASK else 0
+            contact[1] = 1 if sbits & _RIGHT_MASK else 0
         if p[P_PD]:  # JointPDController.compute: kp (q_ref - q) - kd qd, q and qd finite
             finite = True
             for j in range(nj):
-                qj = q[pd_q[j]] - pd[0, j]
-                qdj = v[pd_v[j]]
+                qj = qs[pd_q[j]] - pd[0, j]
+                qdj = vs[pd_v[j]]
                 finite = finite and np.isfinite(qj) and np.isfinite(qdj)
                 out[j] = pd[2, j] * (pd[1, j] - qj) - pd[3, j] * qdj
             if not finite:
                 return k * 8 + PYTHON  # the policy's own error comes from Python
-        elif compute_kernel(q, v, target, gains, contact, mi, mf, work, out) != 0:
+        elif compute_kernel(qs, vs, target, gains, contact, mi, mf, work, out) != 0:
             return k * 8 + PYTHON  # the policy's own error (or its retry) comes from Python
         elif p[P_QP]:  # WorkspaceController._run's QP step: build, solve (Python), finish
             ti, tm, tw, to = unpack(mi, mf, work, out)
@@ -176,6 +194,8 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
         else:
             for j in range(nj):
                 rtau[k, j] = out[j]
+        if p[P_NEURO]:
+            neural_filter(rtau[k], nact, nalpha, nrate, k == 0)
         if bits & _LYING_BIT or xipos[cb, 2] < fall_h:
             return k * 8 + FELL
         if k == n_ctrl:
@@ -197,12 +217,13 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
 def _key_cache_by_what_it_compiles_in() -> None:
     """numba keys a cached kernel by its own source file only, but :func:`_run_rows` compiles the
     controller's kernel into itself: key it by those files too (recursions, statics, buffers,
-    spatial, distribution, fused_qp, cones, daqp_c, contact), so that an edit of the controller recompiles the loop
-    instead of loading stale code. Uses numba's cache internals (as :func:`biped.sim.jit.is_cached` does); without them,
-    numba's own key stands."""
+    spatial, distribution, fused_qp, cones, daqp_c, contact, neuromotor), so that an edit of the
+    controller recompiles the loop instead of loading stale code. Uses numba's cache internals (as
+    :func:`biped.sim.jit.is_cached` does); without them, numba's own key stands."""
     import biped.control.buffers
     import biped.control.cones
     import biped.control.distribution
+    import biped.control.neuromotor
     import biped.control.recursions
     import biped.control.statics
     import biped.spatial
@@ -218,6 +239,7 @@ def _key_cache_by_what_it_compiles_in() -> None:
         biped.control.cones,
         daqp_c,
         contact_mod,
+        biped.control.neuromotor,
     )
     try:
         cache_file = _run_rows._cache._cache_file  # type: ignore[attr-defined]
@@ -373,9 +395,23 @@ class FusedRows:
             pd_v,
             pd,
         )
-        self._records = tuple(
-            records[k] for k in ("qpos", "qvel", "com", "torques", "bits", "feet_pos", "feet_quat")
-        ) + qp_args + c_args
+        neuro = records.get("neuro")
+        if neuro is None:  # placeholders: W's ideal controller reads the live state
+            ring = (np.zeros((1, len(iq))), np.zeros((1, len(iv))), np.zeros(1, dtype=np.int64))
+            filt: tuple = (np.zeros(nj), 1.0, np.full(nj, np.inf))
+        else:
+            p[P_DELAY], p[P_NEURO] = neuro.delay, 1
+            ring = (neuro.ring_q, neuro.ring_v, neuro.ring_bits)
+            filt = (neuro.act, float(neuro.alpha), neuro.rate_step)
+            if not neuro.filtered:  # the delay alone: the filter's constants make it a no-op
+                filt = (neuro.act, 1.0, np.full(nj, np.inf))
+        self._records = (
+            tuple(records[k] for k in ("qpos", "qvel", "com", "torques", "bits", "feet_pos", "feet_quat"))
+            + ring
+            + filt
+            + qp_args
+            + c_args
+        )
         # one call through the dispatcher checks every argument against the signature (no rows
         # run); later calls go straight to the compiled entry point, without numba's typing of
         # the arguments (~10 us a call instead of ~27 us)

@@ -18,7 +18,8 @@ leaves the body and ``foot_drift(result)`` how far the feet moved from the hit t
 checks them against MuJoCo and closed forms).
 
 Each row k is re-evaluated with ``mj_forward`` at the recorded state (qpos_k, qvel_k) with the
-torques of that row (those held on [t_k, t_k+1)) applied, so every quantity is at exactly t_k:
+torques of that row (those held on [t_k, t_k+1)) applied, and a perturbation's applied forces and
+platform servo inputs of that row (``result.extra["inputs"]``), so every quantity is at exactly t_k:
 the contact forces are MuJoCo's constraint forces (``mj_contactForce``) of the first physics
 step of that control period, to the solver's tolerance.
 """
@@ -130,10 +131,16 @@ def measure_rows(scene: Scene, result) -> RowMeasurements:
     cop = np.full((n, 2, 2), np.nan)
     touch = np.zeros(n, dtype=bool)
     f6 = np.zeros(6)
+    inputs = getattr(result, "extra", {}).get("inputs")  # a perturbation's forces and actuators
     for k in range(n):
         d.qpos[:] = result.qpos[k]
         d.qvel[:] = result.qvel[k]
         d.ctrl[:] = 0.0
+        if inputs is not None:
+            j = int(np.searchsorted(inputs["rows"], k, side="right")) - 1
+            if j >= 0:
+                d.ctrl[:] = inputs["ctrl"][j]
+                d.xfrc_applied[:] = inputs["xfrc"][j]
         d.ctrl[scene.actuator_index] = result.torques[k]
         mujoco.mj_forward(m, d)
         mujoco.mj_subtreeVel(m, d)

@@ -34,12 +34,15 @@ import numpy as np
 from biped import models
 from biped.control.distribution import QPWeights
 from biped.control.limits import TorqueLimits, torque_limits
+from biped.control.neuromotor import OLDER_STRENGTH_FACTOR
 from biped.control.policy import PolicyConfig, make_policy, symmetric_limits
 from biped.control.workspace import Gains, Target
 from biped.errors import BipedError, ScenarioError
 from biped.models import subject
 from biped.sim import fused as fused_mod
+from biped.sim import perturbations
 from biped.sim.contact import SOLE_GEOMS, ContactMonitor
+from biped.sim.neuro import neuro_loop
 from biped.sim.scenario import Scenario
 from biped.sim.scene import Scene, build_scene, initial_state, tilt_quat
 
@@ -132,8 +135,13 @@ def scenario_limits(scenario: Scenario) -> TorqueLimits | None:
     """The scenario's ``torque_limits`` ("none", "human" for the model's mass, 1 or 12 numbers)."""
     if scenario.torque_limits == "none":
         return None
-    if scenario.torque_limits == "human":
-        return torque_limits("human", body_mass_kg=models.total_mass_kg(scenario.model))
+    if scenario.torque_limits in ("human", "human-older"):  # older: times OLDER_STRENGTH_FACTOR
+        lim = torque_limits("human", body_mass_kg=models.total_mass_kg(scenario.model))
+        if scenario.torque_limits == "human":
+            return lim
+        assert lim.lower is not None and lim.upper is not None
+        f = OLDER_STRENGTH_FACTOR
+        return TorqueLimits("human-older", lim.joint_names, lim.lower * f, lim.upper * f)
     return symmetric_limits(scenario.torque_limits)
 
 
@@ -339,7 +347,14 @@ def run_closed_loop(
         policy(0.0, d.qpos[iq], d.qvel[iv], (True, True))
     except BipedError:
         pass
+    driver = perturbations.of(scenario).driver(scene, m, d, policy)  # the paradigm's run (or None)
+    events = driver.rows[driver.rows <= n_ctrl] if driver is not None else np.zeros(0, dtype=np.int64)
+    ev = 0  # the next of the rows where the driver acts (before the row's physics steps)
+    inputs: list = []  # (row, ctrl, xfrc_applied) after each of its acts: PushResult.extra["inputs"]
     fused = None
+    # None: W's ideal controller (no delay, lag or rate limit), or a replay of recorded torques
+    neuro = None if isinstance(policy, RecordedTorques) else neuro_loop(scenario, scene)
+    records["neuro"] = neuro
     if compiled is not False and on_step is None and live:
         fused = fused_mod.fused_rows(scene, scenario, policy, m, d, monitor, records)
     if compiled and fused is None:
@@ -351,8 +366,16 @@ def run_closed_loop(
         k = 0
         while k < n:
             t = k * period
-            if fused is not None:  # rows up to the next progress report in one compiled call
-                k, why = fused.run(k, min(n, (k // chunk + 1) * chunk))
+            while ev < len(events) and events[ev] <= k:  # the perturbation's inputs from this row on
+                if events[ev] == k:
+                    driver.apply(k, t, d)  # type: ignore[union-attr]
+                    inputs.append((k, d.ctrl.copy(), d.xfrc_applied.copy()))
+                ev += 1
+            if fused is not None:  # rows up to the next progress report (or perturbation row) in one call
+                stop = min(n, (k // chunk + 1) * chunk)
+                if ev < len(events):
+                    stop = min(stop, int(events[ev]))
+                k, why = fused.run(k, stop)
                 if why != fused_mod.PYTHON:
                     rows = min(k + 1, n) if why != fused_mod.DONE else k
                     feet_rows = k
@@ -373,7 +396,11 @@ def run_closed_loop(
             fell = monitor.update(t, d)
             feet = monitor.feet  # (left, right) on the floor
             try:
-                tau = policy(t, q, v, feet)
+                if neuro is None:
+                    tau = policy(t, q, v, feet)
+                else:  # the state of feedback_delay_s ago, the torques filtered
+                    neuro.command(k, t, q, v, monitor.bits, policy, torques[k])
+                    tau = torques[k]
             except BipedError as exc:  # a singular state is a result, like a fall
                 controller_error = f"t = {t:.3f} s: {exc}"
                 tau = np.zeros(12)
@@ -419,6 +446,8 @@ def run_closed_loop(
     block_vel = qvel[:, bv]
     target_com = np.array(scenario.target_com_m)
     target_quat = tilt_quat(scenario.target_axis, scenario.target_tilt_deg)
+    if driver is not None and driver.final_target is not None:  # a paradigm that moves the set point
+        target_com, target_quat = (np.array(x, dtype=float) for x in driver.final_target)
     if rows:
         com_err = float(np.linalg.norm(com[rows - 1] - target_com))
         ori_err = orientation_error_deg(quat[rows - 1], target_quat)
@@ -467,6 +496,7 @@ def run_closed_loop(
         block_velocity=block_vel[sl],
         feet_pos=feet_pos[sl],
         feet_quat=feet_quat[sl],
+        extra=perturbations.run_extra(scenario, scene, driver, d, inputs),
     )
     if hasattr(policy, "steps"):  # a stepping policy: its steps and its own recovered rule
         from biped.sim.stepping import stepping_outcome

@@ -20,7 +20,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from biped.control import Gains, Target
+from biped.control import Target
+from biped.control.neuromotor import NEUROMOTOR
+from biped.control.neuromotor import PRESET_KEYS as NEURO_PRESET_KEYS
+from biped.control.neuromotor import PRESETS as NEUROMOTOR_PRESETS
 from biped.control.workspace import TARGET_AXES, W_TARGET_AXIS, W_TARGET_TILT_DEG
 from biped.errors import ScenarioError
 from biped.models import (
@@ -31,7 +34,8 @@ from biped.models import (
     W_INITIAL_TILT_DEG,
     subject,
 )
-from biped.sim import scenario_checks
+from biped.sim import perturbations, scenario_checks
+from biped.sim.perturbations.force import SHAPES as FORCE_SHAPES
 from biped.sim.scenario_checks import INTS, MAX_SEED, RANGES, VECTORS, is_number
 
 #: W's initial joint angles theta_2..theta_13 [deg] (:data:`biped.models.W_INITIAL_ANGLES_DEG`).
@@ -97,10 +101,11 @@ class Scenario:
     target_com_m: tuple = Target().com
     target_tilt_deg: float = W_TARGET_TILT_DEG
     target_axis: str = W_TARGET_AXIS
-    kp_com: tuple = Gains().kp_com
-    kv_com: tuple = Gains().kv_com
-    kp_rot: tuple = Gains().kp_rot
-    kv_rot: tuple = Gains().kv_rot
+    # W's gains, or the neuromotor preset's when None (NEUROMOTOR_PRESETS)
+    kp_com: tuple = None  # type: ignore[assignment]
+    kv_com: tuple = None  # type: ignore[assignment]
+    kp_rot: tuple = None  # type: ignore[assignment]
+    kv_rot: tuple = None  # type: ignore[assignment]
     controller: str = "workspace"
     support: str = "fixed"  # not in W: "sensed" drops a foot off the floor from Alg. 3 and 5
     distribution: str = "statics"  # W's Alg. 5; "qp": not in W (docs/controller.md)
@@ -108,15 +113,16 @@ class Scenario:
     qp_min_normal_n: float = 10.0  # "qp": minimum normal force of a foot in contact [N]
     qp_cop_scale: float = 1.0  # "qp": the CoP stays in the sole shrunk by this factor
     qp_leg_weight: float = 1.0  # "qp": share of the legs' weight in the cones (0 with stepping = true)
-    torque_limits: Any = "none"
+    torque_limits: Any = None  # None: the neuromotor preset's ("none" for "ideal", W)
     friction: float = 0.3
     restitution: float = 0.2
     # not in W (Impulse is rigid): MuJoCo's contact stiffness [s]; None: from the preset
     contact_timeconst_s: float = None  # type: ignore[assignment]
     # passive damping of every hinge [N m s/rad], as in the shipped models (W: none). Measured
     # (docs/controller.md): W's push recovers without it, but a falling biped's limp, undamped
-    # ankles spin up until MuJoCo diverges (2 of 120 QP sweep trials); with 1.0 they are falls
-    joint_damping_n_m_s: float = 1.0
+    # ankles spin up until MuJoCo diverges (2 of 120 QP sweep trials); with 1.0 they are falls.
+    # None: the neuromotor preset's (1.0 for "ideal"; muscle's intrinsic damping for the others)
+    joint_damping_n_m_s: float = None  # type: ignore[assignment]
     fall_height_m: float = 0.6  # central-body COM below this height = fall
     recovery_com_tol_m: float = 0.02
     recovery_orientation_tol_deg: float = 2.0
@@ -126,6 +132,30 @@ class Scenario:
     # not in W: capture-point steps when the feet cannot hold (biped.control.stepping)
     stepping: bool = False
     max_steps: int = 3  # with stepping: most steps per run
+    # not in W: a human nervous system (biped.control.neuromotor; docs/validate.md). The preset
+    # fills feedback_delay_s, torque_rate_limit_n_m_s, activation_time_s, torque_limits and the
+    # four gains when they are not given; "ideal" is W's controller
+    neuromotor: str = "ideal"
+    feedback_delay_s: float = None  # type: ignore[assignment]  # [s], a whole number of periods
+    torque_rate_limit_n_m_s: Any = None  # "none", "human", "human-older", 1 or 12 numbers [N m/s]
+    activation_time_s: float = None  # type: ignore[assignment]  # first-order lag [s], 0 = none
+    # hips and knees held at their initial angles by stiff joint springs, the ankles balance
+    ankle_only: bool = False
+    # not in W: the perturbation paradigm (biped.sim.perturbations, docs/perturbations.md); the
+    # block_* keys are the block's, force_* the force pulse's, platform_* and release_* likewise
+    perturbation: str = "block"
+    force_n: tuple = (-60.0, 0.0, 0.0)  # peak force [N], world frame (-x: pushes the biped forward)
+    force_start_s: float = 0.1
+    force_duration_s: float = 0.15
+    force_shape: str = "rectangular"  # or "half-sine"
+    force_body: str = "central_body"  # a body of the biped
+    force_point_m: Any = "pelvis"  # "pelvis" or (x, y, z) in force_body's frame [m]
+    platform_displacement_m: tuple = (0.05, 0.0)  # (x, y) [m]: +x moves the feet backward
+    platform_start_s: float = 0.1
+    platform_duration_s: float = 0.3  # the ramp [s]
+    release_lean_deg: float = 5.0
+    release_direction_deg: float = 0.0  # 0 forward (world -x), 90 to the biped's left (world -y)
+    release_time_s: float = 0.1  # >= duration_s: the tether never goes
 
     def __post_init__(self):
         preset = PHYSICS_PRESETS.get(self.physics) if isinstance(self.physics, str) else None
@@ -136,6 +166,14 @@ class Scenario:
         for key in _PRESET_KEYS:
             if getattr(self, key) is None:
                 object.__setattr__(self, key, preset[key])
+        neuro = NEUROMOTOR_PRESETS.get(self.neuromotor) if isinstance(self.neuromotor, str) else None
+        if neuro is None:
+            raise ScenarioError(
+                f"neuromotor must be one of {', '.join(map(repr, NEUROMOTOR))}; got {self.neuromotor!r}"
+            )
+        for key in NEURO_PRESET_KEYS:
+            if getattr(self, key) is None:
+                object.__setattr__(self, key, neuro[key])
         validate(self)
 
     # ------------------------------------------------------------------ construction
@@ -197,6 +235,9 @@ class Scenario:
         if "physics" in changes:
             for key in _PRESET_KEYS:
                 changes.setdefault(key, None)
+        if "neuromotor" in changes:
+            for key in NEURO_PRESET_KEYS:
+                changes.setdefault(key, None)
         return dataclasses.replace(self, **changes)
 
     @property
@@ -233,6 +274,20 @@ class Scenario:
     def control_substeps(self) -> int:
         """Physics steps per control period (the zero-order hold)."""
         return round(1.0 / (self.control_rate_hz * self.physics_timestep_s))
+
+    @property
+    def delay_steps(self) -> int:
+        """Control periods of ``feedback_delay_s``."""
+        return round(self.feedback_delay_s * self.control_rate_hz)
+
+    @property
+    def neuro_ideal(self) -> bool:
+        """No delay, no activation lag, no rate limit: W's controller acts on the state at once."""
+        return (
+            self.feedback_delay_s == 0
+            and self.activation_time_s == 0
+            and self.torque_rate_limit_n_m_s == "none"
+        )
 
     @property
     def control_steps(self) -> int:
@@ -286,6 +341,9 @@ _STRINGS = {
     "support": SUPPORTS,
     "physics": PHYSICS,
     "distribution": DISTRIBUTIONS,
+    "neuromotor": NEUROMOTOR,
+    "perturbation": perturbations.NAMES,
+    "force_shape": FORCE_SHAPES,
 }
 
 
@@ -310,13 +368,15 @@ def _coerce(key: str, v):
         if isinstance(v, (str, bytes)) or not hasattr(v, "__len__"):
             raise ScenarioError(f"{key} must be {n} numbers, {what}; got {v!r}")
         return tuple(float(x) if is_number(x) else x for x in v)
-    if key == "torque_limits":
+    if key in ("torque_limits", "torque_rate_limit_n_m_s", "force_point_m"):
         if isinstance(v, (list, tuple)):
             return tuple(float(x) if is_number(x) else x for x in v)
         return float(v) if is_number(v) else v
-    if key in _STRINGS or key in INTS or key == "stepping":  # a bool is checked, not converted
+    if (
+        key in _STRINGS or key in INTS or key in ("stepping", "ankle_only")
+    ):  # a bool is checked, not converted
         return v
-    if key == "model":
+    if key in ("model", "force_body"):
         return str(v) if isinstance(v, Path) else v
     return float(v) if is_number(v) else v
 

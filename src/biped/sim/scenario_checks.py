@@ -8,6 +8,7 @@ one-line :class:`~biped.errors.ScenarioError` naming the first invalid key and w
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping
 from typing import TYPE_CHECKING
@@ -30,6 +31,8 @@ VECTORS = {
     "kv_com": (3, "diagonal gains (x, y, z) [1/s]"),
     "kp_rot": (3, "diagonal gains (x, y, z) [1/s^2]"),
     "kv_rot": (3, "diagonal gains (x, y, z) [1/s]"),
+    "force_n": (3, "(Fx, Fy, Fz) in N, world frame"),
+    "platform_displacement_m": (2, "(x, y) in m, world frame"),
 }
 #: Integer keys.
 INTS = {"seed", "max_steps"}
@@ -64,6 +67,9 @@ RANGES = {
     "recovery_orientation_tol_deg": (0.0, 180.0, "orientation error in deg"),
 }
 MAX_SEED = 2**63 - 1
+#: The words ``torque_limits`` and ``torque_rate_limit_n_m_s`` take besides numbers: none, the
+#: human set (young adults) and the older adults' (biped.control.neuromotor).
+LIMIT_WORDS = ("none", "human", "human-older")
 
 
 def is_number(v) -> bool:
@@ -172,16 +178,18 @@ def validate(s: Scenario, choices: Mapping[str, tuple[str, ...]]) -> None:
     if isinstance(tl, tuple):
         if len(tl) != 12:
             raise ScenarioError(
-                f"torque_limits must be 'none', 'human', one number or 12 numbers "
+                f"torque_limits must be 'none', 'human', 'human-older', one number or 12 numbers "
                 f"({', '.join(JOINT_NAMES)}) in N m; got {len(tl)} numbers"
             )
         for i, x in enumerate(tl):
             if _finite(f"torque_limits[{i}]", x, "N m") <= 0:
                 raise ScenarioError(f"torque_limits[{i}] must be > 0 N m; got {x!r}")
-    elif tl not in ("none", "human") and (not is_number(tl) or not math.isfinite(tl) or tl <= 0):
+    elif tl not in LIMIT_WORDS and (not is_number(tl) or not math.isfinite(tl) or tl <= 0):
         raise ScenarioError(
-            f"torque_limits must be 'none', 'human', one positive number or 12 of them in N m; got {tl!r}"
+            f"torque_limits must be 'none', 'human', 'human-older', one positive number or 12 of them "
+            f"in N m; got {tl!r}"
         )
+    _check_neuromotor(s)
     _in_range("friction", _positive(s, "friction", "Coulomb coefficient", zero_ok=True))
     e = _finite("restitution", s.restitution, "coefficient of restitution")
     if not 0.0 <= e <= 0.8:
@@ -223,4 +231,108 @@ def validate(s: Scenario, choices: Mapping[str, tuple[str, ...]]) -> None:
     if not isinstance(s.model, str) or not s.model.strip():
         raise ScenarioError(
             f"model must be a shipped model's name ('wendlandt') or the path of an MJCF file; got {s.model!r}"
+        )
+    _check_perturbation(s)
+
+
+def _check_perturbation(s: Scenario) -> None:
+    """The keys of the perturbation paradigms (docs/perturbations.md); each paradigm's keys are
+    checked whichever paradigm runs (a scenario file stays valid when the paradigm changes), the
+    force body against the model only when the force runs (that needs the model file)."""
+    for key, what in (
+        ("force_start_s", "s after the start"),
+        ("platform_start_s", "s after the start"),
+        ("release_time_s", "s after the start"),
+    ):
+        if _positive(s, key, what, zero_ok=True) > 60.0:
+            raise ScenarioError(f"{key} must be in [0, 60] ({what}); got {getattr(s, key)!r}")
+    for key in ("force_duration_s", "platform_duration_s"):
+        v = _positive(s, key, "duration in s")
+        if v > 60.0 or v < 1.0 / s.control_rate_hz:
+            raise ScenarioError(
+                f"{key} must be in [{1.0 / s.control_rate_hz:g}, 60] s (at least one control period); got {v!r}"
+            )
+    if math.hypot(*s.force_n) > 1e5:
+        raise ScenarioError(f"force_n must be at most 1e5 N in size (a push on a body); got {s.force_n}")
+    if not isinstance(s.force_body, str) or not s.force_body.strip():
+        raise ScenarioError(f"force_body must be the name of a body of the biped; got {s.force_body!r}")
+    fp = s.force_point_m
+    if isinstance(fp, tuple):
+        if len(fp) != 3:
+            raise ScenarioError(
+                f"force_point_m must be 'pelvis' or 3 numbers (x, y, z) in m; got {len(fp)} numbers"
+            )
+        for i, x in enumerate(fp):
+            _in_range(f"force_point_m[{i}]", _finite(f"force_point_m[{i}]", x, "m"), "position_m")
+    elif fp != "pelvis":
+        raise ScenarioError(
+            f"force_point_m must be 'pelvis' or 3 numbers (x, y, z) in m, in force_body's frame; got {fp!r}"
+        )
+    from biped.sim.perturbations.platform import MAX_DISPLACEMENT_M
+
+    if math.hypot(*s.platform_displacement_m) > MAX_DISPLACEMENT_M:
+        raise ScenarioError(
+            f"platform_displacement_m must be at most {MAX_DISPLACEMENT_M:g} m long (the feet stay on the "
+            f"platform, a {2 * MAX_DISPLACEMENT_M + 2:g} m slab); got {s.platform_displacement_m}"
+        )
+    lean = _finite("release_lean_deg", s.release_lean_deg, "deg")
+    if not 0.0 <= lean <= 45.0:
+        raise ScenarioError(
+            f"release_lean_deg must be in [0, 45] deg (a lean about the ankles); got {lean!r}"
+        )
+    _finite("release_direction_deg", s.release_direction_deg, "deg")
+    if s.perturbation == "release" and (s.controller != "workspace" or s.stepping):
+        raise ScenarioError(
+            "perturbation = 'release' needs controller = 'workspace' without stepping (the controller's "
+            "set point holds the lean while the tether acts)"
+        )
+    if s.perturbation == "force" and s.force_body != "central_body":
+        bodies = _biped_bodies(s.model)
+        if s.force_body not in bodies:
+            raise ScenarioError(
+                f"force_body {s.force_body!r} is not a body of the biped; valid: {', '.join(bodies)}"
+            )
+
+
+@functools.lru_cache(maxsize=8)
+def _biped_bodies(model: str) -> tuple[str, ...]:
+    import mujoco
+
+    from biped.models.subject import resolve
+
+    m = mujoco.MjModel.from_xml_path(str(resolve(model)))
+    return tuple(m.body(b).name for b in range(1, m.nbody))
+
+
+def _check_neuromotor(s: Scenario) -> None:
+    """The neuromotor keys: delay, rate limits, activation lag, ankle_only."""
+    delay = _positive(s, "feedback_delay_s", "feedback delay in s", zero_ok=True)
+    if delay > 1.0:
+        raise ScenarioError(f"feedback_delay_s must be in [0, 1] s (human delays are ~0.1 s); got {delay!r}")
+    steps = delay * s.control_rate_hz
+    if abs(steps - round(steps)) > 1e-6:
+        raise ScenarioError(
+            f"feedback_delay_s must be a whole number of control periods (1 / control_rate_hz = "
+            f"{1.0 / s.control_rate_hz:g} s); got {delay!r} s, i.e. {steps:.6g} periods"
+        )
+    act = _positive(s, "activation_time_s", "first-order activation time constant in s", zero_ok=True)
+    if act > 1.0:
+        raise ScenarioError(f"activation_time_s must be in [0, 1] s (muscle: ~0.01-0.1 s); got {act!r}")
+    rl = s.torque_rate_limit_n_m_s
+    what = "'none', 'human', 'human-older', one positive number or 12 of them in N m/s"
+    if isinstance(rl, tuple):
+        if len(rl) != 12:
+            raise ScenarioError(
+                f"torque_rate_limit_n_m_s must be {what} ({', '.join(JOINT_NAMES)}); got {len(rl)} numbers"
+            )
+        for i, x in enumerate(rl):
+            if _finite(f"torque_rate_limit_n_m_s[{i}]", x, "N m/s") <= 0:
+                raise ScenarioError(f"torque_rate_limit_n_m_s[{i}] must be > 0 N m/s; got {x!r}")
+    elif rl not in LIMIT_WORDS and (not is_number(rl) or not math.isfinite(rl) or rl <= 0):
+        raise ScenarioError(f"torque_rate_limit_n_m_s must be {what}; got {rl!r}")
+    if not isinstance(s.ankle_only, bool):
+        raise ScenarioError(f"ankle_only must be true or false; got {s.ankle_only!r}")
+    if s.ankle_only and s.stepping:
+        raise ScenarioError(
+            "ankle_only = true holds the hips and knees: it cannot be used with stepping = true"
         )

@@ -13,6 +13,7 @@ the Coulomb limit is the same in every sliding direction.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -21,6 +22,7 @@ import numpy as np
 
 from biped.errors import ModelError, unknown_name
 from biped.models import JOINT_NAMES
+from biped.sim import perturbations
 from biped.sim.contact import CONTACT_SOLIMP, SOLE_GEOMS, contact_solref
 from biped.sim.scenario import Scenario
 from biped.spatial import axis_angle_quat
@@ -147,12 +149,33 @@ def scene_spec(scenario: Scenario) -> mujoco.MjSpec:
     for j in spec.joints:  # the plant's passive damping (the controller does not model it)
         if j.type == mujoco.mjtJoint.mjJNT_HINGE:
             j.damping = [scenario.joint_damping_n_m_s, *list(j.damping)[1:]]
+    if scenario.ankle_only:
+        _lock_hips_and_knees(spec, scenario)
     for g in spec.geoms:
         g.friction = [scenario.friction, g.friction[1], g.friction[2]]
         g.solref = list(solref)
         g.solimp = list(CONTACT_SOLIMP)
         g.solmix = 1.0
+    perturbations.of(scenario).edit_spec(spec)  # after the contact parameters: a platform gets its own
     return spec
+
+
+#: ``ankle_only``: the stiffness [N m/rad] and damping [N m s/rad] of the springs that hold every
+#: hip and knee joint at its initial angle (the controller's torques still act on them).
+LOCK_STIFFNESS_N_M_RAD = 5000.0
+LOCK_DAMPING_N_M_S = 100.0
+
+
+def _lock_hips_and_knees(spec: mujoco.MjSpec, scenario: Scenario) -> None:
+    """``ankle_only``: a stiff spring-damper at every hip and knee hinge, at rest at the
+    scenario's initial angle (co-contracted muscle's intrinsic stiffness: no delay), so the body
+    above the ankles moves as one: B's inverted pendulum on the feet, balanced by the ankles."""
+    angles = dict(zip(JOINT_NAMES, scenario.initial_joint_angles_deg, strict=True))
+    for j in spec.joints:
+        if j.type == mujoco.mjtJoint.mjJNT_HINGE and j.name in angles and "ankle" not in j.name:
+            j.stiffness = [LOCK_STIFFNESS_N_M_RAD, *list(j.stiffness)[1:]]
+            j.springref = math.radians(angles[j.name])
+            j.damping = [LOCK_DAMPING_N_M_S, *list(j.damping)[1:]]
 
 
 SOLE_BOX = "{foot}_sole_box"
@@ -299,7 +322,7 @@ def build_scene(scenario: Scenario) -> Scene:
         block_qvel_index=model.jnt_dofadr[bj] + np.arange(6),
         central_body=central,
         block_body=block_body,
-        floor_geom=_index_of(model, "geom", FLOOR, "geom"),
+        floor_geom=_index_of(model, "geom", getattr(perturbations.of(scenario), "floor_geom", FLOOR), "geom"),
         block_geom=_index_of(model, "geom", BLOCK, "geom"),
         sole_geoms=sole_geoms,
         biped_geoms=biped_geoms,
@@ -315,6 +338,15 @@ def tilt_quat(axis: str, tilt_deg: float) -> np.ndarray:
 
 
 def initial_state(scene: Scene, scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
+    """Scene ``(qpos (nq,), qvel (nv,))`` of the initial state of ``scenario``: W's
+    (:func:`w_initial_state`), then its perturbation's (the block parked, the lean of ``release``;
+    :meth:`biped.sim.perturbations.Perturbation.initial_state`)."""
+    qpos, qvel = w_initial_state(scene, scenario)
+    perturbations.of(scenario).initial_state(scene, qpos, qvel)
+    return qpos, qvel
+
+
+def w_initial_state(scene: Scene, scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
     """Scene ``(qpos (nq,), qvel (nv,))`` of W's initial state for ``scenario``.
 
     Central-body COM at ``initial_com_m`` turned ``initial_tilt_deg`` about -y, joint angles

@@ -37,7 +37,20 @@ LABELS = {
     "speed_m_s": "block speed [m/s]",
     "impulse_n_s": "impulse to the body [N s]",
     "impulse_horizontal_n_s": "horizontal impulse [N s]",
+    "magnitude": "the perturbation's size",  # + its unit, from the sweep (paradigm_unit)
+    "horizontal_impulse_n_s": "the perturbation's horizontal impulse [N s]",
 }
+
+
+def _label(cols: dict, by: str) -> str:
+    """The radius's label; the paradigm's own unit for ``magnitude``."""
+    if by == "magnitude":
+        units = [u for u in cols.get("paradigm_unit", []) if u]
+        names = [p for p in cols.get("paradigm", []) if p]
+        return f"{names[0] if names else 'perturbation'} size [{units[0] if units else '?'}]"
+    return LABELS[by]
+
+
 #: Where the radial tick labels sit [deg]: between the 0 and 45 deg spokes, clear of every
 #: angle label.
 RLABEL_DEG = 22.5
@@ -84,7 +97,7 @@ def _scale(data: Any, by: str, bound: bool) -> float:
     cols = _columns(data)
     r = _values(cols, by)
     top = float(np.nanmax(r)) if np.isfinite(r).any() else 1.0
-    if bound:
+    if bound and by in ("speed_m_s", "impulse_n_s", "impulse_horizontal_n_s"):
         radius = _bound_radius(data, cols, by, np.arange(0.0, 360.0, 2.0))
         far, near = float(radius.max()), float(radius.min())
         top = max(top, far if far <= 2.5 * top else near)
@@ -139,7 +152,7 @@ def plot_envelope(
     if len(env.directions_deg) >= 3:
         t, v = _closed(np.radians(env.directions_deg), np.nan_to_num(env.survived_max, nan=0.0))
         ax.plot(t, v, color="tab:green", lw=2, label="envelope")
-    if bound:
+    if bound and by in ("speed_m_s", "impulse_n_s", "impulse_horizontal_n_s"):  # Hof's bound is an impulse
         dirs = np.arange(0.0, 360.0, 2.0)
         radius = _bound_radius(data, cols, by, dirs)
         t, v = _closed(np.radians(dirs), radius)
@@ -160,7 +173,9 @@ def plot_envelope(
     _facing_arrow(ax, rmax)
     ctrl = controller_label(data.scenario) if cols["controller"] else "?"
     lim = cols["torque_limits"][0] if cols["torque_limits"] else "?"
-    ax.set_title(f"{title or f'{ctrl}, torque limits: {lim}'}\nradius: {LABELS[by]}", pad=14, fontsize=10)
+    ax.set_title(
+        f"{title or f'{ctrl}, torque limits: {lim}'}\nradius: {_label(cols, by)}", pad=14, fontsize=10
+    )
     return ax
 
 
@@ -209,7 +224,7 @@ def plot_comparison(
         ax.set_theta_zero_location("E")
         ax.set_rlabel_position(RLABEL_DEG)
         _facing_arrow(ax, rmax)
-        ax.set_title(f"envelopes overlaid\nradius: {LABELS[by]}", pad=14, fontsize=10)
+        ax.set_title(f"envelopes overlaid\nradius: {_label(_columns(datas[0]), by)}", pad=14, fontsize=10)
         h2, l2 = ax.get_legend_handles_labels()
         handles, labs = handles + h2, labs + l2
     fig.legend(
@@ -221,7 +236,8 @@ def plot_comparison(
         frameon=False,
         bbox_to_anchor=(0.5, 0.06),
     )
-    note = textwrap.fill(FACING_NOTE, width=int(95 * min(panels, 2) / 2 + 10 * (panels > 1)))
+    note = FACING_NOTE if by == "speed_m_s" or by.startswith("impulse") else PARADIGM_NOTE
+    note = textwrap.fill(note, width=int(95 * min(panels, 2) / 2 + 10 * (panels > 1)))
     fig.text(0.5, 0.01, note, ha="center", va="bottom", fontsize=8)
     fig.tight_layout(rect=(0, 0.17, 1, 0.93))
     if out is not None:
@@ -231,4 +247,10 @@ def plot_comparison(
     return fig
 
 
-__all__ = ["FACING_NOTE", "plot_comparison", "plot_envelope"]
+#: the angle's note for a paradigm's envelope (docs/perturbations.md)
+PARADIGM_NOTE = (
+    "angle: the way the perturbation pushes the body (0 deg = +x). The biped faces -x (180 deg), "
+    "left side toward -y: 180 deg pushes it forward."
+)
+
+__all__ = ["FACING_NOTE", "PARADIGM_NOTE", "plot_comparison", "plot_envelope"]

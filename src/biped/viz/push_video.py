@@ -129,10 +129,12 @@ def push_camera(
     hit = result.block_contact_time_s
     k = 0 if hit is None else int(np.clip(np.searchsorted(times, hit + 1e-12) - 1, 0, times.size - 1))
     planes = np.asarray(model.geom_type) == int(mujoco.mjtGeom.mjGEOM_PLANE)
-    solids = [g for g in range(model.ngeom) if not planes[g]]
+    # not the floor, nor what is not drawn (a parked block), nor a moving floor (the platform)
+    platform = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "platform")
+    solids = [g for g in range(model.ngeom) if not planes[g] and model.geom_rgba[g, 3] > 0 and g != platform]
     block = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "block")
     pts = _points_at(model, result.qpos[k], solids)
-    if block >= 0:
+    if block >= 0 and model.geom_rgba[block, 3] > 0:
         pts = np.concatenate([pts, _points_at(model, result.qpos[0], [block])])
     lookat = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
     fovy = float(model.vis.global_.fovy)
@@ -152,6 +154,17 @@ def push_camera(
 def _fwd(azimuth, elevation) -> np.ndarray:
     az, el = math.radians(azimuth), math.radians(elevation)
     return np.array([math.cos(el) * math.cos(az), math.cos(el) * math.sin(az), math.sin(el)])
+
+
+def _paradigm_title(s) -> str:
+    """The video's title for a paradigm other than W's block (docs/perturbations.md)."""
+    if s.perturbation == "force":
+        f = float(np.linalg.norm(s.force_n))
+        return f"force pulse: {f:.0f} N for {s.force_duration_s:g} s ({s.force_shape})"
+    if s.perturbation == "platform":
+        d = float(np.hypot(*s.platform_displacement_m))
+        return f"platform translation: {d * 100:.3g} cm in {s.platform_duration_s:g} s"
+    return f"lean and release: {s.release_lean_deg:g} deg, released at {s.release_time_s:g} s"
 
 
 def render_push_video(
@@ -185,7 +198,9 @@ def render_push_video(
         slow = push_slow_motion(result, speed=speed, before_s=before_hit_s, after_s=after_landing_s)
     if title is None:
         s = getattr(result, "scenario", None)
-        if s is not None and hasattr(s, "block_mass_kg"):
+        if s is not None and getattr(s, "perturbation", "block") != "block":
+            title = _paradigm_title(s)
+        elif s is not None and hasattr(s, "block_mass_kg"):
             v = float(np.linalg.norm(s.block_velocity_m_s))
             title = f"W section 4: a {s.block_mass_kg:g} kg block thrown at {v:.2f} m/s"
     cam = push_camera(model, result, azimuth=azimuth, elevation=elevation, aspect=width / height)

@@ -209,6 +209,7 @@ def render_video(
     shadows="follow",
     shadow_radius_m=3.0,
     progress=None,
+    arrows=None,
 ) -> VideoResult:
     """Render the trajectory ``(times, qpos)`` of ``model`` to an H.264 MP4 file.
 
@@ -269,7 +270,7 @@ def render_video(
     fd, dest = files.temp_path(files.check_no_link(path))  # ffmpeg writes here, then it moves
     os.close(fd)
     try:
-        return _render_to(model, qpos, idx, path, dest, backend, progress, {
+        return _render_to(model, qpos, idx, arrows, path, dest, backend, progress, {
             "fps": float(fps),
             "width": int(width),
             "height": int(height),
@@ -288,14 +289,17 @@ def render_video(
         dest.unlink(missing_ok=True)
 
 
-def _render_to(model, qpos, idx, path, dest, backend, progress, cfg) -> VideoResult:
-    """Render into the temporary file ``dest`` in a child process, then move it to ``path``."""
+def _render_to(model, qpos, idx, arrows, path, dest, backend, progress, cfg) -> VideoResult:
+    """Render into the temporary file ``dest`` in a child process, then move it to ``path``.
+    ``arrows``: None, or (T, 2, 3) from/to of one arrow a sample (NaN: none), e.g. a push."""
     import mujoco
 
     with tempfile.TemporaryDirectory(prefix="biped-video-") as tmp_name:
         tmp = pathlib.Path(tmp_name)
         mujoco.mj_saveModel(model, str(tmp / "model.mjb"), None)
         np.save(tmp / "qpos.npy", qpos[idx])
+        if arrows is not None:
+            np.save(tmp / "arrows.npy", np.asarray(arrows, dtype=float)[idx])
         extent = float(model.stat.extent) if model.stat.extent > 0 else 1.0
         distance = cfg["distance"]
         cfg = {

@@ -21,6 +21,9 @@ _SHADOW_TEXELS = 2048
 _EYE = np.eye(3).ravel()
 
 
+_ARROW_RGBA = np.array([0.85, 0.1, 0.1, 1.0], dtype=np.float32)
+
+
 def _floor_grid(model, data, qpos, spacing=0.5, margin=4.0, width=0.012):
     """Scene geoms of a floor at z = 0 around the motion, for a model without a plane geom
     (e.g. the bare biped): a light slab with grid lines every ``spacing`` m, so that motion is
@@ -149,6 +152,7 @@ def _render_job(workdir: pathlib.Path) -> int:
     if model.nlight == 0:  # only the headlight: make it bright enough to see the floor
         model.vis.headlight.ambient[:] = 0.35
         model.vis.headlight.diffuse[:] = 0.65
+    arrows = np.load(workdir / "arrows.npy") if (workdir / "arrows.npy").exists() else None
     captions = cfg.get("captions")
     caption = _Caption(w, h, cfg.get("font")) if captions else None
     writer = imageio_ffmpeg.write_frames(
@@ -179,6 +183,13 @@ def _render_job(workdir: pathlib.Path) -> int:
                 scn.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
             for gtype, size, pos, rgba in floor[: scn.maxgeom - scn.ngeom]:
                 mujoco.mjv_initGeom(scn.geoms[scn.ngeom], gtype, size, pos, _EYE, rgba)
+                scn.ngeom += 1
+            if arrows is not None and np.isfinite(arrows[k]).all() and scn.ngeom < scn.maxgeom:
+                g = scn.geoms[scn.ngeom]  # the perturbation's arrow (a push, the tether)
+                mujoco.mjv_initGeom(
+                    g, mujoco.mjtGeom.mjGEOM_ARROW, np.zeros(3), np.zeros(3), _EYE, _ARROW_RGBA
+                )
+                mujoco.mjv_connector(g, mujoco.mjtGeom.mjGEOM_ARROW, 0.02, arrows[k, 0], arrows[k, 1])
                 scn.ngeom += 1
             img = renderer.render()
             if caption is not None:

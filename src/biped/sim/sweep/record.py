@@ -49,6 +49,36 @@ class Measured:
     controller_error: str | None = None
     diverged: str | None = None
     step_count: int = 0  # stepping runs (scenario key stepping): steps taken
+    # the perturbation (biped.sim.perturbations) and the response (biped.sim.response)
+    paradigm: str = ""
+    paradigm_magnitude: float = math.nan  # in paradigm_unit: block m/s, force N, platform m, release deg
+    paradigm_unit: str = ""
+    push_direction_deg: float = math.nan  # the way it pushes the body, from +x toward +y
+    horizontal_impulse_n_s: float = math.nan  # block: measured; force: applied; else NaN
+    com_velocity_change_m_s: float = math.nan  # the impulse / body mass; platform: its peak velocity
+    strategy: str = ""  # ankle | hip | step | fall (biped.sim.response)
+    strategy_torque: str = ""  # the second reading (hip/ankle torque ratio)
+    strategy_agree: bool = False
+    trunk_leg_correlation: float = math.nan
+    peak_trunk_change_deg: float = math.nan
+    peak_leg_change_deg: float = math.nan
+    hip_ankle_torque_ratio: float = math.nan
+    peak_com_excursion_m: float = math.nan
+    peak_com_excursion_time_s: float = math.nan
+    peak_cop_excursion_m: float = math.nan
+    peak_cop_excursion_time_s: float = math.nan
+    mos_min_m: float = math.nan
+    mos_min_time_s: float = math.nan
+    peak_hip_sagittal_n_m: float = math.nan
+    peak_knee_sagittal_n_m: float = math.nan
+    peak_ankle_sagittal_n_m: float = math.nan
+    peak_hip_frontal_n_m: float = math.nan
+    peak_ankle_frontal_n_m: float = math.nan
+    peak_hip_transverse_n_m: float = math.nan
+    time_to_rest_s: float = math.nan
+    step_needed: bool = False
+    step_length_m: float = math.nan
+    time_to_foot_contact_s: float = math.nan
 
     def row(self) -> dict[str, Any]:
         """``{column: value}`` for the sweep file."""
@@ -66,6 +96,7 @@ class _Head:
     block_mass_kg: float
     height_m: float
     gain_scale: float
+    magnitude: float
     controller: str
     torque_limits: str
 

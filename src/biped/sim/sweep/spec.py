@@ -35,10 +35,21 @@ AXES: dict[str, str] = {
     "height_m": "height of the block's aim point above the floor [m]",
     "gain_scale": "factor s on the stiffness gains (kp * s) and sqrt(s) on the damping gains "
     "(kv * sqrt(s)), which keeps every damping ratio",
+    "magnitude": "the perturbation's size in its own unit: force N (peak), platform m, release deg "
+    "(the block's is speed_m_s; scenario key perturbation, docs/perturbations.md)",
 }
 
 #: W's throw (section 4) in sweep coordinates: 1.8 kg at 4.5 m/s along -x, 1.2 m high.
-W_THROW = {"speed_m_s": 4.5, "direction_deg": 180.0, "block_mass_kg": 1.8, "height_m": 1.2, "gain_scale": 1.0}
+W_THROW = {
+    "speed_m_s": 4.5,
+    "direction_deg": 180.0,
+    "block_mass_kg": 1.8,
+    "height_m": 1.2,
+    "gain_scale": 1.0,
+    "magnitude": 0.0,  # unused by the block; another paradigm's default: its base scenario's size
+}
+#: The axes a block sweep's trial keys hash (those before the paradigms existed: its keys stay).
+BLOCK_AXES = ("speed_m_s", "direction_deg", "block_mass_kg", "height_m", "gain_scale")
 
 #: Axis values are kept to this many significant digits, so that ``1:2:11`` and the same values
 #: typed as a list (1.7, not 1.7000000000000002) are the same trials; two sweeps' values are the
@@ -70,6 +81,7 @@ class Trial:
     height_m: float
     gain_scale: float
     key: str
+    magnitude: float = 0.0
 
     def params(self) -> dict[str, float]:
         return {name: getattr(self, name) for name in AXES}
@@ -119,6 +131,8 @@ def _axis_values(name: str, value: Any) -> tuple[float, ...]:
         raise ScenarioError(f"sweep axis {name} ({AXES[name]}) must be in [-360, 360] deg; got {bad:g}")
     if name in ("speed_m_s", "block_mass_kg", "height_m", "gain_scale") and lo <= 0:
         raise ScenarioError(f"sweep axis {name} ({AXES[name]}) must be > 0; got {lo:g}")
+    if name == "magnitude" and lo < 0:
+        raise ScenarioError(f"sweep axis {name} ({AXES[name]}) must be >= 0; got {lo:g}")
     return tuple(out)
 
 
@@ -204,7 +218,32 @@ class SweepSpec:
         given = dict(self.axes.items() if isinstance(self.axes, Mapping) else self.axes)
         for name, value in given.items():
             _axis_values(name, value)  # unknown names and bad values raise here
+        # the other paradigm's axes, unless at their defaults (a spec's own axes read back)
+        unused = {**W_THROW, "block_mass_kg": self.base.block_mass_kg}
+        block_only = [
+            n
+            for n in ("speed_m_s", "block_mass_kg", "height_m")
+            if n in given and _axis_values(n, given[n]) != (float(unused[n]),)
+        ]
+        if self.base.perturbation != "block" and block_only:
+            raise ScenarioError(
+                f"sweep axis {block_only[0]} is the block's; perturbation = {self.base.perturbation!r} is "
+                "swept by magnitude (--magnitude, in its own unit) and direction_deg"
+            )
+        if (
+            self.base.perturbation == "block"
+            and "magnitude" in given
+            and _axis_values("magnitude", given["magnitude"]) != (0.0,)
+        ):
+            raise ScenarioError(
+                "sweep axis magnitude is for perturbation = 'force', 'platform' or 'release'; the block's "
+                "size is speed_m_s (--speed)"
+            )
         defaults = dict(W_THROW, block_mass_kg=self.base.block_mass_kg)
+        if self.base.perturbation != "block":
+            from biped.sim.perturbations import of
+
+            defaults["magnitude"] = of(self.base).size(1.0).magnitude
         axes = tuple(
             (name, _axis_values(name, given[name]) if name in given else (float(defaults[name]),))
             for name in AXES
@@ -245,11 +284,13 @@ class SweepSpec:
                 f"{', '.join(map(repr, TORQUE_LIMIT_KINDS))}; "
                 f"got {self.torque_limits!r}"
             )
-        if self.base.torque_limits != "none":
+        if self.base.torque_limits != "none" and self.torque_limits != "none":
+            # the scenario's own limits (its key, or a neuromotor preset's) apply when the sweep
+            # sets none; both at once would be two sets of limits
             raise ScenarioError(
-                "set the sweep's torque limits with torque_limits = 'none' | "
-                "'human' (SweepSpec / --torque-limits), not the scenario's "
-                f"torque_limits key (got {self.base.torque_limits!r})"
+                "give the sweep's torque limits once: the sweep's torque_limits (SweepSpec / "
+                "--torque-limits) or the scenario's torque_limits key (here "
+                f"{self.base.torque_limits!r}, e.g. from neuromotor = {self.base.neuromotor!r}), not both"
             )
 
     # ------------------------------------------------------------------ construction
@@ -336,8 +377,22 @@ class SweepSpec:
     @property
     def identity(self) -> str:
         """Hash of what makes two trials with equal parameters the same experiment."""
+        scen = self.base.to_dict()
+        if self.base.perturbation == "block":  # a block sweep's identity as before the paradigms
+            from biped.sim.perturbations import PARADIGMS
+
+            for cls in PARADIGMS.values():
+                if cls.name != "block":
+                    for k in cls.keys:
+                        scen.pop(k, None)
+            scen.pop("perturbation", None)
+        # the nervous system's keys at W's ideal values: the identity as before they existed
+        for k, ideal in (("neuromotor", "ideal"), ("feedback_delay_s", 0.0), ("activation_time_s", 0.0),
+                         ("torque_rate_limit_n_m_s", "none"), ("ankle_only", False)):  # fmt: skip
+            if scen.get(k) == ideal:
+                scen.pop(k)
         ident = {
-            "scenario": self.base.to_dict(),
+            "scenario": scen,
             "launch_distance_m": self.launch_distance_m,
             "model_sha256": self.model_sha256,
             "torque_limits": self.torque_limits,
@@ -359,7 +414,7 @@ class SweepSpec:
         values = dict(self.axes)
         if self.samples is None:
             # direction fastest, then speed, mass, height, gain: a partial sweep covers the polar map
-            order = ["gain_scale", "height_m", "block_mass_kg", "speed_m_s", "direction_deg"]
+            order = ["magnitude", "gain_scale", "height_m", "block_mass_kg", "speed_m_s", "direction_deg"]
             points = [
                 dict(zip(order, combo, strict=True))
                 for combo in itertools.product(*(values[n] for n in order))
@@ -369,10 +424,11 @@ class SweepSpec:
             draws = {n: rng.uniform(min(values[n]), max(values[n]), self.samples) for n in names}
             points = [{n: float(draws[n][i]) for n in names} for i in range(self.samples)]
         ident = self.identity
+        hashed = BLOCK_AXES if self.base.perturbation == "block" else names
         out = []
         for i, p in enumerate(points):
             p = {n: float(p[n]) for n in names}
-            key = hashlib.sha256(json.dumps([ident, [repr(p[n]) for n in names]]).encode()).hexdigest()[:20]
+            key = hashlib.sha256(json.dumps([ident, [repr(p[n]) for n in hashed]]).encode()).hexdigest()[:20]
             out.append(Trial(index=i, key=key, **p))
         return tuple(out)
 
@@ -424,7 +480,22 @@ def aim_block(
 
 
 def trial_scenario(base: Scenario, trial: Trial, *, launch_distance_m: float = 0.5) -> Scenario:
-    """``base`` with the block of ``trial`` aimed at the initial COM line and the gains scaled."""
+    """``base`` with the block of ``trial`` aimed at the initial COM line and the gains scaled;
+    for another paradigm (``base.perturbation``), its keys set to the trial's magnitude and
+    direction (:meth:`biped.sim.perturbations.Perturbation.sized`; the direction is the way the
+    perturbation pushes the body, as the block's travel) and the gains scaled."""
+    s, r = trial.gain_scale, math.sqrt(trial.gain_scale)
+    gains = {
+        "kp_com": tuple(k * s for k in base.kp_com),
+        "kv_com": tuple(k * r for k in base.kv_com),
+        "kp_rot": tuple(k * s for k in base.kp_rot),
+        "kv_rot": tuple(k * r for k in base.kv_rot),
+    }
+    if base.perturbation != "block":
+        from biped.sim.perturbations import PARADIGMS
+
+        keys = PARADIGMS[base.perturbation].sized(base, trial.magnitude, trial.direction_deg)
+        return base.with_overrides(**keys, **gains)
     p0, v0 = aim_block(
         base.initial_com_m[:2], trial.speed_m_s, trial.direction_deg, trial.height_m, launch_distance_m
     )

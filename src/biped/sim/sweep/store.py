@@ -223,6 +223,18 @@ def _fmt_values(values: list[float]) -> str:
     return f"{len(v)} value{'s' * (len(v) != 1)} [{shown}]"
 
 
+def _defaults_of_new_keys() -> dict:
+    """The perturbation paradigms' and the nervous system's scenario keys (added after sweeps
+    existed) at their defaults."""
+    from biped.sim.perturbations import PARADIGMS
+    from biped.sim.scenario import Scenario
+
+    d = Scenario().to_dict()
+    keys = {"perturbation", *(k for cls in PARADIGMS.values() if cls.name != "block" for k in cls.keys)}
+    keys |= {"neuromotor", "feedback_delay_s", "torque_rate_limit_n_m_s", "activation_time_s", "ankle_only"}
+    return {k: d[k] for k in keys}
+
+
 def _same(a: Any, b: Any) -> bool:
     return (
         isinstance(a, (int, float)) and isinstance(b, (int, float)) and math.isclose(a, b, rel_tol=GRID_RTOL)
@@ -246,7 +258,10 @@ def spec_difference(
     new = spec.to_dict()
     diffs = []
     old_scen, new_scen = old.get("scenario", {}), new["scenario"]
+    added = _defaults_of_new_keys()
     for k in sorted(set(old_scen) | set(new_scen)):
+        if k not in old_scen and k in added and new_scen.get(k) == added[k]:
+            continue  # a key added since the file was written, at its default: the same experiment
         if old_scen.get(k) != new_scen.get(k):
             diffs.append(f"scenario key {k}: {old_scen.get(k)!r} in the file, {new_scen.get(k)!r} now")
     for k in ("launch_distance_m", "model", "torque_limits", "samples", "seed"):

@@ -28,7 +28,17 @@ _CACHE_SIZE = 16
 
 #: Scenario keys that a trial changes and the scene does not depend on (set in the initial state
 #: or read by the controller only).
-_NOT_SCENE = frozenset({"block_position_m", "block_velocity_m_s", "kp_com", "kv_com", "kp_rot", "kv_rot"})
+_NOT_SCENE = frozenset(
+    {"block_position_m", "block_velocity_m_s", "kp_com", "kv_com", "kp_rot", "kv_rot"}
+    | {"force_n", "force_start_s", "force_duration_s", "force_shape", "force_body", "force_point_m"}
+    | {
+        "release_lean_deg",
+        "release_direction_deg",
+        "release_time_s",
+        "platform_start_s",
+        "platform_duration_s",
+    }
+)
 
 
 def _scene_for(scenario: Scenario) -> Scene:
@@ -190,7 +200,35 @@ def measure(result: PushResult, block_velocity: np.ndarray, *, scene: Scene | No
         controller_error=result.controller_error,
         diverged=getattr(result, "diverged", None),
         step_count=len(result.extra.get("steps", ())),
+        **_perturbation_columns(result, scene, float(np.hypot(J[0], J[1]))),
     )
+
+
+def _perturbation_columns(result: PushResult, scene: Scene | None, block_impulse_h: float) -> dict:
+    """The paradigm's and the response's columns of :class:`Measured` (docs/perturbations.md)."""
+    from dataclasses import fields
+
+    from biped.sim.perturbations import of
+    from biped.sim.response import measure_response
+
+    sc = result.scenario
+    scene = scene if scene is not None else _scene_for(sc)
+    mass = float(scene.model.body_subtreemass[scene.model.body_rootid[scene.central_body]])
+    size = of(sc).size(mass)
+    jh = block_impulse_h if sc.perturbation == "block" else size.impulse_horizontal_n_s
+    dv = jh / mass if sc.perturbation == "block" else size.com_velocity_change_m_s
+    out = {
+        "paradigm": size.paradigm,
+        "paradigm_magnitude": size.magnitude,
+        "paradigm_unit": size.unit,
+        "push_direction_deg": size.direction_deg,
+        "horizontal_impulse_n_s": jh,
+        "com_velocity_change_m_s": dv,
+    }
+    resp = measure_response(scene, result)
+    keep = {f.name for f in fields(Measured)}
+    out.update({k: v for k, v in resp.to_dict().items() if k in keep})
+    return out
 
 
 def _foot_motion(result, scene) -> tuple[tuple[float, float], float]:

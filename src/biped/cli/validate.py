@@ -1,0 +1,86 @@
+"""``biped validate``: the human balance experiments on the biped, ideal and young nervous
+systems side by side, thresholds against people's (:mod:`biped.analysis.validate`;
+docs/validate.md). Writes validation.json, validation.md, figures/<experiment>.png and
+trials.parquet."""
+
+from __future__ import annotations
+
+import time
+
+from biped.cli._common import add_folder_options, run_dir
+
+#: Bisection halvings after the bracket: --quick, full.
+QUICK_ITERATIONS, FULL_ITERATIONS = 3, 9
+
+
+def register(subparsers) -> None:
+    p = subparsers.add_parser(
+        "validate",
+        help="run the human balance experiments (lean release, platform, waist pull) and compare",
+        description="Run the human balance experiments of docs/validate.md with neuromotor = ideal "
+        "and young, find each threshold by bisection and compare it with the human mean +/- 2 SD.",
+    )
+    p.add_argument(
+        "--quick", action="store_true", help=f"coarse: {QUICK_ITERATIONS} bisection steps (<= 60 s)"
+    )
+    p.add_argument(
+        "--neuromotor",
+        action="append",
+        choices=("ideal", "young", "older"),
+        help="the presets to run (repeatable; default: ideal and young)",
+    )
+    p.add_argument(
+        "--experiment",
+        action="append",
+        metavar="NAME",
+        help="run only these experiments (repeatable): ankle_release, platform_backward, waist_pull",
+    )
+    add_folder_options(p, "a new runs/validate-<date>-<time>")
+    p.set_defaults(func=run, _parser=p)
+
+
+def run(args) -> int:
+    from biped.analysis.validate import EXPERIMENTS, run_experiment
+    from biped.errors import ScenarioError, unknown_name
+    from biped.outputs.validate import write_validation
+
+    names = args.experiment or list(EXPERIMENTS)
+    for n in names:
+        if n not in EXPERIMENTS:
+            raise ScenarioError(unknown_name("experiment", n, EXPERIMENTS))
+    presets = list(dict.fromkeys(args.neuromotor or ["ideal", "young"]))
+    out = run_dir(args.out, "validate", overwrite=args.overwrite)
+    iterations = QUICK_ITERATIONS if args.quick else FULL_ITERATIONS
+    t0 = time.perf_counter()
+    results: dict = {}
+    n = 0
+    interrupted = False
+    try:
+        for name in names:
+            per: dict = {}
+            results[name] = per
+            for preset in presets:
+                th = run_experiment(EXPERIMENTS[name], preset, iterations)
+                per[preset] = th
+                n += len(th.trials)
+                print(
+                    f"  {name:<18} {preset:<6} threshold {th.bound}{th.value:.4g} {th.unit} ({len(th.trials)} trials)"
+                )
+    except KeyboardInterrupt:  # Ctrl-C / SIGTERM: write the finished thresholds, then stop
+        interrupted = True
+        results = {k: v for k, v in results.items() if v}
+    wall = time.perf_counter() - t0
+    note = (
+        "Each threshold is the largest magnitude the biped survived (bisection on a log scale; '<' "
+        "below the searched range, '>' above it). Presets: biped.control.neuromotor, docs/validate.md."
+    )
+    meta = {"mode": "quick" if args.quick else "full", "iterations": iterations, "presets": presets,
+            "trials": n, "wall_time_s": wall, "note": note, "interrupted": interrupted}  # fmt: skip
+    if results:
+        write_validation(out, results, meta)
+    if interrupted:
+        raise KeyboardInterrupt
+    print(
+        f"  wrote {out}/validation.md, validation.json, trials.parquet, figures/ ({n} trials, {wall:.1f} s)"
+    )
+    return 0

@@ -1,0 +1,116 @@
+"""``biped validate``'s files: validation.json, validation.md, a figure per experiment and the
+trials as Parquet (trials.parquet), from :mod:`biped.analysis.validate`'s thresholds."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+from biped.analysis.validate import EXPERIMENTS, HUMAN, NOT_RUN, Threshold
+from biped.outputs._json import write_json
+from biped.viz.validate import threshold_figure
+
+__all__ = ["table_rows", "write_validation"]
+
+
+def _fmt(v, bound: str = "") -> str:
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return "-"
+    return f"{bound}{v:.3g}"
+
+
+def table_rows(results: dict[str, dict[str, Threshold]]) -> list[dict]:
+    """One row per compared quantity: human mean, SD, source, the presets' values, inside +/- 2 SD."""
+    rows = []
+    for key, per in results.items():
+        exp = EXPERIMENTS[key]
+        quantities = exp.human or (f"{key}.threshold",)
+        for q in quantities:
+            h = HUMAN.get(q)
+            row: dict[str, Any] = {
+                "quantity": h.quantity if h else f"{exp.title}: threshold",
+                "unit": h.unit if h else exp.unit,
+            }
+            row["human"] = None if h is None else {"mean": h.mean, "sd": h.sd, "source": h.source,
+                                                   "sd_assumed": h.sd_assumed}  # fmt: skip
+            for preset, th in per.items():
+                field = q.split(".", 1)[1]
+                if field in ("lean_deg", "threshold"):
+                    value, bound = th.value, th.bound
+                elif th.at is None:
+                    value, bound = math.nan, ""
+                elif field == "peak_ankle_torque_n_m":
+                    value, bound = th.at.peak_ankle_torque_n_m, ""
+                elif field == "percent_bos":
+                    value, bound = th.at.percent_bos, ""
+                else:
+                    value, bound = th.at.onset_ms, ""
+                row[preset] = {"value": value, "bound": bound,
+                               "inside_2sd": None if (h is None or bound) else h.inside(value)}  # fmt: skip
+            rows.append(row)
+    for key, why in NOT_RUN.items():
+        h = HUMAN.get(f"{key}.lean_deg")
+        skipped: dict[str, Any] = {"quantity": h.quantity if h else key, "unit": "deg", "not_run": why,
+                                    "human": None if h is None else {"mean": h.mean, "sd": h.sd, "source": h.source,
+                                                                     "sd_assumed": h.sd_assumed}}  # fmt: skip
+        rows.append(skipped)
+    return rows
+
+
+def _markdown(rows: list[dict], presets: list[str], meta: dict) -> str:
+    head = ["quantity", "human mean +/- SD (source)", *[f"biped {p}" for p in presets],
+            *[f"{p} inside +/- 2 SD" for p in presets]]  # fmt: skip
+    lines = ["# biped validate", "", meta["note"], "", "| " + " | ".join(head) + " |",
+             "|" + "---|" * len(head)]  # fmt: skip
+    for r in rows:
+        h = r["human"]
+        hum = (
+            "no human number"
+            if h is None
+            else (
+                f"{h['mean']:g} +/- {h['sd']:.3g}{' (SD assumed 20 %)' if h['sd_assumed'] else ''} ({h['source']})"
+            )
+        )
+        if "not_run" in r:
+            cells = ["not run"] * len(presets) + ["-"] * len(presets)
+            lines.append(f"| {r['quantity']} [{r['unit']}] | {hum} | " + " | ".join(cells) + " |")
+            continue
+        vals = [_fmt(r[p]["value"], r[p]["bound"]) if p in r else "not run" for p in presets]
+        ins = []
+        for p in presets:
+            v = r[p]["inside_2sd"] if p in r else None
+            ins.append("n/a" if v is None else ("yes" if v else "no"))
+        lines.append(f"| {r['quantity']} [{r['unit']}] | {hum} | " + " | ".join(vals + ins) + " |")
+    lines += ["", "Not run:"] + [f"- {k}: {v}" for k, v in NOT_RUN.items()]
+    mode = meta["mode"] + (", interrupted" if meta.get("interrupted") else "")
+    lines += ["", f"Trials: {meta['trials']} in {meta['wall_time_s']:.1f} s ({mode})."]
+    return "\n".join(lines) + "\n"
+
+
+def write_validation(out: Path, results: dict[str, dict[str, Threshold]], meta: dict) -> list[Path]:
+    """Write the files into ``out``; returns their paths."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    presets = list(meta.get("presets") or next(iter(results.values())))
+    rows = table_rows(results)
+    written = [write_json(out / "validation.json", {"meta": meta, "rows": rows, "experiments": {
+        k: {"title": EXPERIMENTS[k].title, "protocol": EXPERIMENTS[k].protocol, "unit": EXPERIMENTS[k].unit,
+            "thresholds": {p: {"value": th.value, "bound": th.bound} for p, th in per.items()}}
+        for k, per in results.items()}})]  # fmt: skip
+    md = out / "validation.md"
+    md.write_text(_markdown(rows, presets, meta), encoding="utf-8")
+    written.append(md)
+    trials = [t.row() for per in results.values() for th in per.values() for t in th.trials]
+    table = pa.Table.from_pylist(trials)
+    pq.write_table(table, out / "trials.parquet")
+    written.append(out / "trials.parquet")
+    figs = out / "figures"
+    figs.mkdir(exist_ok=True)
+    for key, per in results.items():
+        exp = EXPERIMENTS[key]
+        human = HUMAN.get(exp.human[0]) if exp.human else None
+        written.append(threshold_figure(figs / f"{key}.png", exp.title, exp.unit,
+                                        {p: (th.value, th.bound) for p, th in per.items()}, human))  # fmt: skip
+    return written
