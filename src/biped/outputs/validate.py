@@ -7,6 +7,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+from biped import files
 from biped.analysis.validate import EXPERIMENTS, HUMAN, NOT_RUN, Threshold
 from biped.outputs._json import write_json
 from biped.viz.validate import threshold_figure
@@ -100,11 +101,11 @@ def write_validation(out: Path, results: dict[str, dict[str, Threshold]], meta: 
             "thresholds": {p: {"value": th.value, "bound": th.bound} for p, th in per.items()}}
         for k, per in results.items()}})]  # fmt: skip
     md = out / "validation.md"
-    md.write_text(_markdown(rows, presets, meta), encoding="utf-8")
+    files.write_text(md, _markdown(rows, presets, meta))
     written.append(md)
     trials = [t.row() for per in results.values() for th in per.values() for t in th.trials]
     table = pa.Table.from_pylist(trials)
-    pq.write_table(table, out / "trials.parquet")
+    files.write_via(out / "trials.parquet", lambda tmp: pq.write_table(table, tmp))
     written.append(out / "trials.parquet")
     figs = out / "figures"
     figs.mkdir(exist_ok=True)

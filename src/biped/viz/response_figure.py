@@ -4,9 +4,12 @@ front and back edges of the base of support (:func:`biped.sim.response.traces`).
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 import numpy as np
+
+from biped import files
 
 
 def plot_response(tr, out_dir, *, title: str = "") -> list[Path]:
@@ -38,7 +41,8 @@ def plot_response(tr, out_dir, *, title: str = "") -> list[Path]:
     paths = []
     for ext in ("png", "svg"):
         p = out / f"response.{ext}"
-        fig.savefig(p, dpi=120, metadata={"Date": None} if ext == "svg" else None)
+        meta = {"Date": None} if ext == "svg" else None
+        files.write_via(p, functools.partial(fig.savefig, dpi=120, metadata=meta, format=ext))
         paths.append(p)
     plt.close(fig)
     return paths

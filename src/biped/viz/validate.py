@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
+import functools
 from pathlib import Path
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+
+from biped import files  # noqa: E402
 
 __all__ = ["threshold_figure"]
 
@@ -36,6 +39,6 @@ def threshold_figure(path: str | Path, title: str, unit: str, thresholds: dict, 
     ax.grid(axis="y", alpha=0.3, zorder=0)
     fig.tight_layout()
     path = Path(path)
-    fig.savefig(path, dpi=120)
+    files.write_via(path, functools.partial(fig.savefig, dpi=120, format=path.suffix.lstrip(".") or "png"))
     plt.close(fig)
     return path
