@@ -26,7 +26,7 @@ import threading
 
 from biped.errors import BipedError
 
-SUBCOMMANDS = ("push", "posture", "walk", "sweep", "model")
+SUBCOMMANDS = ("push", "posture", "walk", "sweep", "envelope", "model")
 
 EXIT_OK, EXIT_FAILED, EXIT_BAD_INPUT, EXIT_INTERRUPTED, EXIT_TERMINATED = 0, 1, 2, 130, 143
 

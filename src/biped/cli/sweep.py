@@ -182,6 +182,8 @@ def build_spec(args):
         overrides["physics"] = args.physics
     elif not ({"physics", *_PHYSICS_KEYS} & (set(overrides) | _grid_scenario_keys(args.grid))):
         overrides["physics"] = "fast"  # the sweep's default preset (docs/sweep.md)
+    if "early_stop" not in overrides and "early_stop" not in _grid_scenario_keys(args.grid):
+        overrides["early_stop"] = True  # end each trial once its outcome is decided (docs/sweep.md)
     if overrides:
         base = base.with_overrides(**overrides)
     axes = dict(spec.axes) if spec else {}

@@ -126,6 +126,8 @@ class Scenario:
     # not in W: capture-point steps when the feet cannot hold (biped.control.stepping)
     stepping: bool = False
     max_steps: int = 3  # with stepping: most steps per run
+    # not in W: end a trial once its outcome is decided (biped.sim.early_stop; sweeps turn it on)
+    early_stop: bool = False
 
     def __post_init__(self):
         preset = PHYSICS_PRESETS.get(self.physics) if isinstance(self.physics, str) else None
@@ -218,6 +220,8 @@ class Scenario:
         out = {}
         for f in dataclasses.fields(self):
             v = getattr(self, f.name)
+            if f.name in _OMITTED_AT_DEFAULT and v == f.default:
+                continue  # a key added later: its default leaves old files (and W's outputs) as they were
             out[f.name] = list(v) if isinstance(v, tuple) else v
         return out
 
@@ -286,6 +290,11 @@ _STRINGS = {
 }
 
 
+#: Keys :meth:`Scenario.to_dict` leaves out at their default value, so that a scenario without
+#: them writes the same summary.json / sweep identity as before they existed.
+_OMITTED_AT_DEFAULT = frozenset({"early_stop"})
+
+
 def keys() -> tuple[str, ...]:
     """Every valid scenario key, in declaration order."""
     return tuple(f.name for f in dataclasses.fields(Scenario))
@@ -311,7 +320,9 @@ def _coerce(key: str, v):
         if isinstance(v, (list, tuple)):
             return tuple(float(x) if is_number(x) else x for x in v)
         return float(v) if is_number(v) else v
-    if key in _STRINGS or key in INTS or key == "stepping":  # a bool is checked, not converted
+    if (
+        key in _STRINGS or key in INTS or key in ("stepping", "early_stop")
+    ):  # a bool is checked, not converted
         return v
     if key == "model":
         return str(v) if isinstance(v, Path) else v
