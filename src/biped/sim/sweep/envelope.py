@@ -46,7 +46,7 @@ def lattice(lo: float, hi: float, resolution: float) -> tuple[float, ...]:
     """The sizes ``lo, lo + resolution, ..., hi`` (``hi - lo`` a multiple of ``resolution``
     within 1e-9), as ``numpy.linspace`` gives them, so they are the values (and trial keys) of
     ``biped sweep --speed lo:hi:num``."""
-    for name, v in (("--min", lo), ("--max", hi), ("--resolution", resolution)):
+    for name, v in (("--resolution", resolution), ("--min", lo), ("--max", hi)):
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
             raise ScenarioError(f"{name} must be a number > 0; got {v!r}")
     if hi < lo:
