@@ -63,7 +63,7 @@ def test_non_monotone_survival_is_reported_with_the_lowest_failure():
         n = int(rng.integers(2, 60))
         holes = set(rng.integers(0, n, 3).tolist())
         top = int(rng.integers(-1, n))
-        r, _ = _run(n, lambda i: i <= top and i not in holes, checks=int(rng.integers(0, 5)))
+        r, _ = _run(n, lambda i, t=top, h=holes: i <= t and i not in h, checks=int(rng.integers(0, 5)))
         fails = [i for i, ok in r.tried.items() if not ok]
         assert r.first_fail == (min(fails) if fails else n)
         assert r.limit < r.first_fail
