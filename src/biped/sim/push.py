@@ -365,7 +365,7 @@ def run_closed_loop(
                     if why == fused_mod.DONE:
                         if progress is not None and k % progress_every == 0:
                             progress(k * period)
-                        if stopper is not None and k % stopper.every == 0 and stopper.check(k):
+                        if stopper is not None and k < n_ctrl and k % stopper.every == 0 and stopper.check(k):
                             stopped = True
                             break
                         continue
@@ -412,7 +412,7 @@ def run_closed_loop(
             k += 1
             if progress is not None and k % progress_every == 0:
                 progress(k * period)
-            if stopper is not None and k % stopper.every == 0 and stopper.check(k):
+            if stopper is not None and k < n_ctrl and k % stopper.every == 0 and stopper.check(k):
                 stopped = True
                 break
     except KeyboardInterrupt:
