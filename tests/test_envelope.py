@@ -194,3 +194,19 @@ def test_envelope_bad_input_is_one_line_and_exit_2(tmp_path, capsys, argv, messa
     err = capsys.readouterr().err.strip()
     assert code == 2
     assert message in err and len(err.splitlines()) == 1
+
+
+def test_early_stop_stops_the_compiled_and_the_python_loop_at_the_same_row():
+    from biped.sim.push import run_closed_loop
+    from biped.sim.sweep.trial import _scene_for, make_policy
+
+    base = hold_scenario().with_overrides(physics="fast", distribution="qp", early_stop=True)
+    spec = SweepSpec(axes={"speed_m_s": (6.0,), "direction_deg": (180.0,)}, base=base)
+    setup = spec.setup(spec.trials()[0])
+    scene = _scene_for(setup.scenario)
+    runs = [
+        run_closed_loop(setup.scenario, scene, make_policy(setup, scene), compiled=c) for c in (True, False)
+    ]
+    assert runs[0].stop_reason == runs[1].stop_reason == "at_rest"
+    assert len(runs[0].times) == len(runs[1].times) < 1501
+    np.testing.assert_array_equal(runs[0].qpos, runs[1].qpos)
