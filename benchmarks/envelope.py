@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import subprocess
 import sys
 import time
@@ -29,10 +30,14 @@ from biped.analysis import envelope
 from biped.sim.sweep import load
 
 
-def _run(cmd: list[str]) -> float:
+def _run(cmd: list[str]) -> tuple[float, float]:
+    """(wall [s], CPU time of the command and its workers [s])."""
+    r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
-    return time.perf_counter() - t0
+    wall = time.perf_counter() - t0
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return wall, (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
 
 
 def main() -> int:
@@ -55,7 +60,7 @@ def main() -> int:
         f.unlink(missing_ok=True)
     stop = 360.0 - 360.0 / args.directions
     load0 = os.getloadavg()
-    wall_env = _run(
+    wall_env, cpu_env = _run(
         [*biped, "envelope", "--directions", str(args.directions), "--resolution", str(args.resolution),
          "--max", str(args.max), "--workers", str(args.workers), "--out", str(env_file),
          "--json", str(env_json), "--quiet", *args.extra]
@@ -65,16 +70,16 @@ def main() -> int:
     print(
         f"biped envelope, {args.directions} directions, resolution {args.resolution:g}, "
         f"{' '.join(args.extra) or 'defaults'}: {wall_env:.1f} s wall (whole command), "
-        f"{n_env} trials; load average {load0[0]:.1f} before"
+        f"{cpu_env:.1f} s CPU, {n_env} trials; load average {load0[0]:.1f} before"
     )
     if args.skip_grid:
         return 0
     num = round((args.max - args.grid_min) / args.resolution) + 1
     grid_file = out / f"grid-{args.tag}-{args.directions}x{num}.parquet"
     load1 = os.getloadavg()
-    wall_grid = float("nan")
+    wall_grid = cpu_grid = float("nan")
     if not grid_file.exists():
-        wall_grid = _run(
+        wall_grid, cpu_grid = _run(
             [*biped, "sweep", "--speed", f"{args.grid_min:g}:{args.max:g}:{num}", "--direction",
              f"0:{stop:g}:{args.directions}", "--workers", str(args.workers), "--out", str(grid_file),
              "--quiet", *args.extra]
@@ -83,10 +88,11 @@ def main() -> int:
     ge = envelope(grid)
     print(
         f"biped sweep grid, {args.directions} x {num} = {grid.table.num_rows} trials: "
-        f"{wall_grid:.1f} s wall (whole command; NaN: reused); load average {load1[0]:.1f} before, "
+        f"{wall_grid:.1f} s wall (whole command; NaN: reused), {cpu_grid:.1f} s CPU; load average "
+        f"{load1[0]:.1f} before, "
         f"{os.getloadavg()[0]:.1f} after"
     )
-    print(f"speed-up: x{wall_grid / wall_env:.1f}")
+    print(f"speed-up: x{wall_grid / wall_env:.1f} wall, x{cpu_grid / cpu_env:.1f} CPU")
     within = 0
     print("direction  envelope limit  grid limit  difference [steps]  note")
     for row in table["directions"]:

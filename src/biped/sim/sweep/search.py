@@ -12,11 +12,13 @@ Method (docs/envelope.md):
    lattice is reached: everything up to the largest size survived, or the smallest failed).
 2. **Bisection** between the largest survivor ``lo`` and the smallest failure ``hi`` until they
    are neighbours (one lattice step apart: the resolution).
-3. **Checks**: ``checks`` trials at evenly spaced sizes below ``lo`` (``lo * j / (checks + 1)``,
-   j = 1..checks, on the lattice, skipping sizes already tried). If one fails, survival is not
-   monotone: that failure becomes ``hi``, the bisection runs again below it, and the new limit gets
-   its own checks. The reported limit is therefore never above a failure that was seen: the
-   optimistic first limit is kept only as ``first_limit`` beside the flag.
+3. **Checks**: ``checks`` trials below ``lo`` at distances that double, 2, 4, 8, ... lattice
+   steps (``lo - 2**j``, j = 1..checks; sizes already tried are not tried again), where a fall
+   inside the envelope is most likely: near its edge, where the push is marginal. If one fails,
+   survival is not monotone: the lowest failure becomes ``hi``, the bisection runs again below
+   it, and the new limit gets its own checks. The reported limit is therefore never above a
+   failure that was seen: the optimistic first limit is kept only as ``first_limit`` beside the
+   flag.
 """
 
 from __future__ import annotations
@@ -105,9 +107,11 @@ def search(n: int, *, start: int | None = None, checks: int = 3) -> Generator[in
             first_limit = lo
         # 3. checks below the limit
         failed = None
-        for j in range(checks, 0, -1):
-            c = (lo * j) // (checks + 1)
-            if c >= lo or c < 0 or c in tried:
+        for j in range(1, checks + 1):
+            c = lo - 2**j
+            if c < 0:
+                break
+            if c in tried:
                 continue
             n_checks += 1
             if not (yield from probe(c)):
