@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import argparse
 import os
+import resource
 import time
 from pathlib import Path
 
@@ -25,6 +26,15 @@ import numpy as np
 
 from biped.analysis import survived
 from biped.sim.sweep import SweepSpec, hold_scenario, load, parse_axis, run_sweep
+
+
+def _cpu() -> float:
+    """CPU time [s] of this process and its finished children (the sweep's workers)."""
+    total = 0.0
+    for who in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN):
+        r = resource.getrusage(who)
+        total += r.ru_utime + r.ru_stime
+    return total
 
 
 def main() -> int:
@@ -63,9 +73,10 @@ def main() -> int:
         )
         spec = SweepSpec(axes=axes, base=base, torque_limits=args.torque_limits, samples=args.samples)
         files[es] = out / f"{name}-{'early' if es else 'full'}.parquet"
+        c0 = _cpu()
         t0 = time.perf_counter()
         s = run_sweep(spec, files[es], workers=args.workers, progress=False, overwrite=args.fresh)
-        walls[es] = (time.perf_counter() - t0, s.ran)
+        walls[es] = (time.perf_counter() - t0, s.ran, _cpu() - c0)
     load2 = os.getloadavg()
     full, early = (load(files[es]).table.to_pylist() for es in (False, True))
     key = ("speed_m_s", "direction_deg")
@@ -102,6 +113,10 @@ def main() -> int:
         f"({walls[True][1]} run now): x{wf / we:.2f}"
         if we > 0
         else ""
+    )
+    cf, ce = walls[False][2], walls[True][2]
+    print(
+        f"  CPU (this process + workers): full {cf:.1f} s, early stop {ce:.1f} s: x{cf / max(ce, 1e-9):.2f}"
     )
     print(f"  simulated time: full {sim_f:.0f} s, early {sim_e:.0f} s (x{sim_f / max(sim_e, 1e-9):.2f})")
     print(f"  how the early-stop trials ended: {reasons}")
