@@ -211,3 +211,30 @@ def test_early_stop_stops_the_compiled_and_the_python_loop_at_the_same_row():
     assert runs[0].stop_reason == runs[1].stop_reason == "at_rest"
     assert len(runs[0].times) == len(runs[1].times) < 1501
     np.testing.assert_array_equal(runs[0].qpos, runs[1].qpos)
+
+
+def test_sweep_refine_bisects_between_the_grids_survivor_and_failure(tmp_path):
+    """`biped sweep --refine`: the coarse grid first (every size, every direction), then the
+    bisection between each direction's last survivor and first failure on the fine lattice."""
+    coarse = (1.0, 3.0, 5.0, 7.0)
+    fine = lattice(1.0, 7.0, 0.25)
+    spec = SweepSpec(axes={"speed_m_s": fine, "direction_deg": (0.0, 90.0, 180.0)})
+    run = run_envelope(spec, tmp_path / "r.parquet", trial_fn=plant_trial, workers=1, checks=0, grid=coarse)
+    got = {d.direction_deg: d for d in run.directions}
+    # plant: 6 m/s at 0 deg, 4 at 90, 2 at 180 with a fall at 1 m/s (the grid's first size)
+    assert (got[0.0].limit, got[0.0].first_fail) == (6.0, 6.25)
+    assert (got[90.0].limit, got[90.0].first_fail) == (4.0, 4.25)
+    assert math.isnan(got[180.0].limit) and got[180.0].first_fail == 1.0  # the grid's first size fell
+    for d in run.directions:  # every grid size ran, then at most log2(8) bisection steps
+        assert set(coarse) <= set(d.rows) and len(d.rows) <= len(coarse) + 3
+
+
+def test_sweep_refine_input_errors(tmp_path, capsys):
+    base = ["sweep", "--dry-run", "--out", str(tmp_path / "s.parquet"), "--direction", "0,90"]
+    assert main([*base, "--speed", "1:7:4", "--refine", "0.35"]) == 2
+    assert "--refine 0.35 must divide" in capsys.readouterr().err
+    assert main([*base, "--speed", "1,2,4", "--refine", "0.75"]) == 2
+    assert "not on the lattice" in capsys.readouterr().err
+    assert main([*base, "--speed", "1:7:4", "--samples", "5", "--refine", "0.5"]) == 2
+    assert "--refine needs a grid" in capsys.readouterr().err
+    assert main([*base, "--speed", "1:7:4", "--refine", "0.5"]) == 0

@@ -21,7 +21,7 @@ import math
 import os
 import time
 from collections import deque
-from collections.abc import Callable
+from collections.abc import Callable, Generator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -111,22 +111,43 @@ class EnvelopeRun:
 class _Direction:
     """One direction's search in progress."""
 
-    def __init__(self, direction: float, n: int, start: int | None, checks: int):
+    def __init__(self, direction: float, n: int, start: int | None, checks: int, pre: tuple = ()):
         self.direction = direction
-        self.gen = search(n, start=start, checks=checks)
-        self.want: int | None = next(self.gen)
+        self.pre = list(pre)  # grid sizes run before the search (``biped sweep --refine``)
+        self.n, self.checks = n, checks
         self.result: SearchResult | None = None
+        self.next_search: int | None = None
+        self.gen: Generator[int, bool, SearchResult]
+        if not pre:
+            self.gen = search(n, start=start, checks=checks)
+            self.next_search = next(self.gen)
         self.rows: dict[int, dict] = {}
         self.in_flight = False
         self.losses: dict[int, int] = {}
         self.abandoned = False
 
+    @property
+    def want(self) -> int | None:
+        return self.pre[0] if self.pre else self.next_search
+
     def tell(self, index: int, row: dict, criterion: str) -> None:
         self.rows[index] = row
+        if self.pre and index == self.pre[0]:
+            self.pre.pop(0)
+            if not self.pre:  # the grid is done: bisect between its last survivor and first failure
+                ok = {i: row_survived(r, criterion) for i, r in self.rows.items()}
+                hi = min((i for i, v in ok.items() if not v), default=self.n)
+                lo = max((i for i, v in ok.items() if v and i < hi), default=-1)
+                self.gen = search(self.n, checks=self.checks, bracket=(lo, hi))
+                self._next()
+            return
+        self._next(row_survived(row, criterion))
+
+    def _next(self, answer: bool | None = None) -> None:
         try:
-            self.want = self.gen.send(row_survived(row, criterion))
+            self.next_search = next(self.gen) if answer is None else self.gen.send(answer)
         except StopIteration as stop:
-            self.want, self.result = None, stop.value
+            self.next_search, self.result = None, stop.value
 
 
 def run_envelope(
@@ -142,6 +163,7 @@ def run_envelope(
     trial_fn: Callable | None = None,
     progress: Callable[[int, int], None] | None = None,
     overwrite: bool = False,
+    grid: tuple = (),
 ) -> EnvelopeRun:
     """Search every direction of ``spec`` along ``axis`` (``spec``'s grid: the lattice of sizes on
     ``axis``, the directions on ``direction_deg``, one value on every other axis; see
@@ -150,7 +172,10 @@ def run_envelope(
     checks: check trials below each limit; start: the first size tried (default the lattice's
     middle; the nearest lattice size); criterion: ``"survived"`` or ``"recovered"`` (as
     :func:`biped.analysis.survived`); workers / scheduler / trial_fn / overwrite: as
-    :func:`biped.sim.sweep.run_sweep`; ``progress(done, running)`` after every row.
+    :func:`biped.sim.sweep.run_sweep`; ``progress(done, running)`` after every row; ``grid``:
+    sizes (on the lattice) every direction runs first, whatever the search needs (``biped sweep
+    --refine``: the coarse grid, then the bisection between its last survivor and first failure,
+    which reuses the grid's trials).
     """
     t0 = time.perf_counter()
     if axis not in MAGNITUDE_AXES:
@@ -166,6 +191,12 @@ def run_envelope(
         if name not in (axis, "direction_deg") and len(axes[name]) != 1:
             raise ScenarioError(f"an envelope takes one value of {name}; got {len(axes[name])}")
     sizes = tuple(sorted(axes[axis]))
+    pre = []
+    for v in sorted(grid):
+        i = int(np.argmin(np.abs(np.asarray(sizes) - float(v))))
+        if abs(sizes[i] - float(v)) > 1e-9 * max(1.0, abs(float(v))):
+            raise ScenarioError(f"grid size {v:g} is not on the lattice of {axis}")
+        pre.append(i)
     dirs = tuple(sorted(set(axes["direction_deg"])))
     start_i = None
     if start is not None:
@@ -187,7 +218,8 @@ def run_envelope(
         known = {r["trial_key"]: r for r in table.to_pylist() if r["error"] is None}
         store.write_manifest(spec, out)
         writer = store.PartWriter(store.parts_dir(out))
-        searches = [_Direction(d, len(sizes), start_i, checks) for d in dirs]
+        searches = [_Direction(d, len(sizes), start_i, checks, tuple(pre)) for d in dirs]
+        ran_keys: set[str] = set()
         keyed: dict[str, tuple[_Direction, int]] = {}
         queue: deque[tuple[_Direction, int]] = deque()
         counts = {"ran": 0, "reused": 0, "lost": 0}
@@ -202,7 +234,7 @@ def run_envelope(
                     queue.append((s, s.want))
                     s.in_flight = True
                     return
-                counts["reused"] += 1
+                counts["reused"] += trial.key not in ran_keys
                 s.tell(s.want, row, criterion)
 
         def record(rows: list[dict]) -> None:
@@ -210,6 +242,9 @@ def run_envelope(
             for row in rows:
                 s, i = keyed.pop(row["trial_key"])
                 counts["ran"] += 1
+                if row["error"] is None:
+                    known[row["trial_key"]] = row
+                    ran_keys.add(row["trial_key"])
                 s.in_flight = False
                 s.tell(i, row, criterion)
                 advance(s)

@@ -51,12 +51,16 @@ class SearchResult:
     tried: dict = field(default_factory=dict)
 
 
-def search(n: int, *, start: int | None = None, checks: int = 3) -> Generator[int, bool, SearchResult]:
+def search(
+    n: int, *, start: int | None = None, checks: int = 3, bracket: tuple[int, int] | None = None
+) -> Generator[int, bool, SearchResult]:
     """Find the survival limit on lattice indices ``0 .. n-1`` (see the module docstring).
 
     Drive it with ``i = next(gen)``, then ``i = gen.send(survived)`` until it raises
     ``StopIteration`` whose ``value`` is the :class:`SearchResult`. ``start``: the first index
-    tried (default the middle); ``checks``: check trials below each limit (0: none).
+    tried (default the middle); ``checks``: check trials below each limit (0: none);
+    ``bracket``: ``(lo, hi)`` known already (a survivor, -1 for none, and a failure, ``n`` for
+    none: ``biped sweep --refine`` takes them from its grid), which skips the bracket phase.
     """
     if not isinstance(n, int) or n < 1:
         raise ValueError(f"the lattice needs at least one size; got n = {n!r}")
@@ -74,7 +78,11 @@ def search(n: int, *, start: int | None = None, checks: int = 3) -> Generator[in
     # 1. bracket
     step = max(1, n // 8)
     i = start
-    if (yield from probe(i)):
+    if bracket is not None:
+        lo, hi = bracket
+        if not -1 <= lo < hi <= n:
+            raise ValueError(f"bracket must be -1 <= lo < hi <= n = {n}; got {bracket!r}")
+    elif (yield from probe(i)):
         lo = i
         while lo < n - 1:
             j = min(n - 1, lo + step)
