@@ -296,7 +296,7 @@ def _run(args) -> int:
     print(
         f"biped sweep: {n} trials of {spec.base.duration_s:g} s, controller "
         f"{spec.base.controller}, torque limits {spec.torque_limits}, physics "
-        f"{spec.base.physics}, on {where} -> {out}",
+        f"{spec.base.physics}, early stop {'on' if spec.base.early_stop else 'off'}, on {where} -> {out}",
         file=sys.stderr,
     )
     if args.scheduler is None:  # compile before the local workers start: they load the cache
