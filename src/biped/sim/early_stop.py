@@ -54,7 +54,14 @@ BLOCK_SPIN_RAD_S = 0.2
 
 AT_REST = "at_rest"
 
-__all__ = ["AT_REST", "CHECK_S", "HOLD_S", "MARGIN", "EarlyStop"]
+__all__ = ["AT_REST", "CHECK_S", "HOLD_S", "MARGIN", "EarlyStop", "applies"]
+
+
+def applies(scenario) -> bool:
+    """Whether ``scenario``'s runs may stop early: ``early_stop`` is on and the perturbation is the
+    block, the one whose end ("at rest") this rule knows. Other perturbation paradigms (a
+    ``perturbation`` key other than ``"block"``) run to their end until they supply their own."""
+    return bool(scenario.early_stop) and getattr(scenario, "perturbation", "block") == "block"
 
 
 class EarlyStop:

@@ -41,6 +41,7 @@ from biped.models import subject
 from biped.sim import fused as fused_mod
 from biped.sim.contact import SOLE_GEOMS, ContactMonitor
 from biped.sim.early_stop import AT_REST, EarlyStop
+from biped.sim.early_stop import applies as early_stop_applies
 from biped.sim.scenario import Scenario
 from biped.sim.scene import Scene, build_scene, initial_state, tilt_quat
 
@@ -348,7 +349,7 @@ def run_closed_loop(
         raise ScenarioError(fused_mod.refusal())
     synced = 0  # rows [0, synced) went through the monitor
     chunk = progress_every if progress is not None else 10 * progress_every  # rows a call
-    stopper = EarlyStop(scenario, scene, records, policy) if scenario.early_stop else None
+    stopper = EarlyStop(scenario, scene, records, policy) if early_stop_applies(scenario) else None
     if stopper is not None:  # the rule is checked between compiled calls: one check interval a call
         chunk = stopper.every
     stopped = False
