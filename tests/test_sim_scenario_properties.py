@@ -43,7 +43,8 @@ _VALUE = st.one_of(
     st.lists(st.floats(min_value=-1, max_value=1.5), min_size=3, max_size=3),
     st.dictionaries(st.text(max_size=3), _SCALAR, max_size=2),
 )
-_DEFAULTS = Scenario().to_dict()
+# every key's default (to_dict leaves out keys added later while they are at their default)
+_DEFAULTS = {**{k: getattr(Scenario(), k) for k in keys()}, **Scenario().to_dict()}
 
 
 def _near_default(key):

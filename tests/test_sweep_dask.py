@@ -49,3 +49,20 @@ def test_sweep_runs_on_a_dask_cluster_by_address(cluster, tmp_path):
     # resuming through the cluster: nothing left to do
     again = run_sweep(spec, out, scheduler=cluster.scheduler_address, progress=False)
     assert again.skipped == 4 and again.ran == 0
+
+
+def test_envelope_runs_on_a_dask_cluster_with_the_local_answer(cluster, tmp_path):
+    """`biped envelope --scheduler`: the directions' searches stream trials (a closed-form plant)
+    through the cluster and find the same limits as in this process."""
+    from test_envelope import _spec, plant_trial
+
+    from biped.sim.sweep.envelope import run_envelope
+
+    here = run_envelope(_spec(), tmp_path / "here.parquet", trial_fn=plant_trial, workers=1)
+    there = run_envelope(
+        _spec(), tmp_path / "dask.parquet", trial_fn=plant_trial, scheduler=cluster.scheduler_address
+    )
+    assert there.backend == "dask" and there.complete
+    assert [(d.limit, d.first_fail, d.n_trials) for d in there.directions] == [
+        (d.limit, d.first_fail, d.n_trials) for d in here.directions
+    ]

@@ -26,7 +26,7 @@ import threading
 
 from biped.errors import BipedError
 
-SUBCOMMANDS = ("push", "posture", "walk", "sweep", "model", "validate")
+SUBCOMMANDS = ("push", "posture", "walk", "sweep", "envelope", "model", "validate")
 
 #: Options naming a file or folder: an empty value is refused (it would read as "not given").
 _PATH_OPTIONS = ("out", "model", "scenario", "grid", "plot", "animation", "video")

@@ -7,6 +7,7 @@ See docs/sweep.md. Exit status: 0 done; 1 incomplete (a worker died: rerun to fi
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
@@ -124,6 +125,13 @@ def register(subparsers) -> None:
         metavar="FILE.parquet",
         help="results (default runs/sweep-<controller>[-<distribution>][-stepping]-<limits>.parquet)",
     )
+    p.add_argument(
+        "--refine",
+        type=float,
+        metavar="V",
+        help="after the grid, bisect each direction's speed between its last survivor and first "
+        "failure to V m/s (biped envelope's search, reusing the grid's trials; docs/envelope.md)",
+    )
     p.add_argument("--retry-failed", action="store_true", help="rerun trials that raised")
     p.add_argument(
         "--overwrite", action="store_true", help="replace an --out file that holds a different sweep"
@@ -195,6 +203,8 @@ def build_spec(args):
         overrides["physics"] = args.physics
     elif not ({"physics", *_PHYSICS_KEYS} & (set(overrides) | _grid_scenario_keys(args.grid))):
         overrides["physics"] = "fast"  # the sweep's default preset (docs/sweep.md)
+    if "early_stop" not in overrides and "early_stop" not in _grid_scenario_keys(args.grid):
+        overrides["early_stop"] = True  # end each trial once its outcome is decided (docs/sweep.md)
     if overrides:
         base = base.with_overrides(**overrides)
     axes = dict(spec.axes) if spec else {}
@@ -295,6 +305,8 @@ def _run(args) -> int:
         else Path("runs")
         / (f"sweep-{spec.base.controller}{_variant_suffix(spec.base)}-{spec.torque_limits}.parquet")
     )
+    if args.refine is not None:
+        refine_spec(spec, args.refine)  # its errors before any work
     n = spec.n_trials
     where = args.scheduler or f"{args.workers or 'all'} local worker(s)"
     check_run_args(out, workers=args.workers, batch=args.batch)
@@ -328,7 +340,7 @@ def _sweep(args, spec, out: Path, n: int, where: str, client) -> int:
     print(
         f"biped sweep: {n} trials of {spec.base.duration_s:g} s, controller "
         f"{spec.base.controller}, torque limits {spec.torque_limits}, physics "
-        f"{spec.base.physics}, on {where} -> {out}",
+        f"{spec.base.physics}, early stop {'on' if spec.base.early_stop else 'off'}, on {where} -> {out}",
         file=sys.stderr,
     )
     if args.scheduler is None:  # compile before the local workers start: they load the cache
@@ -338,6 +350,8 @@ def _sweep(args, spec, out: Path, n: int, where: str, client) -> int:
             kernels_for(spec.base.controller, spec.base.distribution),
             log=lambda line: print(line, file=sys.stderr),
         )
+    if args.refine is not None:
+        return _refine(args, spec, out)
     try:
         summary = run_sweep(
             spec,
@@ -380,3 +394,70 @@ def _sweep(args, spec, out: Path, n: int, where: str, client) -> int:
         plot_comparison([out, *args.compare], by=by, out=args.plot)
         print(f"envelope plot: {args.plot}")
     return 0
+
+
+def refine_spec(spec, resolution: float):
+    """(the sweep on the fine lattice min..max of its speeds by ``resolution``, the coarse
+    speeds): ``--refine``'s checks, before any work."""
+    from biped.sim.sweep.envelope import lattice
+
+    axes = dict(spec.axes)
+    if spec.samples is not None:
+        raise ScenarioError("--refine needs a grid, not --samples")
+    for name in ("block_mass_kg", "height_m", "gain_scale"):
+        if len(axes[name]) != 1:
+            raise ScenarioError(f"--refine takes one value of {name}; got {len(axes[name])}")
+    if not (math.isfinite(resolution) and resolution > 0):
+        raise ScenarioError(f"--refine must be a speed step > 0 [m/s]; got {resolution:g}")
+    coarse = tuple(sorted(axes["speed_m_s"]))
+    steps = (coarse[-1] - coarse[0]) / resolution
+    if abs(steps - round(steps)) > 1e-9 * max(1.0, steps):
+        raise ScenarioError(
+            f"--refine {resolution:g} must divide the grid's speed range {coarse[0]:g}-{coarse[-1]:g} "
+            f"into whole steps"
+        )
+    fine = lattice(coarse[0], coarse[-1], resolution) if len(coarse) > 1 else coarse
+    for v in coarse:
+        if min(abs(v - f) for f in fine) > 1e-9 * max(1.0, v):
+            raise ScenarioError(
+                f"--refine {resolution:g}: the grid speed {v:g} is not on the lattice {coarse[0]:g}, "
+                f"{coarse[0] + resolution:g}, ... {coarse[-1]:g}; choose a resolution that divides the grid's step"
+            )
+    return spec.with_axes(speed_m_s=fine), coarse
+
+
+def _refine(args, spec, out) -> int:
+    """``--refine``: the grid, then each direction's bisection, as one envelope run."""
+    from biped.analysis.envelope_table import envelope_table
+    from biped.sim.sweep import Terminated, parts_dir
+    from biped.sim.sweep.envelope import run_envelope
+
+    fine, coarse = refine_spec(spec, args.refine)
+    try:
+        result = run_envelope(
+            fine,
+            out,
+            checks=0,
+            workers=args.workers,
+            scheduler=args.scheduler,
+            overwrite=args.overwrite,
+            grid=coarse,
+        )
+    except KeyboardInterrupt as exc:
+        print(
+            f"biped sweep: interrupted; every finished trial is kept in {parts_dir(out)}/. Run the "
+            f"same command again to finish.",
+            file=sys.stderr,
+        )
+        return 143 if isinstance(exc, Terminated) else 130
+    print(envelope_table(result).format())
+    print(
+        f"ran {result.ran} (reused {result.reused}), wall {result.wall_time_s:.1f} s ({result.backend}); "
+        f"{out} holds the grid on the {args.refine:g} m/s lattice: rerun with the same --refine"
+    )
+    if args.plot:
+        from biped.viz.envelope import plot_comparison
+
+        plot_comparison([out, *args.compare], by=args.by, out=args.plot)
+        print(f"envelope plot: {args.plot}")
+    return 0 if result.complete else 1

@@ -259,6 +259,8 @@ def summary_dict(result: PushResult, rows: RowMeasurements | None = None) -> dic
         "physics_timestep_s": s.physics_timestep_s,
         "trajectory_columns": "columns.json",
         "scenario": s.to_dict(),
+        # only with early_stop = true (biped.sim.early_stop), so W's default summary is unchanged
+        **({"stop_reason": result.stop_reason} if result.stop_reason else {}),
     }
 
 

@@ -42,6 +42,8 @@ from biped.models import subject
 from biped.sim import fused as fused_mod
 from biped.sim import perturbations
 from biped.sim.contact import SOLE_GEOMS, ContactMonitor
+from biped.sim.early_stop import AT_REST, EarlyStop
+from biped.sim.early_stop import applies as early_stop_applies
 from biped.sim.neuro import neuro_loop
 from biped.sim.scenario import Scenario
 from biped.sim.scene import Scene, build_scene, initial_state, tilt_quat
@@ -105,6 +107,7 @@ class PushResult:
     realtime_factor: float
     controller_error: str | None = None
     diverged: str | None = None
+    stop_reason: str | None = None  # "at_rest": ended early by the early_stop rule (biped.sim.early_stop)
     qvel: np.ndarray | None = None
     block_velocity: np.ndarray | None = None
     feet_pos: np.ndarray | None = None
@@ -361,6 +364,10 @@ def run_closed_loop(
         raise ScenarioError(fused_mod.refusal())
     synced = 0  # rows [0, synced) went through the monitor
     chunk = progress_every if progress is not None else 10 * progress_every  # rows a call
+    stopper = EarlyStop(scenario, scene, records, policy) if early_stop_applies(scenario) else None
+    if stopper is not None:  # the rule is checked between compiled calls: one check interval a call
+        chunk = stopper.every
+    stopped = False
     t0 = time.perf_counter()
     try:
         k = 0
@@ -382,6 +389,9 @@ def run_closed_loop(
                     if why == fused_mod.DONE:
                         if progress is not None and k % progress_every == 0:
                             progress(k * period)
+                        if stopper is not None and k < n_ctrl and k % stopper.every == 0 and stopper.check(k):
+                            stopped = True
+                            break
                         continue
                     if why == fused_mod.DIVERGED:
                         diverged = fused_mod.diverged_message(k * period, period)
@@ -430,6 +440,9 @@ def run_closed_loop(
             k += 1
             if progress is not None and k % progress_every == 0:
                 progress(k * period)
+            if stopper is not None and k < n_ctrl and k % stopper.every == 0 and stopper.check(k):
+                stopped = True
+                break
     except KeyboardInterrupt:
         interrupted = True
     if fused is not None and synced < rows:
@@ -454,7 +467,7 @@ def run_closed_loop(
     else:
         com_err = ori_err = float("nan")
     fell = monitor.fall_time_s is not None
-    complete = rows == n and not interrupted and controller_error is None and diverged is None
+    complete = (rows == n or stopped) and not interrupted and controller_error is None and diverged is None
     recovered = bool(
         complete
         and not fell
@@ -492,6 +505,7 @@ def run_closed_loop(
         realtime_factor=sim_time / wall if wall > 0 else float("inf"),
         controller_error=controller_error,
         diverged=diverged,
+        stop_reason=AT_REST if stopped else None,
         qvel=qvel[sl],
         block_velocity=block_vel[sl],
         feet_pos=feet_pos[sl],

@@ -156,6 +156,8 @@ class Scenario:
     release_lean_deg: float = 5.0
     release_direction_deg: float = 0.0  # 0 forward (world -x), 90 to the biped's left (world -y)
     release_time_s: float = 0.1  # >= duration_s: the tether never goes
+    # not in W: end a trial once its outcome is decided (biped.sim.early_stop; sweeps turn it on)
+    early_stop: bool = False
 
     def __post_init__(self):
         preset = PHYSICS_PRESETS.get(self.physics) if isinstance(self.physics, str) else None
@@ -259,6 +261,8 @@ class Scenario:
         out = {}
         for f in dataclasses.fields(self):
             v = getattr(self, f.name)
+            if f.name in _OMITTED_AT_DEFAULT and v == f.default:
+                continue  # a key added later: its default leaves old files (and W's outputs) as they were
             out[f.name] = list(v) if isinstance(v, tuple) else v
         return out
 
@@ -347,6 +351,11 @@ _STRINGS = {
 }
 
 
+#: Keys :meth:`Scenario.to_dict` leaves out at their default value, so that a scenario without
+#: them writes the same summary.json / sweep identity as before they existed.
+_OMITTED_AT_DEFAULT = frozenset({"early_stop"})
+
+
 def keys() -> tuple[str, ...]:
     """Every valid scenario key, in declaration order."""
     return tuple(f.name for f in dataclasses.fields(Scenario))
@@ -373,7 +382,7 @@ def _coerce(key: str, v):
             return tuple(float(x) if is_number(x) else x for x in v)
         return float(v) if is_number(v) else v
     if (
-        key in _STRINGS or key in INTS or key in ("stepping", "ankle_only")
+        key in _STRINGS or key in INTS or key in ("stepping", "ankle_only", "early_stop")
     ):  # a bool is checked, not converted
         return v
     if key in ("model", "force_body"):

@@ -205,6 +205,64 @@ class LocalPool:
             sel.close()
         return lost
 
+    def stream(
+        self,
+        next_setup: Callable[[], Any],
+        record: Callable[[list[dict]], None],
+        lost: Callable[[list[Any]], None],
+    ) -> None:
+        """Adaptive work (``biped envelope``): whenever a worker is free, ``next_setup()`` gives
+        the next trial setup, or None when there is none now (the next may depend on a row still
+        running). Rows go to ``record(rows)`` as they arrive; the setups of a worker that died go to
+        ``lost(setups)`` (a fresh worker takes the work that follows, up to ``4 * workers`` times).
+        Returns when no trial runs and ``next_setup()`` has nothing."""
+        sel = selectors.DefaultSelector()
+        idle: list[_Worker] = []
+        running: dict[_Worker, list] = {}
+        try:
+            while True:
+                while idle or len(self.workers) < self.n:
+                    setup = next_setup()
+                    if setup is None:
+                        break
+                    if idle:
+                        w = idle.pop()
+                    elif self.respawns >= 0:
+                        w = _Worker(self.trial_fn)
+                        self.workers.append(w)
+                        sel.register(w.fd, selectors.EVENT_READ, w)
+                    else:
+                        lost([setup])
+                        continue
+                    self._assign(w, [setup])
+                    running[w] = [setup]
+                if not running:
+                    return
+                for key, _ in sel.select():
+                    w = key.data
+                    data = os.read(w.fd, 1 << 16)
+                    if data:
+                        rows = w.rows(data)
+                        if rows:
+                            w.remaining -= len(rows)
+                            record(rows)
+                        if w.remaining == 0:
+                            running.pop(w, None)
+                            idle.append(w)
+                        continue
+                    sel.unregister(w.fd)  # end of file: the worker died
+                    self.workers.remove(w)
+                    w.close()
+                    self.respawns -= 1
+                    gone = running.pop(w, [])
+                    if gone:
+                        lost(gone)
+        finally:
+            for w in self.workers:
+                record(w.kill())
+            self.workers.clear()
+            sel.close()
+
     def _start(self, sel: selectors.BaseSelector, todo: list) -> None:
         w = _Worker(self.trial_fn)
         self.workers.append(w)

@@ -79,6 +79,10 @@ class Measured:
     step_needed: bool = False
     step_length_m: float = math.nan
     time_to_foot_contact_s: float = math.nan
+    # why the run ended before its duration ("at_rest": the early_stop rule, biped.sim.early_stop;
+    # "fell", "diverged", "controller_error"), and when [s]; None / NaN: it ran to its duration
+    stop_reason: str | None = None
+    stopped_at_s: float = math.nan
 
     def row(self) -> dict[str, Any]:
         """``{column: value}`` for the sweep file."""
@@ -116,6 +120,24 @@ MEASURED: tuple[str, ...] = tuple(f.name for f in dataclasses.fields(Measured))
 COLUMNS: tuple[str, ...] = tuple(f.name for cls in (_Head, Measured, _Tail) for f in dataclasses.fields(cls))
 
 
+def row_survived(row: dict[str, Any], criterion: str = "survived") -> bool:
+    """One row's verdict, the rule of :func:`biped.analysis.survived` (which works on whole tables):
+    ``"survived"``: no error, completed, no fall, no controller error, no divergence;
+    ``"recovered"``: no error and the simulator's ``recovered``."""
+    if row.get("error") is not None:
+        return False
+    if criterion == "recovered":
+        return bool(row.get("recovered"))
+    fell = row.get("fell")
+    return bool(
+        row.get("completed")
+        and fell is not None
+        and not fell
+        and row.get("controller_error") is None
+        and row.get("diverged") is None
+    )
+
+
 def schema() -> pa.Schema:
     """The ``pyarrow.Schema`` of a sweep file (one row per trial), from the dataclasses above."""
     return pa.schema(
@@ -127,4 +149,4 @@ def schema() -> pa.Schema:
     )
 
 
-__all__ = ["COLUMNS", "MEASURED", "Measured", "schema"]
+__all__ = ["COLUMNS", "MEASURED", "Measured", "row_survived", "schema"]

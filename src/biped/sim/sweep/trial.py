@@ -174,6 +174,19 @@ def measure(result: PushResult, block_velocity: np.ndarray, *, scene: Scene | No
     t_after = tc if tc is not None else float("inf")
     lifts = [e for e in result.events if e.kind == "lift_off" and e.time_s >= t_after]
     slip, rise = _foot_motion(result, scene)
+    ran_out = bool(n and t[-1] >= sc.duration_s - 0.5 / sc.control_rate_hz)
+    at_rest = result.stop_reason is not None
+    stop_reason = result.stop_reason
+    if not ran_out and stop_reason is None:
+        stop_reason = (
+            "fell"
+            if result.fell
+            else "diverged"
+            if result.diverged
+            else "controller_error"
+            if result.controller_error
+            else None
+        )
     return Measured(
         recovered=bool(result.recovered),
         fell=bool(result.fell),
@@ -195,12 +208,14 @@ def measure(result: PushResult, block_velocity: np.ndarray, *, scene: Scene | No
         right_slip_m=slip[1],
         peak_torque_n_m=float(np.abs(result.torques).max()) if n else float("nan"),
         simulated_time_s=float(t[-1]) if n else 0.0,
-        completed=bool(n and t[-1] >= sc.duration_s - 0.5 / sc.control_rate_hz and not result.interrupted),
+        completed=bool(n and (ran_out or at_rest) and not result.interrupted),
         fall_reason=result.fall_reason,
         controller_error=result.controller_error,
         diverged=getattr(result, "diverged", None),
         step_count=len(result.extra.get("steps", ())),
         **_perturbation_columns(result, scene, float(np.hypot(J[0], J[1]))),
+        stop_reason=stop_reason,
+        stopped_at_s=float(t[-1]) if n and stop_reason is not None else float("nan"),
     )
 
 

@@ -1,0 +1,134 @@
+"""The table of a ``biped envelope`` run: per direction the limit found by the search, the first
+failing size, the impulse the limit push delivered, the COM velocity change it means and its
+share of Hof's feet-in-place bound (:mod:`biped.analysis.feet_in_place`).
+
+Pure arithmetic over :class:`biped.sim.sweep.envelope.EnvelopeRun` and the bound; printing and
+JSON here, the polar plot in :mod:`biped.viz.envelope` (the run's Parquet file is a sweep file).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Any
+
+from biped.analysis.feet_in_place import feet_in_place_bound
+
+__all__ = ["EnvelopeRow", "EnvelopeTable", "envelope_table"]
+
+
+@dataclass(frozen=True)
+class EnvelopeRow:
+    """One direction. limit / first_fail: sizes on the search axis (NaN: none survived / none
+    failed); impulse_n_s: the impulse measured on the limit's trial; delta_v_m_s: that impulse over
+    the body's mass (the COM velocity change it causes, J / m); j_max_n_s: Hof's bound in that
+    direction; percent_j_max: 100 impulse / J_max; non_monotone: a check trial below the first
+    limit failed (limit is then the bisection below the lowest failure, first_limit the one
+    before); n_trials: trials this direction used, n_checks of them check trials."""
+
+    direction_deg: float
+    limit: float
+    first_fail: float
+    impulse_n_s: float
+    delta_v_m_s: float
+    j_max_n_s: float
+    percent_j_max: float
+    non_monotone: bool
+    first_limit: float
+    check_failures: int
+    n_checks: int
+    n_trials: int
+    complete: bool
+
+
+@dataclass(frozen=True)
+class EnvelopeTable:
+    axis: str
+    criterion: str
+    resolution: float
+    body_mass_kg: float
+    rows: tuple[EnvelopeRow, ...]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready (NaN as None)."""
+
+        def clean(v: Any) -> Any:
+            return None if isinstance(v, float) and not math.isfinite(v) else v
+
+        return {
+            "axis": self.axis,
+            "criterion": self.criterion,
+            "resolution": self.resolution,
+            "body_mass_kg": self.body_mass_kg,
+            "directions": [{k: clean(v) for k, v in asdict(r).items()} for r in self.rows],
+        }
+
+    def format(self) -> str:
+        """The table as fixed-width text for the terminal."""
+        unit = self.axis.rsplit("_", 2)
+        head = (
+            f"{'direction':>9}  {'limit':>7}  {'first fail':>10}  {'impulse':>8}  "
+            f"{'COM dv':>7}  {'% J_max':>7}  {'trials':>6}  note"
+        )
+        units = (
+            f"{'[deg]':>9}  {'[' + '/'.join(unit[1:]) + ']':>7}  {'':>10}  {'[N s]':>8}  "
+            f"{'[m/s]':>7}  {'':>7}  {'':>6}"
+        )
+        lines = [head, units]
+        for r in self.rows:
+            note = ""
+            if not r.complete:
+                note = "unfinished (a trial was lost twice)"
+            elif r.non_monotone:
+                note = (
+                    f"NOT MONOTONE: {r.check_failures} of {r.n_checks} check trials below "
+                    f"{r.first_limit:g} failed; limit is below the lowest failure"
+                )
+            elif math.isnan(r.first_fail):
+                note = "survived the largest size: limit >= it"
+            elif math.isnan(r.limit):
+                note = "the smallest size failed"
+            lines.append(
+                f"{r.direction_deg:9.1f}  {_f(r.limit, 7, 2)}  {_f(r.first_fail, 10, 2)}  "
+                f"{_f(r.impulse_n_s, 8, 1)}  {_f(r.delta_v_m_s, 7, 3)}  {_f(r.percent_j_max, 6, 0)}%  "
+                f"{r.n_trials:6d}  {note}"
+            )
+        return "\n".join(lines)
+
+
+def _f(v: float, width: int, digits: int) -> str:
+    return f"{'-':>{width}}" if not math.isfinite(v) else f"{v:{width}.{digits}f}"
+
+
+def envelope_table(run: Any, *, bound: Any = None) -> EnvelopeTable:
+    """The :class:`EnvelopeTable` of an :class:`~biped.sim.sweep.envelope.EnvelopeRun`.
+    ``bound``: a :class:`~biped.analysis.FeetInPlaceBound` for the run's directions (default:
+    :func:`feet_in_place_bound` at the run's base scenario)."""
+    dirs = [d.direction_deg for d in run.directions]
+    if bound is None:
+        bound = feet_in_place_bound(dirs, run.spec.base)
+    mass = float(bound.mass_kg)
+    rows = []
+    sizes = run.sizes
+    resolution = float(sizes[1] - sizes[0]) if len(sizes) > 1 else float("nan")
+    for d, jmax in zip(run.directions, bound.j_max_n_s, strict=True):
+        row = d.rows.get(d.limit) if math.isfinite(d.limit) else None
+        j = float(row["impulse_n_s"]) if row and row.get("impulse_n_s") is not None else float("nan")
+        rows.append(
+            EnvelopeRow(
+                direction_deg=float(d.direction_deg),
+                limit=float(d.limit),
+                first_fail=float(d.first_fail),
+                impulse_n_s=j,
+                delta_v_m_s=j / mass,
+                j_max_n_s=float(jmax),
+                percent_j_max=100.0 * j / float(jmax),
+                non_monotone=bool(d.non_monotone),
+                first_limit=float(d.first_limit),
+                check_failures=int(d.check_failures),
+                n_checks=int(d.n_checks),
+                n_trials=int(d.n_trials),
+                complete=bool(d.complete),
+            )
+        )
+    return EnvelopeTable(run.axis, run.criterion, resolution, mass, tuple(rows))

@@ -1,0 +1,118 @@
+"""Early termination of a push trial once its outcome is decided (scenario key ``early_stop``).
+
+A trial's outcome is decided by the rules of :func:`biped.sim.push.run_closed_loop`:
+
+- **fell**: the central-body COM below ``fall_height_m`` or a body other than a foot on the floor
+  (the contact monitor). That already ends every run at the row where it happens, with or without
+  this module: a fall is irreversible by definition (it is the rule, not a prediction), and no
+  earlier "about to fall" guess is made here.
+- **recovered**: the run reached ``duration_s`` without a fall, error or divergence and, at its
+  end, the COM is within ``recovery_com_tol_m`` and the orientation within
+  ``recovery_orientation_tol_deg`` of the set point (with stepping: the stepping policy's set
+  point over the final feet, and COM speed < 5 cm/s).
+
+With ``early_stop`` on, a run also ends as **at rest** (``stop_reason = "at_rest"``; it then
+counts as completed and recovered) at a check row where, over the last :data:`HOLD_S` of
+simulated time (every row of that window):
+
+1. the perturbation is over: the block has come to rest (speed < :data:`BLOCK_SPEED_M_S`,
+   spin < :data:`BLOCK_SPIN_RAD_S`), wherever it lies;
+2. the biped is at rest: central-body speed < :data:`BODY_SPEED_M_S`, its angular speed <
+   :data:`BODY_SPIN_RAD_S`, every joint slower than :data:`JOINT_SPEED_RAD_S`;
+3. both feet stand flat (heel and toe of each on the floor);
+4. the final criterion holds with margin: COM error < :data:`MARGIN` x ``recovery_com_tol_m``,
+   orientation error < :data:`MARGIN` x ``recovery_orientation_tol_deg`` (stepping: against the
+   policy's current set point).
+
+Why the rest of the run cannot change the outcome: the scene's only time-varying input is the
+block, now at rest; the controllers are state feedback with a fixed set point, so a biped at rest
+on flat feet, inside half the tolerance of that set point, is at (a small neighbourhood of) the
+closed loop's equilibrium and stays there. That argument is not a proof for every controller and
+model, so it is checked: docs/sweep.md ("Early stop") lists the grids rerun with and without the
+rule and the per-trial comparison of their outcomes.
+
+Checks run every :data:`CHECK_S` of simulated time: between two calls of the compiled loop
+(:mod:`biped.sim.fused` runs that many rows a call when the rule is on) and at the same rows in
+the Python loop, so both loops stop at the same row.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Simulated time the rest conditions must hold before a run may stop [s].
+HOLD_S = 0.25
+#: How often the rule is evaluated [s] (rows = CHECK_S * control rate).
+CHECK_S = 0.05
+#: Fraction of the recovery tolerances the errors must stay under.
+MARGIN = 0.5
+BODY_SPEED_M_S = 0.02
+BODY_SPIN_RAD_S = 0.05
+JOINT_SPEED_RAD_S = 0.1
+BLOCK_SPEED_M_S = 0.02
+BLOCK_SPIN_RAD_S = 0.2
+
+AT_REST = "at_rest"
+
+__all__ = ["AT_REST", "CHECK_S", "HOLD_S", "MARGIN", "EarlyStop", "applies"]
+
+
+def applies(scenario) -> bool:
+    """Whether ``scenario``'s runs may stop early: ``early_stop`` is on and the perturbation is the
+    block, the one whose end ("at rest") this rule knows. Other perturbation paradigms (a
+    ``perturbation`` key other than ``"block"``) run to their end until they supply their own."""
+    return bool(scenario.early_stop) and getattr(scenario, "perturbation", "block") == "block"
+
+
+class EarlyStop:
+    """The rule for one run: ``check(rows)`` is True when the ``rows`` recorded so far (rows
+    ``[0, rows)`` of the loop's record arrays) end in a window that decides "recovered"."""
+
+    def __init__(self, scenario, scene, records: dict, policy=None):
+        rate = scenario.control_rate_hz
+        self.every = max(1, round(CHECK_S * rate))
+        self.hold = max(1, round(HOLD_S * rate))
+        self.records = records
+        self.scene = scene
+        self.policy = policy
+        self.com_tol = MARGIN * scenario.recovery_com_tol_m
+        self.cos_half = np.cos(np.radians(MARGIN * scenario.recovery_orientation_tol_deg) / 2.0)
+        self.target_com = np.asarray(scenario.target_com_m, dtype=float)
+        from biped.sim.scene import tilt_quat
+
+        self.target_quat = np.asarray(tilt_quat(scenario.target_axis, scenario.target_tilt_deg), dtype=float)
+        iv = np.asarray(scene.biped_qvel_index)
+        self.lin, self.ang, self.joints = iv[:3], iv[3:6], iv[6:]
+        self.quat = np.asarray(scene.biped_qpos_index)[3:7]
+        bv = np.asarray(scene.block_qvel_index)
+        self.block_lin, self.block_ang = bv[:3], bv[3:6]
+        self.flat = (1 << 4) - 1  # the four sole-part bits (biped.sim.contact.SOLE_GEOMS)
+
+    def check(self, rows: int) -> bool:
+        """Whether the run may stop after row ``rows - 1`` (see the module docstring)."""
+        if rows < self.hold:
+            return False
+        w = slice(rows - self.hold, rows)
+        r = self.records
+        if not bool(np.all((r["bits"][w] & self.flat) == self.flat)):
+            return False
+        v = r["qvel"][w]
+        if np.max(np.linalg.norm(v[:, self.block_lin], axis=1)) >= BLOCK_SPEED_M_S:
+            return False
+        if np.max(np.linalg.norm(v[:, self.block_ang], axis=1)) >= BLOCK_SPIN_RAD_S:
+            return False
+        if np.max(np.linalg.norm(v[:, self.lin], axis=1)) >= BODY_SPEED_M_S:
+            return False
+        if np.max(np.linalg.norm(v[:, self.ang], axis=1)) >= BODY_SPIN_RAD_S:
+            return False
+        if np.max(np.abs(v[:, self.joints])) >= JOINT_SPEED_RAD_S:
+            return False
+        target = self.target_com
+        set_point = getattr(self.policy, "set_point_com", None)  # stepping: over the current feet
+        if set_point is not None:
+            target = np.asarray(set_point, dtype=float)
+        if np.max(np.linalg.norm(r["com"][w] - target, axis=1)) >= self.com_tol:
+            return False
+        q = r["qpos"][w][:, self.quat]
+        c = np.abs(q @ self.target_quat) / np.linalg.norm(q, axis=1)
+        return bool(np.min(c) > self.cos_half)
