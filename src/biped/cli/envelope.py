@@ -116,6 +116,7 @@ def build(args):
     ns.grid, ns.samples, ns.seed = None, None, None
     ns.speed = ",".join(repr(s) for s in sizes)
     ns.direction = ",".join(repr(d) for d in dirs)
+    ns.magnitude, ns.perturbation = None, None  # the block's speed axis (the paradigms: not yet)
     spec = build_spec(ns)
     b = spec.base
     out = (
