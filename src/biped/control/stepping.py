@@ -243,14 +243,11 @@ class SteppingController:
         self._stance0 = np.zeros(2)  # the stance sole centre when the step started
         self._last_td = -1e9
         self.last_capture_point: np.ndarray | None = None
-        #: no step starts before this time [s] (a paradigm that holds the body, e.g. the
-        #: lean-and-release's tether, arms the trigger when the nervous system learns of the release)
-        self.arm_time_s = -math.inf
+        self.arm_time_s = -math.inf  # no step before [s] (the lean release arms it when sensed)
 
     @property
     def holding_controller(self):
-        """The workspace controller of double support before the first step (the scenario's own
-        QP weights)."""
+        """The workspace controller of double support before the first step."""
         return self._ctrl_before
 
     @property
@@ -372,8 +369,7 @@ class SteppingController:
         el = t - self._t_start
         if step["lift_off_s"] is None and not feet[i]:
             step["lift_off_s"] = t
-        # touchdown: back on the floor after half the swing, once seen off it (a delayed or
-        # weak swing leg may not have lifted the foot by then: then the swing goes on)
+        # touchdown: on the floor after half the swing, once seen off it (else the swing goes on)
         if feet[i] and el > 0.5 * self._T and step["lift_off_s"] is not None:
             return self._touch_down(t, qpos, qvel, feet)
         stance_c, yaw = self._sole_pose(st)

@@ -27,6 +27,12 @@ The held state, a static equilibrium by construction:
    the feet in place the accelerations are then zero (the controller's statics), so nothing
    moves while the tether holds (``tests/test_perturbations.py``).
 
+With ``stepping = true`` the stepping controller (:mod:`biped.control.stepping`) holds the lean the
+same way through its own set point (a :class:`~biped.control.setpoint.Target` with that
+feed-forward), and its step trigger is armed only when the release is sensed (while the tether
+holds, a large lean's capture point already lies beyond the toes): ``max_steps = 1`` is Wojcik et
+al.'s one-step protocol.
+
 Like every paradigm but the block, the run starts from quiet stance (the soles on the floor, the
 set point the starting pose; :mod:`biped.sim.perturbations.base`).
 At ``release_time_s`` the tether's force goes to zero and the set point returns to the unleaned
