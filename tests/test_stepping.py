@@ -241,3 +241,28 @@ def test_sideways_push_inside_the_envelope_takes_no_step():
     r = simulate(_sweep_scenario(6, 90, "--stepping"))
     assert r.extra["steps"] == []
     assert r.recovered and r.extra["final_com_speed_m_s"] < 0.05
+
+
+def test_release_forward_with_stepping_steps_forward_once_and_recovers():
+    """A forward lean-and-release (the biped faces -x) with stepping: 13 deg (beyond W's ankle-only
+    lean with the QP) is recovered with exactly one step, started after the release, landing in
+    front of the stance foot (its sole centre over 0.25 m further along -x than the stance foot's
+    ankle, measured from MuJoCo's foot poses), and the run ends standing still; 30 deg, beyond one
+    step's reach (0.5 m), falls; held (no release in the run) it takes no step."""
+    base = {"perturbation": "release", "stepping": True, "max_steps": 1, "distribution": "qp",
+            "friction": 1.0, "duration_s": 2.5, "release_time_s": 0.1}  # fmt: skip
+    r = simulate(Scenario(**base, release_lean_deg=13.0))
+    steps = r.extra["steps"]
+    assert len(steps) == 1 and r.recovered and not r.fell, steps
+    st = steps[0]
+    assert st["start_s"] >= 0.1 and st["touch_down_s"] > st["lift_off_s"] >= st["start_s"]
+    stance = 1 - ("left", "right").index(st["foot"])
+    k = int(np.searchsorted(r.times, st["touch_down_s"]))
+    assert st["position_m"][0] < r.feet_pos[k, stance, 0] - 0.25  # forward: -x
+    assert r.feet_pos[k, 1 - stance, 0] < r.feet_pos[0, 1 - stance, 0] - 0.25  # the foot itself moved
+    assert r.extra["final_com_speed_m_s"] < 0.05
+    far = simulate(Scenario(**base, release_lean_deg=30.0))
+    assert far.fell
+    held = simulate(Scenario(**{**base, "duration_s": 0.4, "release_time_s": 1.0}, release_lean_deg=13.0))
+    assert held.extra["steps"] == [] and not held.fell
+    assert np.abs(held.com[: len(held.times)] - held.com[0]).max() < 2e-3

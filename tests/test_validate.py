@@ -36,9 +36,49 @@ def test_validate_quick_writes_the_table_figures_and_trials(tmp_path, capsys):
         assert lean[preset]["inside_2sd"] in (None, abs(value - 5.9) <= 2.2)
     assert "young" in (out / "validation.md").read_text()
     assert (out / "figures" / "ankle_release.png").stat().st_size > 1000
-    assert any("not_run" in r for r in data["rows"])  # the one-step release, said
+    assert not any("not_run" in r for r in data["rows"])  # every experiment of the issue runs now
 
 
 def test_validate_rejects_an_unknown_experiment(tmp_path, capsys):
     assert main(["validate", "--quick", "--experiment", "stairs", "--out", str(tmp_path / "x")]) == 2
     assert "experiment" in capsys.readouterr().err
+
+
+def test_older_preset_is_held_against_the_older_adults_numbers():
+    """Wojcik 1999: young women 30.7 deg, older women 16.2 deg (20 % SD assumed): a 17 deg
+    threshold is inside the older band only, a 28 deg one inside the young band only."""
+    from biped.analysis.validate import Threshold, human_for
+    from biped.outputs.validate import table_rows
+
+    assert human_for("step_release.lean_deg", "older").mean == 16.2
+    assert human_for("step_release.lean_deg", "young").mean == 30.7
+    assert human_for("ankle_release.lean_deg", "older").mean == 5.9  # no older number: the same
+    per = {p: Threshold("step_release", p, v, "deg") for p, v in (("young", 17.0), ("older", 17.0))}
+    row = table_rows({"step_release": per})[0]
+    assert row["young"]["inside_2sd"] is False and row["older"]["inside_2sd"] is True
+    assert row["human_older"]["mean"] == 16.2
+    per = {p: Threshold("step_release", p, 28.0, "deg") for p in ("young", "older")}
+    row = table_rows({"step_release": per})[0]
+    assert row["young"]["inside_2sd"] is True and row["older"]["inside_2sd"] is False
+
+
+def test_step_measures_agree_with_the_feet_and_the_controller():
+    """The one-step release (ideal: no delay) at 13 deg: one step; its length equals the stepping
+    foot's displacement between the start and the end of the run (the foot stays where it landed),
+    to 1 cm; its contact time is the controller's touchdown (same sensing, no delay) to 2 periods."""
+    import numpy as np
+
+    from biped.analysis.validate import EXPERIMENTS, _step_measures
+    from biped.sim import Scenario
+    from biped.sim.push import simulate
+
+    exp = EXPERIMENTS["step_release"]
+    s = Scenario(neuromotor="ideal", **exp.base, **exp.magnitude(13.0))
+    r = simulate(s)
+    n, length, contact = _step_measures(r, s)
+    st = r.extra["steps"][0]
+    i = ("left", "right").index(st["foot"])
+    moved = np.linalg.norm(r.feet_pos[len(r.times) - 2, i, :2] - r.feet_pos[0, i, :2])
+    assert n == 1 and not r.fell and 0.25 < length < 0.5
+    assert abs(length - moved) < 0.01
+    assert abs(contact - 1000 * (st["touch_down_s"] - 0.1)) <= 4.0

@@ -8,7 +8,7 @@ end of the run). The human numbers (:data:`HUMAN`) are copied with their sources
 project's notes; nothing here reads them at run time from anywhere else. docs/validate.md.
 
 >>> sorted(EXPERIMENTS)
-['ankle_release', 'platform_backward', 'waist_pull']
+['ankle_release', 'platform_backward', 'step_release', 'waist_pull']
 """
 
 from __future__ import annotations
@@ -55,9 +55,27 @@ class HumanValue:
 
 
 ROBINOVITCH = "Robinovitch et al. 2002, J Neurophysiol 88:613-620 (23 young adults)"
-WOJCIK = "Wojcik et al. 1999, J Gerontol A 54:M44-50"
+WOJCIK = (
+    "Wojcik et al. 1999, J Gerontol A 54:M44-50 (abstract: 10 young, 10 older women released from forward "
+    "leans raised from ~14 deg until one step failed; no SD in the abstract: 20 % assumed; Thelen et al. "
+    "1997, J Gerontol A 52:M8-13: young men 32.5, older men 23.9 deg)"
+)
+KOUSHYAR = (
+    "Koushyar, Bieryla, Nussbaum & Madigan 2019, PLoS ONE 14:e0210049 (abstract: the largest backward "
+    "support-surface displacement withstood without stepping, 5 young adults 20-30 y, 6 older 70-80 y; "
+    "hips free, not ankles only; the platform's velocity profile is theirs, not our 0.3 s ramp)"
+)
+MILLE = (
+    "Mille et al. 2003, J Neurophysiol 90:666-674, 'Thresholds for inducing protective stepping responses "
+    "to external perturbations of human standing' (abstract: motor-driven forward waist pulls; the pull's "
+    "displacement as % of the base of support (BoS) from the ankles; young never stepped below TH = 72 % "
+    "BoS (fast pulls, velocity no longer mattering above ~121 % BoS/s), always above TL = 107 % (slow); "
+    "older 59 % and 91 %; BoS read here as ankle to toe; no SD in the abstract: 20 % assumed)"
+)
 
-#: The human results the experiments are held against (/work/shared/HUMAN-DATA.md, copied).
+#: The human results the experiments are held against (/work/shared/HUMAN-DATA.md and the
+#: abstracts cited, copied). Keys ``<experiment>.<measure>``; ``<experiment>_older.<measure>``
+#: is the older adults' value, compared with ``neuromotor = "older"``.
 HUMAN = {
     "ankle_release.lean_deg": HumanValue(
         "largest forward lean recovered, ankles only", "deg", 5.9, 1.1, ROBINOVITCH
@@ -66,15 +84,27 @@ HUMAN = {
         "peak ankle torque in that recovery", "N m", 116.0, 32.0, ROBINOVITCH
     ),
     "ankle_release.onset_ms": HumanValue("ankle torque onset after release", "ms", 99.0, 13.0, ROBINOVITCH),
+    "platform_backward.displacement_m": HumanValue(
+        "largest backward platform translation recovered without a step, young adults",
+        "m",
+        0.162,
+        0.026,
+        KOUSHYAR,
+    ),
+    "platform_backward_older.displacement_m": HumanValue(
+        "the same, older adults", "m", 0.118, 0.021, KOUSHYAR
+    ),
     "waist_pull.percent_bos": HumanValue(
         "forward pelvis displacement of the largest fast pull survived without a step, % of the "
         "ankle-to-toe length",
         "% BoS",
         72.0,
         14.4,
-        "Mille et al. 2003, J Neurophysiol 90:666-674: young adults never stepped below 72 % BoS (fast "
-        "pulls, TH), always above 107 % (slow, TL); BoS taken as ankle to toe",
+        MILLE,
         sd_assumed=True,
+    ),
+    "waist_pull_older.percent_bos": HumanValue(
+        "the same, older adults", "% BoS", 59.0, 11.8, MILLE, sd_assumed=True
     ),
     "step_release.lean_deg": HumanValue(
         "largest forward lean recovered with one step, young women",
@@ -89,15 +119,27 @@ HUMAN = {
     ),
 }
 
+#: Measures reported without a human number: (what, unit).
+MEASURES = {
+    "step_release.step_length_m": ("one-step lean release: step length at the threshold (the stepping "
+                                   "foot's horizontal displacement)", "m"),
+    "step_release.contact_ms": ("one-step lean release: time from release to the stepping foot's contact "
+                                "at the threshold", "ms"),
+}  # fmt: skip
+
 #: Experiments of the issue that ``biped validate`` does not run, and why.
-NOT_RUN = {
-    "step_release": (
-        "one-step lean release (Wojcik et al. 1999): the release paradigm holds the lean with W's "
-        "workspace controller and refuses the stepping controller, so a step after the release "
-        "cannot be simulated yet (a first attempt to hold the lean with the stepping controller's "
-        "own set point diverged within 40 ms of its first step, aimed the wrong way; not kept)"
-    ),
-}
+NOT_RUN: dict[str, str] = {}
+
+
+def human_for(quantity: str, preset: str) -> HumanValue | None:
+    """The human value ``preset``'s result at ``quantity`` is held against: the older adults'
+    (``<experiment>_older.<measure>``) for ``"older"`` where there is one, else the quantity's own;
+    None for ``"older"`` against a young-only number when an older one exists elsewhere."""
+    exp, measure = quantity.split(".", 1)
+    older = HUMAN.get(f"{exp}_older.{measure}")
+    if preset == "older":
+        return older if older is not None else HUMAN.get(quantity)
+    return HUMAN.get(quantity)
 
 
 @dataclass(frozen=True)
@@ -155,6 +197,29 @@ EXPERIMENTS = {
         "m",
         0.005,
         0.6,
+        ("platform_backward.displacement_m",),
+    ),
+    "step_release": Experiment(
+        "step_release",
+        "forward lean and release, one step (Wojcik et al. 1999)",
+        "leaning forward straight about the ankles, held by a horizontal tether at the pelvis, "
+        "released without warning at 0.1 s, with capture-point stepping (stepping = true, at most one "
+        "step, the QP distribution) on a floor of friction 1.0 (a shod foot on a dry floor; the tether "
+        "needs about tan(lean) of the weight in friction); the largest lean recovered with at most one step",
+        {
+            "friction": 1.0,
+            "duration_s": 2.5,
+            "perturbation": "release",
+            "release_time_s": 0.1,
+            "stepping": True,
+            "max_steps": 1,
+            "distribution": "qp",
+        },  # fmt: skip
+        _ankle_release,
+        "deg",
+        2.0,
+        40.0,
+        ("step_release.lean_deg", "step_release.step_length_m", "step_release.contact_ms"),
     ),
     "waist_pull": Experiment(
         "waist_pull",
@@ -186,6 +251,9 @@ class Trial:
     hip_knee_motion_deg: float
     wall_time_s: float
     percent_bos: float = math.nan  # peak forward central-body displacement, % ankle-to-toe length
+    steps: int = 0  # steps taken (stepping runs)
+    step_length_m: float = math.nan  # the first step: the stepping foot's horizontal displacement
+    contact_ms: float = math.nan  # the first step: from release (or 0) to that foot's contact
 
     def row(self) -> dict:
         return dict(self.__dict__)
@@ -234,8 +302,34 @@ def run_trial(exp: Experiment, neuromotor: str, magnitude: float) -> Trial:
     peak, onset, motion = _ankle_measures(r, s)
     forward = float(np.max(r.com[0, 0] - r.com[:, 0]))  # the biped faces -x
     bos = 100.0 * forward / ankle_to_toe_m(s.model)
+    n_steps, length, contact = _step_measures(r, s)
     return Trial(exp.key, neuromotor, float(magnitude), exp.unit, bool(survived), r.fall_time_s, peak, onset,
-                 motion, wall, bos)  # fmt: skip
+                 motion, wall, bos, n_steps, length, contact)  # fmt: skip
+
+
+def _step_measures(r, scenario: Scenario) -> tuple[int, float, float]:
+    """(steps taken, the first step's foot horizontal displacement from the start to its first
+    contact after it rose 1 cm [m], the time from the release to that contact [ms]) from MuJoCo's
+    recorded foot poses and sole contacts (not the controller's delayed view); NaN when the foot
+    never rose 1 cm or never came down."""
+    steps = r.extra.get("steps") or []
+    if not steps or r.feet_pos is None:
+        return len(steps), math.nan, math.nan
+    i = ("left", "right").index(steps[0]["foot"])
+    on = r.left_contact if i == 0 else r.right_contact
+    n = len(r.times)
+    k_up = int(np.searchsorted(r.times, steps[0]["start_s"]))
+    m = min(n, len(r.feet_pos))
+    up = np.flatnonzero(r.feet_pos[k_up:m, i, 2] > r.feet_pos[0, i, 2] + 0.01)  # lifted 1 cm
+    if not len(up):  # a heel or toe flicker is not a step
+        return len(steps), math.nan, math.nan
+    back = np.flatnonzero(on[k_up + up[0] : m])
+    if not len(back):
+        return len(steps), math.nan, math.nan
+    k = k_up + int(up[0]) + int(back[0])
+    length = float(np.linalg.norm(r.feet_pos[k, i, :2] - r.feet_pos[0, i, :2]))
+    t0 = getattr(scenario, "release_time_s", 0.0) if scenario.perturbation == "release" else 0.0
+    return len(steps), length, 1000.0 * (float(r.times[k]) - t0)
 
 
 @functools.lru_cache(maxsize=4)

@@ -16,7 +16,7 @@ QUICK_ITERATIONS, FULL_ITERATIONS = 3, 9
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "validate",
-        help="run the human balance experiments (lean release, platform, waist pull) and compare",
+        help="run the human balance experiments (lean releases, platform, waist pull) and compare",
         description="Run the human balance experiments of docs/validate.md with neuromotor = ideal "
         "and young, find each threshold by bisection and compare it with the human mean +/- 2 SD.",
     )
@@ -33,7 +33,7 @@ def register(subparsers) -> None:
         "--experiment",
         action="append",
         metavar="NAME",
-        help="run only these experiments (repeatable): ankle_release, platform_backward, waist_pull",
+        help="run only these experiments (repeatable): ankle_release, platform_backward, step_release, waist_pull",
     )
     add_folder_options(p, "a new runs/validate-<date>-<time>")
     p.set_defaults(func=run, _parser=p)

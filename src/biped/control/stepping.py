@@ -243,6 +243,12 @@ class SteppingController:
         self._stance0 = np.zeros(2)  # the stance sole centre when the step started
         self._last_td = -1e9
         self.last_capture_point: np.ndarray | None = None
+        self.arm_time_s = -math.inf  # no step before [s] (the lean release arms it when sensed)
+
+    @property
+    def holding_controller(self):
+        """The workspace controller of double support before the first step."""
+        return self._ctrl_before
 
     @property
     def set_point_com(self) -> np.ndarray:
@@ -287,6 +293,7 @@ class SteppingController:
             self.phase == "double"
             and len(self.steps) < s.max_steps
             and t - self._last_td >= s.refractory_s
+            and t >= self.arm_time_s
             and self.trigger.update(self._polygon((left, right)), xi)
         ):
             self._start_step(t, xi, (left, right))
@@ -362,7 +369,8 @@ class SteppingController:
         el = t - self._t_start
         if step["lift_off_s"] is None and not feet[i]:
             step["lift_off_s"] = t
-        if feet[i] and el > 0.5 * self._T:  # touchdown
+        # touchdown: on the floor after half the swing, once seen off it (else the swing goes on)
+        if feet[i] and el > 0.5 * self._T and step["lift_off_s"] is not None:
             return self._touch_down(t, qpos, qvel, feet)
         stance_c, yaw = self._sole_pose(st)
         # the stance CoP: the point of the stance sole nearest the COM (the QP pushes it there)

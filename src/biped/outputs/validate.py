@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from biped import files
-from biped.analysis.validate import EXPERIMENTS, HUMAN, NOT_RUN, Threshold
+from biped.analysis.validate import EXPERIMENTS, HUMAN, MEASURES, NOT_RUN, Threshold, human_for
 from biped.outputs._json import write_json
 from biped.viz.validate import threshold_figure
 
@@ -21,42 +21,51 @@ def _fmt(v, bound: str = "") -> str:
     return f"{bound}{v:.3g}"
 
 
+def _human(h) -> dict | None:
+    return None if h is None else {"mean": h.mean, "sd": h.sd, "source": h.source, "sd_assumed": h.sd_assumed}
+
+
+def _value(th: Threshold, field: str) -> tuple[float, str]:
+    if field in ("lean_deg", "threshold", "displacement_m"):
+        return th.value, th.bound
+    if th.at is None:
+        return math.nan, ""
+    return float(getattr(th.at, field)), ""
+
+
 def table_rows(results: dict[str, dict[str, Threshold]]) -> list[dict]:
-    """One row per compared quantity: human mean, SD, source, the presets' values, inside +/- 2 SD."""
+    """One row per compared quantity: human mean, SD, source (and the older adults' where the
+    paper gives them: ``human_older``, the ``older`` preset's comparison), the presets' values,
+    inside +/- 2 SD."""
     rows = []
     for key, per in results.items():
         exp = EXPERIMENTS[key]
         quantities = exp.human or (f"{key}.threshold",)
         for q in quantities:
             h = HUMAN.get(q)
-            row: dict[str, Any] = {
-                "quantity": h.quantity if h else f"{exp.title}: threshold",
-                "unit": h.unit if h else exp.unit,
-            }
-            row["human"] = None if h is None else {"mean": h.mean, "sd": h.sd, "source": h.source,
-                                                   "sd_assumed": h.sd_assumed}  # fmt: skip
+            exp_key, field = q.split(".", 1)
+            older = HUMAN.get(f"{exp_key}_older.{field}")
+            name, unit = MEASURES.get(q, (f"{exp.title}: threshold", exp.unit))
+            row: dict[str, Any] = {"quantity": h.quantity if h else name, "unit": h.unit if h else unit,
+                                   "human": _human(h)}  # fmt: skip
+            if older is not None and "older" in per:
+                row["human_older"] = _human(older)
             for preset, th in per.items():
-                field = q.split(".", 1)[1]
-                if field in ("lean_deg", "threshold"):
-                    value, bound = th.value, th.bound
-                elif th.at is None:
-                    value, bound = math.nan, ""
-                elif field == "peak_ankle_torque_n_m":
-                    value, bound = th.at.peak_ankle_torque_n_m, ""
-                elif field == "percent_bos":
-                    value, bound = th.at.percent_bos, ""
-                else:
-                    value, bound = th.at.onset_ms, ""
+                value, bound = _value(th, field)
+                hp = human_for(q, preset) if h is not None else None
                 row[preset] = {"value": value, "bound": bound,
-                               "inside_2sd": None if (h is None or bound) else h.inside(value)}  # fmt: skip
+                               "inside_2sd": None if (hp is None or bound) else hp.inside(value)}  # fmt: skip
             rows.append(row)
     for key, why in NOT_RUN.items():
         h = HUMAN.get(f"{key}.lean_deg")
-        skipped: dict[str, Any] = {"quantity": h.quantity if h else key, "unit": "deg", "not_run": why,
-                                    "human": None if h is None else {"mean": h.mean, "sd": h.sd, "source": h.source,
-                                                                     "sd_assumed": h.sd_assumed}}  # fmt: skip
-        rows.append(skipped)
+        rows.append({"quantity": h.quantity if h else key, "unit": "deg", "not_run": why, "human": _human(h)})
     return rows
+
+
+def _hum(h: dict | None) -> str:
+    if h is None:
+        return "no human number"
+    return f"{h['mean']:g} +/- {h['sd']:.3g}{' (SD assumed 20 %)' if h['sd_assumed'] else ''} ({h['source']})"
 
 
 def _markdown(rows: list[dict], presets: list[str], meta: dict) -> str:
@@ -65,14 +74,9 @@ def _markdown(rows: list[dict], presets: list[str], meta: dict) -> str:
     lines = ["# biped validate", "", meta["note"], "", "| " + " | ".join(head) + " |",
              "|" + "---|" * len(head)]  # fmt: skip
     for r in rows:
-        h = r["human"]
-        hum = (
-            "no human number"
-            if h is None
-            else (
-                f"{h['mean']:g} +/- {h['sd']:.3g}{' (SD assumed 20 %)' if h['sd_assumed'] else ''} ({h['source']})"
-            )
-        )
+        hum = _hum(r["human"])
+        if r.get("human_older"):
+            hum += f"; older adults (the older preset's band): {_hum(r['human_older'])}"
         if "not_run" in r:
             cells = ["not run"] * len(presets) + ["-"] * len(presets)
             lines.append(f"| {r['quantity']} [{r['unit']}] | {hum} | " + " | ".join(cells) + " |")
@@ -83,7 +87,8 @@ def _markdown(rows: list[dict], presets: list[str], meta: dict) -> str:
             v = r[p]["inside_2sd"] if p in r else None
             ins.append("n/a" if v is None else ("yes" if v else "no"))
         lines.append(f"| {r['quantity']} [{r['unit']}] | {hum} | " + " | ".join(vals + ins) + " |")
-    lines += ["", "Not run:"] + [f"- {k}: {v}" for k, v in NOT_RUN.items()]
+    if NOT_RUN:
+        lines += ["", "Not run:"] + [f"- {k}: {v}" for k, v in NOT_RUN.items()]
     mode = meta["mode"] + (", interrupted" if meta.get("interrupted") else "")
     lines += ["", f"Trials: {meta['trials']} in {meta['wall_time_s']:.1f} s ({mode})."]
     return "\n".join(lines) + "\n"

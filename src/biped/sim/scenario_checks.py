@@ -283,9 +283,9 @@ def _check_perturbation(s: Scenario) -> None:
             f"release_lean_deg must be in [0, 45] deg (a lean about the ankles); got {lean!r}"
         )
     _finite("release_direction_deg", s.release_direction_deg, "deg")
-    if s.perturbation == "release" and (s.controller != "workspace" or s.stepping):
+    if s.perturbation == "release" and s.controller != "workspace":
         raise ScenarioError(
-            "perturbation = 'release' needs controller = 'workspace' without stepping (the controller's "
+            "perturbation = 'release' needs controller = 'workspace', with or without stepping (the controller's "
             "set point holds the lean while the tether acts)"
         )
     if s.perturbation == "force" and s.force_body != "central_body":

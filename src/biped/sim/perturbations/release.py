@@ -27,6 +27,12 @@ The held state, a static equilibrium by construction:
    the feet in place the accelerations are then zero (the controller's statics), so nothing
    moves while the tether holds (``tests/test_perturbations.py``).
 
+With ``stepping = true`` the stepping controller (:mod:`biped.control.stepping`) holds the lean the
+same way through its own set point (a :class:`~biped.control.setpoint.Target` with that
+feed-forward), and its step trigger is armed only when the release is sensed (while the tether
+holds, a large lean's capture point already lies beyond the toes): ``max_steps = 1`` is Wojcik et
+al.'s one-step protocol.
+
 Like every paradigm but the block, the run starts from quiet stance (the soles on the floor, the
 set point the starting pose; :mod:`biped.sim.perturbations.base`).
 At ``release_time_s`` the tether's force goes to zero and the set point returns to the unleaned
@@ -144,7 +150,9 @@ def turn_body(scene, qpos: np.ndarray, point, axis, angle_rad: float) -> bool:
 class ReleaseDriver(Driver):
     """Row 0: the tether's force and the offset set point; the release row: both gone."""
 
-    def __init__(self, scenario, model, data, controller, hold: dict):
+    def __init__(self, scenario, model, data, controller, hold: dict, stepper=None):
+        self.stepper = stepper  # a SteppingController (its set point is a Target it holds), or None
+        self.period = 1.0 / scenario.control_rate_hz
         self.k_release = round(scenario.release_time_s * scenario.control_rate_hz)
         # the nervous system learns of the release from the state it sees, feedback_delay_s late:
         # the set point returns upright then (the same row without a delay)
@@ -161,6 +169,15 @@ class ReleaseDriver(Driver):
         self.final_target = (hold["upright_com"], hold["upright_quat"]) if self.k_release <= n else None
 
     def _set_target(self, com, quat, acc=None) -> None:
+        if self.stepper is not None:  # its own set point: a Target object, not the array
+            from biped.control.setpoint import Target
+
+            a = np.zeros(6) if acc is None else np.asarray(acc, dtype=float)
+            self.stepper.target = Target(com=tuple(map(float, com)), quat=tuple(map(float, quat)),
+                                         com_acc=tuple(a[:3]), ang_acc=tuple(a[3:]))  # fmt: skip
+            if acc is None:  # upright again: what its steps move with the feet
+                self.stepper.base_target = self.stepper.target
+            return
         set_target(self.controller, com, quat)
         if acc is not None:  # the feed-forward accelerations (world frame) that hold the lean
             arr = self.controller.target.array
@@ -178,6 +195,8 @@ class ReleaseDriver(Driver):
             self.released_at = t
         if k == self.k_sense and self.k_release > 0:
             self._set_target(h["upright_com"], h["upright_quat"])
+            if self.stepper is not None:  # steps only once the release is sensed
+                self.stepper.arm_time_s = k * self.period
 
     def finish(self, data) -> dict:
         return {
@@ -198,18 +217,28 @@ class Release(Perturbation):
         qvel[scene.biped_qvel_index] = 0.0
 
     def driver(self, scene, model, data, policy):
-        ctrl = workspace_controller(policy)
+        from biped.control.stepping import SteppingController
+
+        stepper = policy if isinstance(policy, SteppingController) else None
+        if stepper is not None:  # no step while the tether holds: armed at the sensed release
+            stepper.reset()
+            stepper.arm_time_s = math.inf
+        ctrl = stepper.holding_controller if stepper is not None else workspace_controller(policy)
         if ctrl is None:
             raise ScenarioError(
-                "perturbation = 'release' needs W's workspace controller without stepping (it holds the "
-                "lean with the controller's set point); got another policy"
+                "perturbation = 'release' needs W's workspace controller, with or without stepping (it "
+                "holds the lean with the controller's set point); got another policy"
             )
         from biped.sim.scene import w_initial_state
 
         s = self.scenario  # the upright pose and the lean again (the run's data holds the leaned state)
         pose = lean_pose(scene, w_initial_state(scene, s)[0], s.release_lean_deg,
                          world_direction(s.release_direction_deg))  # fmt: skip
-        return ReleaseDriver(self.scenario, model, data, ctrl, hold_state(scene, model, data, ctrl, pose))
+        hold = hold_state(scene, model, data, ctrl, pose)
+        drv = ReleaseDriver(self.scenario, model, data, ctrl, hold, stepper)
+        if stepper is not None and drv.k_release == 0:  # released at the start: no tether row
+            stepper.arm_time_s = drv.k_sense * drv.period
+        return drv
 
     def markers(self) -> list[tuple[float, str]]:
         s = self.scenario
