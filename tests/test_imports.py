@@ -22,6 +22,7 @@ LAYERS = {
     "": 0,  # biped/__init__.py
     "errors": 0,
     "_numba_cache": 0,  # where numba caches the kernels; imports nothing from biped
+    "_progress": 0,  # progress counters (tqdm on a terminal, lines otherwise)
     "spatial": 0,
     "model": 0,
     "models": 0,

@@ -84,6 +84,7 @@ def register(subparsers) -> None:
     p.add_argument("--no-video", action="store_true", help="skip video.mp4")
     p.add_argument("--no-replay", action="store_true", help="skip replay.html")
     p.add_argument("--no-figures", action="store_true", help="skip figures/")
+    p.add_argument("--svg", action="store_true", help="figures as SVG too (default: PNG only)")
     p.add_argument("--viewer", action="store_true", help="show the run live in MuJoCo's viewer")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
@@ -251,23 +252,42 @@ def _table(result, out: Path, paths: dict, times: dict | None = None) -> str:
 
 
 def _writer_progress(quiet: bool):
-    """(on_stage, on_frame, close) that tell what is being written after the simulation; with
-    ``quiet``, nothing (not even the video's frame counts)."""
+    """(on_stage, on_frame, on_figure, close) that tell what is being written after the
+    simulation, with a counter for the figures and the video's frames (a bar on a terminal,
+    lines otherwise); with ``quiet``, nothing."""
     if quiet:
-        return None, lambda *_: None, lambda: None
-    on_frame, close = frame_bar()
+        return None, lambda *_: None, lambda *_: None, lambda: None
+    from biped._progress import progress_bar
+
+    on_frame, close_frames = frame_bar()
+    bars: dict = {}
+
+    def on_figure(done, total):
+        if bars.get("figures") is not None:
+            bars["figures"].update(done - bars["figures"].n)
+
+    def close():
+        close_frames()
+        if bars.get("figures") is not None:
+            bars.pop("figures").close()
 
     def on_stage(name):
         close()
+        if name == "figures":
+            from biped.viz.push_figures import FIGURES
+
+            bars["figures"] = progress_bar(total=len(FIGURES), desc="figures", unit="figure")
         what = {
             "trajectory.csv": "trajectory.csv, columns.json, summary.json (contact forces from MuJoCo)",
             "figures": "figures/ (W's Figs. 3-6)",
-            "video.mp4": "video.mp4",
+            "video.mp4": "video.mp4 (rendered meanwhile by a child process)",
             "replay.html": "replay.html",
         }.get(name, name)
-        print(f"writing {what} ...", flush=True)
+        print(f"writing {what} ...", file=sys.stderr, flush=True)
+        if name == "figures":
+            bars["figures"].update(0)  # a line "figures: 0/4" (a bar on a terminal)
 
-    return on_stage, on_frame, close
+    return on_stage, on_frame, on_figure, close
 
 
 def run(args) -> int:
@@ -299,12 +319,13 @@ def _run(args) -> int:
     bar = None
     progress = None
     if not args.quiet:
-        from tqdm import tqdm
+        from biped._progress import progress_bar
 
-        bar = tqdm(
+        bar = progress_bar(
             total=round(scenario.duration_s, 6),
             unit="s sim",
             desc="biped push",
+            line_format="{:.2f}",
             bar_format="{l_bar}{bar}| {n:.2f}/{total:.2f} s sim [{elapsed}<{remaining}]",
         )
 
@@ -319,7 +340,7 @@ def _run(args) -> int:
         if close is not None:
             close()
     t_write = time.perf_counter()
-    on_stage, on_frame, close_bar = _writer_progress(args.quiet)
+    on_stage, on_frame, on_figure, close_bar = _writer_progress(args.quiet)
     try:
         paths = write_outputs(
             result,
@@ -330,6 +351,8 @@ def _run(args) -> int:
             scene=scene,
             on_stage=on_stage,
             on_frame=on_frame,
+            on_figure=on_figure,
+            figure_formats=("png", "svg") if args.svg else ("png",),
         )
     finally:
         close_bar()

@@ -6,7 +6,7 @@ Plotting only: every function takes a :class:`biped.sim.push.PushResult` and dra
 Usage (needs a run's result, so not a doctest)::
 
     from biped.viz.push_figures import plot_push
-    plot_push(result, "runs/mine/figures")     # fig3_joint_angles.png/.svg ... fig6_orientation
+    plot_push(result, "runs/mine/figures")     # fig3_joint_angles.png ... fig6_orientation.png
 
 Each figure has, beside the whole run, a panel of its first :data:`ZOOM_S` = 0.5 s (where the
 hit and the feet's events crowd), with the events named; Fig. 6 adds the orientation error in
@@ -19,6 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
+from biped.errors import ScenarioError
 from biped.models import LEG_JOINTS as _LEG_JOINTS
 
 _LEG_LABELS = tuple(j.replace("_", " ") for j in _LEG_JOINTS)
@@ -270,19 +271,31 @@ FIGURES = {
 }
 
 
-def plot_push(result, out_dir) -> list[Path]:
-    """Write Figs. 3-6 of ``result`` as PNG and SVG into ``out_dir``; returns the paths."""
+#: The formats :func:`plot_push` can write.
+FORMATS = ("png", "svg")
+
+
+def plot_push(result, out_dir, formats=("png",), progress=None) -> list[Path]:
+    """Write Figs. 3-6 of ``result`` into ``out_dir`` in each of ``formats`` (``"png"``, the
+    default, and/or ``"svg"``); returns the paths. ``progress(n, N)`` is called after each of the
+    ``N`` figures."""
+    formats = tuple(formats)
+    bad = [f for f in formats if f not in FORMATS]
+    if bad or not formats:
+        raise ScenarioError(f"figure formats must be some of {', '.join(FORMATS)}, got {formats!r}")
     plt = _pyplot()
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = []
-    for name, make in FIGURES.items():
+    for k, (name, make) in enumerate(FIGURES.items()):
         fig = make(result)
         try:
-            for ext in ("png", "svg"):
+            for ext in formats:
                 p = out / f"{name}.{ext}"
                 fig.savefig(p, dpi=120, metadata={"Date": None} if ext == "svg" else None)
                 paths.append(p)
         finally:
             plt.close(fig)
+        if progress is not None:
+            progress(k + 1, len(FIGURES))
     return paths

@@ -133,6 +133,8 @@ def _render_job(workdir: pathlib.Path) -> int:
         # the small box needs no 4096-texel map (2048 over 6 m: 3 mm a texel); with Mesa's
         # software renderer a 1280 x 720 frame takes 0.86 as long (benchmarks/video.py)
         model.vis.quality.shadowsize = min(int(model.vis.quality.shadowsize), _SHADOW_TEXELS)
+    if cfg.get("msaa") is not None:
+        model.vis.quality.offsamples = int(cfg["msaa"])
     data = mujoco.MjData(model)
 
     cam = mujoco.MjvCamera()
@@ -177,6 +179,8 @@ def _render_job(workdir: pathlib.Path) -> int:
             scn = renderer.scene
             if cfg["shadows"] == "off":
                 scn.flags[mujoco.mjtRndFlag.mjRND_SHADOW] = 0
+            if not cfg.get("reflection", True):
+                scn.flags[mujoco.mjtRndFlag.mjRND_REFLECTION] = 0
             for gtype, size, pos, rgba in floor[: scn.maxgeom - scn.ngeom]:
                 mujoco.mjv_initGeom(scn.geoms[scn.ngeom], gtype, size, pos, _EYE, rgba)
                 scn.ngeom += 1
