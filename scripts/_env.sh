@@ -60,3 +60,45 @@ ensure_env() {
   export PATH="$VENV/bin:$PATH"
   echo "using Python environment $VENV"
 }
+
+# pip_install ARGS...: "$PY" -m pip install ARGS, showing pip's progress one line a package
+# ("Collecting numpy>=1.26", "Installing collected packages: ...", "Successfully installed ...";
+# not the "Requirement already satisfied" and download lines), and, whenever pip prints nothing
+# for 3 s (building, unpacking, installing), a line saying it is still at work with the elapsed
+# time. Returns pip's exit status; on failure pip's whole output is shown.
+pip_install() {
+  local log pid rc seen=0 n quiet=0 t0=$SECONDS
+  log=$(mktemp)
+  "$PY" -m pip install --progress-bar off "$@" >"$log" 2>&1 &
+  pid=$!
+  while kill -0 "$pid" 2>/dev/null; do
+    sleep 1
+    n=$(wc -l <"$log")
+    if [ "$n" -gt "$seen" ]; then
+      sed -n "$((seen + 1)),${n}p" "$log" | _pip_lines
+      seen=$n
+      quiet=0
+    else
+      quiet=$((quiet + 1))
+      if [ "$quiet" -ge 3 ]; then
+        echo "  pip is still at work ($((SECONDS - t0)) s)"
+        quiet=0
+      fi
+    fi
+  done
+  rc=0
+  wait "$pid" || rc=$?
+  sed -n "$((seen + 1)),\$p" "$log" | _pip_lines
+  if [ "$rc" != 0 ]; then
+    echo "error: pip install $* failed (exit $rc); its output:" >&2
+    cat "$log" >&2
+  else
+    echo "  pip done in $((SECONDS - t0)) s"
+  fi
+  rm -f "$log"
+  return "$rc"
+}
+
+_pip_lines() {
+  grep -E '^ *(Collecting|Obtaining|Building|Installing|Successfully|ERROR)' | cut -c1-160 || true
+}

@@ -313,7 +313,9 @@ def _run(args) -> int:
     route_to(out / "mujoco.log")  # MuJoCo's warnings, if any, go to the run's folder
     scene = build_scene(scenario)
     warm_up(
-        kernels_for(scenario.controller, scenario.distribution), log=lambda line: print(line, file=sys.stderr)
+        kernels_for(scenario.controller, scenario.distribution),
+        log=lambda line: print(line, file=sys.stderr),
+        tick=sys.stderr,
     )
     on_step, close = _viewer(args.viewer)
     bar = None

@@ -293,6 +293,7 @@ def _run(args) -> int:
         warm_up(
             kernels_for(spec.base.controller, spec.base.distribution),
             log=lambda line: print(line, file=sys.stderr),
+            tick=sys.stderr,
         )
     try:
         summary = run_sweep(
