@@ -120,7 +120,14 @@ def register(subparsers) -> None:
     p.add_argument(
         "--overwrite", action="store_true", help="replace an --out file that holds a different sweep"
     )
-    p.add_argument("--plot", metavar="FILE.png", help="draw the polar envelope when done")
+    p.add_argument(
+        "--plot",
+        nargs="?",
+        const="",
+        metavar="FILE.png",
+        help="draw the polar envelope when done; without FILE, beside the results (--out's name "
+        "with .png, in runs/ by default)",
+    )
     p.add_argument(
         "--compare",
         metavar="OTHER.parquet",
@@ -229,9 +236,10 @@ def _grid_file(grid) -> tuple[dict, dict]:
 
 
 def _check_plot(path: str | None, compare: list[str]) -> None:
-    """--plot and --compare, checked before the sweep runs."""
-    if compare and not path:
-        raise ScenarioError("--compare needs --plot FILE.png")
+    """--plot and --compare, checked before the sweep runs (``path`` "" : the default beside the
+    results, a PNG)."""
+    if compare and path is None:
+        raise ScenarioError("--compare needs --plot (or --plot FILE.png)")
     if not path:
         return
     import matplotlib.figure
@@ -268,6 +276,7 @@ def _run(args) -> int:
         else Path("runs")
         / (f"sweep-{spec.base.controller}{_variant_suffix(spec.base)}-{spec.torque_limits}.parquet")
     )
+    plot = (Path(args.plot) if args.plot else out.with_suffix(".png")) if args.plot is not None else None
     n = spec.n_trials
     where = args.scheduler or f"{args.workers or 'all'} local worker(s)"
     check_run_args(out, workers=args.workers, batch=args.batch, scheduler=args.scheduler)
@@ -330,9 +339,9 @@ def _run(args) -> int:
     data = load(out)
     ok = survived(data.table)
     print(f"{out}: {data.table.num_rows} trials, survived {int(ok.sum())}, did not {int((~ok).sum())}")
-    if args.plot:
+    if plot is not None:
         from biped.viz.envelope import plot_comparison
 
-        plot_comparison([out, *args.compare], by=args.by, out=args.plot)
-        print(f"envelope plot: {args.plot}")
+        plot_comparison([out, *args.compare], by=args.by, out=plot)
+        print(f"envelope plot: {plot}")
     return 0
