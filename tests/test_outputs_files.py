@@ -145,6 +145,14 @@ def test_mujoco_warnings_never_land_in_the_current_directory(tmp_path):
     assert r.returncode == 0, r.stderr
     assert not (cwd / "MUJOCO_LOG.TXT").exists()
     assert "QVEL" in log.read_text()
+    # routed to the run's log, the warning is not printed (it would break a progress bar's line)
+    assert "QVEL" not in r.stdout + r.stderr
+    from biped.sim.mjlog import count_warnings, summary
+
+    assert count_warnings(log) == 1 and summary(log, 0) == (
+        f"MuJoCo warned 1 time (e.g. a diverging simulation): see {log}"
+    )
+    assert summary(log, 1) is None
 
 
 def test_push_says_what_it_writes_and_the_whole_time(tmp_path, capsys, monkeypatch):
@@ -291,3 +299,25 @@ def test_any_nested_value_gives_strict_json(tmp_path):
         assert same(obj, strict_json(path.read_text()))
 
     check()
+
+
+def test_progress_is_whole_lines_when_stderr_is_not_a_terminal(tmp_path):
+    """Redirected (a pipe here), `biped push`'s progress is whole lines, never a tqdm bar redrawn
+    with carriage returns, and says the figures as they are drawn and the end of the run."""
+    env = dict(os.environ, PYTHONPATH=SRC)
+    r = subprocess.run(
+        [sys.executable, "-m", "biped", "push", "--duration", "0.1", "--no-video", "--no-replay"]
+        + ["--controller", "joint-pd", "--out", str(tmp_path / "run")],
+        check=False,
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert r.returncode == 0, r.stderr
+    assert "\r" not in r.stderr
+    lines = r.stderr.splitlines()
+    assert "biped push: 0.10/0.10 s sim" in " ".join(lines)
+    figs = [ln for ln in lines if ln.startswith("figures: ")]
+    assert figs[0].startswith("figures: 0/4 figure") and figs[-1].startswith("figures: 4/4 figure"), lines

@@ -78,11 +78,33 @@ class LineProgress:
     def set_postfix(self, **kw: Any) -> None:
         self._postfix = ", ".join(f"{k}={v}" for k, v in kw.items())
 
+    def set_postfix_str(self, text: str) -> None:
+        self._postfix = text
+
     def close(self) -> None:
         if not self._closed:
             self._closed = True
             if self._said != self.n:
                 self._say()
+
+
+class _Silent:
+    """The counter of a quiet command: counts, says nothing."""
+
+    def __init__(self):
+        self.n: float = 0
+
+    def update(self, k: float = 1) -> None:
+        self.n += k
+
+    def set_postfix(self, **kw: Any) -> None:
+        pass
+
+    def set_postfix_str(self, text: str) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
 
 
 def progress_bar(
@@ -95,10 +117,13 @@ def progress_bar(
     **tqdm_kwargs: Any,
 ):
     """A tqdm bar on ``file`` (default ``sys.stderr``) when it is a terminal, else a
-    :class:`LineProgress` (``line_format`` formats its counts, e.g. ``"{:.2f}"``).
+    :class:`LineProgress` (``line_format`` formats its counts, e.g. ``"{:.2f}"``); nothing at all
+    with ``disable=True``.
     ``tqdm_kwargs`` (``initial``, ``bar_format``, ``leave``...) go to tqdm; of them the line
     counter takes ``initial``."""
     stream = file if file is not None else sys.stderr
+    if tqdm_kwargs.get("disable"):
+        return _Silent()
     if is_terminal(stream):
         from tqdm import tqdm
 

@@ -283,7 +283,7 @@ def _writer_progress(quiet: bool):
             "video.mp4": "video.mp4 (rendered meanwhile by a child process)",
             "replay.html": "replay.html",
         }.get(name, name)
-        print(f"writing {what} ...", file=sys.stderr, flush=True)
+        print(f"writing {what} ...", flush=True)
         if name == "figures":
             bars["figures"].update(0)  # a line "figures: 0/4" (a bar on a terminal)
 
@@ -303,7 +303,7 @@ def _run(args) -> int:
 
     from biped.outputs.push import write_outputs
     from biped.sim.jit import kernels_for, warm_up
-    from biped.sim.mjlog import route_to
+    from biped.sim.mjlog import count_warnings, route_to, summary
     from biped.sim.push import simulate
     from biped.sim.scene import build_scene
 
@@ -311,6 +311,7 @@ def _run(args) -> int:
     scenario = build_scenario(args)  # validated before anything is simulated
     out = _out_dir(args)
     route_to(out / "mujoco.log")  # MuJoCo's warnings, if any, go to the run's folder
+    warned_before = count_warnings(out / "mujoco.log")
     scene = build_scene(scenario)
     warm_up(
         kernels_for(scenario.controller, scenario.distribution),
@@ -360,6 +361,9 @@ def _run(args) -> int:
         close_bar()
     t_end = time.perf_counter()
     print(_table(result, out, paths, {"total": command_seconds(t_start), "write": t_end - t_write}))
+    said = summary(out / "mujoco.log", warned_before)
+    if said:
+        print(said, file=sys.stderr)
     if result.interrupted:
         return 130
     return 0

@@ -256,6 +256,19 @@ def _check_plot(path: str | None, compare: list[str]) -> None:
             raise ScenarioError(f"--compare {other!r}: no finished sweep file (.parquet) there")
 
 
+def _say_warnings(table, mjlog: Path, before: int) -> None:
+    """After the bar: MuJoCo's warnings of this sweep, counted once, and how many of its trials
+    diverged (the warnings themselves are in ``mjlog``)."""
+    from biped.sim.mjlog import count_warnings
+
+    n = count_warnings(mjlog) - before
+    if n <= 0:
+        return
+    div = sum(1 for d in table.column("diverged").to_pylist() if d) if "diverged" in table.column_names else 0
+    trials = f"{div} trial{'s' if div != 1 else ''} diverged; " if div else ""
+    print(f"MuJoCo warned {n} time{'s' if n != 1 else ''} ({trials}see {mjlog})", file=sys.stderr)
+
+
 def run(args) -> int:
     """The command; MuJoCo's warnings go to its output's log while it runs (then back)."""
     from biped.sim.mjlog import preserved
@@ -287,9 +300,11 @@ def _run(args) -> int:
             f"{spec.base.controller}, torque limits {spec.torque_limits}, on {where} -> {out}"
         )
         return 0
-    from biped.sim.mjlog import route_to
+    from biped.sim.mjlog import count_warnings, route_to
 
-    route_to(out.with_suffix(".mujoco.log"))  # MuJoCo's warnings (workers too) beside the results
+    mjlog = out.with_suffix(".mujoco.log")
+    route_to(mjlog)  # MuJoCo's warnings (workers too) beside the results, not inside the bar
+    warned_before = count_warnings(mjlog)
     print(
         f"biped sweep: {n} trials of {spec.base.duration_s:g} s, controller "
         f"{spec.base.controller}, torque limits {spec.torque_limits}, physics "
@@ -339,6 +354,7 @@ def _run(args) -> int:
     data = load(out)
     ok = survived(data.table)
     print(f"{out}: {data.table.num_rows} trials, survived {int(ok.sum())}, did not {int((~ok).sum())}")
+    _say_warnings(data.table, mjlog, warned_before)
     if plot is not None:
         from biped.viz.envelope import plot_comparison
 
