@@ -226,7 +226,16 @@ def _table(result, out: Path, paths: dict, times: dict | None = None) -> str:
             if rise is not None:
                 rows.append((f"{foot} foot rises", f"{rise.time_s:.3f} s ({rise.part})"))
             if rise is not None and downs and downs[-1].time_s > rise.time_s:
-                rows.append((f"{foot} foot back down", f"{downs[-1].time_s:.3f} s ({downs[-1].part})"))
+                last = downs[-1]
+                landed = [
+                    st["touch_down_s"]
+                    for st in result.extra.get("steps", ())
+                    if st["foot"] == foot and st.get("touch_down_s") is not None
+                ]
+                why = ""
+                if landed and last.time_s > max(landed) + 1e-9:  # after the step's own landing
+                    why = f"; the sole settling after its step landed at {max(landed):.3f} s"
+                rows.append((f"{foot} foot back down", f"{last.time_s:.3f} s ({last.part}{why})"))
     for k, st in enumerate(result.extra.get("steps", ()), 1):
         pos = st.get("position_m")
         where = (

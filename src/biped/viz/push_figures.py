@@ -150,9 +150,15 @@ def _legs_figure(result, values, ylabel, title, zoom=True):
 
 
 def fig3_joint_angles(result, zoom=True):
-    """W Fig. 3: joint angles theta_2..theta_13 [deg] against time (right: the first 0.5 s)."""
+    """W Fig. 3: joint angles theta_2..theta_13 [deg] against time (right: the first 0.5 s), with
+    the MJCF hinges' signs, which the title states: a flexed knee is negative (the crouch starts
+    at -77 deg), hip flexion and ankle dorsiflexion positive."""
     return _legs_figure(
-        result, np.degrees(result.joint_angles), "joint angle [deg]", "Joint angles (W Fig. 3)", zoom
+        result,
+        np.degrees(result.joint_angles),
+        "joint angle [deg]",
+        "Joint angles (W Fig. 3); signs of the model's hinges: knee flexion is negative",
+        zoom,
     )
 
 
