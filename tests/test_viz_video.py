@@ -88,3 +88,18 @@ def test_without_opengl_it_returns_a_one_line_reason_instead_of_raising(wendland
     assert res.path is None and res.frames == 0
     assert "MUJOCO_GL" in res.reason and "\n" not in res.reason
     assert not (tmp_path / "v.mp4").exists()
+
+
+def test_an_unprobed_backend_that_fails_falls_back_to_the_probe(wendlandt_mj, gl, tmp_path, monkeypatch):
+    """The video tries its first backend without the ~1 s probe; when that one cannot render
+    (here MUJOCO_GL names one that does not exist) it probes the others and renders with the
+    one that works, as it did when it always probed first."""
+    monkeypatch.setenv("MUJOCO_GL", "nosuchbackend")
+    gl_available.cache_clear()
+    try:
+        t, q = _sliding(wendlandt_mj, T=3)
+        res = render_video(wendlandt_mj, t, q, tmp_path / "v.mp4", width=64, height=48)
+    finally:
+        gl_available.cache_clear()
+    assert res.reason is None and res.backend in ("egl", "osmesa"), res
+    assert res.frames == 3 and len(_decode(res.path)) == 3

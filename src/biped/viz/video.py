@@ -13,7 +13,8 @@ reason.
 Backends tried, in order: the ``MUJOCO_GL`` of the environment if set, then ``egl``, then
 ``osmesa`` (then ``glfw`` if a ``DISPLAY`` is set). On Debian, ``egl`` needs ``libegl1`` (with
 Mesa's ``libegl-mesa0`` and ``libgl1-mesa-dri`` it renders on the CPU), ``osmesa`` needs
-``libosmesa6``. :func:`gl_available` probes them once per process (about 1 s).
+``libosmesa6``. :func:`gl_available` probes them once per process (about 1 s); the video itself
+first tries the first candidate unprobed and probes only when that fails.
 """
 
 from __future__ import annotations
@@ -269,9 +270,10 @@ def render_video(
     ft = playback_times(times[0], times[-1], fps, slow_motion)  # validates slow_motion
     captions = overlay_text(ft.tolist(), fps, events=events, slow_motion=slow_motion, t1=times[-1])
     path = pathlib.Path(path)
-    ok, backend = gl_available()
+    ok, backend = _first_try()
     if not ok:
         return VideoResult(None, backend)
+    probed = gl_available.cache_info().currsize > 0
     import mujoco
 
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -302,6 +304,14 @@ def render_video(
         (tmp / "job.json").write_text(json.dumps(cfg))
         try:
             code, err = _run_child(tmp, backend, len(idx), progress, cancel)
+            if code != 0 and not probed and not (cancel is not None and cancel.is_set()):
+                # the unprobed first choice failed: probe every backend, as before, and retry
+                ok, found = gl_available()
+                if not ok:
+                    return VideoResult(None, found)
+                if found != backend:
+                    backend = found
+                    code, err = _run_child(tmp, backend, len(idx), progress, cancel)
         except subprocess.TimeoutExpired:
             return VideoResult(None, f"no video: rendering with MUJOCO_GL={backend} timed out", backend)
     if cancel is not None and cancel.is_set():
@@ -311,6 +321,16 @@ def render_video(
             None, f"no video: rendering with MUJOCO_GL={backend} failed: {_last_line(err)}", backend
         )
     return VideoResult(path.resolve(), None, backend, len(idx))
+
+
+def _first_try() -> tuple[bool, str]:
+    """The backend to render with first: :func:`gl_available`'s answer when it was probed in this
+    process (or rendering is disabled), else the first candidate, unprobed: the probe, a child
+    process of its own, costs about 1 s of CPU, and the renderer's failure falls back to it."""
+    disabled = os.environ.get("MUJOCO_GL", "").strip().lower() in ("disable", "disabled", "off", "false", "0")
+    if disabled or gl_available.cache_info().currsize:
+        return gl_available()
+    return True, _candidates()[0]
 
 
 def _font_file() -> str | None:
