@@ -321,6 +321,10 @@ def _run(args) -> int:
     out = _out_dir(args)
     route_to(out / "mujoco.log")  # MuJoCo's warnings, if any, go to the run's folder
     warned_before = count_warnings(out / "mujoco.log")
+    if not args.no_video:  # the renderer's process starts (imports) on the idle core meanwhile
+        from biped.viz.video import prewarm
+
+        prewarm()
     scene = build_scene(scenario)
     warm_up(
         kernels_for(scenario.controller, scenario.distribution),

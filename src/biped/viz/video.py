@@ -58,9 +58,38 @@ class VideoResult:
 
 
 _CHILD = (
-    "import pathlib, sys; from biped.viz.video_render import _render_job; "
-    "sys.exit(_render_job(pathlib.Path(sys.argv[1])))"
+    "import pathlib, sys; from biped.viz.video_render import _preload, _render_job; "
+    "waiting = sys.argv[1] == '-'; _preload() if waiting else None; "
+    "job = sys.stdin.readline().strip() if waiting else sys.argv[1]; "
+    "sys.exit(_render_job(pathlib.Path(job)) if job else 0)"
 )
+
+#: Renderer processes started ahead by :func:`prewarm`, by backend: each has imported MuJoCo,
+#: Pillow and ffmpeg and waits on its stdin for a job folder (end of input: it exits).
+_WAITING: dict[str, tuple[subprocess.Popen, object]] = {}
+
+
+def prewarm() -> None:
+    """Start the renderer's child process now, so that a video rendered later in this process
+    skips the child's start-up (importing MuJoCo, Pillow, ffmpeg: ~1 s of one core). ``biped
+    push`` calls it before it simulates, while the second core idles. Nothing happens when
+    rendering is disabled or a child already waits; an unused child exits with this process
+    (its stdin closes)."""
+    ok, backend = _first_try()
+    if not ok or backend in _WAITING and _WAITING[backend][0].poll() is None:
+        return
+    err = tempfile.TemporaryFile(mode="w+")  # noqa: SIM115 - read and closed by _run_child
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _CHILD, "-"],
+        env=_child_env(backend),
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=err,
+        text=True,
+        bufsize=1,
+    )
+    _WAITING[backend] = (proc, err)
+
 
 _PROBE = r"""
 import mujoco
@@ -351,8 +380,14 @@ def _run_child(tmp: pathlib.Path, backend: str, n_frames: int, progress, cancel=
     import threading
 
     timeout = 120 + 2.0 * n_frames
-    err_path = tmp / "stderr.txt"
-    with open(err_path, "w") as err:
+    waiting = _WAITING.pop(backend, None)
+    if waiting is not None and waiting[0].poll() is None:  # started ahead by prewarm()
+        proc, err = waiting
+        assert proc.stdin is not None  # stdin=PIPE
+        proc.stdin.write(f"{tmp}\n")
+        proc.stdin.close()
+    else:
+        err = open(tmp / "stderr.txt", "w+")  # noqa: SIM115 - closed below
         proc = subprocess.Popen(
             [sys.executable, "-c", _CHILD, str(tmp)],
             env=_child_env(backend),
@@ -361,6 +396,7 @@ def _run_child(tmp: pathlib.Path, backend: str, n_frames: int, progress, cancel=
             text=True,
             bufsize=1,
         )
+    with err:  # type: ignore[attr-defined]
         killed = threading.Event()
 
         def _kill():
@@ -397,6 +433,8 @@ def _run_child(tmp: pathlib.Path, backend: str, n_frames: int, progress, cancel=
             timer.cancel()
             if proc.stdout is not None:
                 proc.stdout.close()
+        err.seek(0)  # type: ignore[attr-defined]
+        text = err.read()  # type: ignore[attr-defined]
     if killed.is_set():
         raise subprocess.TimeoutExpired(_CHILD, timeout)
-    return code, err_path.read_text(errors="replace")
+    return code, text

@@ -131,6 +131,13 @@ class _Caption:
         return np.asarray(img)
 
 
+def _preload() -> None:
+    """Import what :func:`_render_job` needs (a child started ahead, waiting for its job)."""
+    import imageio_ffmpeg  # noqa: F401
+    import mujoco  # noqa: F401
+    from PIL import Image, ImageDraw, ImageFont  # noqa: F401
+
+
 def _render_job(workdir: pathlib.Path) -> int:
     """Child process: render ``workdir/job.json`` (started by :func:`render_video`); prints
     ``frame n`` on stdout after each frame."""
