@@ -4,7 +4,7 @@ log file or a pipe.
 A tqdm bar redraws itself with carriage returns; written to a file (``biped sweep ... 2> log``, a
 batch system, CI) it becomes one huge line. :func:`progress_bar` returns a tqdm bar when the stream
 is a terminal and otherwise a :class:`LineProgress`, which prints ``desc: n/total unit (elapsed)``
-as a whole line at the start, every ``every_s`` seconds (default 2) and at the end.
+as a whole line at the start, every ``every_s`` seconds (default 1) and at the end.
 
 >>> import io
 >>> out = io.StringIO()
@@ -45,7 +45,7 @@ class LineProgress:
         *,
         file: TextIO | None = None,
         initial: float = 0,
-        every_s: float = 2.0,
+        every_s: float = 1.0,
         fmt: str = "{:g}",
     ):
         self.total, self.desc, self.unit = total, desc, unit

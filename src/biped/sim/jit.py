@@ -119,7 +119,12 @@ class _Ticker:
         self._thread.start()
 
     def _line(self) -> str:
-        return f"  compiling{self.stage}: {time.perf_counter() - self._t0:.0f} s of ~{self.estimate:.0f} s"
+        t = time.perf_counter() - self._t0
+        if t <= self.estimate:
+            return f"  compiling{self.stage}: {t:.0f} s of ~{self.estimate:.0f} s"
+        return (
+            f"  compiling{self.stage}: {t:.0f} s (over the ~{self.estimate:.0f} s estimate: a busy machine)"
+        )
 
     def _run(self) -> None:
         period = 1.0 if self.tty else 2.0
