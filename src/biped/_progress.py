@@ -22,7 +22,7 @@ import sys
 import time
 from typing import Any, TextIO
 
-__all__ = ["LineProgress", "is_terminal", "progress_bar"]
+__all__ = ["LineProgress", "is_terminal", "progress_bar", "track"]
 
 
 def is_terminal(stream: Any) -> bool:
@@ -129,3 +129,19 @@ def progress_bar(
 
         return tqdm(total=total, desc=desc, unit=unit, file=stream, **tqdm_kwargs)
     return LineProgress(total, desc, unit, file=file, initial=tqdm_kwargs.get("initial", 0), fmt=line_format)
+
+
+def track(iterable, total: int, desc: str, unit: str = "it"):
+    """``iterable`` with a counter: a tqdm bar on a terminal, whole lines otherwise."""
+    if is_terminal(sys.stderr):
+        from tqdm import tqdm
+
+        yield from tqdm(iterable, total=total, desc=desc, unit=unit)
+        return
+    bar = LineProgress(total, desc, unit)
+    try:
+        for item in iterable:
+            yield item
+            bar.update(1)
+    finally:
+        bar.close()
