@@ -88,23 +88,20 @@ ensure_env() {
 # for 2 s (building, unpacking, installing), a line saying it is still at work with the elapsed
 # time. Returns pip's exit status; on failure pip's whole output is shown.
 pip_install() {
-  local log pid rc seen=0 n quiet=0 t0=$SECONDS
+  local log pid rc seen=0 n last=$SECONDS t0=$SECONDS
   log=$(mktemp)
   "$PY" -m pip install --progress-bar off "$@" >"$log" 2>&1 &
   pid=$!
   while kill -0 "$pid" 2>/dev/null; do
-    sleep 1
+    sleep 0.5
     n=$(wc -l <"$log")
     if [ "$n" -gt "$seen" ]; then
       sed -n "$((seen + 1)),${n}p" "$log" | _pip_lines
       seen=$n
-      quiet=0
-    else
-      quiet=$((quiet + 1))
-      if [ "$quiet" -ge 2 ]; then
-        echo "  pip is still at work ($((SECONDS - t0)) s)"
-        quiet=0
-      fi
+      last=$SECONDS
+    elif [ $((SECONDS - last)) -ge 2 ]; then
+      echo "  pip is still at work ($((SECONDS - t0)) s)"
+      last=$SECONDS
     fi
   done
   rc=0
