@@ -40,6 +40,7 @@ from biped.errors import BipedError, ScenarioError
 from biped.models import subject
 from biped.sim import fused as fused_mod
 from biped.sim.contact import SOLE_GEOMS, ContactMonitor
+from biped.sim.jit import announce_and_warm, kernels_for
 from biped.sim.scenario import Scenario
 from biped.sim.scene import Scene, build_scene, initial_state, tilt_quat
 
@@ -484,16 +485,13 @@ def simulate(
 ) -> PushResult:
     """Run ``scenario`` (W's defaults if None) closed loop with its controller
     (:func:`controller_policy`) and return its :class:`PushResult`; see :func:`run_closed_loop`.
-    The first run on a machine compiles the numba kernels (~20 s once); a warning through
-    ``logging`` (logger ``"biped"``) says so before it starts."""
+    A first run compiles the numba kernels (~20 s once); a ``logging`` warning says so first."""
     scenario = Scenario() if scenario is None else scenario
     if not isinstance(scenario, Scenario):
         raise ScenarioError(
             f"simulate takes a biped.sim.Scenario (or None: W's); got {type(scenario).__name__}"
         )
     scene = scene or build_scene(scenario)
-    from biped.sim.jit import announce_and_warm, kernels_for
-
     announce_and_warm(kernels_for(scenario.controller, scenario.distribution))  # says so when cold
     return run_closed_loop(
         scenario, scene, controller_policy(scenario, scene), progress=progress, on_step=on_step
