@@ -65,13 +65,14 @@ def main() -> None:
     }
     if args.video_settings:
         tasks |= {
-            "video 1280x720, shadows, 30 fps (before)": video(
-                width=1280, height=720, fps=30, shadows="follow"
+            "video 1280x720, shadows, MSAA, reflection, 30 fps (before)": video(
+                width=1280, height=720, fps=30, shadows="follow", msaa=4, reflection=True
             ),
-            "video 854x480, shadows, 30 fps": video(width=854, height=480, fps=30, shadows="follow"),
-            "video 640x360, shadows, 30 fps": video(width=640, height=360, fps=30, shadows="follow"),
-            "video 640x360, no shadows, 30 fps": video(width=640, height=360, fps=30, shadows="off"),
-            "video 854x480, no shadows, 24 fps": video(width=854, height=480, fps=24, shadows="off"),
+            "video 854x480, shadows, MSAA, reflection": video(shadows="follow", msaa=4, reflection=True),
+            "video 854x480, shadows": video(shadows="follow"),
+            "video 854x480, MSAA": video(msaa=4),
+            "video 854x480, reflection": video(reflection=True),
+            "video 640x360": video(width=640, height=360),
         }
     times: dict[str, list[float]] = {k: [] for k in tasks}
     cpu: dict[str, list[float]] = {k: [] for k in tasks}
