@@ -6,6 +6,6 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 . scripts/_env.sh
 ensure_env libosmesa6 libgl1
-echo "installing biped and its Python dependencies (first run: a few minutes)"
-"$PY" -m pip install -q -e .
+echo "installing biped and its Python dependencies with pip (first run: a few minutes; one line a package)"
+pip_install -e .
 exec "$PY" -m biped push "$@"

@@ -3,7 +3,8 @@
 #   1. ruff check   (pyflakes, pycodestyle, bugbear, isort, pyupgrade, numpy rules; pyproject.toml)
 #   2. mypy         (src/biped, configured in pyproject.toml)
 #   3. the doctests (every `>>>` example in src/biped)
-#   4. the test suite (pytest -n 2); extra arguments go to this step.
+#   4. the documentation site (mkdocs build --strict: no broken link, anchor or reference)
+#   5. the test suite (pytest -n 2); extra arguments go to this step.
 # Exits non-zero if any step fails or if no test ran.
 # Debian packages: libosmesa6 and libgl1 (offscreen rendering of the videos), chromium (the
 # browser tests open replay.html headless; ~130 packages with its dependencies).
@@ -12,8 +13,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 . scripts/_env.sh
 ensure_env libosmesa6 libgl1 chromium
-echo "installing biped and the test dependencies (first run: a few minutes)"
-"$PY" -m pip install -q -e ".[test]"
+echo "installing biped, the test and docs dependencies with pip (first run: a few minutes; one line a package)"
+pip_install -e ".[test,docs]"
 DIRS=(src tests benchmarks scripts)
 echo "== ruff check"
 "$PY" -m ruff check "${DIRS[@]}"
@@ -23,6 +24,8 @@ echo "== mypy"
 "$PY" -m mypy
 echo "== doctests"
 "$PY" -m pytest -q -n 0 -p no:cacheprovider --doctest-modules src/biped
+echo "== docs site (mkdocs build --strict)"
+NO_MKDOCS_2_WARNING=1 "$PY" -m mkdocs build --strict --quiet
 echo "== test suite"
 rc=0
 "$PY" -m pytest -n 2 -q "$@" || rc=$?

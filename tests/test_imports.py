@@ -23,6 +23,7 @@ LAYERS = {
     "errors": 0,
     "files": 0,  # every file biped writes or reads from the user (imports errors only)
     "_numba_cache": 0,  # where numba caches the kernels; imports nothing from biped
+    "_progress": 0,  # progress counters (tqdm on a terminal, lines otherwise)
     "spatial": 0,
     "model": 0,
     "models": 0,

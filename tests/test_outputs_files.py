@@ -145,6 +145,14 @@ def test_mujoco_warnings_never_land_in_the_current_directory(tmp_path):
     assert r.returncode == 0, r.stderr
     assert not (cwd / "MUJOCO_LOG.TXT").exists()
     assert "QVEL" in log.read_text()
+    # routed to the run's log, the warning is not printed (it would break a progress bar's line)
+    assert "QVEL" not in r.stdout + r.stderr
+    from biped.sim.mjlog import count_warnings, summary
+
+    assert count_warnings(log) == 1 and summary(log, 0) == (
+        f"MuJoCo warned 1 time (e.g. a diverging simulation): see {log}"
+    )
+    assert summary(log, 1) is None
 
 
 def test_push_says_what_it_writes_and_the_whole_time(tmp_path, capsys, monkeypatch):
@@ -202,8 +210,9 @@ def _stub_video(frames: int):
 
 @pytest.mark.parametrize("quiet", [False, True])
 def test_walk_video_draws_pushs_frame_bar_unless_quiet(tmp_path, capsys, monkeypatch, quiet):
-    """The walk's video stage shows the same frame bar as push (cli._common.frame_bar): tqdm's
-    "rendering video.mp4 ... n/7" on stderr (gone when the stage ends); --quiet shows none."""
+    """The walk's video stage shows the same frame counter as push (cli._common.frame_bar):
+    "rendering video.mp4: n/7 frame" on stderr (whole lines here, where stderr is not a terminal;
+    a tqdm bar on one); --quiet shows none."""
     import biped.outputs.walk as walk_out
 
     monkeypatch.setattr(walk_out, "render_video", _stub_video(7))
@@ -214,7 +223,7 @@ def test_walk_video_draws_pushs_frame_bar_unless_quiet(tmp_path, capsys, monkeyp
         argv.remove("--quiet")
     assert main(argv) == 0
     err = capsys.readouterr().err
-    assert ("rendering video.mp4" in err and "/7 [" in err) is not quiet, err
+    assert ("rendering video.mp4: 7/7 frame" in err) is not quiet, err
 
 
 def test_push_quiet_says_nothing_about_video_frames(tmp_path, capsys, monkeypatch):
@@ -252,7 +261,10 @@ def test_push_outputs_report_stages_and_video_frames(tmp_path, monkeypatch):
         on_stage=stages.append,
         on_frame=lambda d, n: frames.append((d, n)),
     )
-    assert stages == ["trajectory.csv", "video.mp4"] and frames == [(1, 2), (2, 2)]
+    # the video renders while the rest is written: the frames done meanwhile are said at once,
+    # then each as it comes (here all were done before write_outputs waited for them)
+    assert stages == ["trajectory.csv", "video.mp4"] and frames[-1] == (2, 2)
+    assert frames == sorted(frames) and set(frames) <= {(1, 2), (2, 2)}
 
 
 def test_any_nested_value_gives_strict_json(tmp_path):
@@ -291,3 +303,25 @@ def test_any_nested_value_gives_strict_json(tmp_path):
         assert same(obj, strict_json(path.read_text()))
 
     check()
+
+
+def test_progress_is_whole_lines_when_stderr_is_not_a_terminal(tmp_path):
+    """Redirected (a pipe here), `biped push`'s progress is whole lines, never a tqdm bar redrawn
+    with carriage returns, and says the figures as they are drawn and the end of the run."""
+    env = dict(os.environ, PYTHONPATH=SRC)
+    r = subprocess.run(
+        [sys.executable, "-m", "biped", "push", "--duration", "0.1", "--no-video", "--no-replay"]
+        + ["--controller", "joint-pd", "--out", str(tmp_path / "run")],
+        check=False,
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert r.returncode == 0, r.stderr
+    assert "\r" not in r.stderr
+    lines = r.stderr.splitlines()
+    assert "biped push: 0.10/0.10 s sim" in " ".join(lines)
+    figs = [ln for ln in lines if ln.startswith("figures: ")]
+    assert figs[0].startswith("figures: 0/4 figure") and figs[-1].startswith("figures: 4/4 figure"), lines

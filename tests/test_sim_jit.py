@@ -152,3 +152,46 @@ def test_compile_runs_each_kernel():
         jit._compile(name)
         assert jit._dispatcher(name).overloads, name
         assert jit.cold_kernels((name,)) == []
+
+
+_API = """
+import logging
+import biped.models
+from biped.control import WorkspaceController
+a = WorkspaceController.from_mjcf(biped.models.path("wendlandt"))
+b = WorkspaceController.from_mjcf(biped.models.path("wendlandt"))
+print("built")
+"""
+
+
+def test_python_api_says_once_through_logging_that_it_compiles(tmp_path):
+    """A cold cache: building W's controller from Python warns once, through ``logging`` (logger
+    "biped", shown on stderr with no logging set up), that it compiles on first use; a second
+    controller in the same process says nothing more. (Nothing is compiled here.)"""
+    p = _python(_API, tmp_path / "cache", tmp_path)
+    assert p.returncode == 0 and p.stdout.strip() == "built", p.stderr
+    said = [ln for ln in p.stderr.splitlines() if "compiling W's controller on first use" in ln]
+    assert len(said) == 1 and "~15 s" in said[0], p.stderr
+
+
+def test_compile_estimate_is_measured_once_compiled_here(tmp_path, monkeypatch):
+    """warm_up remembers each kernel's compile time (in numba's cache folder) and the next
+    announcement quotes it; a "compile" that takes no time (a cache another process filled) is
+    not remembered."""
+    import time
+
+    from biped.sim import jit
+
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
+    assert jit.estimate_s(["controller", "contact"]) == (16.0, False)  # the defaults
+    monkeypatch.setattr(jit, "_WARM", set())
+    monkeypatch.setattr(jit, "cold_kernels", lambda names: list(names))
+    monkeypatch.setattr(jit, "_compile", lambda n: time.sleep(0.6 if n == "contact" else 0.0))
+    lines = []
+    jit.warm_up(["controller", "contact"], log=lines.append)
+    assert "~16 s" in lines[0] and "idle 2-core" in lines[0]
+    assert jit.estimate_s(["contact"]) == (pytest.approx(0.6, abs=0.3), True)
+    assert jit.estimate_s(["controller", "contact"])[1] is False  # the controller's not measured
+    lines.clear()
+    jit.warm_up(["contact"], log=lines.append)
+    assert "measured on this machine" in lines[0]

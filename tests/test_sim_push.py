@@ -181,7 +181,7 @@ def test_outputs_columns_and_summary(tmp_path):
         assert e["foot"] in ("left", "right") and e["part"] in ("heel", "toe")
         assert e["kind"] in ("lift_off", "touch_down")
     figs = sorted(p.name for p in (tmp_path / "figures").iterdir())
-    assert len(figs) == 8 and "fig5_body_position.svg" in figs
+    assert len(figs) == 4 and "fig5_body_position.png" in figs  # PNG only by default (--svg adds SVG)
 
 
 def test_cli_default_layout(tmp_path, capsys):
@@ -239,3 +239,20 @@ def test_ctrl_c_keeps_what_was_simulated(tmp_path):
     assert summary["interrupted"] is True
     n = len((tmp_path / "trajectory.csv").read_text().splitlines())
     assert n == len(r.times) + 1
+
+
+def test_figures_png_by_default_svg_on_request(tmp_path):
+    """`biped push` writes its figures once, as PNG; `--svg` (formats=("png", "svg")) adds SVG; an
+    unknown format is refused before anything is drawn."""
+    from biped.errors import BipedError
+    from biped.viz.push_figures import FIGURES, plot_push
+
+    r = simulate(Scenario(duration_s=0.05))
+    seen = []
+    paths = plot_push(r, tmp_path / "both", formats=("png", "svg"), progress=lambda n, N: seen.append((n, N)))
+    assert sorted(p.suffix for p in paths) == [".png"] * len(FIGURES) + [".svg"] * len(FIGURES)
+    assert all(p.stat().st_size > 1000 for p in paths)
+    assert seen == [(k, len(FIGURES)) for k in range(1, len(FIGURES) + 1)]
+    with pytest.raises(BipedError, match="png, svg"):
+        plot_push(r, tmp_path / "bad", formats=("jpg",))
+    assert not (tmp_path / "bad").exists()

@@ -166,3 +166,38 @@ def test_envelope_labels_tell_the_distributions_apart(tmp_path):
     )
     assert {ln.get_label() for ln in fig.axes[-1].get_lines()} == {"workspace", "workspace (qp)"}
     assert fig.axes[1].get_title().startswith("workspace (qp), torque limits")
+
+
+def test_plot_without_a_file_goes_beside_the_results(tmp_path, capsys):
+    """`--plot` alone writes the envelope plot beside the sweep file (its name, .png), so the
+    default run lands in runs/ and nothing in the working directory."""
+    out = tmp_path / "sub" / "s.parquet"
+    assert main(tiny_sweep_argv(out, "--plot", direction="0,180")) == 0
+    assert (tmp_path / "sub" / "s.png").stat().st_size > 10_000
+    assert f"envelope plot: {tmp_path / 'sub' / 's.png'}" in capsys.readouterr().out
+    assert main(tiny_sweep_argv(out, "--compare", str(out))) == 2  # --compare still needs --plot
+
+
+def test_too_few_directions_for_an_envelope_line_are_said(tmp_path):
+    """Two directions draw no envelope line (it joins three or more): each panel, the overlay
+    included, says so instead of staying silently empty."""
+    pytest.importorskip("matplotlib")
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from biped.sim.scenario import Scenario
+    from biped.sim.sweep import SweepSpec, run_sweep
+    from biped.viz.envelope import plot_comparison
+
+    paths = []
+    for name in ("a.parquet", "b.parquet"):
+        spec = SweepSpec(axes={"speed_m_s": (2.0, 6.0), "direction_deg": (0.0, 180.0)}, base=Scenario())
+        run_sweep(spec, tmp_path / name, workers=1, trial_fn=toy_trial, progress=False)
+        paths.append(tmp_path / name)
+    fig = plot_comparison(paths)
+    assert len(fig.axes) == 3
+    for ax in fig.axes:
+        said = [t.get_text() for t in ax.texts if "no envelope line" in t.get_text()]
+        assert said == ["no envelope line:\n2 directions swept\n(it needs 3 or more)"], ax.get_title()
+    fig3 = plot_comparison([_toy_sweep(tmp_path, "c.parquet")])  # 8 directions: a line, no note
+    assert not any("no envelope line" in t.get_text() for t in fig3.axes[0].texts)

@@ -66,3 +66,74 @@ def test_envelope_runs_on_a_dask_cluster_with_the_local_answer(cluster, tmp_path
     assert [(d.limit, d.first_fail, d.n_trials) for d in there.directions] == [
         (d.limit, d.first_fail, d.n_trials) for d in here.directions
     ]
+
+
+def _docs_commands() -> dict[str, list[str]]:
+    """The `dask scheduler` and `dask worker` command lines of docs/sweep.md ("On a Dask
+    cluster"), as words, comments dropped."""
+    import shlex
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[1] / "docs" / "sweep.md").read_text(encoding="utf-8")
+    section = text.split("## On a Dask cluster", 1)[1].split("\n## ", 1)[0]
+    out = {}
+    for line in section.splitlines():
+        words = shlex.split(line.split("#", 1)[0])
+        if words[:2] in (["dask", "scheduler"], ["dask", "worker"]):
+            out[words[1]] = words
+    return out
+
+
+@pytest.mark.slow
+def test_the_docs_cluster_commands_run_a_sweep(tmp_path):
+    """docs/sweep.md's commands, as written but on 127.0.0.1 and a free port: `dask scheduler`,
+    `dask worker` (separate processes, biped from this checkout), then `biped sweep --scheduler`
+    with short joint-PD trials."""
+    import os
+    import socket
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    from biped.cli import main
+
+    cmds = _docs_commands()
+    assert set(cmds) == {"scheduler", "worker"}, cmds
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    addr = f"tcp://127.0.0.1:{port}"
+    dask_exe = str(Path(sys.executable).parent / "dask")
+
+    def local(words):
+        words = [w.replace("10.0.0.5", "127.0.0.1").replace("8786", str(port)) for w in words]
+        return [dask_exe, *words[1:]]
+
+    worker_cmd = local(cmds["worker"])
+    worker_cmd[worker_cmd.index("--nworkers") + 1] = "1"  # one core's worth is enough here
+    src = str(Path(__file__).resolve().parents[1] / "src")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([src, os.environ.get("PYTHONPATH", "")])}
+    procs = []
+    try:
+        for cmd in (local(cmds["scheduler"]), worker_cmd):
+            log = open(tmp_path / f"{cmd[1]}.log", "w")  # noqa: SIM115 - closed with the process
+            procs.append((subprocess.Popen(cmd, env=env, stdout=log, stderr=subprocess.STDOUT), log))
+            time.sleep(1.0)
+        client = distributed.Client(addr, timeout=60)
+        client.wait_for_workers(1, timeout=90)
+        client.close()
+        out = tmp_path / "docs.parquet"
+        argv = ["sweep", "--speed", "3", "--direction", "0,180", "--duration", "0.02"]
+        argv += ["--controller", "joint-pd", "--quiet", "--scheduler", addr, "--out", str(out)]
+        assert main(argv) == 0
+        data = load(out)
+        assert data.table.num_rows == 2 and all(e is None for e in data.table.column("error").to_pylist())
+    finally:
+        for proc, log in reversed(procs):
+            proc.terminate()
+            try:
+                proc.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+            log.close()

@@ -88,3 +88,38 @@ def test_without_opengl_it_returns_a_one_line_reason_instead_of_raising(wendland
     assert res.path is None and res.frames == 0
     assert "MUJOCO_GL" in res.reason and "\n" not in res.reason
     assert not (tmp_path / "v.mp4").exists()
+
+
+def test_an_unprobed_backend_that_fails_falls_back_to_the_probe(wendlandt_mj, gl, tmp_path, monkeypatch):
+    """The video tries its first backend without the ~1 s probe; when that one cannot render
+    (here MUJOCO_GL names one that does not exist) it probes the others and renders with the
+    one that works, as it did when it always probed first."""
+    monkeypatch.setenv("MUJOCO_GL", "nosuchbackend")
+    gl_available.cache_clear()
+    try:
+        t, q = _sliding(wendlandt_mj, T=3)
+        res = render_video(wendlandt_mj, t, q, tmp_path / "v.mp4", width=64, height=48)
+    finally:
+        gl_available.cache_clear()
+    assert res.reason is None and res.backend in ("egl", "osmesa"), res
+    assert res.frames == 3 and len(_decode(res.path)) == 3
+
+
+def test_a_prewarmed_renderer_takes_the_job_and_an_unused_one_exits(wendlandt_mj, gl, tmp_path):
+    """prewarm() starts the renderer's process ahead (what `biped push` does before it
+    simulates); the next video is rendered by that process; one never given a job exits as
+    soon as its stdin closes (as when the command ends), leaving no process behind."""
+    from biped.viz import video
+
+    video.prewarm()
+    ((waiting, _),) = video._WAITING.values()
+    t, q = _sliding(wendlandt_mj, T=3)
+    res = render_video(wendlandt_mj, t, q, tmp_path / "v.mp4", width=64, height=48)
+    assert res.reason is None and res.frames == 3 and not video._WAITING
+    assert waiting.poll() == 0  # it rendered the job and exited
+    video.prewarm()
+    ((unused, err),) = video._WAITING.values()
+    video._WAITING.clear()
+    unused.stdin.close()
+    assert unused.wait(timeout=60) == 0
+    err.close()

@@ -349,15 +349,16 @@ def add_folder_options(parser, default: str = "a new one under runs/") -> None:
 
 def frame_bar(**tqdm_kwargs):
     """``(on_frame, close)``: ``on_frame(done, total)`` (the video renderer's progress) draws a tqdm
-    bar "rendering video.mp4" of ``total`` frames, made at the first report; ``close()`` ends it.
+    bar "rendering video.mp4" of ``total`` frames (whole lines when stderr is not a terminal,
+    :func:`biped._progress.progress_bar`), made at the first report; ``close()`` ends it.
     One bar for every command that renders a video (push, walk); ``tqdm_kwargs`` go to tqdm."""
     state: dict = {}
 
     def on_frame(done, total=None, *_):
-        from tqdm import tqdm
+        from biped._progress import progress_bar
 
         if state.get("bar") is None:
-            state["bar"] = tqdm(total=total, desc="rendering video.mp4", unit="frame", **tqdm_kwargs)
+            state["bar"] = progress_bar(total=total, desc="rendering video.mp4", unit="frame", **tqdm_kwargs)
         bar = state["bar"]
         bar.update(max(0, int(done) - bar.n))
 

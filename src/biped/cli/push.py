@@ -90,6 +90,7 @@ def register(subparsers) -> None:
     p.add_argument("--no-video", action="store_true", help="skip video.mp4")
     p.add_argument("--no-replay", action="store_true", help="skip replay.html")
     p.add_argument("--no-figures", action="store_true", help="skip figures/")
+    p.add_argument("--svg", action="store_true", help="figures as SVG too (default: PNG only)")
     p.add_argument("--viewer", action="store_true", help="show the run live in MuJoCo's viewer")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
@@ -232,7 +233,16 @@ def _table(result, out: Path, paths: dict, times: dict | None = None) -> str:
             if rise is not None:
                 rows.append((f"{foot} foot rises", f"{rise.time_s:.3f} s ({rise.part})"))
             if rise is not None and downs and downs[-1].time_s > rise.time_s:
-                rows.append((f"{foot} foot back down", f"{downs[-1].time_s:.3f} s ({downs[-1].part})"))
+                last = downs[-1]
+                landed = [
+                    st["touch_down_s"]
+                    for st in result.extra.get("steps", ())
+                    if st["foot"] == foot and st.get("touch_down_s") is not None
+                ]
+                why = ""
+                if landed and last.time_s > max(landed) + 1e-9:  # after the step's own landing
+                    why = f"; the sole settling after its step landed at {max(landed):.3f} s"
+                rows.append((f"{foot} foot back down", f"{last.time_s:.3f} s ({last.part}{why})"))
     for k, st in enumerate(result.extra.get("steps", ()), 1):
         pos = st.get("position_m")
         where = (
@@ -277,23 +287,42 @@ def _response(out: Path):
 
 
 def _writer_progress(quiet: bool):
-    """(on_stage, on_frame, close) that tell what is being written after the simulation; with
-    ``quiet``, nothing (not even the video's frame counts)."""
+    """(on_stage, on_frame, on_figure, close) that tell what is being written after the
+    simulation, with a counter for the figures and the video's frames (a bar on a terminal,
+    lines otherwise); with ``quiet``, nothing."""
     if quiet:
-        return None, lambda *_: None, lambda: None
-    on_frame, close = frame_bar()
+        return None, lambda *_: None, lambda *_: None, lambda: None
+    from biped._progress import progress_bar
+
+    on_frame, close_frames = frame_bar()
+    bars: dict = {}
+
+    def on_figure(done, total):
+        if bars.get("figures") is not None:
+            bars["figures"].update(done - bars["figures"].n)
+
+    def close():
+        close_frames()
+        if bars.get("figures") is not None:
+            bars.pop("figures").close()
 
     def on_stage(name):
         close()
+        if name == "figures":
+            from biped.viz.push_figures import FIGURES
+
+            bars["figures"] = progress_bar(total=len(FIGURES), desc="figures", unit="figure")
         what = {
             "trajectory.csv": "trajectory.csv, columns.json, summary.json (contact forces from MuJoCo)",
             "figures": "figures/ (W's Figs. 3-6)",
-            "video.mp4": "video.mp4",
+            "video.mp4": "video.mp4 (rendered meanwhile by a child process)",
             "replay.html": "replay.html",
         }.get(name, name)
         print(f"writing {what} ...", flush=True)
+        if name == "figures":
+            bars["figures"].update(0)  # a line "figures: 0/4" (a bar on a terminal)
 
-    return on_stage, on_frame, close
+    return on_stage, on_frame, on_figure, close
 
 
 def run(args) -> int:
@@ -309,7 +338,7 @@ def _run(args) -> int:
 
     from biped.outputs.push import write_outputs
     from biped.sim.jit import kernels_for, warm_up
-    from biped.sim.mjlog import route_to
+    from biped.sim.mjlog import count_warnings, route_to, summary
     from biped.sim.push import simulate
     from biped.sim.scene import build_scene
 
@@ -317,20 +346,28 @@ def _run(args) -> int:
     scenario = build_scenario(args)  # validated before anything is simulated
     out = _out_dir(args)
     route_to(out / "mujoco.log")  # MuJoCo's warnings, if any, go to the run's folder
+    warned_before = count_warnings(out / "mujoco.log")
+    if not args.no_video:  # the renderer's process starts (imports) on the idle core meanwhile
+        from biped.viz.video import prewarm
+
+        prewarm()
     scene = build_scene(scenario)
     warm_up(
-        kernels_for(scenario.controller, scenario.distribution), log=lambda line: print(line, file=sys.stderr)
+        kernels_for(scenario.controller, scenario.distribution),
+        log=lambda line: print(line, file=sys.stderr),
+        tick=sys.stderr,
     )
     on_step, close = _viewer(args.viewer)
     bar = None
     progress = None
     if not args.quiet:
-        from tqdm import tqdm
+        from biped._progress import progress_bar
 
-        bar = tqdm(
+        bar = progress_bar(
             total=round(scenario.duration_s, 6),
             unit="s sim",
             desc="biped push",
+            line_format="{:.2f}",
             bar_format="{l_bar}{bar}| {n:.2f}/{total:.2f} s sim [{elapsed}<{remaining}]",
         )
 
@@ -345,7 +382,7 @@ def _run(args) -> int:
         if close is not None:
             close()
     t_write = time.perf_counter()
-    on_stage, on_frame, close_bar = _writer_progress(args.quiet)
+    on_stage, on_frame, on_figure, close_bar = _writer_progress(args.quiet)
     try:
         paths = write_outputs(
             result,
@@ -356,11 +393,16 @@ def _run(args) -> int:
             scene=scene,
             on_stage=on_stage,
             on_frame=on_frame,
+            on_figure=on_figure,
+            figure_formats=("png", "svg") if args.svg else ("png",),
         )
     finally:
         close_bar()
     t_end = time.perf_counter()
     print(_table(result, out, paths, {"total": command_seconds(t_start), "write": t_end - t_write}))
+    said = summary(out / "mujoco.log", warned_before)
+    if said:
+        print(said, file=sys.stderr)
     if result.interrupted:
         return 130
     return 0

@@ -136,7 +136,14 @@ def register(subparsers) -> None:
     p.add_argument(
         "--overwrite", action="store_true", help="replace an --out file that holds a different sweep"
     )
-    p.add_argument("--plot", metavar="FILE.png", help="draw the polar envelope when done")
+    p.add_argument(
+        "--plot",
+        nargs="?",
+        const="",
+        metavar="FILE.png",
+        help="draw the polar envelope when done; without FILE, beside the results (--out's name "
+        "with .png, in runs/ by default)",
+    )
     p.add_argument(
         "--compare",
         metavar="OTHER.parquet",
@@ -255,9 +262,10 @@ def _grid_file(grid) -> tuple[dict, dict]:
 
 
 def _check_plot(path: str | None, compare: list[str]) -> None:
-    """--plot and --compare, checked before the sweep runs."""
-    if compare and not path:
-        raise ScenarioError("--compare needs --plot FILE.png")
+    """--plot and --compare, checked before the sweep runs (``path`` "" : the default beside the
+    results, a PNG)."""
+    if compare and path is None:
+        raise ScenarioError("--compare needs --plot (or --plot FILE.png)")
     if not path:
         return
     import matplotlib.figure
@@ -279,6 +287,19 @@ def _check_plot(path: str | None, compare: list[str]) -> None:
         except ScenarioError as exc:
             raise ScenarioError(f"--compare {other!r}: {exc}") from None
     check_file_writable(path, "--plot")
+
+
+def _say_warnings(table, mjlog: Path, before: int) -> None:
+    """After the bar: MuJoCo's warnings of this sweep, counted once, and how many of its trials
+    diverged (the warnings themselves are in ``mjlog``)."""
+    from biped.sim.mjlog import count_warnings
+
+    n = count_warnings(mjlog) - before
+    if n <= 0:
+        return
+    div = sum(1 for d in table.column("diverged").to_pylist() if d) if "diverged" in table.column_names else 0
+    trials = f"{div} trial{'s' if div != 1 else ''} diverged; " if div else ""
+    print(f"MuJoCo warned {n} time{'s' if n != 1 else ''} ({trials}see {mjlog})", file=sys.stderr)
 
 
 def run(args) -> int:
@@ -333,10 +354,13 @@ def _run(args) -> int:
 def _sweep(args, spec, out: Path, n: int, where: str, client) -> int:
     """The sweep itself, its inputs checked (:func:`_run`)."""
     from biped.analysis import survived
-    from biped.sim.mjlog import route_to
+    from biped.sim.mjlog import count_warnings, route_to
     from biped.sim.sweep import Terminated, load, parts_dir, run_sweep
 
-    route_to(out.with_suffix(".mujoco.log"))  # MuJoCo's warnings (workers too) beside the results
+    plot = (Path(args.plot) if args.plot else out.with_suffix(".png")) if args.plot is not None else None
+    mjlog = out.with_suffix(".mujoco.log")
+    route_to(mjlog)  # MuJoCo's warnings (workers too) beside the results, not inside the bar
+    warned_before = count_warnings(mjlog)
     print(
         f"biped sweep: {n} trials of {spec.base.duration_s:g} s, controller "
         f"{spec.base.controller}, torque limits {spec.torque_limits}, physics "
@@ -349,6 +373,7 @@ def _sweep(args, spec, out: Path, n: int, where: str, client) -> int:
         warm_up(
             kernels_for(spec.base.controller, spec.base.distribution),
             log=lambda line: print(line, file=sys.stderr),
+            tick=sys.stderr,
         )
     if args.refine is not None:
         return _refine(args, spec, out)
@@ -387,12 +412,13 @@ def _sweep(args, spec, out: Path, n: int, where: str, client) -> int:
     data = load(out)
     ok = survived(data.table)
     print(f"{out}: {data.table.num_rows} trials, survived {int(ok.sum())}, did not {int((~ok).sum())}")
-    if args.plot:
+    _say_warnings(data.table, mjlog, warned_before)
+    if plot is not None:
         from biped.viz.envelope import plot_comparison
 
         by = args.by or ("speed_m_s" if spec.base.perturbation == "block" else "magnitude")
-        plot_comparison([out, *args.compare], by=by, out=args.plot)
-        print(f"envelope plot: {args.plot}")
+        plot_comparison([out, *args.compare], by=by, out=plot)
+        print(f"envelope plot: {plot}")
     return 0
 
 
@@ -455,9 +481,10 @@ def _refine(args, spec, out) -> int:
         f"ran {result.ran} (reused {result.reused}), wall {result.wall_time_s:.1f} s ({result.backend}); "
         f"{out} holds the grid on the {args.refine:g} m/s lattice: rerun with the same --refine"
     )
-    if args.plot:
+    if args.plot is not None:  # --plot without a file: beside the results
         from biped.viz.envelope import plot_comparison
 
-        plot_comparison([out, *args.compare], by=args.by, out=args.plot)
-        print(f"envelope plot: {args.plot}")
+        plot = Path(args.plot) if args.plot else out.with_suffix(".png")
+        plot_comparison([out, *args.compare], by=args.by, out=plot)
+        print(f"envelope plot: {plot}")
     return 0 if result.complete else 1

@@ -178,8 +178,7 @@ def run(args) -> int:
 def _run(args) -> int:
     import time
 
-    from tqdm import tqdm
-
+    from biped._progress import progress_bar
     from biped.cli._common import command_seconds, frame_bar
     from biped.outputs.walk import walk_stages, write_walk
     from biped.sim.mjlog import route_to
@@ -194,7 +193,7 @@ def _run(args) -> int:
         "replay": not args.no_replay,
         "video": not args.no_video,
     }
-    bar = tqdm(
+    bar = progress_bar(
         total=len(walk_stages(**flags)), desc=f"biped walk {args.gait}", disable=args.quiet, unit="stage"
     )
 

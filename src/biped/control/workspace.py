@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from biped._numba_cache import say_if_cold
 from biped.control.recursions import (
     NONFINITE_RESULT,
     NONFINITE_STATE,
@@ -129,6 +130,7 @@ class WorkspaceController:
         if distribution not in DISTRIBUTIONS:
             raise ScenarioError(f"unknown wrench distribution {distribution!r}; valid: {DISTRIBUTIONS}")
         _check_feet(tree)
+        say_if_cold(compute_kernel, "W's controller", "controller", 15)  # logging, once a process
         self.distribution = distribution
         self.tree = tree
         self.big_base = float(big_base)

@@ -353,11 +353,59 @@ def _footprints(scene: Scene, result: PushResult) -> list[dict]:
     return out
 
 
-def _render_video(scene: Scene, result: PushResult, path: Path, on_frame):
-    """:func:`render_push_video` of the run (slow motion around the hit), reporting frames through
-    ``on_frame(done, total)``."""
-    arrows = perturbations.of(result.scenario).arrows(scene, result)  # a push, the tether
-    return render_push_video(scene.model, result, path, progress=on_frame, arrows=arrows)
+class _BackgroundVideo:
+    """:func:`render_push_video` of the run (slow motion around the hit) in a thread, so that the
+    child process that renders it runs while this process writes the figures and the replay
+    (two cores: the video no longer adds its time to theirs). ``join(on_frame)`` waits for it,
+    reporting ``on_frame(done, total)`` as frames arrive, and returns the ``VideoResult`` (or
+    raises what the renderer raised); ``cancel()`` kills the renderer (Ctrl-C)."""
+
+    def __init__(self, scene: Scene, result: PushResult, path: Path):
+        import threading
+
+        self._progress: tuple[int, int] | None = None
+        self._result: Any = None
+        self._error: BaseException | None = None
+        self._cancel = threading.Event()
+        self._changed = threading.Event()
+
+        def progress(n: int, total: int) -> None:
+            self._progress = (n, total)
+            self._changed.set()
+
+        def run() -> None:
+            try:
+                arrows = perturbations.of(result.scenario).arrows(scene, result)  # a push, the tether
+                self._result = render_push_video(
+                    scene.model, result, path, progress=progress, cancel=self._cancel, arrows=arrows
+                )
+            except BaseException as exc:  # noqa: BLE001 - handed to join()
+                self._error = exc
+            finally:
+                self._changed.set()
+
+        self._thread = threading.Thread(target=run, name="biped-video", daemon=True)
+        self._thread.start()
+
+    def cancel(self) -> None:
+        self._cancel.set()
+        self._thread.join(timeout=5)
+
+    def join(self, on_frame: Callable[..., None]):
+        said = None
+        while True:
+            alive = self._thread.is_alive()
+            self._changed.wait(0.25)
+            self._changed.clear()
+            if self._progress is not None and self._progress != said:
+                said = self._progress
+                on_frame(*said)
+            if not alive:
+                break
+        self._thread.join()
+        if self._error is not None:
+            raise self._error
+        return self._result
 
 
 def _frame_log(log: Callable[[str], None], step: float = 0.25):
@@ -390,16 +438,20 @@ def write_outputs(
     log: Callable[[str], None] = print,
     on_stage: Callable[[str], None] | None = None,
     on_frame: Callable[..., None] | None = None,
+    on_figure: Callable[..., None] | None = None,
+    figure_formats: tuple[str, ...] = ("png",),
 ) -> dict:
     """Write every output of a run into ``out_dir`` (created if needed); returns ``{name: path}``.
 
-    Order: ``trajectory.csv`` and ``summary.json`` first (atomic writes), then ``scenario.toml``,
-    ``figures/``, ``video.mp4``, ``replay.html``. A failing optional output (no OpenGL, no
-    ffmpeg...) is reported through ``log`` in one line and never removes what was written; a
-    write error (full disk) or a link where a file would go raises (:mod:`biped.files`).
-    ``on_stage(name)`` is called before each product ("trajectory.csv", "figures", "video.mp4",
-    "replay.html"); ``on_frame(done, total)`` while the video renders (when the renderer reports
-    frames).
+    ``video.mp4`` is rendered by a child process that starts first and runs while this one writes,
+    in order, ``trajectory.csv`` and ``summary.json`` (atomic writes), ``scenario.toml``,
+    ``figures/`` (PNG; ``figure_formats=("png", "svg")`` adds SVG) and ``replay.html``; then it
+    waits for the video. A failing optional output (no OpenGL, no ffmpeg...) is reported through
+    ``log`` in one line and never removes what was written; a write error (full disk) or a link
+    where a file would go raises (:mod:`biped.files`). ``on_stage(name)`` is called before each
+    product ("trajectory.csv", "figures", "replay.html", then "video.mp4" when it waits for
+    the video); ``on_figure(done, total)`` after each figure; ``on_frame(done, total)`` with the
+    video's frames (those rendered meanwhile at once, then as they come).
     """
 
     def stage(name: str) -> None:
@@ -408,8 +460,34 @@ def write_outputs(
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    stage("trajectory.csv")
     scene = scene or build_scene(result.scenario)
+    bg: _BackgroundVideo | None = None
+    if video:  # rendered by a child process while this one writes the rest
+        bg = _BackgroundVideo(scene, result, out / "video.mp4")
+    try:
+        written = _write_rest(result, out, scene, figures, replay, figure_formats, log, stage, on_figure)
+        if bg is not None:
+            stage("video.mp4")
+            try:
+                res = bg.join(on_frame if on_frame is not None else _frame_log(log))
+                if res.path:
+                    written["video"] = Path(res.path)
+                else:
+                    log(f"video: not written ({res.reason})")
+            except _REFUSED:
+                raise
+            except Exception as exc:  # noqa: BLE001 - an optional output must not lose the run
+                log(f"video: not written ({type(exc).__name__}: {exc})")
+            bg = None
+    finally:
+        if bg is not None:  # interrupted while writing the rest: stop the renderer
+            bg.cancel()
+    return written
+
+
+def _write_rest(result, out, scene, figures, replay, figure_formats, log, stage, on_figure) -> dict:
+    """Everything but the video, in order (:func:`write_outputs`)."""
+    stage("trajectory.csv")
     rows = measure_rows(scene, result)
     written: dict[str, Any] = {
         "trajectory": write_trajectory_csv(result, out / "trajectory.csv", rows=rows),
@@ -423,38 +501,28 @@ def write_outputs(
     if figures:
         stage("figures")
         try:
-            written["figures"] = plot_push(result, out / "figures")
+            written["figures"] = plot_push(
+                result, out / "figures", formats=figure_formats, progress=on_figure
+            )
             if result.scenario.perturbation != "block":  # the response against the base of support
                 from biped.sim.response import traces
                 from biped.viz.response_figure import plot_response
 
                 size = response_title(result)
-                written["figures"] += plot_response(traces(scene, result, rows), out / "figures", title=size)
+                written["figures"] += plot_response(
+                    traces(scene, result, rows), out / "figures", title=size, formats=figure_formats
+                )
         except _REFUSED:
             raise
         except Exception as exc:  # noqa: BLE001 - an optional output must not lose the run
             log(f"figures: not written ({type(exc).__name__}: {exc})")
-    if video:
-        stage("video.mp4")
-        try:
-            res = _render_video(
-                scene, result, out / "video.mp4", on_frame if on_frame is not None else _frame_log(log)
-            )
-            if res.path:
-                written["video"] = Path(res.path)
-            else:
-                log(f"video: not written ({res.reason})")
-        except _REFUSED:
-            raise
-        except Exception as exc:  # noqa: BLE001 - an optional output must not lose the run
-            log(f"video: not written ({type(exc).__name__}: {exc})")
     if replay:
         stage("replay.html")
         try:
             info = {
                 "recovered": judged_set_point(result)["recovered"],
                 "fell": result.fell,
-                "final COM error [mm]": 1000 * result.final_com_error_m,  # 4 significant digits
+                "final COM error [mm]": round(1000 * result.final_com_error_m, 3),  # as the terminal says
                 "final orientation error [deg]": round(result.final_orientation_error_deg, 3),
             }
             rp = replay_from_mujoco(

@@ -302,12 +302,12 @@ def write_walk(
                 )
             paths["figures"] = [str(f) for f in figs]
         elif stage == "replay.html":
-            info = {
+            info = {  # what the replay's panel shows: words and units, rounded to what is meaningful
                 "gait": gait,
-                "distance_m": metrics.distance_m,
-                "height_climbed_m": metrics.height_climbed_m,
-                "max_stance_slip_m": metrics.max_stance_slip_m,
-                "min_swing_clearance_m": metrics.min_swing_clearance_m,
+                "distance walked [m]": round(metrics.distance_m, 3),
+                "height climbed [m]": round(metrics.height_climbed_m, 3),
+                "largest stance-foot slip [mm]": round(1000 * metrics.max_stance_slip_m, 3),
+                "smallest swing-foot clearance [mm]": round(1000 * metrics.min_swing_clearance_m, 1),
             }
             rep = build_replay(motion, f"biped walk --gait {gait} (Bediz's kinematic figure)", info)
             paths["replay"] = str(write_replay(rep, out / "replay.html"))

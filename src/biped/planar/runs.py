@@ -129,9 +129,9 @@ def _run(model, method, acc_fn, nq, torque_fn, x0, dt, duration, integrator, hol
     us = np.empty((n + 1, len(torque_fn(x0))))
     iterator = range(n)
     if progress and n > 2000:
-        from tqdm import tqdm
+        from biped._progress import track  # a bar on a terminal, whole lines otherwise
 
-        iterator = tqdm(iterator, desc=f"{model} {method}", unit="step")
+        iterator = track(iterator, n, desc=f"{model} {method}", unit="step")
     t0 = _time.perf_counter()
     for i in iterator:
         x = xs[i]

@@ -23,9 +23,21 @@ to every user of :mod:`biped.planar` or :mod:`biped.kinematic`, which do not use
 
 from __future__ import annotations
 
-import hashlib
+import threading
 import time
 from collections.abc import Callable
+
+from biped._numba_cache import is_cached, mark_said, measured_compile_s, record_compile_s
+
+__all__ = [
+    "KERNELS",
+    "announce_and_warm",
+    "cold_kernels",
+    "estimate_s",
+    "is_cached",
+    "kernels_for",
+    "warm_up",
+]
 
 #: Kernel names for :func:`cold_kernels` / :func:`warm_up`: what they are and about how long
 #: they take to compile [s] on an idle 2-core x86_64 machine (several times that under load).
@@ -35,6 +47,9 @@ KERNELS = {
     "contact": ("the contact monitor", 1),
     "loop": ("the compiled push loop", 3),
 }
+
+#: Kernels found compiled or cached in this process (no need to look again).
+_WARM: set[str] = set()
 
 
 def kernels_for(controller: str, distribution: str = "statics") -> tuple[str, ...]:
@@ -67,28 +82,65 @@ def _dispatcher(name: str):
     raise ValueError(f"unknown kernel {name!r}; valid: {', '.join(KERNELS)}")
 
 
-def is_cached(dispatcher) -> bool | None:
-    """True if numba's on-disk cache holds machine code of ``dispatcher`` for this CPU and this
-    version of its source (what numba itself checks before it loads an entry: the source stamp
-    in the index, then the code hash and the CPU in the entry's key); None if that cannot be told
-    (caching off, or a numba whose cache layout differs)."""
-    if getattr(dispatcher, "overloads", None):
-        return True  # compiled in this process already
-    cache = getattr(dispatcher, "_cache", None)
-    try:
-        index = cache._cache_file._load_index()  # type: ignore[union-attr]
-        from numba.core.registry import cpu_target
-
-        magic = cpu_target.target_context.codegen().magic_tuple()
-        code = hashlib.sha256(dispatcher.py_func.__code__.co_code).hexdigest()
-        return any(key[1] == magic and key[2][0] == code for key in index)
-    except Exception:  # noqa: BLE001 - a numba without this layout, or no cache: cannot tell
-        return None
-
-
 def cold_kernels(names=tuple(KERNELS)) -> list[str]:
     """The kernels of ``names`` that would compile on first use (not cached, or cannot tell)."""
-    return [n for n in names if not is_cached(_dispatcher(n))]
+    cold = []
+    for n in names:
+        if n in _WARM:
+            continue
+        if is_cached(_dispatcher(n)):
+            _WARM.add(n)
+        else:
+            cold.append(n)
+    return cold
+
+
+def estimate_s(names) -> tuple[float, bool]:
+    """(seconds, measured): the time the kernels ``names`` take to compile, measured on this
+    machine when each was compiled here before (``measured`` True), else the :data:`KERNELS`
+    estimates."""
+    measured = [measured_compile_s(n) for n in names]
+    if names and all(m is not None for m in measured):
+        return float(sum(m for m in measured if m is not None)), True
+    return float(sum(KERNELS[n][1] for n in names)), False
+
+
+class _Ticker:
+    """While kernels compile: the elapsed time, every second on a terminal (one line redrawn),
+    else a line every 2 s."""
+
+    def __init__(self, stream, what: str, estimate: float):
+        self.stream, self.what, self.estimate = stream, what, estimate
+        self.tty = bool(getattr(stream, "isatty", lambda: False)())
+        self.stage = ""
+        self._stop = threading.Event()
+        self._t0 = time.perf_counter()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def _line(self) -> str:
+        t = time.perf_counter() - self._t0
+        if t <= self.estimate:
+            return f"  compiling{self.stage}: {t:.0f} s of ~{self.estimate:.0f} s"
+        return (
+            f"  compiling{self.stage}: {t:.0f} s (over the ~{self.estimate:.0f} s estimate: a busy machine)"
+        )
+
+    def _run(self) -> None:
+        period = 1.0 if self.tty else 2.0
+        while not self._stop.wait(period):
+            if self.tty:
+                self.stream.write("\r" + self._line() + "   ")
+            else:
+                self.stream.write(self._line() + "\n")
+            self.stream.flush()
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join()
+        end = f"  compiled in {time.perf_counter() - self._t0:.0f} s"
+        self.stream.write(("\r" + end + " " * 30 + "\n") if self.tty else end + "\n")
+        self.stream.flush()
 
 
 def _compile(name: str) -> None:
@@ -116,18 +168,45 @@ def _compile(name: str) -> None:
     ctrl.torques(qpos, np.zeros(tree.nv))
 
 
-def warm_up(names=tuple(KERNELS), *, log: Callable[[str], None] | None = print) -> float:
-    """Compile the cold kernels of ``names`` now, after one line through ``log`` saying so
-    (nothing is said when everything is cached). Returns the seconds spent compiling."""
+def warm_up(names=tuple(KERNELS), *, log: Callable[[str], None] | None = print, tick=None) -> float:
+    """Compile the cold kernels of ``names`` now, after one line through ``log`` saying so, with
+    an estimate (measured on this machine when it compiled them before); nothing is said when
+    everything is cached. ``tick``: a stream (e.g. ``sys.stderr``) on which the elapsed time
+    ticks while it compiles. Each kernel's compile time is remembered for the next estimate.
+    Returns the seconds spent compiling."""
     cold = cold_kernels(names)
     if not cold:
         return 0.0
+    labels = [KERNELS[n][0] for n in cold]
+    what = " and ".join([", ".join(labels[:-1]), labels[-1]] if len(labels) > 1 else labels)
+    secs, measured = estimate_s(cold)
     if log is not None:
-        names = [KERNELS[n][0] for n in cold]
-        what = " and ".join([", ".join(names[:-1]), names[-1]] if len(names) > 1 else names)
-        secs = sum(KERNELS[n][1] for n in cold)
-        log(f"compiling {what} (first run only, ~{secs} s; cached for later runs)")
+        how = "measured on this machine" if measured else "on an idle 2-core machine; longer under load"
+        log(f"compiling {what} (first run only, ~{secs:.0f} s, {how}; cached for later runs)")
+    for label in labels:
+        mark_said(label)
+    ticker = _Ticker(tick, what, secs) if tick is not None else None
     t0 = time.perf_counter()
-    for n in cold:
-        _compile(n)
+    try:
+        for k, n in enumerate(cold):
+            if ticker is not None:
+                ticker.stage = f" {KERNELS[n][0]} ({k + 1}/{len(cold)})"
+            t = time.perf_counter()
+            _compile(n)
+            took = time.perf_counter() - t
+            if took > 0.5:  # less: loaded from a cache another process filled meanwhile
+                record_compile_s(n, took)
+            _WARM.add(n)
+    finally:
+        if ticker is not None:
+            ticker.stop()
     return time.perf_counter() - t0
+
+
+def announce_and_warm(names) -> None:
+    """What the Python API does before a run: compile the cold kernels of ``names``, saying so
+    once through ``logging`` (logger ``"biped"``, a warning) with the estimate."""
+    import logging
+
+    if cold_kernels(names):
+        warm_up(names, log=lambda line: logging.getLogger("biped").warning("biped: %s", line))

@@ -44,6 +44,7 @@ from biped.sim import perturbations
 from biped.sim.contact import SOLE_GEOMS, ContactMonitor
 from biped.sim.early_stop import AT_REST, EarlyStop
 from biped.sim.early_stop import applies as early_stop_applies
+from biped.sim.jit import announce_and_warm, kernels_for
 from biped.sim.neuro import neuro_loop
 from biped.sim.scenario import Scenario
 from biped.sim.scene import Scene, build_scene, initial_state, tilt_quat
@@ -527,13 +528,15 @@ def simulate(
     on_step=None,
 ) -> PushResult:
     """Run ``scenario`` (W's defaults if None) closed loop with its controller
-    (:func:`controller_policy`) and return its :class:`PushResult`; see :func:`run_closed_loop`."""
+    (:func:`controller_policy`) and return its :class:`PushResult`; see :func:`run_closed_loop`.
+    A first run compiles the numba kernels (~20 s once); a ``logging`` warning says so first."""
     scenario = Scenario() if scenario is None else scenario
     if not isinstance(scenario, Scenario):
         raise ScenarioError(
             f"simulate takes a biped.sim.Scenario (or None: W's); got {type(scenario).__name__}"
         )
     scene = scene or build_scene(scenario)
+    announce_and_warm(kernels_for(scenario.controller, scenario.distribution))  # says so when cold
     return run_closed_loop(
         scenario, scene, controller_policy(scenario, scene), progress=progress, on_step=on_step
     )

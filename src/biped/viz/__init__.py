@@ -4,7 +4,7 @@
   file that plays the motion in 3D with three.js (inlined; nothing loaded from the network).
 - :func:`render_video` (module :mod:`biped.viz.video`): an MP4 from MuJoCo's offscreen renderer
   with a camera that follows a body; returns ``path=None`` and a reason where no OpenGL works.
-- :func:`render_push_video` (module :mod:`biped.viz.push_video`): the push run's video, 1280 x 720,
+- :func:`render_push_video` (module :mod:`biped.viz.push_video`): the push run's video, 854 x 480,
   the hit in slow motion (:class:`SlowMotion`, :mod:`biped.viz.timeline`), events captioned.
 
 Both take ``(model, times, qpos)``: the visualisation is a function of the model and the

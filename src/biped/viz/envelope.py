@@ -152,6 +152,8 @@ def plot_envelope(
     if len(env.directions_deg) >= 3:
         t, v = _closed(np.radians(env.directions_deg), np.nan_to_num(env.survived_max, nan=0.0))
         ax.plot(t, v, color="tab:green", lw=2, label="envelope")
+    else:
+        _too_few_directions(ax, len(env.directions_deg))
     if bound and by in ("speed_m_s", "impulse_n_s", "impulse_horizontal_n_s"):  # Hof's bound is an impulse
         dirs = np.arange(0.0, 360.0, 2.0)
         radius = _bound_radius(data, cols, by, dirs)
@@ -212,6 +214,11 @@ def plot_comparison(
     if n > 1:
         ax = axes[-1]
         colors = ["tab:blue", "tab:orange", "tab:purple", "tab:brown"]
+        fewest = min(
+            len(envelope(d.table, by=by, criterion=criterion, bin_deg=bin_deg).directions_deg) for d in datas
+        )
+        if fewest < 3:
+            _too_few_directions(ax, fewest)
         for k, (d, lab) in enumerate(zip(datas, labels, strict=True)):
             env = envelope(d.table, by=by, criterion=criterion, bin_deg=bin_deg)
             if len(env.directions_deg) < 3:
@@ -245,6 +252,22 @@ def plot_comparison(
         out.parent.mkdir(parents=True, exist_ok=True)
         files.write_via(out, lambda tmp: fig.savefig(tmp, dpi=80))
     return fig
+
+
+def _too_few_directions(ax, n: int) -> None:
+    """Say in the panel why it has no envelope line (it joins three or more directions)."""
+    ax.text(
+        0.5,
+        0.5,
+        f"no envelope line:\n{n} direction{'s' if n != 1 else ''} swept\n(it needs 3 or more)",
+        transform=ax.transAxes,
+        ha="center",
+        va="center",
+        fontsize=9,
+        color="0.3",
+        bbox={"boxstyle": "round", "fc": "white", "ec": "0.7", "alpha": 0.9},
+        zorder=6,
+    )
 
 
 #: the angle's note for a paradigm's envelope (docs/perturbations.md)

@@ -19,7 +19,13 @@ Defaults (each a keyword argument of :func:`render_push_video`):
 - **Caption**: simulated time, "0.25x slow motion" inside the window, and the events as they
   happen ("block hits", "left heel up", "right heel down", "fall"), each on screen for 1.5 s of
   video.
-- 1280 x 720 pixels, 30 frames per second.
+- **Cheap to render** (software OpenGL renders a frame of it in ~15-30 ms on one core, so the
+  3 s run's 99 frames take ~3 s, in a child process while ``biped push`` writes its figures):
+  854 x 480 pixels, 24 frames per second, no shadows, no floor reflection, no multisample
+  anti-aliasing. Before: 1280 x 720, 30 frames per second, shadows and 4x anti-aliasing, 18-38 s
+  (``python benchmarks/outputs.py --video-settings``; docs/viz.md has the measurements). Every
+  one of these is a keyword: ``width=1280, height=720, fps=30, shadows="follow", msaa=4,
+  reflection=True`` renders the old video.
 """
 
 from __future__ import annotations
@@ -172,9 +178,9 @@ def render_push_video(
     result,
     path,
     *,
-    fps: float = 30,
-    width: int = 1280,
-    height: int = 720,
+    fps: float = 24,
+    width: int = 854,
+    height: int = 480,
     speed: float = SLOW_SPEED,
     before_hit_s: float = BEFORE_HIT_S,
     after_landing_s: float = AFTER_LANDING_S,
@@ -182,14 +188,17 @@ def render_push_video(
     elevation: float = -10.0,
     title: str | None = None,
     progress=None,
+    shadows: str = "off",
+    msaa: int | None = 0,
+    reflection: bool = False,
     **render_kw,
 ) -> VideoResult:
     """Render a push run (a :class:`biped.sim.push.PushResult`, or anything with its ``times``,
     ``qpos``, ``events``, ``block_contact_time_s``, ``fall_time_s``) to an MP4 with the
     defaults of the module docstring. ``model`` is the scene's ``MjModel`` (biped + block +
-    floor, the layout of ``result.qpos``); ``speed = 1`` turns slow motion off. ``progress(n, N)``
-    and the other keywords (``shadows``, ``overlay``, ``lookat``...) go to
-    :func:`biped.viz.video.render_video`."""
+    floor, the layout of ``result.qpos``); ``speed = 1`` turns slow motion off. ``progress(n, N)``,
+    ``shadows``, ``msaa``, ``reflection`` and the other keywords (``overlay``, ``lookat``,
+    ``cancel``...) go to :func:`biped.viz.video.render_video`."""
     times = np.asarray(result.times, dtype=float)
     if times.size < 1:
         raise StateError("the run has no samples to render")
@@ -220,6 +229,9 @@ def render_push_video(
         events=event_captions(result),
         title=title,
         progress=progress,
+        shadows=shadows,
+        msaa=msaa,
+        reflection=reflection,
         **cam,
         **render_kw,
     )

@@ -12,9 +12,9 @@ import numpy as np
 from biped import files
 
 
-def plot_response(tr, out_dir, *, title: str = "") -> list[Path]:
-    """Write ``response.png`` and ``response.svg`` of the :class:`~biped.sim.response.Traces`
-    ``tr`` into ``out_dir``; returns the paths."""
+def plot_response(tr, out_dir, *, title: str = "", formats=("png",)) -> list[Path]:
+    """Write ``response.png`` (and ``response.svg`` with ``formats=("png", "svg")``) of the
+    :class:`~biped.sim.response.Traces` ``tr`` into ``out_dir``; returns the paths."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -39,7 +39,7 @@ def plot_response(tr, out_dir, *, title: str = "") -> list[Path]:
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     paths = []
-    for ext in ("png", "svg"):
+    for ext in formats:
         p = out / f"response.{ext}"
         meta = {"Date": None} if ext == "svg" else None
         files.write_via(p, functools.partial(fig.savefig, dpi=120, metadata=meta, format=ext))

@@ -13,7 +13,8 @@ reason.
 Backends tried, in order: the ``MUJOCO_GL`` of the environment if set, then ``egl``, then
 ``osmesa`` (then ``glfw`` if a ``DISPLAY`` is set). On Debian, ``egl`` needs ``libegl1`` (with
 Mesa's ``libegl-mesa0`` and ``libgl1-mesa-dri`` it renders on the CPU), ``osmesa`` needs
-``libosmesa6``. :func:`gl_available` probes them once per process (about 1 s).
+``libosmesa6``. :func:`gl_available` probes them once per process (about 1 s); the video itself
+first tries the first candidate unprobed and probes only when that fails.
 """
 
 from __future__ import annotations
@@ -59,9 +60,38 @@ class VideoResult:
 
 
 _CHILD = (
-    "import pathlib, sys; from biped.viz.video_render import _render_job; "
-    "sys.exit(_render_job(pathlib.Path(sys.argv[1])))"
+    "import pathlib, sys; from biped.viz.video_render import _preload, _render_job; "
+    "waiting = sys.argv[1] == '-'; _preload() if waiting else None; "
+    "job = sys.stdin.readline().strip() if waiting else sys.argv[1]; "
+    "sys.exit(_render_job(pathlib.Path(job)) if job else 0)"
 )
+
+#: Renderer processes started ahead by :func:`prewarm`, by backend: each has imported MuJoCo,
+#: Pillow and ffmpeg and waits on its stdin for a job folder (end of input: it exits).
+_WAITING: dict[str, tuple[subprocess.Popen, object]] = {}
+
+
+def prewarm() -> None:
+    """Start the renderer's child process now, so that a video rendered later in this process
+    skips the child's start-up (importing MuJoCo, Pillow, ffmpeg: ~1 s of one core). ``biped
+    push`` calls it before it simulates, while the second core idles. Nothing happens when
+    rendering is disabled or a child already waits; an unused child exits with this process
+    (its stdin closes)."""
+    ok, backend = _first_try()
+    if not ok or backend in _WAITING and _WAITING[backend][0].poll() is None:
+        return
+    err = tempfile.TemporaryFile(mode="w+")  # noqa: SIM115 - read and closed by _run_child
+    proc = subprocess.Popen(
+        [sys.executable, "-c", _CHILD, "-"],
+        env=_child_env(backend),
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        stderr=err,
+        text=True,
+        bufsize=1,
+    )
+    _WAITING[backend] = (proc, err)
+
 
 _PROBE = r"""
 import mujoco
@@ -208,8 +238,11 @@ def render_video(
     overlay=True,
     shadows="follow",
     shadow_radius_m=3.0,
+    msaa=None,
+    reflection=True,
     progress=None,
     arrows=None,
+    cancel=None,
 ) -> VideoResult:
     """Render the trajectory ``(times, qpos)`` of ``model`` to an H.264 MP4 file.
 
@@ -244,8 +277,14 @@ def render_video(
             the light's position: on a long walk, its far floor shows dark shadow-map streaks
             near the horizon); ``"off"``: no shadows. Spot lights are left as they are.
             ``"follow"`` also caps the shadow map at 2048 texels (enough for its small box).
+        msaa: multisample anti-aliasing samples (0 = off); ``None`` keeps the model's
+            ``vis.quality.offsamples`` (MuJoCo's default 4). With Mesa's software renderer 4x
+            MSAA costs about 2.5x a frame (docs/viz.md).
+        reflection: draw reflective floors' reflections (another pass of the scene per frame).
         progress: ``progress(n, N)`` is called with ``n = 0`` before the first frame and after
             each of the ``N`` frames is written.
+        cancel: a ``threading.Event``; when it is set, the child renderer is killed and the
+            call returns without a video (for a caller that renders in a background thread).
 
     Returns:
         :class:`VideoResult`; ``path=None`` and a one-line ``reason`` if no OpenGL backend works
@@ -258,19 +297,22 @@ def render_video(
     lookat = _check_camera(lookat, shadows, progress, title)
     if not (isinstance(shadow_radius_m, (int, float)) and shadow_radius_m > 0):
         raise ScenarioError(f"shadow_radius_m must be a positive number of m, got {shadow_radius_m!r}")
+    if msaa is not None and not (isinstance(msaa, (int, np.integer)) and 0 <= msaa <= 16):
+        raise ScenarioError(f"msaa must be None or a number of samples in [0, 16] (0 = off), got {msaa!r}")
     ft = playback_times(times[0], times[-1], fps, slow_motion)  # validates slow_motion
     captions = overlay_text(ft.tolist(), fps, events=events, slow_motion=slow_motion, t1=times[-1])
     path = pathlib.Path(path)
-    ok, backend = gl_available()
+    ok, backend = _first_try()
     if not ok:
         return VideoResult(None, backend)
+    probed = gl_available.cache_info().currsize > 0
 
     path.parent.mkdir(parents=True, exist_ok=True)
     idx = frame_indices(times, fps, slow_motion)
     fd, dest = files.temp_path(files.check_no_link(path))  # ffmpeg writes here, then it moves
     os.close(fd)
     try:
-        return _render_to(model, qpos, idx, arrows, path, dest, backend, progress, {
+        return _render_to(model, qpos, idx, arrows, path, dest, (backend, probed, cancel), progress, {
             "fps": float(fps),
             "width": int(width),
             "height": int(height),
@@ -281,6 +323,8 @@ def render_video(
             "elevation": float(elevation),
             "shadows": shadows,
             "shadow_radius": float(shadow_radius_m),
+            "msaa": None if msaa is None else int(msaa),
+            "reflection": bool(reflection),
             "captions": captions if overlay else None,
             "title": title or "",
             "font": _font_file(),
@@ -289,10 +333,13 @@ def render_video(
         dest.unlink(missing_ok=True)
 
 
-def _render_to(model, qpos, idx, arrows, path, dest, backend, progress, cfg) -> VideoResult:
+def _render_to(model, qpos, idx, arrows, path, dest, how, progress, cfg) -> VideoResult:
     """Render into the temporary file ``dest`` in a child process, then move it to ``path``.
-    ``arrows``: None, or (T, 2, 3) from/to of one arrow a sample (NaN: none), e.g. a push."""
+    ``arrows``: None, or (T, 2, 3) from/to of one arrow a sample (NaN: none), e.g. a push.
+    ``how``: (the GL backend, whether it was probed, the cancel event or None)."""
     import mujoco
+
+    backend, probed, cancel = how
 
     with tempfile.TemporaryDirectory(prefix="biped-video-") as tmp_name:
         tmp = pathlib.Path(tmp_name)
@@ -309,9 +356,19 @@ def _render_to(model, qpos, idx, arrows, path, dest, backend, progress, cfg) -> 
         }
         (tmp / "job.json").write_text(json.dumps(cfg))
         try:
-            code, err = _run_child(tmp, backend, len(idx), progress)
+            code, err = _run_child(tmp, backend, len(idx), progress, cancel)
+            if code != 0 and not probed and not (cancel is not None and cancel.is_set()):
+                # the unprobed first choice failed: probe every backend, as before, and retry
+                ok, found = gl_available()
+                if not ok:
+                    return VideoResult(None, found)
+                if found != backend:
+                    backend = found
+                    code, err = _run_child(tmp, backend, len(idx), progress, cancel)
         except subprocess.TimeoutExpired:
             return VideoResult(None, f"no video: rendering with MUJOCO_GL={backend} timed out", backend)
+    if cancel is not None and cancel.is_set():
+        return VideoResult(None, "no video: cancelled", backend)
     if code != 0 and any(w in err for w in ("No space left on device", "Disk quota exceeded")):
         raise files.WriteError(errno.ENOSPC, "No space left on device", str(path))  # not a note: exit 1
     if code != 0 or not dest.is_file() or dest.stat().st_size == 0:
@@ -320,6 +377,16 @@ def _render_to(model, qpos, idx, arrows, path, dest, backend, progress, cfg) -> 
         )
     files.place(dest, path)
     return VideoResult(path.resolve(), None, backend, len(idx))
+
+
+def _first_try() -> tuple[bool, str]:
+    """The backend to render with first: :func:`gl_available`'s answer when it was probed in this
+    process (or rendering is disabled), else the first candidate, unprobed: the probe, a child
+    process of its own, costs about 1 s of CPU, and the renderer's failure falls back to it."""
+    disabled = os.environ.get("MUJOCO_GL", "").strip().lower() in ("disable", "disabled", "off", "false", "0")
+    if disabled or gl_available.cache_info().currsize:
+        return gl_available()
+    return True, _candidates()[0]
 
 
 def _font_file() -> str | None:
@@ -333,15 +400,21 @@ def _font_file() -> str | None:
         return None
 
 
-def _run_child(tmp: pathlib.Path, backend: str, n_frames: int, progress) -> tuple[int, str]:
+def _run_child(tmp: pathlib.Path, backend: str, n_frames: int, progress, cancel=None) -> tuple[int, str]:
     """Run :func:`biped.viz.video_render._render_job` in a child process; relay its per-frame
-    ``"frame n"`` lines to ``progress(n, N)``. Returns (exit code, stderr). Raises
-    ``subprocess.TimeoutExpired``."""
+    ``"frame n"`` lines to ``progress(n, N)``; kill it when the event ``cancel`` is set. Returns
+    (exit code, stderr). Raises ``subprocess.TimeoutExpired``."""
     import threading
 
     timeout = 120 + 2.0 * n_frames
-    err_path = tmp / "stderr.txt"
-    with open(err_path, "w") as err:
+    waiting = _WAITING.pop(backend, None)
+    if waiting is not None and waiting[0].poll() is None:  # started ahead by prewarm()
+        proc, err = waiting
+        assert proc.stdin is not None  # stdin=PIPE
+        proc.stdin.write(f"{tmp}\n")
+        proc.stdin.close()
+    else:
+        err = open(tmp / "stderr.txt", "w+")  # noqa: SIM115 - closed below
         proc = subprocess.Popen(
             [sys.executable, "-c", _CHILD, str(tmp)],
             env=_child_env(backend),
@@ -350,6 +423,7 @@ def _run_child(tmp: pathlib.Path, backend: str, n_frames: int, progress) -> tupl
             text=True,
             bufsize=1,
         )
+    with err:  # type: ignore[attr-defined]
         killed = threading.Event()
 
         def _kill():
@@ -358,6 +432,16 @@ def _run_child(tmp: pathlib.Path, backend: str, n_frames: int, progress) -> tupl
 
         timer = threading.Timer(timeout, _kill)
         timer.start()
+        done = threading.Event()
+        if cancel is not None:
+
+            def _watch():
+                while not done.is_set():
+                    if cancel.wait(0.2):
+                        proc.kill()
+                        return
+
+            threading.Thread(target=_watch, daemon=True).start()
         try:
             if progress is not None:
                 progress(0, n_frames)
@@ -372,9 +456,12 @@ def _run_child(tmp: pathlib.Path, backend: str, n_frames: int, progress) -> tupl
             proc.wait()
             raise
         finally:
+            done.set()
             timer.cancel()
             if proc.stdout is not None:
                 proc.stdout.close()
+        err.seek(0)  # type: ignore[attr-defined]
+        text = err.read()  # type: ignore[attr-defined]
     if killed.is_set():
         raise subprocess.TimeoutExpired(_CHILD, timeout)
-    return code, err_path.read_text(errors="replace")
+    return code, text

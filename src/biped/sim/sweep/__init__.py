@@ -11,8 +11,8 @@ of travel, its mass, its height and a scale on the controller gains, around one 
 
 then (minutes of simulation, so not a doctest)::
 
-    summary = run_sweep(spec, "sweep.parquet")          # all local cores, processes
-    summary = run_sweep(spec, "sweep.parquet", scheduler="tcp://10.0.0.5:8786")   # Dask
+    summary = run_sweep(spec, "runs/sweep.parquet")     # all local cores, processes
+    summary = run_sweep(spec, "runs/sweep.parquet", scheduler="tcp://10.0.0.5:8786")   # Dask
 
 One concept per module:
 

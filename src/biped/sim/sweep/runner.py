@@ -399,9 +399,9 @@ def _run_locked(
     writer = store.PartWriter(store.parts_dir(out))
     bar = None
     if progress:
-        from tqdm.auto import tqdm
+        from biped._progress import progress_bar  # a bar on a terminal, whole lines otherwise
 
-        bar = tqdm(total=len(trials), initial=skipped, unit="trial", desc="sweep", smoothing=0.05)
+        bar = progress_bar(total=len(trials), desc="sweep", unit="trial", initial=skipped, smoothing=0.05)
         bar.set_postfix(failed=failed_before)
     counts = {"ran": 0, "failed": 0}
 
@@ -442,6 +442,10 @@ def _run_locked(
             bar.close()
     complete = lost == 0
     if complete:
+        if progress:
+            import sys
+
+            print(f"sweep: writing {len(trials)} trials into {out} ...", file=sys.stderr, flush=True)
         store.consolidate(spec, out, trials)
     return SweepSummary(
         path=out,
