@@ -93,7 +93,9 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return EXIT_BAD_INPUT
-    empty = next((k for k in _PATH_OPTIONS if getattr(args, k, None) == ""), None)
+    # `biped sweep --plot` without a file is "" (argparse's const): beside the results, not empty
+    bare = ("plot",) if args.command == "sweep" else ()
+    empty = next((k for k in _PATH_OPTIONS if k not in bare and getattr(args, k, None) == ""), None)
     if empty is not None:  # '' would otherwise silently mean the default
         getattr(args, "_parser", parser).error(
             f"--{empty.replace('_', '-')} '' is an empty path; name a file or folder, or leave the option out"
