@@ -171,8 +171,8 @@ def run(args) -> int:
 
 def _run(args) -> int:
     from biped.cli.sweep import _check_plot
-    from biped.sim.sweep import Terminated, check_run_args, parts_dir
     from biped.sim.early_stop import applies as early_stop_applies
+    from biped.sim.sweep import Terminated, check_run_args, parts_dir
     from biped.sim.sweep.envelope import paradigm_lattice, run_envelope
 
     _check_plot(args.plot, [])

@@ -3,7 +3,8 @@
 Each direction runs :func:`biped.sim.sweep.search.search` (bracket, bisection, check trials) on a
 lattice of sizes: the values ``--min``, ``--min + --resolution``, ... up to ``--max`` of one
 magnitude axis (the block's ``speed_m_s``, or ``magnitude``, the size of another perturbation
-paradigm in its own unit: force N, platform m, release deg; the search knows only indices). The lattice times the directions is an ordinary :class:`SweepSpec` grid:
+paradigm in its own unit: force N, platform m, release deg; the search knows only indices). The
+lattice times the directions is an ordinary :class:`SweepSpec` grid:
 every trial the search asks for is a trial of that grid, with its key, run by the sweep's trial
 function and stored as a row of the same Parquet file (:mod:`.store`: lock, part files written
 as each trial finishes, one consolidated file holding the trials that ran). So an interrupted
@@ -67,7 +68,11 @@ def paradigm_lattice(perturbation: str) -> Lattice:
         "block": Lattice("speed_m_s", "m/s", 0.25, 24.0, math.inf, ""),
         "force": Lattice("magnitude", "N", 10.0, 1000.0, 1e5, "force_n is at most 1e5 N"),
         "platform": Lattice(
-            "magnitude", "m", 0.01, 1.0, MAX_DISPLACEMENT_M,
+            "magnitude",
+            "m",
+            0.01,
+            1.0,
+            MAX_DISPLACEMENT_M,
             f"the feet stay on the platform: at most {MAX_DISPLACEMENT_M:g} m",
         ),  # fmt: skip
         "release": Lattice("magnitude", "deg", 0.5, 15.0, 45.0, "release_lean_deg is at most 45 deg"),
