@@ -32,7 +32,9 @@ class EnvelopeRow:
     the body's mass (the COM velocity change it causes, J / m); j_max_n_s: Hof's bound in that
     direction; percent_j_max: 100 impulse / J_max; non_monotone: a check trial below the first
     limit failed (limit is then the bisection below the lowest failure, first_limit the one
-    before); n_trials: trials this direction used, n_checks of them check trials."""
+    before); n_trials: trials this direction used, n_checks of them check trials;
+    first_fail_error: the error of the first failure's trial when it raised (a release lean
+    friction cannot hold), else None."""
 
     direction_deg: float
     limit: float
@@ -47,6 +49,7 @@ class EnvelopeRow:
     n_checks: int
     n_trials: int
     complete: bool
+    first_fail_error: str | None = None
 
 
 @dataclass(frozen=True)
@@ -99,6 +102,8 @@ class EnvelopeTable:
                 note = "survived the largest size: limit >= it"
             elif math.isnan(r.limit):
                 note = "the smallest size failed"
+            if r.first_fail_error:
+                note = (note + "; " if note else "") + f"first fail is an error: {r.first_fail_error[:70]}"
             lines.append(
                 f"{r.direction_deg:9.1f}  {_f(r.limit, 7, 2)}  {_f(r.first_fail, 10, 2)}  "
                 f"{_f(r.impulse_n_s, 8, 1)}  {_f(r.delta_v_m_s, 7, 3)}  {_f(r.percent_j_max, 6, 0)}%  "
@@ -126,6 +131,7 @@ def envelope_table(run: Any, *, bound: Any = None) -> EnvelopeTable:
     for d, jmax in zip(run.directions, bound.j_max_n_s, strict=True):
         row = d.rows.get(d.limit) if math.isfinite(d.limit) else None
         j, dv = _momentum(row, paradigm, mass)
+        fail = d.rows.get(d.first_fail) if math.isfinite(d.first_fail) else None
         rows.append(
             EnvelopeRow(
                 direction_deg=float(d.direction_deg),
@@ -141,6 +147,7 @@ def envelope_table(run: Any, *, bound: Any = None) -> EnvelopeTable:
                 n_checks=int(d.n_checks),
                 n_trials=int(d.n_trials),
                 complete=bool(d.complete),
+                first_fail_error=fail.get("error") if fail else None,
             )
         )
     unit = "m/s" if paradigm == "block" else PARADIGMS[paradigm].unit
