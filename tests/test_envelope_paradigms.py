@@ -81,3 +81,16 @@ def test_envelope_paradigm_bad_input_is_one_line_and_exit_2(tmp_path, capsys, ar
     assert message in err
     if "invalid choice" not in message:
         assert len(err.splitlines()) == 1
+
+
+def test_hofs_bound_is_the_bipeds_whatever_the_paradigm():
+    """The platform's 1000 kg slab (and the parked block) are not the body: Hof's bound of a
+    platform scenario is the block scenario's (same biped, same stance), its mass the biped's."""
+    from biped.analysis.feet_in_place import feet_in_place_bound
+    from biped.sim.sweep import hold_scenario
+
+    base = hold_scenario().with_overrides(physics="fast")
+    block = feet_in_place_bound([0.0, 90.0, 180.0], base)
+    platform = feet_in_place_bound([0.0, 90.0, 180.0], base.with_overrides(perturbation="platform"))
+    assert platform.mass_kg == pytest.approx(block.mass_kg) and block.mass_kg < 200.0
+    assert platform.j_max_n_s == pytest.approx(block.j_max_n_s)
