@@ -104,9 +104,10 @@ class EnvelopeTable:
                 note = "the smallest size failed"
             if r.first_fail_error:
                 note = (note + "; " if note else "") + f"first fail is an error: {r.first_fail_error[:70]}"
+            pct = f"{r.percent_j_max:6.0f}%" if math.isfinite(r.percent_j_max) else f"{'-':>7}"
             lines.append(
                 f"{r.direction_deg:9.1f}  {_f(r.limit, 7, 2)}  {_f(r.first_fail, 10, 2)}  "
-                f"{_f(r.impulse_n_s, 8, 1)}  {_f(r.delta_v_m_s, 7, 3)}  {_f(r.percent_j_max, 6, 0)}%  "
+                f"{_f(r.impulse_n_s, 8, 1)}  {_f(r.delta_v_m_s, 7, 3)}  {pct}  "
                 f"{r.n_trials:6d}  {note}"
             )
         return "\n".join(lines)
