@@ -55,7 +55,7 @@ def register(subparsers) -> None:
         type=float,
         default=None,
         metavar="V",
-        help="largest size tried (block 24 m/s, force 1000 N, platform 1 m, release 15 deg)",
+        help="largest size tried (block 24 m/s, force 1000 N, platform 1 m, release 14.5 deg)",
     )
     p.add_argument("--start", type=float, default=None, metavar="V", help="first size tried (the middle)")
     p.add_argument(

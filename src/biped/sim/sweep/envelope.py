@@ -60,8 +60,9 @@ def paradigm_lattice(perturbation: str) -> Lattice:
     """The :class:`Lattice` of ``perturbation`` (``block``, ``force``, ``platform``, ``release``;
     docs/envelope.md): force 10 N to 1000 N (the pulse's ``force_duration_s``, 0.15 s by
     default: up to 150 N s, six times W's block limit); platform 0.01 m to the floor's 1 m;
-    release 0.5 deg to 15 deg (about what W's friction 0.3 holds; a larger lean's trial is a row
-    with friction's error, counted as not survived)."""
+    release 0.5 deg to 14.5 deg (what W's friction 0.3 holds in every direction: 14.5 deg sideways,
+    15.2 deg forward and backward; a larger lean's trial is a row with friction's error, counted
+    as not survived)."""
     from biped.sim.perturbations.platform import MAX_DISPLACEMENT_M
 
     table = {
@@ -75,7 +76,7 @@ def paradigm_lattice(perturbation: str) -> Lattice:
             MAX_DISPLACEMENT_M,
             f"the feet stay on the platform: at most {MAX_DISPLACEMENT_M:g} m",
         ),  # fmt: skip
-        "release": Lattice("magnitude", "deg", 0.5, 15.0, 45.0, "release_lean_deg is at most 45 deg"),
+        "release": Lattice("magnitude", "deg", 0.5, 14.5, 45.0, "release_lean_deg is at most 45 deg"),
     }
     if perturbation not in table:
         raise ScenarioError(f"perturbation must be one of {', '.join(table)}; got {perturbation!r}")
