@@ -69,6 +69,8 @@ def test_paradigm_lattices_stay_inside_their_scenario_checks():
         (["--perturbation", "platform", "--resolution", "0.03"], "whole number of --resolution steps"),
         (["--perturbation", "force", "--mass", "3"], "block_mass_kg is the block's"),
         (["--perturbation", "wind"], "invalid choice"),
+        (["--perturbation", "platform", "--by", "impulse_n_s"], "--by impulse_n_s has no values"),
+        (["--perturbation", "force", "--by", "speed_m_s"], "valid: magnitude, horizontal_impulse_n_s"),
     ],
 )
 def test_envelope_paradigm_bad_input_is_one_line_and_exit_2(tmp_path, capsys, argv, message):

@@ -17,6 +17,15 @@ from pathlib import Path
 from biped.cli._common import check_file_writable
 from biped.errors import ScenarioError
 
+#: the plot's radii a paradigm's rows hold (docs/perturbations.md: the block's impulse is measured
+#: from its momentum; a force's horizontal impulse is the pulse applied; platform and release: none)
+_PLOT_BY = {
+    "block": ("speed_m_s", "impulse_n_s", "horizontal_impulse_n_s"),
+    "force": ("magnitude", "horizontal_impulse_n_s"),
+    "platform": ("magnitude",),
+    "release": ("magnitude",),
+}
+
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
@@ -176,6 +185,11 @@ def _run(args) -> int:
     from biped.sim.sweep.envelope import paradigm_lattice, run_envelope
 
     _check_plot(args.plot, [])
+    valid_by = _PLOT_BY[args.perturbation]
+    if args.by is not None and args.by not in valid_by:
+        raise ScenarioError(
+            f"--by {args.by} has no values for perturbation {args.perturbation}; valid: {', '.join(valid_by)}"
+        )
     if args.json and Path(args.json).suffix != ".json":
         raise ScenarioError(f"--json must name a .json file; got {args.json!r}")
     spec, out = build(args)
