@@ -96,3 +96,19 @@ def test_hofs_bound_is_the_bipeds_whatever_the_paradigm():
     platform = feet_in_place_bound([0.0, 90.0, 180.0], base.with_overrides(perturbation="platform"))
     assert platform.mass_kg == pytest.approx(block.mass_kg) and block.mass_kg < 200.0
     assert platform.j_max_n_s == pytest.approx(block.j_max_n_s)
+
+
+def test_sweep_refine_bisects_a_paradigms_magnitude(tmp_path):
+    """`biped sweep --perturbation force --refine V`: the grid's two sizes, then the bisection
+    between them on the V lattice of the magnitude axis; the file's rows say the refined limit
+    is a survivor one step below a failure."""
+    out = tmp_path / "r.parquet"
+    argv = ["sweep", "--perturbation", "force", "--magnitude", "50,4050", "--direction", "90",
+            "--refine", "2000", "--duration", "0.6", "--set", "force_duration_s=0.05",
+            "--distribution", "qp", "--workers", "1", "--quiet", "--out", str(out)]  # fmt: skip
+    assert main(argv) == 0
+    table = load(out).table
+    got = dict(zip(table.column("magnitude").to_pylist(), (bool(v) for v in survived(table)), strict=True))
+    assert set(got) <= {50.0, 2050.0, 4050.0} and {50.0, 4050.0} <= set(got)
+    assert got[50.0] and not got[4050.0]  # the grid brackets the limit
+    assert 2050.0 in got  # the bisection tried the size between them
