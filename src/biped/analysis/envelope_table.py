@@ -2,6 +2,13 @@
 failing size, the impulse the limit push delivered, the COM velocity change it means and its
 share of Hof's feet-in-place bound (:mod:`biped.analysis.feet_in_place`).
 
+The limit is in the search axis's unit: the block's speed [m/s], or another paradigm's size in its
+own unit (force N, platform m, release deg; the rows' ``paradigm_unit``). The common sizes are
+the rows' (docs/perturbations.md): the block's impulse measured from its momentum; a force's
+horizontal impulse applied (``horizontal_impulse_n_s``); a platform's body mass times its peak
+velocity (``com_velocity_change_m_s``: the support's velocity change under the COM, the same
+COM-relative-to-feet velocity as a push of that momentum); a release none (it starts at rest: NaN).
+
 Pure arithmetic over :class:`biped.sim.sweep.envelope.EnvelopeRun` and the bound; printing and
 JSON here, the polar plot in :mod:`biped.viz.envelope` (the run's Parquet file is a sweep file).
 """
@@ -13,6 +20,7 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 from biped.analysis.feet_in_place import feet_in_place_bound
+from biped.sim.perturbations import PARADIGMS
 
 __all__ = ["EnvelopeRow", "EnvelopeTable", "envelope_table"]
 
@@ -24,7 +32,9 @@ class EnvelopeRow:
     the body's mass (the COM velocity change it causes, J / m); j_max_n_s: Hof's bound in that
     direction; percent_j_max: 100 impulse / J_max; non_monotone: a check trial below the first
     limit failed (limit is then the bisection below the lowest failure, first_limit the one
-    before); n_trials: trials this direction used, n_checks of them check trials."""
+    before); n_trials: trials this direction used, n_checks of them check trials;
+    first_fail_error: the error of the first failure's trial when it raised (a release lean
+    friction cannot hold), else None."""
 
     direction_deg: float
     limit: float
@@ -39,6 +49,7 @@ class EnvelopeRow:
     n_checks: int
     n_trials: int
     complete: bool
+    first_fail_error: str | None = None
 
 
 @dataclass(frozen=True)
@@ -48,6 +59,8 @@ class EnvelopeTable:
     resolution: float
     body_mass_kg: float
     rows: tuple[EnvelopeRow, ...]
+    paradigm: str = "block"
+    unit: str = "m/s"
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready (NaN as None)."""
@@ -56,6 +69,8 @@ class EnvelopeTable:
             return None if isinstance(v, float) and not math.isfinite(v) else v
 
         return {
+            "paradigm": self.paradigm,
+            "unit": self.unit,
             "axis": self.axis,
             "criterion": self.criterion,
             "resolution": self.resolution,
@@ -65,13 +80,12 @@ class EnvelopeTable:
 
     def format(self) -> str:
         """The table as fixed-width text for the terminal."""
-        unit = self.axis.rsplit("_", 2)
         head = (
             f"{'direction':>9}  {'limit':>7}  {'first fail':>10}  {'impulse':>8}  "
             f"{'COM dv':>7}  {'% J_max':>7}  {'trials':>6}  note"
         )
         units = (
-            f"{'[deg]':>9}  {'[' + '/'.join(unit[1:]) + ']':>7}  {'':>10}  {'[N s]':>8}  "
+            f"{'[deg]':>9}  {'[' + self.unit + ']':>7}  {'':>10}  {'[N s]':>8}  "
             f"{'[m/s]':>7}  {'':>7}  {'':>6}"
         )
         lines = [head, units]
@@ -88,9 +102,12 @@ class EnvelopeTable:
                 note = "survived the largest size: limit >= it"
             elif math.isnan(r.limit):
                 note = "the smallest size failed"
+            if r.first_fail_error:
+                note = (note + "; " if note else "") + f"first fail is an error: {r.first_fail_error[:70]}"
+            pct = f"{r.percent_j_max:6.0f}%" if math.isfinite(r.percent_j_max) else f"{'-':>7}"
             lines.append(
                 f"{r.direction_deg:9.1f}  {_f(r.limit, 7, 2)}  {_f(r.first_fail, 10, 2)}  "
-                f"{_f(r.impulse_n_s, 8, 1)}  {_f(r.delta_v_m_s, 7, 3)}  {_f(r.percent_j_max, 6, 0)}%  "
+                f"{_f(r.impulse_n_s, 8, 1)}  {_f(r.delta_v_m_s, 7, 3)}  {pct}  "
                 f"{r.n_trials:6d}  {note}"
             )
         return "\n".join(lines)
@@ -111,16 +128,18 @@ def envelope_table(run: Any, *, bound: Any = None) -> EnvelopeTable:
     rows = []
     sizes = run.sizes
     resolution = float(sizes[1] - sizes[0]) if len(sizes) > 1 else float("nan")
+    paradigm = str(run.spec.base.perturbation)
     for d, jmax in zip(run.directions, bound.j_max_n_s, strict=True):
         row = d.rows.get(d.limit) if math.isfinite(d.limit) else None
-        j = float(row["impulse_n_s"]) if row and row.get("impulse_n_s") is not None else float("nan")
+        j, dv = _momentum(row, paradigm, mass)
+        fail = d.rows.get(d.first_fail) if math.isfinite(d.first_fail) else None
         rows.append(
             EnvelopeRow(
                 direction_deg=float(d.direction_deg),
                 limit=float(d.limit),
                 first_fail=float(d.first_fail),
                 impulse_n_s=j,
-                delta_v_m_s=j / mass,
+                delta_v_m_s=dv,
                 j_max_n_s=float(jmax),
                 percent_j_max=100.0 * j / float(jmax),
                 non_monotone=bool(d.non_monotone),
@@ -129,6 +148,31 @@ def envelope_table(run: Any, *, bound: Any = None) -> EnvelopeTable:
                 n_checks=int(d.n_checks),
                 n_trials=int(d.n_trials),
                 complete=bool(d.complete),
+                first_fail_error=fail.get("error") if fail else None,
             )
         )
-    return EnvelopeTable(run.axis, run.criterion, resolution, mass, tuple(rows))
+    unit = "m/s" if paradigm == "block" else PARADIGMS[paradigm].unit
+    return EnvelopeTable(run.axis, run.criterion, resolution, mass, tuple(rows), paradigm, unit)
+
+
+def _num(row: dict, key: str) -> float:
+    v = row.get(key)
+    return float(v) if v is not None else float("nan")
+
+
+def _momentum(row: dict | None, paradigm: str, mass: float) -> tuple[float, float]:
+    """(horizontal momentum change [N s], COM velocity change [m/s]) of the limit's row (module
+    docstring); NaN without a row."""
+    nan = float("nan")
+    if row is None:
+        return nan, nan
+    if paradigm == "block":
+        j = _num(row, "impulse_n_s")
+        return j, j / mass
+    if paradigm == "platform":
+        dv = _num(row, "com_velocity_change_m_s")
+        return mass * dv, dv
+    if paradigm == "release":
+        return nan, nan
+    j = _num(row, "horizontal_impulse_n_s")
+    return j, j / mass

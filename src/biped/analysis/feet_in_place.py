@@ -124,8 +124,8 @@ def _support_polygon(scenario: Scenario) -> tuple[np.ndarray, float, float, np.n
     bottom = corners[corners[:, 2] < z_sole + 1e-3]
     hull = ConvexHull(bottom[:, :2])
     polygon = bottom[hull.vertices, :2]  # counter-clockwise
-    biped_bodies = [b for b in range(m.nbody) if b != scene.block_body and b != 0]
-    mass = float(sum(m.body_mass[b] for b in biped_bodies))
+    # the biped's tree alone: not the block, nor a paradigm's bodies (the 1000 kg platform)
+    mass = float(m.body_subtreemass[m.body_rootid[scene.central_body]])
     com = d.subtree_com[scene.central_body]
     return com[:2].copy(), float(com[2] - z_sole), mass, polygon
 

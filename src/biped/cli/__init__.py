@@ -94,8 +94,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return EXIT_BAD_INPUT
     # `biped sweep --plot` without a file is "" (argparse's const): beside the results, not empty
-    bare = ("plot",) if args.command == "sweep" else ()
-    empty = next((k for k in _PATH_OPTIONS if k not in bare and getattr(args, k, None) == ""), None)
+    valueless = ("plot",) if args.command == "sweep" else ()
+    empty = next((k for k in _PATH_OPTIONS if k not in valueless and getattr(args, k, None) == ""), None)
     if empty is not None:  # '' would otherwise silently mean the default
         getattr(args, "_parser", parser).error(
             f"--{empty.replace('_', '-')} '' is an empty path; name a file or folder, or leave the option out"

@@ -17,14 +17,31 @@ from pathlib import Path
 from biped.cli._common import check_file_writable
 from biped.errors import ScenarioError
 
+#: the plot's radii a paradigm's rows hold (docs/perturbations.md: the block's impulse is measured
+#: from its momentum; a force's horizontal impulse is the pulse applied; platform and release: none)
+_PLOT_BY = {
+    "block": ("speed_m_s", "impulse_n_s", "horizontal_impulse_n_s"),
+    "force": ("magnitude", "horizontal_impulse_n_s"),
+    "platform": ("magnitude",),
+    "release": ("magnitude",),
+}
+
 
 def register(subparsers) -> None:
     p = subparsers.add_parser(
         "envelope",
         help="push-recovery envelope by bisection: each direction's limit in a few trials",
-        description="Per direction, find the largest block speed survived: bracket, bisection to "
-        "--resolution, then check trials below the limit. Every trial is a row of a sweep "
-        "Parquet file (resumable: run the same command again). See docs/envelope.md.",
+        description="Per direction, find the largest push survived (block speed, or the size of "
+        "--perturbation in its own unit): bracket, bisection to --resolution, then check trials "
+        "below the limit. Every trial is a row of a sweep Parquet file (resumable: run the same "
+        "command again). See docs/envelope.md.",
+    )
+    p.add_argument(
+        "--perturbation",
+        choices=("block", "force", "platform", "release"),
+        default="block",
+        help="the experiment (as biped sweep): W's block (default; size: speed m/s), a force pulse "
+        "(peak N), a platform move (m) or a lean-and-release (deg); docs/perturbations.md",
     )
     p.add_argument(
         "--directions",
@@ -33,12 +50,22 @@ def register(subparsers) -> None:
         help="N directions evenly spaced from 0 deg (default 16), or a list such as 0,90,180 [deg]",
     )
     p.add_argument(
-        "--resolution", type=float, default=0.25, metavar="V", help="step of the search (0.25 m/s)"
+        "--resolution",
+        type=float,
+        default=None,
+        metavar="V",
+        help="step of the search (block 0.25 m/s, force 10 N, platform 0.01 m, release 0.5 deg)",
     )
     p.add_argument(
         "--min", type=float, default=None, metavar="V", help="smallest size tried (= --resolution)"
     )
-    p.add_argument("--max", type=float, default=24.0, metavar="V", help="largest size tried (24 m/s)")
+    p.add_argument(
+        "--max",
+        type=float,
+        default=None,
+        metavar="V",
+        help="largest size tried (block 24 m/s, force 1000 N, platform 1 m, release 14.5 deg)",
+    )
     p.add_argument("--start", type=float, default=None, metavar="V", help="first size tried (the middle)")
     p.add_argument(
         "--checks", type=int, default=3, metavar="N", help="check trials below each limit (3; 0: none)"
@@ -67,7 +94,11 @@ def register(subparsers) -> None:
     p.add_argument("--json", metavar="FILE.json", help="also write the envelope table as JSON")
     p.add_argument("--plot", metavar="FILE.png", help="draw the polar envelope")
     p.add_argument(
-        "--by", choices=("speed_m_s", "impulse_n_s"), default="speed_m_s", help="radius of the polar plot"
+        "--by",
+        choices=("speed_m_s", "impulse_n_s", "magnitude", "horizontal_impulse_n_s"),
+        default=None,
+        help="radius of the polar plot (default: speed_m_s for the block, else magnitude, the "
+        "paradigm's own unit)",
     )
     p.add_argument("--overwrite", action="store_true", help="replace an --out that holds a different sweep")
     p.add_argument("--quiet", action="store_true", help="no progress line")
@@ -101,9 +132,19 @@ def directions(text: str) -> tuple[float, ...]:
 def build(args):
     """(SweepSpec of the lattice x directions, out path)."""
     from biped.cli.sweep import _variant_suffix, build_spec
-    from biped.sim.sweep.envelope import lattice
+    from biped.sim.sweep.envelope import lattice, paradigm_lattice
 
     dirs = directions(args.directions)
+    lat = paradigm_lattice(args.perturbation)
+    if args.resolution is None:
+        args.resolution = lat.resolution
+    if args.max is None:
+        args.max = lat.max
+    if math.isfinite(args.max) and args.max > lat.limit:
+        raise ScenarioError(
+            f"--max must be at most {lat.limit:g} {lat.unit} for perturbation {args.perturbation} "
+            f"({lat.limit_why}); got {args.max:g}"
+        )
     lo = args.min if args.min is not None else args.resolution
     sizes = lattice(lo, args.max, args.resolution)
     if args.checks < 0 or args.checks > 20:
@@ -114,9 +155,12 @@ def build(args):
         )
     ns = argparse.Namespace(**vars(args))
     ns.grid, ns.samples, ns.seed = None, None, None
-    ns.speed = ",".join(repr(s) for s in sizes)
+    values = ",".join(repr(s) for s in sizes)
     ns.direction = ",".join(repr(d) for d in dirs)
-    ns.magnitude, ns.perturbation = None, None  # the block's speed axis (the paradigms: not yet)
+    if args.perturbation == "block":
+        ns.speed, ns.magnitude, ns.perturbation = values, None, None  # a block file's identity as before
+    else:
+        ns.speed, ns.magnitude = None, values
     spec = build_spec(ns)
     b = spec.base
     out = (
@@ -136,10 +180,16 @@ def run(args) -> int:
 
 def _run(args) -> int:
     from biped.cli.sweep import _check_plot
+    from biped.sim.early_stop import applies as early_stop_applies
     from biped.sim.sweep import Terminated, check_run_args, parts_dir
-    from biped.sim.sweep.envelope import run_envelope
+    from biped.sim.sweep.envelope import paradigm_lattice, run_envelope
 
     _check_plot(args.plot, [])
+    valid_by = _PLOT_BY[args.perturbation]
+    if args.by is not None and args.by not in valid_by:
+        raise ScenarioError(
+            f"--by {args.by} has no values for perturbation {args.perturbation}; valid: {', '.join(valid_by)}"
+        )
     if args.json and Path(args.json).suffix != ".json":
         raise ScenarioError(f"--json must name a .json file; got {args.json!r}")
     spec, out = build(args)
@@ -148,13 +198,18 @@ def _run(args) -> int:
     if args.json:
         check_file_writable(args.json, "--json")
     axes = dict(spec.axes)
-    n_dir, n_size = len(axes["direction_deg"]), len(axes["speed_m_s"])
+    lat = paradigm_lattice(args.perturbation)
+    size = axes[lat.axis]
+    n_dir, n_size = len(axes["direction_deg"]), len(size)
     where = args.scheduler or f"{args.workers or 'all'} local worker(s)"
+    stop = "on" if early_stop_applies(spec.base) else "off"
+    if spec.base.early_stop and stop == "off":
+        stop = "off (the block's rule only: trials run their duration)"
     what = (
-        f"{n_dir} directions x {n_size} sizes ({min(axes['speed_m_s']):g}-{max(axes['speed_m_s']):g} m/s "
+        f"{args.perturbation}: {n_dir} directions x {n_size} sizes ({min(size):g}-{max(size):g} {lat.unit} "
         f"by {args.resolution:g}), controller {spec.base.controller}, distribution "
         f"{spec.base.distribution}, torque limits {spec.torque_limits}, physics {spec.base.physics}, "
-        f"early stop {'on' if spec.base.early_stop else 'off'}, on {where} -> {out}"
+        f"early stop {stop}, on {where} -> {out}"
     )
     if args.dry_run:
         print(f"biped envelope (dry run): {what}")
@@ -177,6 +232,7 @@ def _run(args) -> int:
         result = run_envelope(
             spec,
             out,
+            axis=lat.axis,
             checks=args.checks,
             start=args.start,
             criterion=args.criterion,
@@ -217,7 +273,8 @@ def _run(args) -> int:
     if args.plot:
         from biped.viz.envelope import plot_comparison
 
-        plot_comparison([out], by=args.by, out=args.plot)
+        by = args.by or ("speed_m_s" if args.perturbation == "block" else "magnitude")
+        plot_comparison([out], by=by, out=args.plot)
         print(f"envelope plot: {args.plot}")
     if not result.complete:
         print(

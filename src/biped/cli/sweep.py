@@ -129,8 +129,9 @@ def register(subparsers) -> None:
         "--refine",
         type=float,
         metavar="V",
-        help="after the grid, bisect each direction's speed between its last survivor and first "
-        "failure to V m/s (biped envelope's search, reusing the grid's trials; docs/envelope.md)",
+        help="after the grid, bisect each direction's speed (another paradigm: its --magnitude) between "
+        "its last survivor and first failure to V m/s (the paradigm's unit) (biped envelope's search, "
+        "reusing the grid's trials; docs/envelope.md)",
     )
     p.add_argument("--retry-failed", action="store_true", help="rerun trials that raised")
     p.add_argument(
@@ -422,9 +423,15 @@ def _sweep(args, spec, out: Path, n: int, where: str, client) -> int:
     return 0
 
 
+def _unit(base) -> str:
+    from biped.sim.perturbations import PARADIGMS
+
+    return "m/s" if base.perturbation == "block" else PARADIGMS[base.perturbation].unit
+
+
 def refine_spec(spec, resolution: float):
-    """(the sweep on the fine lattice min..max of its speeds by ``resolution``, the coarse
-    speeds): ``--refine``'s checks, before any work."""
+    """(the sweep on the fine lattice min..max of its speeds (another paradigm: its magnitudes)
+    by ``resolution``, the coarse sizes): ``--refine``'s checks, before any work."""
     from biped.sim.sweep.envelope import lattice
 
     axes = dict(spec.axes)
@@ -434,8 +441,9 @@ def refine_spec(spec, resolution: float):
         if len(axes[name]) != 1:
             raise ScenarioError(f"--refine takes one value of {name}; got {len(axes[name])}")
     if not (math.isfinite(resolution) and resolution > 0):
-        raise ScenarioError(f"--refine must be a speed step > 0 [m/s]; got {resolution:g}")
-    coarse = tuple(sorted(axes["speed_m_s"]))
+        raise ScenarioError(f"--refine must be a step > 0 [{_unit(spec.base)}]; got {resolution:g}")
+    axis = "speed_m_s" if spec.base.perturbation == "block" else "magnitude"
+    coarse = tuple(sorted(axes[axis]))
     steps = (coarse[-1] - coarse[0]) / resolution
     if abs(steps - round(steps)) > 1e-9 * max(1.0, steps):
         raise ScenarioError(
@@ -449,7 +457,7 @@ def refine_spec(spec, resolution: float):
                 f"--refine {resolution:g}: the grid speed {v:g} is not on the lattice {coarse[0]:g}, "
                 f"{coarse[0] + resolution:g}, ... {coarse[-1]:g}; choose a resolution that divides the grid's step"
             )
-    return spec.with_axes(speed_m_s=fine), coarse
+    return spec.with_axes(**{axis: fine}), coarse
 
 
 def _refine(args, spec, out) -> int:
@@ -463,6 +471,7 @@ def _refine(args, spec, out) -> int:
         result = run_envelope(
             fine,
             out,
+            axis="speed_m_s" if spec.base.perturbation == "block" else "magnitude",
             checks=0,
             workers=args.workers,
             scheduler=args.scheduler,
@@ -479,12 +488,13 @@ def _refine(args, spec, out) -> int:
     print(envelope_table(result).format())
     print(
         f"ran {result.ran} (reused {result.reused}), wall {result.wall_time_s:.1f} s ({result.backend}); "
-        f"{out} holds the grid on the {args.refine:g} m/s lattice: rerun with the same --refine"
+        f"{out} holds the grid on the {args.refine:g} {_unit(spec.base)} lattice: rerun with the same --refine"
     )
     if args.plot is not None:  # --plot without a file: beside the results
         from biped.viz.envelope import plot_comparison
 
         plot = Path(args.plot) if args.plot else out.with_suffix(".png")
-        plot_comparison([out, *args.compare], by=args.by, out=plot)
+        by = args.by or ("speed_m_s" if spec.base.perturbation == "block" else "magnitude")
+        plot_comparison([out, *args.compare], by=by, out=plot)
         print(f"envelope plot: {plot}")
     return 0 if result.complete else 1

@@ -2,8 +2,9 @@
 
 Each direction runs :func:`biped.sim.sweep.search.search` (bracket, bisection, check trials) on a
 lattice of sizes: the values ``--min``, ``--min + --resolution``, ... up to ``--max`` of one
-magnitude axis (``speed_m_s`` today; the search knows only indices, so another magnitude axis is
-a new ``axis`` name). The lattice times the directions is an ordinary :class:`SweepSpec` grid:
+magnitude axis (the block's ``speed_m_s``, or ``magnitude``, the size of another perturbation
+paradigm in its own unit: force N, platform m, release deg; the search knows only indices). The
+lattice times the directions is an ordinary :class:`SweepSpec` grid:
 every trial the search asks for is a trial of that grid, with its key, run by the sweep's trial
 function and stored as a row of the same Parquet file (:mod:`.store`: lock, part files written
 as each trial finishes, one consolidated file holding the trials that ran). So an interrupted
@@ -36,10 +37,50 @@ from biped.sim.sweep.runner import _sigterm_raises, check_run_args, default_work
 from biped.sim.sweep.search import SearchResult, search
 from biped.sim.sweep.spec import AXES, SweepSpec, Trial
 
-__all__ = ["DirectionResult", "EnvelopeRun", "lattice", "run_envelope"]
+__all__ = ["DirectionResult", "EnvelopeRun", "Lattice", "lattice", "paradigm_lattice", "run_envelope"]
 
 #: Magnitude axes an envelope can search along.
-MAGNITUDE_AXES = ("speed_m_s",)
+MAGNITUDE_AXES = ("speed_m_s", "magnitude")
+
+
+@dataclass(frozen=True)
+class Lattice:
+    """A paradigm's search: its axis, unit, default step and top, and the largest size its
+    scenario checks accept (``--max`` above it is refused before any work)."""
+
+    axis: str
+    unit: str
+    resolution: float
+    max: float
+    limit: float
+    limit_why: str
+
+
+def paradigm_lattice(perturbation: str) -> Lattice:
+    """The :class:`Lattice` of ``perturbation`` (``block``, ``force``, ``platform``, ``release``;
+    docs/envelope.md): force 10 N to 1000 N (the pulse's ``force_duration_s``, 0.15 s by
+    default: up to 150 N s, six times W's block limit); platform 0.01 m to the floor's 1 m;
+    release 0.5 deg to 14.5 deg (what W's friction 0.3 holds in every direction: 14.5 deg sideways,
+    15.2 deg forward and backward; a larger lean's trial is a row with friction's error, counted
+    as not survived)."""
+    from biped.sim.perturbations.platform import MAX_DISPLACEMENT_M
+
+    table = {
+        "block": Lattice("speed_m_s", "m/s", 0.25, 24.0, math.inf, ""),
+        "force": Lattice("magnitude", "N", 10.0, 1000.0, 1e5, "force_n is at most 1e5 N"),
+        "platform": Lattice(
+            "magnitude",
+            "m",
+            0.01,
+            1.0,
+            MAX_DISPLACEMENT_M,
+            f"the feet stay on the platform: at most {MAX_DISPLACEMENT_M:g} m",
+        ),  # fmt: skip
+        "release": Lattice("magnitude", "deg", 0.5, 14.5, 45.0, "release_lean_deg is at most 45 deg"),
+    }
+    if perturbation not in table:
+        raise ScenarioError(f"perturbation must be one of {', '.join(table)}; got {perturbation!r}")
+    return table[perturbation]
 
 
 def lattice(lo: float, hi: float, resolution: float) -> tuple[float, ...]:
