@@ -13,7 +13,7 @@ cd "$(dirname "$0")/.."
 . scripts/_env.sh
 ensure_env libosmesa6 libgl1 chromium
 echo "installing biped and the test dependencies (first run: a few minutes)"
-"$PY" -m pip install -q -e ".[test]"
+"$PY" -m pip install -q -e ".[test,robots]"
 DIRS=(src tests benchmarks scripts)
 echo "== ruff check"
 "$PY" -m ruff check "${DIRS[@]}"
