@@ -29,6 +29,15 @@ from biped.spatial import rot_to_quat
 
 FLOOR = "robot_floor"
 BLOCK, BLOCK_JOINT = "robot_block", "robot_block_root"
+#: W Alg. 3's big-base factor on the robots. W's 1e6 makes Unitree G1 unstable: one physics step
+#: after its sphere soles first touch the floor the feet move a little, the 1e6-heavy feet's
+#: velocity terms swamp the bias wrench and the QP saturates every leg joint; with 1e2 G1,
+#: T1 and Berkeley Humanoid stand and recover 0.2 m/s kicks (docs/robots.md).
+ROBOT_BIG_BASE = 1e2
+#: W's push moved onto a robot (:func:`block_for`): W's block (1.8 kg, 4.5 m/s, 0.2 m/s up,
+#: 1.2 m high against W's central-body COM at 1.035 m, 0.5 m from it), its mass scaled by the
+#: robot's mass over W's biped's (73.06 kg), its height by the central-body COM heights.
+W_BLOCK = {"mass_kg": 1.8, "speed_m_s": 4.5, "vz_m_s": 0.2, "height_m": 1.2, "com_m": 1.035, "gap_m": 0.5}
 
 
 @dataclass(frozen=True)
@@ -56,6 +65,32 @@ class RobotRun:
     def final_offset_m(self) -> float:
         """Horizontal distance of the central-body COM from its set point at the end [m]."""
         return float(np.linalg.norm(self.central_com[-1, :2] - self.target_com[:2]))
+
+
+@dataclass(frozen=True)
+class Block:
+    """A thrown cube: start position (3,) [m], velocity (3,) [m/s], mass [kg], edge [m]."""
+
+    position_m: tuple
+    velocity_m_s: tuple
+    mass_kg: float
+    size_m: float = 0.1
+
+
+def block_for(
+    desc: RobotDescription, w_biped_mass_kg: float, ctrl: WorkspaceController | None = None
+) -> Block:
+    """W's block moved onto the robot (:data:`W_BLOCK`), thrown from behind (-x: the robots
+    face +x) at the central body's COM line."""
+    ctrl = ctrl or robot_controller(desc, "statics", "none")
+    c = ctrl.link_poses(standing_qpos(desc, ctrl))[0][:3, 3]
+    w = W_BLOCK
+    z = w["height_m"] / w["com_m"] * c[2]
+    return Block(
+        (float(c[0] - w["gap_m"]), float(c[1]), float(z)),
+        (w["speed_m_s"], 0.0, w["vz_m_s"]),
+        w["mass_kg"] * desc.mass / w_biped_mass_kg,
+    )
 
 
 def robot_controller(desc: RobotDescription, distribution: str = "qp", torque_limits: str = "model", **kw):
@@ -100,21 +135,37 @@ def robot_push(
     distribution: str = "qp",
     torque_limits: str = "model",
     fall_drop_m: float = 0.15,
+    timestep_s: float | None = None,
+    big_base: float = ROBOT_BIG_BASE,
+    block: Block | None = None,
 ) -> RobotRun:
     """Stand the robot for ``seconds`` under W's controller, kicked by ``push_m_s`` of COM
-    velocity change at ``push_time_s`` (zero: no push); stops early when it falls."""
-    ctrl = robot_controller(desc, distribution, torque_limits)
+    velocity change at ``push_time_s`` (zero: no push) and/or hit by ``block`` (thrown at t = 0);
+    stops early when it falls."""
+    ctrl = robot_controller(desc, distribution, torque_limits, big_base=big_base)
     q0 = standing_qpos(desc, ctrl)
     g = ctrl.link_poses(q0)[0]
     ctrl.target = Target(com=tuple(g[:3, 3]), quat=tuple(rot_to_quat(np.ascontiguousarray(g[:3, :3]))))
     spec = plant_spec(desc)
     spec.worldbody.add_geom(name=FLOOR, type=mujoco.mjtGeom.mjGEOM_PLANE, size=[10, 10, 0.1])
+    if block is not None:
+        b = spec.worldbody.add_body(name=BLOCK, pos=list(block.position_m))
+        b.add_freejoint(name=BLOCK_JOINT)
+        b.add_geom(
+            name=BLOCK, type=mujoco.mjtGeom.mjGEOM_BOX, size=[block.size_m / 2] * 3, mass=block.mass_kg
+        )
+    if timestep_s is not None:
+        spec.option.timestep = timestep_s
     m = spec.compile()
     d = mujoco.MjData(m)
     tree = ctrl.tree
-    if m.nq != tree.nq:
+    if m.nq != tree.nq + (7 if block is not None else 0):
         raise ScenarioError("internal: the plant's qpos layout differs from the file's")
-    d.qpos[:] = q0
+    d.qpos[: tree.nq] = q0
+    if block is not None:
+        bj = m.joint(BLOCK_JOINT)
+        d.qpos[bj.qposadr[0] : bj.qposadr[0] + 7] = [*block.position_m, 1, 0, 0, 0]
+        d.qvel[bj.dofadr[0] : bj.dofadr[0] + 3] = block.velocity_m_s
     legs = np.array([_actuator(m, j) for j in tree.joint_names])
     for j in desc.held_joints:
         d.ctrl[_actuator(m, j)] = q0[m.jnt_qposadr[m.joint(j).id]]
@@ -128,12 +179,12 @@ def robot_push(
         if i == kick and np.any(push_m_s):
             # free joint linear velocity is in the world frame in MuJoCo: every body gets +dv
             d.qvel[root_v : root_v + 3] += np.asarray(push_m_s, float)
-        u = ctrl.torques(d.qpos, d.qvel)
+        u = ctrl.torques(d.qpos[: tree.nq], d.qvel[: tree.nv])  # the robot's own layout comes first
         tau[i] = u
         d.ctrl[legs] = u
         mujoco.mj_step(m, d)
         t[i] = d.time
-        cc[i] = ctrl.link_poses(d.qpos)[0][:3, 3] if i % 10 == 0 or i == n - 1 else cc[i - 1]
+        cc[i] = ctrl.link_poses(d.qpos[: tree.nq])[0][:3, 3] if i % 10 == 0 or i == n - 1 else cc[i - 1]
         com[i] = d.subtree_com[m.body(desc.root).id]
         if cc[i, 2] < g[2, 3] - fall_drop_m:
             fell_at = float(d.time)
