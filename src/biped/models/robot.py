@@ -19,11 +19,13 @@ two legs and :func:`controller_model` folds the rest away, by these documented r
   feet, the waist, arms and head into the floating body, whose inertia is then the composite of
   that subtree at the keyframe pose. The plant's qpos/qvel layout (the file's) is kept in the
   :class:`~biped.model.TreeModel`, so the controller reads the plant's state directly.
-- **Soles** (:func:`robot_soles`): in each foot's frame at the keyframe, "up" is the world's z;
-  the support points of the foot's collision geoms (a sphere's lowest point, a capsule's two
-  lowest points, a box's corners, a mesh's vertices, a cylinder's rim) within
-  :data:`SOLE_TOLERANCE_M` of the lowest are the sole; its rectangle is their bounding box
-  along the foot's forward axis (its x projected on the ground) and the axis across.
+- **Soles** (:func:`robot_soles`): the foot's collision geoms (contype or conaffinity nonzero;
+  when none, its geoms in :data:`COLLISION_GROUP`, Menagerie's pair-only collision geoms). The
+  sole's axes are those of the one reaching lowest at the keyframe: "up" the axis nearest the world's vertical at
+  the keyframe, "forward" the one nearest the world's x. The geoms' support points (a sphere's
+  lowest point, a capsule's two lowest, a box's corners, a mesh's vertices, a cylinder's rims)
+  within :data:`SOLE_TOLERANCE_M` of the lowest along "up" are the sole; its rectangle is their
+  bounding box along "forward" and the axis across.
 - **Standing pose**: the model's keyframe (the first, or ``keyframe=``).
 - **Plant** (:func:`plant_spec`): the leg actuators become torque motors (``ctrlrange`` = the
   joint's ``actuatorfrcrange``, else the actuator's ``forcerange``); held joints keep their
@@ -292,6 +294,19 @@ def robot_tree(desc: RobotDescription) -> TreeModel:
     return replace(tree, qpos_adr=qadr, dof_adr=dadr, nq=m.nq, nv=m.nv)
 
 
+#: Menagerie's collision geoms that collide only through explicit <pair>s (contype and
+#: conaffinity 0, e.g. Apptronik Apollo) sit in this geom group.
+COLLISION_GROUP = 3
+
+
+def collision_geoms(m: mujoco.MjModel, body: int) -> list[int]:
+    """Geoms of ``body`` that collide: contype or conaffinity nonzero; when it has none, its geoms
+    in :data:`COLLISION_GROUP` (collision by explicit pairs, which the plant adds)."""
+    own = [g for g in range(m.ngeom) if m.geom_bodyid[g] == body]
+    hit = [g for g in own if m.geom_contype[g] or m.geom_conaffinity[g]]
+    return hit or [g for g in own if m.geom_group[g] == COLLISION_GROUP]
+
+
 def _support_points(cm: mujoco.MjModel, g: int) -> np.ndarray:
     """(k, 3) candidate lowest points of geom ``g`` in its body's frame (see the module's rule)."""
     R, c = quat_to_rot(cm.geom_quat[g]), cm.geom_pos[g]
@@ -332,29 +347,35 @@ def robot_soles(desc: RobotDescription) -> tuple[SoleRectangle, SoleRectangle]:
     for foot in desc.feet:
         b = cm.body(foot).id
         Rw = d.xmat[m.body(foot).id].reshape(3, 3)  # foot body orientation at the keyframe
-        up = Rw.T @ np.array([0.0, 0.0, 1.0])  # world up in the foot frame
-        fwd = np.array([1.0, 0.0, 0.0]) - up[0] * up
-        if np.linalg.norm(fwd) < 0.5:
-            raise ModelError(f"foot {foot!r}: its x axis is not roughly horizontal at the keyframe")
-        fwd /= np.linalg.norm(fwd)
-        S = np.stack([fwd, np.cross(up, fwd), up], 1)  # sole axes in the foot frame
-        pts = []
-        geoms = [
-            g
-            for g in range(cm.ngeom)
-            if cm.geom_bodyid[g] == b and (cm.geom_contype[g] or cm.geom_conaffinity[g])
-        ]
+        geoms = collision_geoms(cm, b)
         if not geoms:
             raise ModelError(
-                f"foot {foot!r} has no collision geoms (contype or conaffinity nonzero) to stand on"
+                f"foot {foot!r} has no collision geoms (contype or conaffinity nonzero, or in "
+                f"group {COLLISION_GROUP}) to stand on"
             )
-        for g in geoms:
+        # the sole's axes: those of the foot's lowest collision geom at the keyframe, "up" the
+        # one nearest the world's vertical, "forward" the one nearest the world's x
+        wup, wfwd = Rw.T @ np.array([0.0, 0.0, 1.0]), Rw.T @ np.array([1.0, 0.0, 0.0])
+
+        def lowest(g, up):
             p = _support_points(cm, g)
-            t = int(cm.geom_type[g])
-            if t in (mujoco.mjtGeom.mjGEOM_SPHERE, mujoco.mjtGeom.mjGEOM_CAPSULE):
+            if int(cm.geom_type[g]) in (mujoco.mjtGeom.mjGEOM_SPHERE, mujoco.mjtGeom.mjGEOM_CAPSULE):
                 p = p - cm.geom_size[g][0] * up
-            pts.append(p)
-        P = np.concatenate(pts) @ S  # sole-axis coordinates
+            return p
+
+        big = min(geoms, key=lambda g: float((lowest(g, wup) @ wup).min()))
+        A = quat_to_rot(cm.geom_quat[big])
+        k_up = int(np.argmax(np.abs(A.T @ wup)))
+        if abs(A[:, k_up] @ wup) < np.cos(np.radians(30)):
+            raise ModelError(
+                f"foot {foot!r}: no axis of its sole geoms is within 30 deg of vertical at the keyframe"
+            )
+        up = A[:, k_up] * np.sign(A[:, k_up] @ wup)
+        rest = [k for k in range(3) if k != k_up]
+        k_f = max(rest, key=lambda k: abs(A[:, k] @ wfwd))
+        fwd = A[:, k_f] * np.sign(A[:, k_f] @ wfwd)
+        S = np.stack([fwd, np.cross(up, fwd), up], 1)  # sole axes in the foot frame
+        P = np.concatenate([lowest(g, up) for g in geoms]) @ S  # sole-axis coordinates
         low = P[P[:, 2] <= P[:, 2].min() + SOLE_TOLERANCE_M]
         x0, x1 = low[:, 0].min(), low[:, 0].max()
         y0, y1 = low[:, 1].min(), low[:, 1].max()
@@ -367,10 +388,29 @@ def robot_soles(desc: RobotDescription) -> tuple[SoleRectangle, SoleRectangle]:
     return out[0], out[1]
 
 
+def leg_torque_limits(desc: RobotDescription) -> np.ndarray:
+    """(12, 2) [N m] (lower, upper) torque of each leg joint: the joint's ``actuatorfrcrange``,
+    else its actuator's ``forcerange``; a leg joint with neither is refused."""
+    m = plant_model(desc)
+    out = np.zeros((len(desc.leg_joints), 2))
+    for i, name in enumerate(desc.leg_joints):
+        j = m.joint(name).id
+        acts = [a for a in range(m.nu) if m.actuator_trnid[a, 0] == j and m.actuator_trntype[a] == 0]
+        if m.jnt_actfrclimited[j]:
+            out[i] = m.jnt_actfrcrange[j]
+        elif acts and m.actuator_forcelimited[acts[0]]:
+            out[i] = m.actuator_forcerange[acts[0]]
+        else:
+            raise ModelError(
+                f"leg joint {name!r} has no torque limit (the joint's actuatorfrcrange or its "
+                f"actuator's forcerange)"
+            )
+    return out
+
+
 def plant_spec(desc: RobotDescription) -> mujoco.MjSpec:
     """The file's spec with the leg actuators made torque motors (``ctrlrange`` = the joint's
     ``actuatorfrcrange``, else the actuator's ``forcerange``); held joints keep their servos."""
-    m = plant_model(desc)
     spec = mujoco.MjSpec.from_file(str(desc.path))
     legs = set(desc.leg_joints)
     driven = {}
@@ -380,16 +420,9 @@ def plant_spec(desc: RobotDescription) -> mujoco.MjSpec:
     missing = sorted(legs - set(driven))
     for name in missing:
         driven[name] = spec.add_actuator(name=f"{name}_motor", target=name, trntype=mujoco.mjtTrn.mjTRN_JOINT)
+    limits = dict(zip(desc.leg_joints, leg_torque_limits(desc), strict=True))
     for name, a in driven.items():
-        j = m.joint(name).id
-        lim = m.jnt_actfrcrange[j] if m.jnt_actfrclimited[j] else None
-        if lim is None:
-            ai = m.actuator(a.name).id if a.name and name not in missing else None
-            if ai is None or not m.actuator_forcelimited[ai]:
-                raise ModelError(
-                    f"leg joint {name!r} has no torque limit (actuatorfrcrange or the actuator's forcerange)"
-                )
-            lim = m.actuator_forcerange[ai]
+        lim = limits[name]
         a.gaintype = mujoco.mjtGain.mjGAIN_FIXED
         a.gainprm = [1.0] + [0.0] * 9
         a.biastype = mujoco.mjtBias.mjBIAS_NONE

@@ -24,7 +24,15 @@ from biped.control.limits import TorqueLimits
 from biped.control.setpoint import Gains, Target
 from biped.control.workspace import WorkspaceController
 from biped.errors import ScenarioError
-from biped.models.robot import RobotDescription, plant_spec, robot_soles, robot_tree
+from biped.models.robot import (
+    COLLISION_GROUP,
+    RobotDescription,
+    leg_torque_limits,
+    plant_model,
+    plant_spec,
+    robot_soles,
+    robot_tree,
+)
 from biped.spatial import rot_to_quat
 
 FLOOR = "robot_floor"
@@ -93,15 +101,39 @@ def block_for(
     )
 
 
+#: The plant's physics step: the file's, at most this [s] (the controller runs every step).
+MAX_TIMESTEP_S = 0.002
+
+
+def _pair_colliders(spec: mujoco.MjSpec, desc: RobotDescription, block: bool) -> None:
+    """Geoms that collide only through explicit pairs (:data:`~biped.models.robot.COLLISION_GROUP`,
+    contype and conaffinity 0) get pairs with the floor (the feet's) and the block (all)."""
+    m = plant_model(desc)  # the file's geoms (the floor and block are added by name)
+    pair_only = [
+        g
+        for g in range(m.ngeom)
+        if m.geom_group[g] == COLLISION_GROUP and not (m.geom_contype[g] or m.geom_conaffinity[g])
+    ]
+    if not pair_only:
+        return
+    feet = {m.body(f).id for f in desc.feet}
+    for g in pair_only:
+        name = m.geom(g).name
+        if not name:  # a pair needs names; unnamed pair-only geoms stay inert
+            continue
+        if m.geom_bodyid[g] in feet:
+            spec.add_pair(geomname1=name, geomname2=FLOOR, condim=3)
+        if block:
+            spec.add_pair(geomname1=name, geomname2=BLOCK, condim=3)
+
+
 def robot_controller(desc: RobotDescription, distribution: str = "qp", torque_limits: str = "model", **kw):
     """W's controller on the robot's folded tree; ``torque_limits`` "model" (the joints'
     ``actuatorfrcrange`` inside the QP) or "none"."""
     tree = robot_tree(desc)
-    m = plant_spec(desc).compile()
     lim = None
     if torque_limits == "model":
-        lo = np.array([m.actuator_ctrlrange[_actuator(m, j), 0] for j in tree.joint_names])
-        hi = np.array([m.actuator_ctrlrange[_actuator(m, j), 1] for j in tree.joint_names])
+        lo, hi = leg_torque_limits(desc).T
         lim = TorqueLimits("model", tree.joint_names, lo, hi)
     elif torque_limits != "none":
         raise ScenarioError(f"unknown torque_limits {torque_limits!r} for a robot; valid: 'model', 'none'")
@@ -117,11 +149,17 @@ def _actuator(m: mujoco.MjModel, joint: str) -> int:
 
 
 def standing_qpos(desc: RobotDescription, ctrl: WorkspaceController) -> np.ndarray:
-    """The keyframe's qpos with the robot moved vertically so that its lowest sole point is on z = 0."""
+    """The keyframe's qpos with the robot moved vertically so that its lowest sole corner is on z = 0."""
     q = desc.key_qpos.copy()
     g = ctrl.link_poses(q)
     soles = robot_soles(desc)
-    z = min((g[f] @ s.g_foot_sole)[2, 3] for f, s in zip(ctrl.tree.feet, soles, strict=True))
+    corners = [
+        (g[f] @ s.g_foot_sole @ np.array([i * s.half_length, j * s.half_width, 0.0, 1.0]))[2]
+        for f, s in zip(ctrl.tree.feet, soles, strict=True)
+        for i in (-1, 1)
+        for j in (-1, 1)
+    ]
+    z = min(corners)
     q[ctrl.tree.qpos_adr[0] + 2] -= z
     return q
 
@@ -154,8 +192,8 @@ def robot_push(
         b.add_geom(
             name=BLOCK, type=mujoco.mjtGeom.mjGEOM_BOX, size=[block.size_m / 2] * 3, mass=block.mass_kg
         )
-    if timestep_s is not None:
-        spec.option.timestep = timestep_s
+    _pair_colliders(spec, desc, block is not None)
+    spec.option.timestep = timestep_s or min(spec.option.timestep, MAX_TIMESTEP_S)
     m = spec.compile()
     d = mujoco.MjData(m)
     tree = ctrl.tree
