@@ -131,3 +131,41 @@ def test_biped_push_model_robot_recovers_ws_block_scaled(tmp_path):
     assert rows[0].startswith("t_s,central_com_x_m") and len(rows) > 900
     assert main(["push", "--model", "g1", "--stepping", "--out", str(tmp_path / "x")]) == 2
     assert not (tmp_path / "x").exists()
+
+
+@pytest.mark.parametrize("name", ["t1", "apollo"])
+def test_sole_rectangles_are_the_box_soles_bottom_faces(name):
+    """T1's and Apollo's soles are one box each: the rectangles' world corners at the standing
+    pose are the boxes' bottom-face corners as MuJoCo places them (geom_xpos, geom_xmat), and
+    Hof's J_max from behind is m sqrt(g / h) times the COM's distance to the front edge."""
+    from biped.analysis.robot import robot_hof_bound, sole_corners
+    from biped.models.robot import collision_geoms
+    from biped.sim.robot import standing_qpos
+
+    desc = describe(name)
+    m = plant_model(desc)
+    d = mujoco.MjData(m)
+    d.qpos[:] = standing_qpos(desc, robot_controller(desc, "statics", "none"))
+    mujoco.mj_forward(m, d)
+    got = sole_corners(desc)
+    for side, foot in enumerate(desc.feet):
+        (g,) = collision_geoms(m, m.body(foot).id)
+        assert m.geom_type[g] == mujoco.mjtGeom.mjGEOM_BOX
+        R, s = d.geom_xmat[g].reshape(3, 3), m.geom_size[g]
+        k = int(np.argmax(np.abs(R[2])))  # the box axis nearest the vertical
+        down = -np.sign(R[2, k])
+        box = []
+        for i in (-1, 1):
+            for j in (-1, 1):
+                u = np.zeros(3)
+                u[[a for a in range(3) if a != k]] = [i, j]
+                u[k] = down
+                box.append(d.geom_xpos[g] + R @ (u * s))
+        mine = got[4 * side : 4 * side + 4]
+        for c in box:
+            assert np.min(np.linalg.norm(mine - c, axis=1)) < 1e-9
+    b = robot_hof_bound(desc, [0.0])
+    com = d.subtree_com[m.body(desc.root).id]
+    h = com[2] - got[:, 2].min()
+    d_front = got[:, 0].max() - com[0]  # both feet's toes level at the keyframe
+    assert b.j_max_n_s[0] == pytest.approx(desc.mass * np.sqrt(-m.opt.gravity[2] / h) * d_front, rel=1e-2)
