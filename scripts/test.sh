@@ -13,8 +13,8 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 . scripts/_env.sh
 ensure_env libosmesa6 libgl1 chromium
-echo "installing biped, the test and docs dependencies with pip (first run: a few minutes; one line a package)"
-pip_install -e ".[test,docs]"
+echo "installing biped, the test, docs and robot-model dependencies with pip (first run: a few minutes; one line a package)"
+pip_install -e ".[test,docs,robots]"
 DIRS=(src tests benchmarks scripts)
 echo "== ruff check"
 "$PY" -m ruff check "${DIRS[@]}"

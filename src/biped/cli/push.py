@@ -27,7 +27,8 @@ def register(subparsers) -> None:
         "--model",
         metavar="FILE.xml",
         help="the biped: an MJCF file with W's structure (e.g. from `biped model`); W's "
-        "initial state, set point and block height move onto it (docs/model.md)",
+        "initial state, set point and block height move onto it (docs/model.md); or a robot "
+        "of the optional extra biped[robots]: g1, t1, berkeley_humanoid, apollo (docs/robots.md)",
     )
     p.add_argument("--duration", type=float, metavar="S", help="simulated time [s] (W: 3)")
     p.add_argument(
@@ -336,12 +337,15 @@ def run(args) -> int:
 def _run(args) -> int:
     import time
 
+    from biped.models.robot import ROBOTS
     from biped.outputs.push import write_outputs
     from biped.sim.jit import kernels_for, warm_up
     from biped.sim.mjlog import count_warnings, route_to, summary
     from biped.sim.push import simulate
     from biped.sim.scene import build_scene
 
+    if getattr(args, "model", None) in ROBOTS:
+        return _run_robot(args)
     t_start = time.perf_counter()
     scenario = build_scenario(args)  # validated before anything is simulated
     out = _out_dir(args)
@@ -405,4 +409,52 @@ def _run(args) -> int:
         print(said, file=sys.stderr)
     if result.interrupted:
         return 130
+    return 0
+
+
+def _run_robot(args) -> int:
+    """``--model <robot>``: W's push moved onto a robot's own MJCF (docs/robots.md): its
+    keyframe stance, the QP with its actuator limits, W's block scaled to it, from behind."""
+    from biped.errors import ScenarioError
+    from biped.models import total_mass_kg
+    from biped.models.robot import describe
+    from biped.outputs.robot import write_robot_outputs
+    from biped.sim.robot import Block, block_for, robot_controller, robot_push
+
+    unsupported = {
+        "--scenario": args.scenario,
+        "--set": args.set or None,
+        "--controller": args.controller,
+        "--physics": args.physics,
+        "--stepping": getattr(args, "stepping", None),
+        "--seed": args.seed,
+    }
+    given = [k for k, v in unsupported.items() if v]
+    if given:
+        raise ScenarioError(
+            f"--model {args.model}: {', '.join(given)} not supported on robots yet; valid: --duration, "
+            f"--distribution, --timestep, --block-position, --block-velocity, --block-mass"
+        )
+    desc = describe(args.model)
+    distribution = args.distribution or "qp"
+    seconds = args.duration if args.duration is not None else 3.0
+    if not (0 < seconds <= 60):
+        raise ScenarioError(f"--duration must be in (0, 60] s, got {seconds}")
+    ctrl = robot_controller(desc, distribution)  # checks the feet, soles and limits first
+    out = _out_dir(args)
+    b = block_for(desc, total_mass_kg(), ctrl)
+    block = Block(
+        tuple(args.block_position) if args.block_position else b.position_m,
+        tuple(args.block_velocity) if args.block_velocity else b.velocity_m_s,
+        args.block_mass if args.block_mass is not None else b.mass_kg,
+    )
+    run = robot_push(desc, seconds, distribution=distribution, block=block, timestep_s=args.timestep)
+    summary = write_robot_outputs(out, desc, run, block, distribution)
+    status = "recovered" if summary["recovered"] else "fell" if run.fell else "not recovered"
+    print(
+        f"{args.model} ({desc.mass:.1f} kg): {status}; block {block.mass_kg:.3f} kg at "
+        f"{block.velocity_m_s[0]:g} m/s, peak COM velocity {summary['peak_com_velocity_x_m_s']:.3f} m/s, "
+        f"final COM offset {summary['final_com_offset_m'] * 1e3:.2f} mm, peak torque "
+        f"{summary['peak_torque_fraction_of_limit'] * 100:.0f}% of the limits -> {out}"
+    )
     return 0

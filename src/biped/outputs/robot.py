@@ -1,0 +1,54 @@
+"""The files of a robot's push run (``biped push --model g1|t1|berkeley_humanoid|apollo``):
+``summary.json`` (the robot, the block, the result) and ``trajectory.csv`` (time, central-body
+COM, whole-body COM, leg torques as commanded)."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+
+from biped.files import write_text
+from biped.models.robot import RobotDescription
+from biped.outputs._json import write_json
+from biped.sim.robot import Block, RobotRun
+
+
+def robot_summary(desc: RobotDescription, run: RobotRun, block: Block | None, distribution: str) -> dict:
+    """The run's numbers (SI units); ``recovered``: did not fall and its central-body COM ended
+    within 1 cm of the set point horizontally."""
+    vx = np.gradient(run.com[:, 0], run.t) if len(run.t) > 2 else np.zeros(1)
+    return {
+        "model": str(desc.path),
+        "robot_mass_kg": desc.mass,
+        "feet": list(desc.feet),
+        "leg_joints": list(desc.leg_joints),
+        "held_joints": list(desc.held_joints),
+        "keyframe": desc.keyframe,
+        "distribution": distribution,
+        "torque_limits": "model (the joints' actuatorfrcrange)",
+        "block": dataclasses.asdict(block) if block is not None else None,
+        "block_momentum_per_kg_m_s": (
+            block.mass_kg * float(np.linalg.norm(block.velocity_m_s)) / desc.mass if block else None
+        ),
+        "simulated_s": float(run.t[-1]) if len(run.t) else 0.0,
+        "fell": run.fell,
+        "fall_time_s": run.fall_time_s,
+        "recovered": (not run.fell) and run.final_offset_m < 0.01,
+        "final_com_offset_m": run.final_offset_m,
+        "peak_com_velocity_x_m_s": float(np.max(vx)),
+        "peak_torque_fraction_of_limit": run.max_torque_fraction,
+    }
+
+
+def write_robot_outputs(out: Path, desc: RobotDescription, run: RobotRun, block, distribution: str) -> dict:
+    summary = robot_summary(desc, run, block, distribution)
+    write_json(out / "summary.json", summary)
+    head = "t_s,central_com_x_m,central_com_y_m,central_com_z_m,com_x_m,com_y_m,com_z_m," + ",".join(
+        f"tau_{j}_n_m" for j in desc.leg_joints
+    )
+    rows = np.column_stack([run.t, run.central_com, run.com, run.torques])
+    body = "\n".join(",".join(f"{x:.9g}" for x in r) for r in rows)
+    write_text(out / "trajectory.csv", head + "\n" + body + "\n")
+    return summary

@@ -1,0 +1,231 @@
+"""A robot's own MJCF on the floor under W's controller (:mod:`biped.models.robot`'s mapping).
+
+The plant is the file's model edited at load (:func:`biped.models.robot.plant_spec`: leg servos
+made torque motors) plus a floor plane, and, for :func:`robot_push` with a block, the thrown
+block. The robot starts at its keyframe, lowered or raised so that its lowest sole point touches
+the floor; the set point is the folded central body's pose there (COM over the feet as the
+keyframe has it). Held joints keep their position servos at the keyframe angles; the legs get
+the controller's torques every physics step (``ctrlrange`` clamps them to the joints'
+``actuatorfrcrange``, which ``torque_limits="model"`` also puts inside the QP).
+
+A push is either a COM velocity change ``push_m_s`` given to the whole robot at ``push_time_s``
+(every body's velocity changes by the same vector: MuJoCo Playground's base-velocity kick, but
+exact for the COM) or a block of ``block_mass_kg`` thrown at ``block_speed_m_s`` at a height.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from biped.control.limits import TorqueLimits
+from biped.control.setpoint import Gains, Target
+from biped.control.workspace import WorkspaceController
+from biped.errors import ScenarioError
+from biped.models.robot import (
+    COLLISION_GROUP,
+    RobotDescription,
+    leg_torque_limits,
+    plant_model,
+    plant_spec,
+    robot_soles,
+    robot_tree,
+)
+from biped.spatial import rot_to_quat
+
+FLOOR = "robot_floor"
+BLOCK, BLOCK_JOINT = "robot_block", "robot_block_root"
+#: W Alg. 3's big-base factor on the robots. W's 1e6 makes Unitree G1 unstable: one physics step
+#: after its sphere soles first touch the floor the feet move a little, the 1e6-heavy feet's
+#: velocity terms swamp the bias wrench and the QP saturates every leg joint; with 1e2 G1,
+#: T1 and Berkeley Humanoid stand and recover 0.2 m/s kicks (docs/robots.md).
+ROBOT_BIG_BASE = 1e2
+#: W's push moved onto a robot (:func:`block_for`): W's block (1.8 kg, 4.5 m/s, 0.2 m/s up,
+#: 1.2 m high against W's central-body COM at 1.035 m, 0.5 m from it), its mass scaled by the
+#: robot's mass over W's biped's (73.06 kg), its height by the central-body COM heights.
+W_BLOCK = {"mass_kg": 1.8, "speed_m_s": 4.5, "vz_m_s": 0.2, "height_m": 1.2, "com_m": 1.035, "gap_m": 0.5}
+
+
+@dataclass(frozen=True)
+class RobotRun:
+    """One run: times (n,) [s], central-body COM (n, 3) [m], robot COM (n, 3) [m], leg torques
+    (n, 12) [N m] as commanded (before the actuators' clamp), the limits (12,) [N m], whether it
+    fell (central-body COM more than ``fall_drop_m`` below its set point) and when."""
+
+    t: np.ndarray
+    central_com: np.ndarray
+    com: np.ndarray
+    torques: np.ndarray
+    limits: np.ndarray
+    fell: bool
+    fall_time_s: float | None
+    target_com: np.ndarray
+    mass: float
+
+    @property
+    def max_torque_fraction(self) -> float:
+        """Largest |commanded torque| / limit over the run (<= 1 when the QP respects them)."""
+        return float(np.max(np.abs(self.torques) / self.limits))
+
+    @property
+    def final_offset_m(self) -> float:
+        """Horizontal distance of the central-body COM from its set point at the end [m]."""
+        return float(np.linalg.norm(self.central_com[-1, :2] - self.target_com[:2]))
+
+
+@dataclass(frozen=True)
+class Block:
+    """A thrown cube: start position (3,) [m], velocity (3,) [m/s], mass [kg], edge [m]."""
+
+    position_m: tuple
+    velocity_m_s: tuple
+    mass_kg: float
+    size_m: float = 0.1
+
+
+def block_for(
+    desc: RobotDescription, w_biped_mass_kg: float, ctrl: WorkspaceController | None = None
+) -> Block:
+    """W's block moved onto the robot (:data:`W_BLOCK`), thrown from behind (-x: the robots
+    face +x) at the central body's COM line."""
+    ctrl = ctrl or robot_controller(desc, "statics", "none")
+    c = ctrl.link_poses(standing_qpos(desc, ctrl))[0][:3, 3]
+    w = W_BLOCK
+    z = w["height_m"] / w["com_m"] * c[2]
+    return Block(
+        (float(c[0] - w["gap_m"]), float(c[1]), float(z)),
+        (w["speed_m_s"], 0.0, w["vz_m_s"]),
+        w["mass_kg"] * desc.mass / w_biped_mass_kg,
+    )
+
+
+#: The plant's physics step: the file's, at most this [s] (the controller runs every step).
+MAX_TIMESTEP_S = 0.002
+
+
+def _pair_colliders(spec: mujoco.MjSpec, desc: RobotDescription, block: bool) -> None:
+    """Geoms that collide only through explicit pairs (:data:`~biped.models.robot.COLLISION_GROUP`,
+    contype and conaffinity 0) get pairs with the floor (the feet's) and the block (all)."""
+    m = plant_model(desc)  # the file's geoms (the floor and block are added by name)
+    pair_only = [
+        g
+        for g in range(m.ngeom)
+        if m.geom_group[g] == COLLISION_GROUP and not (m.geom_contype[g] or m.geom_conaffinity[g])
+    ]
+    if not pair_only:
+        return
+    feet = {m.body(f).id for f in desc.feet}
+    for g in pair_only:
+        name = m.geom(g).name
+        if not name:  # a pair needs names; unnamed pair-only geoms stay inert
+            continue
+        if m.geom_bodyid[g] in feet:
+            spec.add_pair(geomname1=name, geomname2=FLOOR, condim=3)
+        if block:
+            spec.add_pair(geomname1=name, geomname2=BLOCK, condim=3)
+
+
+def robot_controller(desc: RobotDescription, distribution: str = "qp", torque_limits: str = "model", **kw):
+    """W's controller on the robot's folded tree; ``torque_limits`` "model" (the joints'
+    ``actuatorfrcrange`` inside the QP) or "none"."""
+    tree = robot_tree(desc)
+    lim = None
+    if torque_limits == "model":
+        lo, hi = leg_torque_limits(desc).T
+        lim = TorqueLimits("model", tree.joint_names, lo, hi)
+    elif torque_limits != "none":
+        raise ScenarioError(f"unknown torque_limits {torque_limits!r} for a robot; valid: 'model', 'none'")
+    kw.setdefault("gains", Gains())
+    return WorkspaceController(
+        tree, distribution=distribution, torque_limits=lim, soles=robot_soles(desc), **kw
+    )
+
+
+def _actuator(m: mujoco.MjModel, joint: str) -> int:
+    j = m.joint(joint).id
+    return int(next(a for a in range(m.nu) if m.actuator_trnid[a, 0] == j))
+
+
+def standing_qpos(desc: RobotDescription, ctrl: WorkspaceController) -> np.ndarray:
+    """The keyframe's qpos with the robot moved vertically so that its lowest sole corner is on z = 0."""
+    q = desc.key_qpos.copy()
+    g = ctrl.link_poses(q)
+    soles = robot_soles(desc)
+    corners = [
+        (g[f] @ s.g_foot_sole @ np.array([i * s.half_length, j * s.half_width, 0.0, 1.0]))[2]
+        for f, s in zip(ctrl.tree.feet, soles, strict=True)
+        for i in (-1, 1)
+        for j in (-1, 1)
+    ]
+    z = min(corners)
+    q[ctrl.tree.qpos_adr[0] + 2] -= z
+    return q
+
+
+def robot_push(
+    desc: RobotDescription,
+    seconds: float = 3.0,
+    *,
+    push_m_s: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    push_time_s: float = 0.5,
+    distribution: str = "qp",
+    torque_limits: str = "model",
+    fall_drop_m: float = 0.15,
+    timestep_s: float | None = None,
+    big_base: float = ROBOT_BIG_BASE,
+    block: Block | None = None,
+) -> RobotRun:
+    """Stand the robot for ``seconds`` under W's controller, kicked by ``push_m_s`` of COM
+    velocity change at ``push_time_s`` (zero: no push) and/or hit by ``block`` (thrown at t = 0);
+    stops early when it falls."""
+    ctrl = robot_controller(desc, distribution, torque_limits, big_base=big_base)
+    q0 = standing_qpos(desc, ctrl)
+    g = ctrl.link_poses(q0)[0]
+    ctrl.target = Target(com=tuple(g[:3, 3]), quat=tuple(rot_to_quat(np.ascontiguousarray(g[:3, :3]))))
+    spec = plant_spec(desc)
+    spec.worldbody.add_geom(name=FLOOR, type=mujoco.mjtGeom.mjGEOM_PLANE, size=[10, 10, 0.1])
+    if block is not None:
+        b = spec.worldbody.add_body(name=BLOCK, pos=list(block.position_m))
+        b.add_freejoint(name=BLOCK_JOINT)
+        b.add_geom(
+            name=BLOCK, type=mujoco.mjtGeom.mjGEOM_BOX, size=[block.size_m / 2] * 3, mass=block.mass_kg
+        )
+    _pair_colliders(spec, desc, block is not None)
+    spec.option.timestep = timestep_s or min(spec.option.timestep, MAX_TIMESTEP_S)
+    m = spec.compile()
+    d = mujoco.MjData(m)
+    tree = ctrl.tree
+    if m.nq != tree.nq + (7 if block is not None else 0):
+        raise ScenarioError("internal: the plant's qpos layout differs from the file's")
+    d.qpos[: tree.nq] = q0
+    if block is not None:
+        bj = m.joint(BLOCK_JOINT)
+        d.qpos[bj.qposadr[0] : bj.qposadr[0] + 7] = [*block.position_m, 1, 0, 0, 0]
+        d.qvel[bj.dofadr[0] : bj.dofadr[0] + 3] = block.velocity_m_s
+    legs = np.array([_actuator(m, j) for j in tree.joint_names])
+    for j in desc.held_joints:
+        d.ctrl[_actuator(m, j)] = q0[m.jnt_qposadr[m.joint(j).id]]
+    lim = np.array([m.actuator_ctrlrange[a, 1] for a in legs])
+    n = int(round(seconds / m.opt.timestep))
+    t, cc, com, tau = np.zeros(n), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 12))
+    root_v = tree.dof_adr[0]
+    kick = int(round(push_time_s / m.opt.timestep))
+    fell_at = None
+    for i in range(n):
+        if i == kick and np.any(push_m_s):
+            # free joint linear velocity is in the world frame in MuJoCo: every body gets +dv
+            d.qvel[root_v : root_v + 3] += np.asarray(push_m_s, float)
+        u = ctrl.torques(d.qpos[: tree.nq], d.qvel[: tree.nv])  # the robot's own layout comes first
+        tau[i] = u
+        d.ctrl[legs] = u
+        mujoco.mj_step(m, d)
+        t[i] = d.time
+        cc[i] = ctrl.link_poses(d.qpos[: tree.nq])[0][:3, 3] if i % 10 == 0 or i == n - 1 else cc[i - 1]
+        com[i] = d.subtree_com[m.body(desc.root).id]
+        if cc[i, 2] < g[2, 3] - fall_drop_m:
+            fell_at = float(d.time)
+            t, cc, com, tau = t[: i + 1], cc[: i + 1], com[: i + 1], tau[: i + 1]
+            break
+    return RobotRun(t, cc, com, tau, lim, fell_at is not None, fell_at, g[:3, 3].copy(), desc.mass)
