@@ -103,6 +103,8 @@ def test_a_stopped_push_writes_what_it_computed(tmp_path, sig, status, word):
         pytest.fail("the push did not start within 180 s: " + buf[-500:])
     p.send_signal(sig)
     p.wait(timeout=120)
+    os.set_blocking(fd, True)
+    buf += p.stderr.read()  # what it said after the signal, shown if the status is wrong
     assert p.returncode == status, buf
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
     assert summary[word] is True
