@@ -31,14 +31,7 @@ from dataclasses import dataclass, field
 import mujoco
 import numpy as np
 
-from biped import models
-from biped.control.distribution import QPWeights
-from biped.control.limits import TorqueLimits, torque_limits
-from biped.control.neuromotor import OLDER_STRENGTH_FACTOR
-from biped.control.policy import PolicyConfig, make_policy, symmetric_limits
-from biped.control.workspace import Gains, Target
 from biped.errors import BipedError, ScenarioError
-from biped.models import subject
 from biped.sim import fused as fused_mod
 from biped.sim import perturbations
 from biped.sim.contact import SOLE_GEOMS, ContactMonitor
@@ -46,6 +39,13 @@ from biped.sim.early_stop import AT_REST, EarlyStop
 from biped.sim.early_stop import applies as early_stop_applies
 from biped.sim.jit import announce_and_warm, kernels_for
 from biped.sim.neuro import neuro_loop
+from biped.sim.policies import (  # noqa: F401 - offered here too, as before the split
+    ControllerPolicy,
+    RecordedTorques,
+    controller_policy,
+    policy_config,
+    scenario_limits,
+)
 from biped.sim.scenario import Scenario
 from biped.sim.scene import Scene, build_scene, initial_state, tilt_quat
 
@@ -129,120 +129,6 @@ def orientation_error_deg(quat, target_quat) -> float:
     """Angle [deg] of the rotation between two unit quaternions (w, x, y, z)."""
     c = abs(float(np.dot(quat, target_quat))) / (np.linalg.norm(quat) * np.linalg.norm(target_quat))
     return math.degrees(2.0 * math.acos(min(1.0, float(c))))
-
-
-# ---------------------------------------------------------------------------------------------
-# policies
-
-
-def scenario_limits(scenario: Scenario) -> TorqueLimits | None:
-    """The scenario's ``torque_limits`` ("none", "human" for the model's mass, 1 or 12 numbers)."""
-    if scenario.torque_limits == "none":
-        return None
-    if scenario.torque_limits in ("human", "human-older"):  # older: times OLDER_STRENGTH_FACTOR
-        lim = torque_limits("human", body_mass_kg=models.total_mass_kg(scenario.model))
-        if scenario.torque_limits == "human":
-            return lim
-        assert lim.lower is not None and lim.upper is not None
-        f = OLDER_STRENGTH_FACTOR
-        return TorqueLimits("human-older", lim.joint_names, lim.lower * f, lim.upper * f)
-    return symmetric_limits(scenario.torque_limits)
-
-
-def policy_config(
-    scenario: Scenario, *, gain_scale: float = 1.0, torque_limits: TorqueLimits | None = None
-) -> PolicyConfig:
-    """The :class:`~biped.control.policy.PolicyConfig` of ``scenario``: its controller, W's set
-    point and gains as the scenario gives them, its support mode, the joint-PD holding the initial
-    joint angles, its control period, and ``torque_limits`` (default: the scenario's own)."""
-    target = Target.wendlandt(
-        com=scenario.target_com_m, tilt_deg=scenario.target_tilt_deg, axis=scenario.target_axis
-    )
-    gains = Gains(
-        kp_com=scenario.kp_com, kv_com=scenario.kv_com, kp_rot=scenario.kp_rot, kv_rot=scenario.kv_rot
-    )
-    if torque_limits is None:
-        torque_limits = scenario_limits(scenario)
-    elif scenario.torque_limits != "none":
-        raise ScenarioError(
-            "give torque limits once: the scenario's torque_limits or the torque_limits argument, not both"
-        )
-    qp_weights = None
-    if scenario.distribution == "qp":
-        qp_weights = QPWeights(
-            moment=scenario.qp_moment_weight,
-            friction=scenario.friction,
-            min_normal_n=scenario.qp_min_normal_n,
-            cop_scale=scenario.qp_cop_scale,
-            # the stepping controller was tuned with massless-leg cones (docs/controller.md)
-            leg_weight=0.0 if scenario.stepping else scenario.qp_leg_weight,
-        )
-    model_path = None if scenario.model == subject.DEFAULT else subject.resolve(scenario.model)
-    return PolicyConfig(
-        controller=scenario.controller,
-        target=target,
-        gains=gains,
-        support=scenario.support,
-        q_ref_deg=tuple(scenario.initial_joint_angles_deg),
-        control_period_s=1.0 / scenario.control_rate_hz,
-        gain_scale=gain_scale,
-        torque_limits=torque_limits,
-        distribution=scenario.distribution,
-        qp_weights=qp_weights,
-        model_path=model_path,
-    )
-
-
-class ControllerPolicy:
-    """A :class:`biped.control.policy.Policy` as a loop policy (the time is not used).
-    ``policy`` is the control-level policy, ``policy.controller`` the controller object;
-    ``sensed``: whether it is given the sensed feet (None: not known, which keeps
-    :func:`run_closed_loop` on its Python loop)."""
-
-    __slots__ = ("joint_names", "policy", "sensed")
-
-    def __init__(self, policy, *, sensed: bool | None = None):
-        self.policy = policy
-        self.joint_names = policy.joint_names
-        self.sensed = sensed
-
-    def __call__(self, t: float, qpos: np.ndarray, qvel: np.ndarray, feet) -> np.ndarray:
-        return self.policy(qpos, qvel, feet)
-
-
-def controller_policy(
-    scenario: Scenario,
-    scene: Scene,
-    *,
-    gain_scale: float = 1.0,
-    torque_limits: TorqueLimits | None = None,
-    tree=None,
-) -> Callable[[float, np.ndarray, np.ndarray, tuple[bool, bool]], np.ndarray]:
-    """The loop policy of ``scenario``'s controller (:func:`policy_config`), torques in
-    ``scene.joint_names`` order. ``tree``: a cached :class:`~biped.model.TreeModel` of the biped."""
-    config = policy_config(scenario, gain_scale=gain_scale, torque_limits=torque_limits)
-    if scenario.stepping:  # not in W: capture-point steps around W's controller
-        from biped.control.stepping import SteppingConfig, SteppingController
-
-        return SteppingController(
-            config, SteppingConfig(max_steps=scenario.max_steps), scene.joint_names, tree=tree
-        )
-    sensed = config.support == "sensed" or config.distribution == "qp"  # as make_policy decides
-    return ControllerPolicy(make_policy(config, scene.joint_names, tree=tree), sensed=sensed)
-
-
-class RecordedTorques:
-    """Open-loop policy: row ``round(t * rate_hz)`` of ``torques`` (n, 12) [N m] whatever the
-    state (zeros past the last row)."""
-
-    def __init__(self, torques: np.ndarray, rate_hz: float):
-        self.torques = np.ascontiguousarray(torques, dtype=float)
-        self.rate_hz = float(rate_hz)
-        self._zero = np.zeros(self.torques.shape[1])
-
-    def __call__(self, t: float, qpos: np.ndarray, qvel: np.ndarray, feet) -> np.ndarray:
-        k = round(t * self.rate_hz)
-        return self.torques[k] if k < len(self.torques) else self._zero
 
 
 # ---------------------------------------------------------------------------------------------
