@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import base64
 import dataclasses
+import html
 import json
 import re
 
@@ -89,6 +90,14 @@ def test_chromium_draws_the_arrow_while_the_force_acts_and_not_after(force_push,
     during, after = counts.values()
     assert during > 60, counts
     assert after == 0, counts
+    # and the page with an arrow still loads nothing from the network (the probe of the viewer)
+    dom = run_chromium(tmp_path, "--dump-dom", url=f"{page.as_uri()}#t={START_S + 0.05!r}&probe=1")
+    assert 'data-ready="1"' in dom, dom[-3000:]
+    probe = json.loads(
+        html.unescape(re.search(r'<pre id="probe" style="[^"]*">(.*?)</pre>', dom, re.DOTALL)[1])
+    )
+    assert probe["violations"] == []
+    assert all(u.startswith(("blob:", "file:")) for u in probe["resources"]), probe["resources"]
 
 
 def test_a_replay_without_arrow_inlines_the_viewer_unchanged(force_push, tmp_path):
