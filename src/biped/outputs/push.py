@@ -535,6 +535,7 @@ def _write_rest(result, out, scene, figures, replay, figure_formats, log, stage,
                 info=info,
                 markers=_markers(result),
                 follow="trunk",
+                arrow=perturbations.of(result.scenario).arrows(scene, result),  # as the video's
             )
             rp = with_footprints(rp, _footprints(scene, result))
             written["replay"] = write_replay(rp, out / "replay.html") or out / "replay.html"

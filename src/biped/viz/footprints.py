@@ -69,4 +69,5 @@ def with_footprints(replay: Replay, footprints: Iterable[Mapping]) -> Replay:
         info=replay.info,
         markers=replay.markers,
         follow=replay.geoms[follow].name if follow >= 0 else None,
+        arrow=replay.arrow,
     )

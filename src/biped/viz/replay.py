@@ -35,11 +35,12 @@ import numpy as np
 
 from biped import files
 from biped.errors import BipedError, ModelError, StateError, unknown_name
+from biped.viz.replay_arrow import ARROW_RGBA, arrow_edges, arrow_payload, check_arrow, viewer_text
 
 if TYPE_CHECKING:  # pragma: no cover
     import mujoco
 
-__all__ = ["GEOM_KINDS", "Replay", "ReplayGeom", "replay_from_mujoco", "write_replay"]
+__all__ = ["ARROW_RGBA", "GEOM_KINDS", "Replay", "ReplayGeom", "replay_from_mujoco", "write_replay"]
 
 #: Valid :attr:`ReplayGeom.kind` values and the number of entries of their ``size``.
 GEOM_KINDS = {"box": 3, "sphere": 1, "capsule": 2, "cylinder": 2, "ellipsoid": 3, "plane": 2}
@@ -100,6 +101,11 @@ class Replay:
         markers: timeline events, each ``{"time_s": float, "label": str}``; kept in time order.
         follow: name of the geom the page's camera follows; ``None`` picks the largest solid
             (by volume), e.g. the trunk.
+        arrow: ``None`` (no arrow, the page is as without this field), or (T, 2, 3) one arrow a
+            frame, from its tail to its tip (world, m), all NaN where there is none: a push
+            while it acts, a tether while it holds (:meth:`biped.sim.perturbations.base.
+            Perturbation.arrows`). The page draws frame k's arrow from ``times[k]`` until the
+            next frame, moving with the body between two frames that both have one.
     """
 
     geoms: tuple
@@ -110,6 +116,7 @@ class Replay:
     info: dict = field(default_factory=dict)
     markers: tuple = ()
     follow: str | None = None
+    arrow: np.ndarray | None = None
 
     def __post_init__(self):
         geoms = tuple(self.geoms)
@@ -152,6 +159,7 @@ class Replay:
         object.__setattr__(self, "quat", quat)
         object.__setattr__(self, "info", dict(self.info))
         object.__setattr__(self, "markers", _check_markers(self.markers))
+        object.__setattr__(self, "arrow", check_arrow(self.arrow, T))
         names = [g.name for g in geoms]
         if self.follow is not None and self.follow not in names:
             raise ModelError(unknown_name("follow geom", self.follow, names))
@@ -246,6 +254,7 @@ def replay_from_mujoco(
     markers: Iterable[Mapping] = (),
     follow: str | None = None,
     max_rate_hz: float | None = 100.0,
+    arrow=None,
 ) -> Replay:
     """Record the world pose of each visible geom of ``model`` along a trajectory.
 
@@ -262,6 +271,9 @@ def replay_from_mujoco(
             (alpha 0) and height fields are always left out. Mesh geoms are drawn as their
             bounding box.
         title, info, markers, follow: see :class:`Replay`.
+        arrow: None, or (T, 2, 3) one arrow a sample of ``times`` (see :class:`Replay`); thinned
+            with the frames, keeping too the samples on both sides of each moment an arrow appears
+            or goes, so even a push shorter than a frame shows, and shows when it acts.
         max_rate_hz: keep samples at least ``1 / max_rate_hz`` s apart (plus the last one), so
             a 500 Hz control-rate trajectory makes a 100 frames/s replay (the page interpolates
             between frames); ``None`` keeps every sample. File size is about
@@ -292,12 +304,17 @@ def replay_from_mujoco(
         bad = np.argwhere(~np.isfinite(qpos))[0]
         raise StateError(f"qpos contains a non-finite entry at frame {bad[0]}, coordinate {bad[1]}")
 
+    if arrow is not None:
+        arrow = check_arrow(arrow, times.size)
     if max_rate_hz is not None:
         if not (isinstance(max_rate_hz, (int, float)) and max_rate_hz > 0):
             raise BipedError(
                 f"max_rate_hz must be a positive number of frames per second or None, got {max_rate_hz!r}"
             )
         keep = _thin(times, 1.0 / float(max_rate_hz))
+        if arrow is not None:  # the samples where an arrow appears or goes, kept too
+            keep = np.union1d(keep, arrow_edges(arrow))
+            arrow = arrow[keep]
         times, qpos = times[keep], qpos[keep]
 
     groups = {0, 1, 2} if geom_groups is None else {int(g) for g in geom_groups}
@@ -367,6 +384,7 @@ def replay_from_mujoco(
         info=dict(info or {}),
         markers=tuple(markers),
         follow=follow,
+        arrow=arrow,
     )
 
 
@@ -424,8 +442,9 @@ def _script_text(name: str) -> str:
 
 
 def replay_payload(replay: Replay) -> dict:
-    """The JSON-able description of ``replay`` that the page reads (float32 arrays in base64)."""
-    return {
+    """The JSON-able description of ``replay`` that the page reads (float32 arrays in base64;
+    ``"arrow"`` only when the replay has one)."""
+    payload = {
         "title": replay.title,
         "info": [[str(k), _info_value(v)] for k, v in replay.info.items()],
         "markers": [{"t": m["time_s"], "label": m["label"]} for m in replay.markers],
@@ -441,6 +460,9 @@ def replay_payload(replay: Replay) -> dict:
         "pos": _b64_f32(replay.pos),
         "quat": _b64_f32(replay.quat),
     }
+    if replay.arrow is not None:  # NaN (no arrow) survives float32 and base64
+        payload["arrow"] = arrow_payload(replay.arrow, _b64_f32)
+    return payload
 
 
 def write_replay(replay: Replay, path) -> pathlib.Path:
@@ -467,7 +489,7 @@ def write_replay(replay: Replay, path) -> pathlib.Path:
         "THREE_CORE": _script_text("three.core.min.js"),
         "THREE_MODULE": _script_text("three.module.min.js"),
         "ORBIT_CONTROLS": _script_text("OrbitControls.js"),
-        "VIEWER": _script_text("replay_viewer.js"),
+        "VIEWER": viewer_text(_script_text, replay.arrow is not None),
     }
     # one pass, so nothing inserted is scanned for placeholders again
     page = re.sub(r"@@([A-Z_]+)@@", lambda m: parts[m.group(1)], template)
