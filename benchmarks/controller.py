@@ -180,6 +180,7 @@ def robot_bench(args) -> int:
     desc = describe(path)
     t0 = time.perf_counter()
     ctrls = {dist: robot_controller(desc, dist) for dist in ("qp", "statics")}
+    ctrls["qp, no limits"] = robot_controller(desc, "qp", "none")
     tree = ctrls["qp"].tree
     rng = np.random.default_rng(0)
     qpos = standing_qpos(desc, ctrls["qp"])
@@ -208,6 +209,7 @@ def robot_bench(args) -> int:
     fns: dict[str, Callable[[], object]] = {
         "qp.torques": lambda: ctrls["qp"].torques(qpos, qvel),
         "qp.compute": lambda: ctrls["qp"].compute(qpos, qvel),
+        "qp.torques, no limits": lambda: ctrls["qp, no limits"].torques(qpos, qvel),
         "statics.torques": lambda: ctrls["statics"].torques(qpos, qvel),
         "mujoco.mj_forward (file)": lambda: mujoco.mj_forward(m, d),
     }
