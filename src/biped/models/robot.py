@@ -250,6 +250,10 @@ def robot_for(model: str | PathLike | None) -> RobotDescription | None:
         return None
     if str(model) in ROBOTS:
         return describe(str(model))
+    from biped import models
+
+    if str(model) in models.names():  # a shipped W-structured model's name, even if a file is so named
+        return None
     path = Path(model)
     if not path.is_file() or _names_w_body(path):
         return None
