@@ -1,6 +1,7 @@
 """Speed of W's controller (one call = W Alg. 1-6) next to Pinocchio and MuJoCo on the same model.
 
     python benchmarks/controller.py [--calls 20000] [--rounds 5] [--push 7]
+    python benchmarks/controller.py --model g1   # a robot (docs/robots.md) instead of W's biped
 
 Prints the median and 99th percentile of the wall time per call [us] of
 - ``WorkspaceController.compute`` (all outputs as fresh arrays in a ControllerOutput),
@@ -22,10 +23,12 @@ time of this process (zero when the cache in ``__pycache__`` was warm).
 from __future__ import annotations
 
 import argparse
+import functools
 import os
 import platform
 import time
 import tracemalloc
+from collections.abc import Callable
 
 import mujoco
 import numpy as np
@@ -58,7 +61,10 @@ def main(argv=None) -> int:
         metavar="N",
         help="also time W's default push closed loop, statics vs qp, N times each",
     )
+    ap.add_argument("--model", help="a robot's name or MJCF path (docs/robots.md) instead of W's biped")
     args = ap.parse_args(argv)
+    if args.model:
+        return robot_bench(args)
 
     path = str(models.path("wendlandt"))
     m = mujoco.MjModel.from_xml_path(path)
@@ -158,6 +164,88 @@ def main(argv=None) -> int:
     )
     if args.push:
         push_ratio(args.push)
+    return 0
+
+
+def robot_bench(args) -> int:
+    """The controller on a robot's folded tree against Pinocchio on the same tree and on the file."""
+    import tempfile
+
+    import pinocchio as pin
+
+    from biped.models.robot import ROBOTS, controller_spec, describe, robot_path
+    from biped.sim.robot import robot_controller, standing_qpos
+
+    path = robot_path(args.model) if args.model in ROBOTS else args.model
+    desc = describe(path)
+    t0 = time.perf_counter()
+    ctrls = {dist: robot_controller(desc, dist) for dist in ("qp", "statics")}
+    ctrls["qp, no limits"] = robot_controller(desc, "qp", "none")
+    tree = ctrls["qp"].tree
+    rng = np.random.default_rng(0)
+    qpos = standing_qpos(desc, ctrls["qp"])
+    qvel = np.zeros(tree.nv)
+    qvel[tree.dof_adr[0] : tree.dof_adr[0] + 6] = rng.normal(0.0, 0.1, 6)
+    qvel[tree.dof_adr[1:]] = rng.normal(0.0, 0.3, len(tree.dof_adr) - 1)
+    for c in ctrls.values():
+        c.compute(qpos, qvel)  # compiles, or loads numba's cache
+    t_first = time.perf_counter() - t0
+    m = mujoco.MjModel.from_xml_path(str(desc.path))
+    d = mujoco.MjData(m)
+    d.qpos[:], d.qvel[:] = qpos, rng.normal(0.0, 0.3, m.nv)
+    spec = controller_spec(desc)
+    spec.compile()  # fuses the jointless bodies; to_xml then writes the fused tree
+    with tempfile.TemporaryDirectory() as tmp:  # the folded tree as MuJoCo wrote it after fusing
+        folded_xml = os.path.join(tmp, "folded.xml")
+        with open(folded_xml, "w") as f:
+            f.write(spec.to_xml())
+        pf = pin.buildModelFromMJCF(folded_xml)
+    pw = pin.buildModelFromMJCF(str(desc.path))
+    mass = {
+        "controller tree": float(tree.mass.sum()),
+        "pin folded": float(sum(i.mass for i in pf.inertias)),
+        "pin file": float(sum(i.mass for i in pw.inertias)),
+    }
+    fns: dict[str, Callable[[], object]] = {
+        "qp.torques": lambda: ctrls["qp"].torques(qpos, qvel),
+        "qp.compute": lambda: ctrls["qp"].compute(qpos, qvel),
+        "qp.torques, no limits": lambda: ctrls["qp, no limits"].torques(qpos, qvel),
+        "statics.torques": lambda: ctrls["statics"].torques(qpos, qvel),
+        "mujoco.mj_forward (file)": lambda: mujoco.mj_forward(m, d),
+    }
+    for name, pm in (("folded", pf), ("file", pw)):
+        pd = pm.createData()
+        q = pin.neutral(pm)
+        v, tau = rng.normal(0.0, 0.3, pm.nv), rng.normal(size=pm.nv)
+        fns[f"pin.aba ({name})"] = functools.partial(pin.aba, pm, pd, q, v, tau)
+        fns[f"pin.rnea ({name})"] = functools.partial(pin.rnea, pm, pd, q, v, tau)
+    for fn in fns.values():  # warm up
+        for _ in range(1000):
+            fn()
+    per_round = max(1, args.calls // args.rounds)
+    samples: dict[str, list] = {name: [] for name in fns}
+    load0 = os.getloadavg()[0]
+    for _ in range(args.rounds):
+        for name, fn in fns.items():
+            samples[name].append(per_call_us(fn, per_round))
+    stats = {name: np.concatenate(s) for name, s in samples.items()}
+    print(
+        f"{desc.path.name} ({desc.mass:.2f} kg): folded tree {pf.nv} DOF ({tree.nv} in the file's "
+        f"layout), whole file {pw.nv} DOF; masses [kg] {', '.join(f'{k} {v:.2f}' for k, v in mass.items())}; "
+        f"{per_round * args.rounds} calls each, load average {load0:.1f} -> {os.getloadavg()[0]:.1f}, "
+        f"{platform.python_implementation()} {platform.python_version()}, {os.cpu_count()} cores"
+    )
+    ref = np.median(stats["pin.aba (folded)"])
+    print(f"{'call':26s} {'median [us]':>12s} {'p99 [us]':>10s} {'/ pin.aba (folded)':>19s}")
+    for name, s in stats.items():
+        print(f"{name:26s} {np.median(s):12.2f} {np.percentile(s, 99):10.2f} {np.median(s) / ref:19.2f}")
+    print(
+        f"goal: the controller call <= 2x pin.aba on the same model: qp.torques "
+        f"{np.median(stats['qp.torques']) / ref:.2f}x, statics.torques "
+        f"{np.median(stats['statics.torques']) / ref:.2f}x (against pin.aba on the whole file: "
+        f"{np.median(stats['qp.torques']) / np.median(stats['pin.aba (file)']):.2f}x)"
+    )
+    print(f"first calls (numba compile or cache load, model folding): {t_first:.2f} s")
     return 0
 
 

@@ -169,3 +169,44 @@ def test_sole_rectangles_are_the_box_soles_bottom_faces(name):
     h = com[2] - got[:, 2].min()
     d_front = got[:, 0].max() - com[0]  # both feet's toes level at the keyframe
     assert b.j_max_n_s[0] == pytest.approx(desc.mass * np.sqrt(-m.opt.gravity[2] / h) * d_front, rel=1e-2)
+
+
+def test_biped_push_model_path_routes_a_robot_file_and_refuses_neither(tmp_path, capsys):
+    """``biped push --model PATH``: a copy of Berkeley Humanoid's file in tmp_path (its meshes
+    folder linked beside it) takes the robot path and writes what ``--model berkeley_humanoid``
+    writes (same robot, same block, same trajectory); a W-structured file (W's own, copied) is
+    routed to W's path, not the robot's; a robot-like MJCF without a keyframe is refused with one
+    line naming both structures, exit 2, no folder."""
+    import json
+
+    from biped import models
+    from biped.cli import main
+    from biped.models.robot import robot_for
+
+    src = robot_path("berkeley_humanoid")
+    copy = tmp_path / "my_robot.xml"
+    copy.write_text(src.read_text())
+    (tmp_path / "assets").symlink_to(src.parent / "assets")
+    desc = robot_for(copy)
+    assert desc is not None and desc.path == copy and desc.feet == describe("berkeley_humanoid").feet
+    runs = {}
+    for name, model in (("path", str(copy)), ("name", "berkeley_humanoid")):
+        out = tmp_path / name
+        assert main(["push", "--model", model, "--duration", "0.3", "--out", str(out)]) == 0
+        runs[name] = out
+    a, b = (json.loads((runs[k] / "summary.json").read_text()) for k in ("path", "name"))
+    assert a["block"] == b["block"] and a["feet"] == b["feet"]
+    assert (runs["path"] / "trajectory.csv").read_text() == (runs["name"] / "trajectory.csv").read_text()
+    w = tmp_path / "w.xml"
+    w.write_text(models.path("wendlandt").read_text())
+    assert robot_for(w) is None and robot_for("wendlandt") is None
+    nokey = tmp_path / "nokey.xml"
+    text = src.read_text()
+    start, end = text.index("<keyframe>"), text.index("</keyframe>") + len("</keyframe>")
+    nokey.write_text(text[:start] + text[end:])
+    capsys.readouterr()
+    assert main(["push", "--model", str(nokey), "--out", str(tmp_path / "bad")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert "neither W's biped structure" in err and "has no keyframe" in err
+    assert not (tmp_path / "bad").exists()

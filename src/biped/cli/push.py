@@ -28,7 +28,8 @@ def register(subparsers) -> None:
         metavar="FILE.xml",
         help="the biped: an MJCF file with W's structure (e.g. from `biped model`); W's "
         "initial state, set point and block height move onto it (docs/model.md); or a robot "
-        "of the optional extra biped[robots]: g1, t1, berkeley_humanoid, apollo (docs/robots.md)",
+        "of the optional extra biped[robots]: g1, t1, berkeley_humanoid, apollo, or any other "
+        "robot MJCF with two 6-hinge legs and a keyframe (docs/robots.md)",
     )
     p.add_argument("--duration", type=float, metavar="S", help="simulated time [s] (W: 3)")
     p.add_argument(
@@ -337,15 +338,16 @@ def run(args) -> int:
 def _run(args) -> int:
     import time
 
-    from biped.models.robot import ROBOTS
+    from biped.models.robot import robot_for
     from biped.outputs.push import write_outputs
     from biped.sim.jit import kernels_for, warm_up
     from biped.sim.mjlog import count_warnings, route_to, summary
     from biped.sim.push import simulate
     from biped.sim.scene import build_scene
 
-    if getattr(args, "model", None) in ROBOTS:
-        return _run_robot(args)
+    robot = robot_for(getattr(args, "model", None))  # None: W's structure (checked below)
+    if robot is not None:
+        return _run_robot(args, robot)
     t_start = time.perf_counter()
     scenario = build_scenario(args)  # validated before anything is simulated
     out = _out_dir(args)
@@ -412,12 +414,12 @@ def _run(args) -> int:
     return 0
 
 
-def _run_robot(args) -> int:
-    """``--model <robot>``: W's push moved onto a robot's own MJCF (docs/robots.md): its
-    keyframe stance, the QP with its actuator limits, W's block scaled to it, from behind."""
+def _run_robot(args, desc) -> int:
+    """``--model <robot>`` (a name or an MJCF path, ``desc`` its mapping): W's push moved onto a
+    robot's own MJCF (docs/robots.md): its keyframe stance, the QP with its actuator limits, W's
+    block scaled to it, from behind."""
     from biped.errors import ScenarioError
     from biped.models import total_mass_kg
-    from biped.models.robot import describe
     from biped.outputs.robot import write_robot_outputs
     from biped.sim.robot import Block, block_for, robot_controller, robot_push
 
@@ -435,7 +437,6 @@ def _run_robot(args) -> int:
             f"--model {args.model}: {', '.join(given)} not supported on robots yet; valid: --duration, "
             f"--distribution, --timestep, --block-position, --block-velocity, --block-mass"
         )
-    desc = describe(args.model)
     distribution = args.distribution or "qp"
     seconds = args.duration if args.duration is not None else 3.0
     if not (0 < seconds <= 60):

@@ -225,6 +225,47 @@ def describe(
     )
 
 
+#: The body every W-structured file (W's biped, `biped model` subjects) has; a file naming it is
+#: taken for W's structure (and checked as such), any other MJCF for a robot (:func:`robot_for`).
+W_BODY = "central_body"
+
+
+def _names_w_body(path: Path) -> bool:
+    """Whether ``path`` names W's central body, or is not MJCF at all (W's checks then say why)."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.parse(path).getroot()
+    except (ET.ParseError, OSError):
+        return True
+    return root.tag != "mujoco" or any(b.get("name") == W_BODY for b in root.iter("body"))
+
+
+def robot_for(model: str | PathLike | None) -> RobotDescription | None:
+    """The robot that ``--model`` names, or None for W's structure: a :data:`ROBOTS` name is a
+    robot; a path that is not a file, not MJCF, or names W's body :data:`W_BODY` is W's (its
+    checks give the errors, as before); any other MJCF must be a robot (:func:`describe`), else a
+    one-line error saying it is neither."""
+    if model is None:
+        return None
+    if str(model) in ROBOTS:
+        return describe(str(model))
+    from biped import models
+
+    if str(model) in models.names():  # a shipped W-structured model's name, even if a file is so named
+        return None
+    path = Path(model)
+    if not path.is_file() or _names_w_body(path):
+        return None
+    try:
+        return describe(path)
+    except ModelError as exc:
+        raise ModelError(
+            f"--model {str(path)!r} is neither W's biped structure (no body {W_BODY!r}: "
+            f"docs/model.md) nor a robot W's controller can take (docs/robots.md): {exc}"
+        ) from None
+
+
 def plant_model(desc: RobotDescription) -> mujoco.MjModel:
     return _load(str(desc.path))
 
