@@ -85,7 +85,7 @@ ensure_env() {
 # pip_install ARGS...: "$PY" -m pip install ARGS, showing pip's progress one line a package
 # ("Collecting numpy>=1.26", "Installing collected packages: ...", "Successfully installed ...";
 # not the "Requirement already satisfied" and download lines), and, whenever pip prints nothing
-# for 2 s (building, unpacking, installing), a line saying it is still at work with the elapsed
+# for a second or two (building, unpacking, installing), a line saying it is still at work with the elapsed
 # time. Returns pip's exit status; on failure pip's whole output is shown.
 pip_install() {
   local log pid rc seen=0 n last=$SECONDS t0=$SECONDS
@@ -99,7 +99,7 @@ pip_install() {
       sed -n "$((seen + 1)),${n}p" "$log" | _pip_lines
       seen=$n
       last=$SECONDS
-    elif [ $((SECONDS - last)) -ge 2 ]; then
+    elif [ $((SECONDS - last)) -ge 1 ]; then  # bash counts whole seconds: a line every 1-2 s
       echo "  pip is still at work ($((SECONDS - t0)) s)"
       last=$SECONDS
     fi
