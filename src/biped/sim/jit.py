@@ -40,12 +40,14 @@ __all__ = [
 ]
 
 #: Kernel names for :func:`cold_kernels` / :func:`warm_up`: what they are and about how long
-#: they take to compile [s] on an idle 2-core x86_64 machine (several times that under load).
+#: they take to compile [s] on an idle 2-core x86_64 machine (several times that under load;
+#: controller and loop measured on a fresh clone's scripts/push.sh, 2026-11-25: 25 s and 20 s,
+#: the loop having grown the perturbations' and the nervous system's rows).
 KERNELS = {
-    "controller": ("W's controller", 15),
+    "controller": ("W's controller", 25),
     "qp": ("the contact QP", 5),
     "contact": ("the contact monitor", 1),
-    "loop": ("the compiled push loop", 3),
+    "loop": ("the compiled push loop", 20),
 }
 
 #: Kernels found compiled or cached in this process (no need to look again).
