@@ -368,3 +368,21 @@ def frame_bar(**tqdm_kwargs):
             state["bar"] = None
 
     return on_frame, close
+
+
+def stopped_trials(exc: BaseException, prog: str, out: Path, again: str, *, newline: bool = False) -> int:
+    """Ctrl-C or SIGTERM during a sweep or an envelope: say that every finished trial is kept
+    and how to go on (``again``: "finish", "resume"); returns the exit status (130, 143).
+    ``newline``: end a progress line first."""
+    import sys
+
+    from biped.sim.sweep import Terminated, parts_dir
+
+    term = isinstance(exc, Terminated)
+    what = "terminated (SIGTERM)" if term else "interrupted"
+    print(
+        f"{chr(10) if newline else ''}{prog}: {what}; every finished trial is kept in {parts_dir(out)}/. "
+        f"Run the same command again to {again}.",
+        file=sys.stderr,
+    )
+    return 143 if term else 130

@@ -14,7 +14,7 @@ import math
 import sys
 from pathlib import Path
 
-from biped.cli._common import check_file_writable
+from biped.cli._common import check_file_writable, stopped_trials
 from biped.errors import ScenarioError
 
 #: the plot's radii a paradigm's rows hold (docs/perturbations.md: the block's impulse is measured
@@ -181,7 +181,7 @@ def run(args) -> int:
 def _run(args) -> int:
     from biped.cli.sweep import _check_plot
     from biped.sim.early_stop import applies as early_stop_applies
-    from biped.sim.sweep import Terminated, check_run_args, parts_dir
+    from biped.sim.sweep import check_run_args
     from biped.sim.sweep.envelope import paradigm_lattice, run_envelope
 
     _check_plot(args.plot, [])
@@ -242,13 +242,7 @@ def _run(args) -> int:
             overwrite=args.overwrite,
         )
     except KeyboardInterrupt as exc:
-        what = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
-        print(
-            f"\nbiped envelope: {what}; every finished trial is kept in {parts_dir(out)}/. Run the "
-            f"same command again to resume.",
-            file=sys.stderr,
-        )
-        return 143 if isinstance(exc, Terminated) else 130
+        return stopped_trials(exc, "biped envelope", out, "resume", newline=True)
     if not args.quiet:
         print(file=sys.stderr)
     from biped.analysis.envelope_table import envelope_table

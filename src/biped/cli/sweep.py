@@ -11,7 +11,7 @@ import math
 import sys
 from pathlib import Path
 
-from biped.cli._common import check_file_writable
+from biped.cli._common import check_file_writable, stopped_trials
 from biped.errors import ScenarioError
 
 _AXIS_OPTIONS = (
@@ -356,7 +356,7 @@ def _sweep(args, spec, out: Path, n: int, where: str, client) -> int:
     """The sweep itself, its inputs checked (:func:`_run`)."""
     from biped.analysis import survived
     from biped.sim.mjlog import count_warnings, route_to
-    from biped.sim.sweep import Terminated, load, parts_dir, run_sweep
+    from biped.sim.sweep import load, run_sweep
 
     plot = (Path(args.plot) if args.plot else out.with_suffix(".png")) if args.plot is not None else None
     mjlog = out.with_suffix(".mujoco.log")
@@ -390,13 +390,7 @@ def _sweep(args, spec, out: Path, n: int, where: str, client) -> int:
             batch=args.batch,
         )
     except KeyboardInterrupt as exc:
-        what = "terminated (SIGTERM)" if isinstance(exc, Terminated) else "interrupted"
-        print(
-            f"biped sweep: {what}; every finished trial is kept in {parts_dir(out)}/. Run the "
-            f"same command again to finish.",
-            file=sys.stderr,
-        )
-        return 143 if isinstance(exc, Terminated) else 130
+        return stopped_trials(exc, "biped sweep", out, "finish")
     rate = summary.ran / summary.wall_time_s if summary.wall_time_s > 0 else float("nan")
     print(
         f"ran {summary.ran} (skipped {summary.skipped} already done), failed {summary.failed}, "
@@ -463,7 +457,6 @@ def refine_spec(spec, resolution: float):
 def _refine(args, spec, out) -> int:
     """``--refine``: the grid, then each direction's bisection, as one envelope run."""
     from biped.analysis.envelope_table import envelope_table
-    from biped.sim.sweep import Terminated, parts_dir
     from biped.sim.sweep.envelope import run_envelope
 
     fine, coarse = refine_spec(spec, args.refine)
@@ -479,12 +472,7 @@ def _refine(args, spec, out) -> int:
             grid=coarse,
         )
     except KeyboardInterrupt as exc:
-        print(
-            f"biped sweep: interrupted; every finished trial is kept in {parts_dir(out)}/. Run the "
-            f"same command again to finish.",
-            file=sys.stderr,
-        )
-        return 143 if isinstance(exc, Terminated) else 130
+        return stopped_trials(exc, "biped sweep", out, "finish")
     print(envelope_table(result).format())
     print(
         f"ran {result.ran} (reused {result.reused}), wall {result.wall_time_s:.1f} s ({result.backend}); "

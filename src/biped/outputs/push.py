@@ -269,15 +269,7 @@ def response_entries(scene: Scene, result: PushResult, rows: RowMeasurements) ->
     and ``response`` (:func:`biped.sim.response.measure_response`: strategy, excursions, margin of
     stability, peak torques, time to rest, steps) entries; docs/perturbations.md."""
     size = perturbations.of(result.scenario).size(rows.biped_mass_kg)
-    info = {
-        "paradigm": size.paradigm,
-        "magnitude": size.magnitude,
-        "unit": size.unit,
-        "direction_deg": size.direction_deg,
-        "impulse_horizontal_n_s": size.impulse_horizontal_n_s,
-        "com_velocity_change_m_s": size.com_velocity_change_m_s,
-        **size.extra,
-    }
+    info = size.entry()
     info.update(result.extra.get("perturbation", {}))
     return {"perturbation": info, "response": measure_response(scene, result, rows).to_dict()}
 

@@ -45,15 +45,7 @@ def run_extra(scenario: Scenario, scene, driver, d, inputs: list) -> dict:
         return {}
     mass = float(scene.model.body_subtreemass[scene.model.body_rootid[scene.central_body]])
     size = of(scenario).size(mass)
-    info = {
-        "paradigm": size.paradigm,
-        "magnitude": size.magnitude,
-        "unit": size.unit,
-        "direction_deg": size.direction_deg,
-        "impulse_horizontal_n_s": size.impulse_horizontal_n_s,
-        "com_velocity_change_m_s": size.com_velocity_change_m_s,
-        **size.extra,
-    }
+    info = size.entry()
     if driver is not None:
         info.update(driver.finish(d))
     out: dict = {"perturbation": info}

@@ -74,6 +74,18 @@ class Size:
     com_velocity_change_m_s: float = float("nan")
     extra: dict = field(default_factory=dict)
 
+    def entry(self) -> dict:
+        """The size as ``summary.json``'s ``perturbation`` entry: the fields, ``extra`` spread in."""
+        return {
+            "paradigm": self.paradigm,
+            "magnitude": self.magnitude,
+            "unit": self.unit,
+            "direction_deg": self.direction_deg,
+            "impulse_horizontal_n_s": self.impulse_horizontal_n_s,
+            "com_velocity_change_m_s": self.com_velocity_change_m_s,
+            **self.extra,
+        }
+
 
 class Perturbation:
     """A perturbation paradigm bound to one scenario; see the module docstring."""
