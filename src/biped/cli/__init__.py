@@ -93,11 +93,13 @@ def main(argv: list[str] | None = None) -> int:
     if not getattr(args, "func", None):
         parser.print_help()
         return EXIT_BAD_INPUT
-    # `biped sweep --plot` without a file is "" (argparse's const): beside the results, not empty
-    valueless = ("plot",) if args.command == "sweep" else ()
-    empty = next((k for k in _PATH_OPTIONS if k not in valueless and getattr(args, k, None) == ""), None)
+    sub = getattr(args, "_parser", parser)
+    # an option that may be given bare (nargs="?", const "": `biped sweep --plot` beside the
+    # results) reads "" when given so; that is not an empty path
+    bare_ok = {a.dest for a in sub._actions if a.nargs == "?" and a.const == ""}
+    empty = next((k for k in _PATH_OPTIONS if k not in bare_ok and getattr(args, k, None) == ""), None)
     if empty is not None:  # '' would otherwise silently mean the default
-        getattr(args, "_parser", parser).error(
+        sub.error(
             f"--{empty.replace('_', '-')} '' is an empty path; name a file or folder, or leave the option out"
         )
     prog = getattr(args, "_prog", None) or f"biped {args.command}"
