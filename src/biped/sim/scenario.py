@@ -160,6 +160,9 @@ class Scenario:
     platform_displacement_m: tuple = (0.05, 0.0)  # (x, y) [m]: +x moves the feet backward
     platform_start_s: float = 0.1
     platform_duration_s: float = 0.3  # the ramp [s]
+    pull_displacement_m: tuple = (-0.1, 0.0)  # (x, y) [m], the motor's travel: -x pulls forward
+    pull_velocity_m_s: float = 0.4  # the motor's speed [m/s]
+    pull_start_s: float = 0.1
     release_lean_deg: float = 5.0
     release_direction_deg: float = 0.0  # 0 forward (world -x), 90 to the biped's left (world -y)
     release_time_s: float = 0.1  # >= duration_s: the tether never goes
@@ -361,7 +364,9 @@ _STRINGS = {
 
 #: Keys :meth:`Scenario.to_dict` leaves out at their default value, so that a scenario without
 #: them writes the same summary.json / sweep identity as before they existed.
-_OMITTED_AT_DEFAULT = frozenset({"early_stop", "step_program"})
+_OMITTED_AT_DEFAULT = frozenset(
+    {"early_stop", "step_program", "pull_displacement_m", "pull_velocity_m_s", "pull_start_s"}
+)
 
 
 def keys() -> tuple[str, ...]:
