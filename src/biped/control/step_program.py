@@ -33,7 +33,7 @@ given; W's ideal runs use the feedback stepping controller (the default ``step_p
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 
 import mujoco
 import numpy as np
@@ -54,6 +54,10 @@ class StepProgramConfig:
     """The program's timing and gains (SI units; chosen here, not fitted: docs/validate.md).
 
     delay_s: the controller's own feedback delay (the state it gets is this old).
+    swing_time_s: the planned swing's duration: about the shortest a torque rate limit allows
+    (docs/validate.md: a jerk-limited swing of d = 0.45 m takes (32 d / J)^(1/3) = 0.44 s, J =
+    827 N m/s (the young hip flexion rate limit) / 0.8 m (the leg) / ~6 kg (the leg's effective
+    mass at the ankle, from the swing's computed torque)).
     lead_s: the feed-forward's lead over the plan (the activation lag's time constant).
     transfer_s: the weight transfer's duration. transfer_acc_m_s2: its lateral feed-forward
     acceleration of the COM toward the stance foot. kp_pos, kv_pos: the swing foot's feedback
@@ -63,6 +67,7 @@ class StepProgramConfig:
 
     delay_s: float = 0.0
     lead_s: float = 0.0
+    swing_time_s: float = 0.45
     transfer_s: float = 0.3
     transfer_acc_m_s2: float = 3.0
     kp_pos: float = 10.0
@@ -72,18 +77,12 @@ class StepProgramConfig:
     damping_n_m_s: float = 0.0
 
     def __post_init__(self):
-        for k in (
-            "delay_s",
-            "lead_s",
-            "transfer_s",
-            "transfer_acc_m_s2",
-            "give_up_s",
-            "toe_lift_deg",
-            "damping_n_m_s",
-        ):
-            v = getattr(self, k)
+        for f in fields(self):
+            v = getattr(self, f.name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
-                raise ScenarioError(f"step program: {k} must be a number >= 0; got {v!r}")
+                raise ScenarioError(f"step program: {f.name} must be a number >= 0; got {v!r}")
+        if not self.swing_time_s > 0:
+            raise ScenarioError(f"step program: swing_time_s must be > 0 s; got {self.swing_time_s!r}")
 
 
 def predicted_capture_point(xi, cop, omega: float, ahead_s: float) -> np.ndarray:
@@ -100,8 +99,15 @@ class StepProgram(SteppingController):
                  tree=None, program: StepProgramConfig | None = None):  # fmt: skip
         self.program = program or StepProgramConfig()
         base = stepping or SteppingConfig()
-        super().__init__(config, replace(base, kp_pos=self.program.kp_pos, kv_pos=self.program.kv_pos),
-                         joint_order, tree=tree)  # fmt: skip
+        pg = self.program
+        # the stance gains a delayed loop tolerates: the scenario's own (the presets' have a delay
+        # margin of 1.8-2.2 x the young delay), not the feedback stepper's stiffer trunk gains in
+        # single support (x4: margin 0.084 s) and COM gains after the step (margin 0.117 s)
+        g = config.gains
+        base = replace(base, kp_pos=pg.kp_pos, kv_pos=pg.kv_pos, swing_time_s=pg.swing_time_s,
+                       swing_rot_gain_scale=1.0, lateral_rot_gain_scale=1.0,
+                       post_step_kp_xy=g.kp_com[0], post_step_kv_xy=g.kv_com[0])  # fmt: skip
+        super().__init__(config, base, joint_order, tree=tree)
 
     def reset(self) -> None:
         super().reset()
