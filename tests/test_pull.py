@@ -106,3 +106,17 @@ def test_pull_keys_stay_out_of_a_default_scenario():
     d = Scenario().to_dict()
     assert not {"pull_displacement_m", "pull_velocity_m_s", "pull_start_s", "step_program"} & set(d)
     assert Scenario(pull_velocity_m_s=0.3).to_dict()["pull_velocity_m_s"] == 0.3
+
+
+def test_push_command_runs_the_pull_and_names_its_strategy(tmp_path):
+    import json
+
+    from biped.cli import main
+
+    out = tmp_path / "run"
+    argv = ["push", "--perturbation", "pull", "--duration", "0.4", "--set", 'physics="fast"', "--quiet"]
+    assert main([*argv, "--no-video", "--no-replay", "--no-figures", "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["perturbation"]["paradigm"] == "pull"
+    assert summary["perturbation"]["peak_tension_n"] > 0.0
+    assert summary["response"]["strategy"] in ("ankle", "hip", "step", "fall")
