@@ -74,9 +74,9 @@ def register(subparsers) -> None:
     )
     p.add_argument(
         "--perturbation",
-        choices=("block", "force", "platform", "release"),
-        help="the experiment: W's thrown block (default), a force pulse, a platform translation or a "
-        "lean-and-release; its keys with --set (docs/perturbations.md)",
+        choices=("block", "force", "platform", "release", "pull"),
+        help="the experiment: W's thrown block (default), a force pulse, a platform translation, a "
+        "lean-and-release or a motor-driven waist pull; its keys with --set (docs/perturbations.md)",
     )
     p.add_argument("--timestep", type=float, metavar="S", help="physics step [s], <= 0.001")
     p.add_argument("--seed", type=int, help="seed of the initial-state noise (joint_noise_deg)")

@@ -43,9 +43,9 @@ def register(subparsers) -> None:
         p.add_argument(f"--{opt.replace('_', '-')}", metavar="VALUES", dest=opt, help=what)
     p.add_argument(
         "--perturbation",
-        choices=("block", "force", "platform", "release"),
+        choices=("block", "force", "platform", "release", "pull"),
         help="the experiment swept: W's thrown block (default; --speed), a force pulse, a platform "
-        "translation or a lean-and-release (--magnitude in its unit; --direction: the way it pushes the "
+        "translation, a lean-and-release or a waist pull (--magnitude in its unit; --direction: the way it pushes the "
         "body, from +x toward +y); docs/perturbations.md",
     )
     p.add_argument(

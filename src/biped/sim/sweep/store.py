@@ -232,7 +232,7 @@ def _defaults_of_new_keys() -> dict:
     d = Scenario().to_dict()
     keys = {"perturbation", *(k for cls in PARADIGMS.values() if cls.name != "block" for k in cls.keys)}
     keys |= {"neuromotor", "feedback_delay_s", "torque_rate_limit_n_m_s", "activation_time_s", "ankle_only"}
-    return {k: d[k] for k in keys}
+    return {k: d[k] for k in keys if k in d}  # keys left out at their default are absent anyway
 
 
 def _same(a: Any, b: Any) -> bool:
