@@ -250,11 +250,16 @@ def _check_perturbation(s: Scenario) -> None:
     ):
         if _positive(s, key, what, zero_ok=True) > 60.0:
             raise ScenarioError(f"{key} must be in [0, 60] ({what}); got {getattr(s, key)!r}")
-    for key in ("force_duration_s", "platform_duration_s"):
+    for key, paradigm in (("force_duration_s", "force"), ("platform_duration_s", "platform")):
         v = _positive(s, key, "duration in s")
-        if v > 60.0 or v < 1.0 / s.control_rate_hz:
+        if v > 60.0:
+            raise ScenarioError(f"{key} must be in (0, 60] s; got {v!r}")
+        # at least one control period, checked when the paradigm runs (an unused paradigm's
+        # default must not refuse a scenario that only changed control_rate_hz)
+        if s.perturbation == paradigm and v < 1.0 / s.control_rate_hz:
             raise ScenarioError(
-                f"{key} must be in [{1.0 / s.control_rate_hz:g}, 60] s (at least one control period); got {v!r}"
+                f"{key} must be at least one control period, 1 / control_rate_hz = "
+                f"{1.0 / s.control_rate_hz:g} s (and at most 60 s); got {v!r}"
             )
     if math.hypot(*s.force_n) > 1e5:
         raise ScenarioError(f"force_n must be at most 1e5 N in size (a push on a body); got {s.force_n}")
