@@ -94,6 +94,14 @@ class RobotDescription:
     keyframe: str
     key_qpos: np.ndarray
     mass: float
+    #: the robot file (:mod:`biped.models.robot_file`) it was read from; "" when detected
+    source: str = ""
+
+    @property
+    def spec(self) -> str:
+        """What names this robot for :func:`robot_for` again (a sweep's ``robot``): its robot
+        file, else its MJCF."""
+        return self.source or str(self.path)
 
 
 def _name(m, obj, i) -> str:
@@ -243,13 +251,18 @@ def _names_w_body(path: Path) -> bool:
 
 def robot_for(model: str | PathLike | None) -> RobotDescription | None:
     """The robot that ``--model`` names, or None for W's structure: a :data:`ROBOTS` name is a
-    robot; a path that is not a file, not MJCF, or names W's body :data:`W_BODY` is W's (its
+    robot, and so is a ``.toml`` robot file (:mod:`biped.models.robot_file`); a
+    path that is not a file, not MJCF, or names W's body :data:`W_BODY` is W's (its
     checks give the errors, as before); any other MJCF must be a robot (:func:`describe`), else a
     one-line error saying it is neither."""
     if model is None:
         return None
     if str(model) in ROBOTS:
         return describe(str(model))
+    if Path(model).suffix.lower() == ".toml":  # a robot file names its feet (and legs, keyframe)
+        from biped.models.robot_file import read_robot_file
+
+        return read_robot_file(Path(model))
     from biped import models
 
     if str(model) in models.names():  # a shipped W-structured model's name, even if a file is so named
