@@ -37,11 +37,10 @@ from biped.spatial import rot_to_quat
 
 FLOOR = "robot_floor"
 BLOCK, BLOCK_JOINT = "robot_block", "robot_block_root"
-#: W Alg. 3's big-base factor on the robots. W's 1e6 makes Unitree G1 unstable: one physics step
-#: after its sphere soles first touch the floor the feet move a little, the 1e6-heavy feet's
-#: velocity terms swamp the bias wrench and the QP saturates every leg joint; with 1e2 G1,
-#: T1 and Berkeley Humanoid stand and recover 0.2 m/s kicks (docs/robots.md).
-ROBOT_BIG_BASE = 1e2
+#: W Alg. 3's big-base factor on the robots: W's own. (It was 1e2 while Unitree G1 stood on its
+#: keyframe's straight knees, where the legs' Jacobians are singular and 1e6 made it fall at once;
+#: :mod:`biped.models.robot_pose` now crouches such legs, and all four robots stand with 1e6.)
+ROBOT_BIG_BASE = 1e6
 #: W's push moved onto a robot (:func:`block_for`): W's block (1.8 kg, 4.5 m/s, 0.2 m/s up,
 #: 1.2 m high against W's central-body COM at 1.035 m, 0.5 m from it), its mass scaled by the
 #: robot's mass over W's biped's (73.06 kg), its height by the central-body COM heights.
