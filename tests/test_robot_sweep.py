@@ -165,3 +165,21 @@ def test_robot_file_names_feet_legs_keyframe_and_is_checked(tmp_path):
     for text, message in bad.items():
         with pytest.raises(ModelError, match=message.replace("[", r"\[").replace("]", r"\]")):
             robot_for(_robot_file(tmp_path, text))
+
+
+def test_push_force_on_a_robot_is_ws_pulse_scaled_and_other_paradigms_refused(tmp_path, capsys):
+    """``biped push --model berkeley_humanoid --perturbation force``: W's pulse (60 N for 0.15 s,
+    from behind) scaled with the robot's mass: its applied impulse is 60 x m / W's mass x 0.15 N s
+    toward +x (the robots face +x); platform and release exit 2 with one line, no folder."""
+    out = tmp_path / "f"
+    assert main(["push", "--model", BH, "--perturbation", "force", "--duration", "1", "--out", str(out)]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    desc = describe(BH)
+    assert s["force_impulse_n_s"][0] == pytest.approx(60.0 * desc.mass / total_mass_kg() * 0.15, rel=1e-9)
+    assert s["block"] is None and not s["fell"]
+    for p in ("platform", "release"):
+        capsys.readouterr()
+        assert main(["push", "--model", BH, "--perturbation", p, "--out", str(tmp_path / p)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and f"--perturbation {p}" in err
+        assert not (tmp_path / p).exists()
