@@ -4,9 +4,9 @@ W's controller moves the central body through the legs, each foot a big base (W 
 straight knee the leg's 6 x 6 Jacobian (foot twist per joint rate) is singular, the central
 body's articulated inertia ``P_1`` takes in the feet's big-base inertia along the locked
 direction, and the desired wrench ``F_1^bd = P_1 X + z_1`` follows whatever error there is times
-that factor. Unitree G1's keyframe has every leg joint at 0 (straight knees, the Jacobian's
-smallest singular value 0): with W's factor 1e6 it falls at once, with 1e2 it stands but a block
-of 0.07 m/s of COM velocity change throws it (docs/robots.md).
+that factor. A keyframe with every leg joint at 0 (straight knees, the Jacobian's smallest
+singular value 0) fell at once with W's factor 1e6, and with 1e2 a block of 0.07 m/s of COM
+velocity change threw it (docs/robots.md).
 
 The rule: when a leg's Jacobian (rows: the foot's linear [m] and angular velocity per joint rate,
 MuJoCo's ``mj_jacBody``) has its smallest singular value below :data:`LEG_SV_MIN_M` at the

@@ -37,9 +37,9 @@ from biped.spatial import rot_to_quat
 
 FLOOR = "robot_floor"
 BLOCK, BLOCK_JOINT = "robot_block", "robot_block_root"
-#: W Alg. 3's big-base factor on the robots: W's own. (It was 1e2 while Unitree G1 stood on its
-#: keyframe's straight knees, where the legs' Jacobians are singular and 1e6 made it fall at once;
-#: :mod:`biped.models.robot_pose` now crouches such legs, and all four robots stand with 1e6.)
+#: W Alg. 3's big-base factor on the robots: W's own. (It was 1e2 while robots stood on their
+#: keyframes' straight knees, where the legs' Jacobians are singular and 1e6 threw them at once;
+#: :mod:`biped.models.robot_pose` now crouches such legs; docs/robots.md.)
 ROBOT_BIG_BASE = 1e6
 #: W's push moved onto a robot (:func:`block_for`): W's block (1.8 kg, 4.5 m/s, 0.2 m/s up,
 #: 1.2 m high against W's central-body COM at 1.035 m, 0.5 m from it), its mass scaled by the

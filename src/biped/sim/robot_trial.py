@@ -1,5 +1,5 @@
-"""One sweep trial on a robot's own MJCF (``biped sweep --model g1``, ``biped envelope --model
-g1``): the sweep's trial (:class:`~biped.sim.sweep.spec.TrialSetup`, its scenario aimed at W's
+"""One sweep trial on a robot's own MJCF (``biped sweep --model NAME``, ``biped envelope --model
+NAME``): the sweep's trial (:class:`~biped.sim.sweep.spec.TrialSetup`, its scenario aimed at W's
 biped) moved onto the robot (:func:`biped.sim.robot.robot_push`), measured into the sweep's row.
 
 - **Block**: the scenario's block (its mass, the sweep's ``block_mass_kg``; its velocity; its start

@@ -214,7 +214,7 @@ class SweepSpec:
     launch_distance_m: float = 0.5
     model: str = "wendlandt"
     torque_limits: str = "none"
-    #: a robot's MJCF path (:mod:`biped.models.robot`, ``--model g1`` etc.): the trials run on it
+    #: a robot's MJCF path (:mod:`biped.models.robot`, ``--model NAME|PATH``): the trials run on it
     #: (W's block moved onto it by ``biped sweep``); "" for W's structure (``base.model``)
     robot: str = ""
 
