@@ -264,9 +264,9 @@ def spec_difference(
             continue  # a key added since the file was written, at its default: the same experiment
         if old_scen.get(k) != new_scen.get(k):
             diffs.append(f"scenario key {k}: {old_scen.get(k)!r} in the file, {new_scen.get(k)!r} now")
-    for k in ("launch_distance_m", "model", "torque_limits", "samples", "seed"):
-        if old.get(k) != new[k]:
-            diffs.append(f"{k}: {old.get(k)!r} in the file, {new[k]!r} now")
+    for k in ("launch_distance_m", "model", "torque_limits", "samples", "seed", "robot"):
+        if old.get(k) != new.get(k):
+            diffs.append(f"{k}: {old.get(k)!r} in the file, {new.get(k)!r} now")
     if old_compiled_sha256:
         now = spec.model_compiled_sha256
         if old_compiled_sha256 != now:
