@@ -52,13 +52,15 @@ from biped.control.workspace import Gains, Target
 from biped.errors import ScenarioError
 from biped.model import TreeModel, sole_rectangles
 
-__all__ = ["SteppingConfig", "SteppingController"]
+__all__ = ["SteppingConfig", "SteppingController", "xcom_offset"]
 
 FEET = ("left", "right")
 FOOT_BODIES = ("left_foot", "right_foot")
 #: With W's fixed support and "qp", a foot whose sole centre is this far above the floor is left
 #: out of the double-support QP [m].
 AIRBORNE_M = 0.10
+#: Time constant of the low-pass filter on the capture point's rate [s].
+RATE_TAU_S = 0.01
 
 
 @dataclass(frozen=True)
@@ -115,6 +117,9 @@ class SteppingConfig:
     reach_m: float = 0.78
     swing_rot_gain_scale: float = 4.0
     qp_moment_weight: float | None = 10.0
+    qp_leg_weight: float = 0.0
+    holding_sensed: bool = False
+    trigger_rate_m_s: float | None = None
     post_step_kp_xy: float = 10.0
     post_step_kv_xy: float = 3.5
     ankle_kp: float = 80.0
@@ -135,6 +140,17 @@ class SteppingConfig:
             raise ScenarioError(f"max_steps must be an integer >= 0; got {self.max_steps!r}")
         if not self.swing_time_s > 0:
             raise ScenarioError(f"swing_time_s must be > 0 s; got {self.swing_time_s!r}")
+
+
+def xcom_offset(landing_xy, xcom_xy, stance_xy) -> float:
+    """How far [m] the landing sole centre lies beyond the extrapolated COM (Hof's XCoM, the
+    capture point) at touchdown, along the line from the stance sole centre through the XCoM:
+    > 0 outward of it (Hof, Vermerris & Gjaltema 2010: people land a constant offset outward)."""
+    u = np.asarray(xcom_xy, dtype=float)[:2] - np.asarray(stance_xy, dtype=float)[:2]
+    r = float(np.linalg.norm(u))
+    if r < 1e-9:
+        return float("nan")
+    return float((np.asarray(landing_xy, dtype=float)[:2] - np.asarray(xcom_xy, dtype=float)[:2]) @ u / r)
 
 
 # the swing path's pieces (pure functions in capture.py; the old names kept for the tests)
@@ -170,7 +186,11 @@ class SteppingController:
 
             inner = replace(
                 inner,
-                qp_weights=replace(config.qp_weights or QPWeights(), moment=self.stepping.qp_moment_weight),
+                qp_weights=replace(
+                    config.qp_weights or QPWeights(),
+                    moment=self.stepping.qp_moment_weight,
+                    leg_weight=self.stepping.qp_leg_weight,
+                ),
             )
         self._inner = make_policy(inner, tree=tree)
         self.ctrl = self._inner.controller
@@ -230,7 +250,7 @@ class SteppingController:
     # ------------------------------------------------------------------ state
     def reset(self) -> None:
         s = self.stepping
-        self.trigger = cp.CaptureTrigger(s.margin_m, s.rearm_margin_m, s.hold, s.lateral_margin_m)
+        self.trigger = self._new_trigger()
         self._T, self._offset, self._limits = s.swing_time_s, s.offset_m, s.limits
         self.phase = "double"
         self.target = self.base_target
@@ -243,7 +263,13 @@ class SteppingController:
         self._stance0 = np.zeros(2)  # the stance sole centre when the step started
         self._last_td = -1e9
         self.last_capture_point: np.ndarray | None = None
+        self._t_prev = -math.inf
+        self._xi_rate = np.zeros(2)  # low-passed rate of the capture point [m/s]
         self.arm_time_s = -math.inf  # no step before [s] (the lean release arms it when sensed)
+
+    def _new_trigger(self) -> cp.CaptureTrigger:
+        s = self.stepping
+        return cp.CaptureTrigger(s.margin_m, s.rearm_margin_m, s.hold, s.lateral_margin_m, s.trigger_rate_m_s)
 
     @property
     def holding_controller(self):
@@ -285,6 +311,10 @@ class SteppingController:
         vcom = d.subtree_linvel[0].copy()
         omega = cp.omega0(max(com[2], 0.05), self._gravity)  # the floor is z = 0
         xi = cp.capture_point(com[:2], vcom[:2], omega)
+        if self.last_capture_point is not None and t > self._t_prev:
+            raw = (xi - self.last_capture_point) / (t - self._t_prev)
+            self._xi_rate += min(1.0, (t - self._t_prev) / RATE_TAU_S) * (raw - self._xi_rate)
+        self._t_prev = t
         self.last_capture_point = xi
         if self._mid0 is None:
             self._mid0 = 0.5 * (self._sole_pose(0)[0] + self._sole_pose(1)[0])
@@ -294,15 +324,17 @@ class SteppingController:
             and len(self.steps) < s.max_steps
             and t - self._last_td >= s.refractory_s
             and t >= self.arm_time_s
-            and self.trigger.update(self._polygon((left, right)), xi)
+            and self.trigger.update(self._polygon((left, right)), xi, self._xi_rate)
         ):
             self._start_step(t, xi, (left, right))
         if self.phase == "swing":
             return self._swing_call(t, qpos, qvel, xi, omega, (left, right))
         ctrl = self.ctrl if self.steps else self._ctrl_before
-        tau = ctrl.torques(
-            qpos, qvel, target=self.target, gains=self.gains, feet_in_contact=self._flags(left, right)
-        )
+        if not self.steps and s.holding_sensed and self.config.distribution == "qp":
+            flags = (left, right)  # before the first step: the feet-in-place QP exactly
+        else:
+            flags = self._flags(left, right)
+        tau = ctrl.torques(qpos, qvel, target=self.target, gains=self.gains, feet_in_contact=flags)
         return self._out(tau)
 
     def _flags(self, left, right):
@@ -371,7 +403,7 @@ class SteppingController:
             step["lift_off_s"] = t
         # touchdown: on the floor after half the swing, once seen off it (else the swing goes on)
         if feet[i] and el > 0.5 * self._T and step["lift_off_s"] is not None:
-            return self._touch_down(t, qpos, qvel, feet)
+            return self._touch_down(t, qpos, qvel, feet, xi)
         stance_c, yaw = self._sole_pose(st)
         # the stance CoP: the point of the stance sole nearest the COM (the QP pushes it there)
         c, sn = math.cos(yaw), math.sin(yaw)
@@ -465,7 +497,7 @@ class SteppingController:
             tau[k] = s.ankle_kp * (qk - q[k]) - s.ankle_kv * wk + d.qfrc_bias[dofs[k]]
         return np.clip(tau, -s.swing_torque_max_n_m, s.swing_torque_max_n_m)
 
-    def _touch_down(self, t, qpos, qvel, feet):
+    def _touch_down(self, t, qpos, qvel, feet, xi):
         i = self.swing
         assert i is not None and self._mid0 is not None  # a foot swings, after the first call
         step = self.steps[-1]
@@ -475,6 +507,9 @@ class SteppingController:
         # how far the stance sole slid while the foot swung (the swing leg's reaction is not in
         # the stance QP's model: W treats the free leg as passive)
         step["stance_slip_m"] = float(np.linalg.norm(self._sole_pose(1 - i)[0][:2] - self._stance0))
+        # Hof et al. 2010: the landing point against the extrapolated COM at touchdown
+        step["xcom_m"] = [float(xi[0]), float(xi[1])]
+        step["xcom_offset_m"] = xcom_offset(c[:2], xi, self._sole_pose(1 - i)[0][:2])
         if step["lift_off_s"] is None:
             step["lift_off_s"] = step["start_s"]
         mid = 0.5 * (self._sole_pose(0)[0] + self._sole_pose(1)[0])
@@ -493,8 +528,7 @@ class SteppingController:
         self.phase = "double"
         self.swing = None
         self._last_td = t
-        s = self.stepping
-        self.trigger = cp.CaptureTrigger(s.margin_m, s.rearm_margin_m, s.hold, s.lateral_margin_m)
+        self.trigger = self._new_trigger()
         tau = self.ctrl.torques(
             qpos, qvel, target=self.target, gains=self.gains, feet_in_contact=self._flags(*feet)
         )

@@ -65,8 +65,9 @@ def policy_config(
             friction=scenario.friction,
             min_normal_n=scenario.qp_min_normal_n,
             cop_scale=scenario.qp_cop_scale,
-            # the stepping controller was tuned with massless-leg cones (docs/controller.md)
-            leg_weight=0.0 if scenario.stepping else scenario.qp_leg_weight,
+            # with stepping: the feet-in-place QP until the first step (SteppingConfig.qp_leg_weight
+            # for the stepping QP after it)
+            leg_weight=scenario.qp_leg_weight,
         )
     model_path = None if scenario.model == subject.DEFAULT else subject.resolve(scenario.model)
     return PolicyConfig(
