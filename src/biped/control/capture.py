@@ -47,6 +47,7 @@ __all__ = [
     "sole_corners",
     "step_target",
     "support_polygon",
+    "xcom_offset",
 ]
 
 
@@ -283,6 +284,17 @@ def step_target(
     if r > 1e-9:
         xi_td = xi_td + offset_m * d / r
     return clamp_step(xi_td, stance_xy, side, limits)
+
+
+def xcom_offset(landing_xy, xcom_xy, stance_xy) -> float:
+    """How far [m] the landing sole centre lies beyond the extrapolated COM (Hof's XCoM, the
+    capture point) at touchdown, along the line from the stance sole centre through the XCoM:
+    > 0 outward of it (Hof, Vermerris & Gjaltema 2010: people land a constant offset outward)."""
+    u = np.asarray(xcom_xy, dtype=float)[:2] - np.asarray(stance_xy, dtype=float)[:2]
+    r = float(np.linalg.norm(u))
+    if r < 1e-9:
+        return float("nan")
+    return float((np.asarray(landing_xy, dtype=float)[:2] - np.asarray(xcom_xy, dtype=float)[:2]) @ u / r)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -4,13 +4,15 @@ Koolen et al. 2012, the math :mod:`biped.control.capture`.
 
 Phases (one :class:`SteppingController` call per control period, ``(t, qpos, qvel, feet)``):
 
-- **double support** (as without stepping): W's Alg. 1-6 with the scenario's distribution and
-  set point, contact flags as sensed. Every call the whole-body COM (MuJoCo ``subtree_com`` of
-  the biped's own model) gives the capture point ``xi = x + v / omega_0``, ``omega_0 =
-  sqrt(g / h)``, h the COM height above the floor. When xi has stayed outside the support
-  polygon of the soles in contact, shrunk by ``margin_m``, for ``hold`` periods
-  (:class:`~biped.control.capture.CaptureTrigger`), and fewer than ``max_steps`` steps were
-  taken, a step starts.
+- **double support**: until the first step, exactly the feet-in-place controller of the
+  scenario (with "qp": its QP, the legs' weight in the cones, the sensed feet), so a push that
+  takes no step runs as without stepping. Every call the whole-body COM (MuJoCo ``subtree_com``
+  of the biped's own model) gives the capture point ``xi = x + v / omega_0``, ``omega_0 =
+  sqrt(g / h)``, h the COM height above the floor. The feet cannot hold once xi has left the
+  support polygon of the soles in contact (the QP's CoP limits: no CoP outside it brings xi
+  back, ``xi' = omega_0 (xi - p)``) for ``hold`` periods
+  (:class:`~biped.control.capture.CaptureTrigger`): then, if fewer than ``max_steps`` steps
+  were taken, a step starts.
 - **swing**: swing foot rule: for the first step, the foot off the floor if only one is on it,
   else the foot whose sole centre lies nearer to xi across the body (the push side: a push to
   the biped's right steps with the right foot; no crossover); later steps alternate feet. The stance
@@ -48,11 +50,12 @@ import numpy as np
 from biped.control import capture as cp
 from biped.control.limits import clip_torques
 from biped.control.policy import PolicyConfig, _model_path, make_policy
+from biped.control.swing import swing_leg_torques
 from biped.control.workspace import Gains, Target
 from biped.errors import ScenarioError
 from biped.model import TreeModel, sole_rectangles
 
-__all__ = ["SteppingConfig", "SteppingController", "xcom_offset"]
+__all__ = ["SteppingConfig", "SteppingController"]
 
 FEET = ("left", "right")
 FOOT_BODIES = ("left_foot", "right_foot")
@@ -89,8 +92,13 @@ class SteppingConfig:
     swing_height_drop_m, swing_tilt_deg: while a foot swings the stance leg holds the body this
     much lower than the set point (reach) and upright but for this tilt about -y (the set point's
     forward tilt moves the hips back, away from a forward step).
-    lateral_margin_m: the trigger's extra margin along y (sideways: the feet-in-place strategy
-    holds xi just inside the polygon's side while the trunk rolls over; waiting steps too late).
+    lateral_margin_m: the trigger's extra margin along y (0: a 3 cm margin stepped at sideways
+    pushes the feet-in-place QP holds, docs/controller.md).
+    holding_sensed: before the first step the QP takes the sensed feet, as the QP alone does (W's
+    fixed feet made it a weaker feet-in-place controller that fell at pushes the QP alone holds).
+    qp_leg_weight: the stepping QP's share of the legs' weight (0: massless legs, as tuned;
+    before the first step the scenario's own). trigger_rate_m_s: if set, step only while xi also
+    moves away from the polygon faster than this (changed no envelope cell; off).
     lateral_offset_m, lateral_swing_time_s, lateral_limits: a *sideways step* (xi further out of
     the polygon's y-extent than out of its x-extent when the step starts) lands this far beyond
     the predicted capture point, swings this fast, within these limits (the LIPM capture point
@@ -118,7 +126,7 @@ class SteppingConfig:
     swing_rot_gain_scale: float = 4.0
     qp_moment_weight: float | None = 10.0
     qp_leg_weight: float = 0.0
-    holding_sensed: bool = False
+    holding_sensed: bool = True
     trigger_rate_m_s: float | None = None
     post_step_kp_xy: float = 10.0
     post_step_kv_xy: float = 3.5
@@ -128,8 +136,8 @@ class SteppingConfig:
     swing_height_drop_m: float = 0.08
     post_step_height_drop_m: float = 0.08
     swing_tilt_deg: float = 0.0
-    limits: cp.StepLimits = field(default_factory=cp.StepLimits)
-    lateral_margin_m: float = 0.03
+    limits: cp.StepLimits = field(default_factory=lambda: cp.StepLimits(max_back=0.4))
+    lateral_margin_m: float = 0.0
     lateral_offset_m: float = 0.15
     lateral_swing_time_s: float = 0.2
     lateral_rot_gain_scale: float = 4.0
@@ -140,17 +148,6 @@ class SteppingConfig:
             raise ScenarioError(f"max_steps must be an integer >= 0; got {self.max_steps!r}")
         if not self.swing_time_s > 0:
             raise ScenarioError(f"swing_time_s must be > 0 s; got {self.swing_time_s!r}")
-
-
-def xcom_offset(landing_xy, xcom_xy, stance_xy) -> float:
-    """How far [m] the landing sole centre lies beyond the extrapolated COM (Hof's XCoM, the
-    capture point) at touchdown, along the line from the stance sole centre through the XCoM:
-    > 0 outward of it (Hof, Vermerris & Gjaltema 2010: people land a constant offset outward)."""
-    u = np.asarray(xcom_xy, dtype=float)[:2] - np.asarray(stance_xy, dtype=float)[:2]
-    r = float(np.linalg.norm(u))
-    if r < 1e-9:
-        return float("nan")
-    return float((np.asarray(landing_xy, dtype=float)[:2] - np.asarray(xcom_xy, dtype=float)[:2]) @ u / r)
 
 
 # the swing path's pieces (pure functions in capture.py; the old names kept for the tests)
@@ -454,48 +451,8 @@ class SteppingController:
         return self._out(tau)
 
     def _swing_torques(self, i, pd, vd, ad):
-        """Swing-leg torques: the ankle point follows (pd, vd, ad) by task-space computed torque
-        on hip abduction, hip flexion and knee (3 x 3 Jacobian, MuJoCo mj_jacBody, damped least
-        squares); hip rotation is held at 0 and the two ankle joints at the angles that put the
-        sole flat with zero yaw (from the shank's world orientation), both by joint-space PD;
-        torques ``M_ll qdd + b_l - p_l`` (leg block of MuJoCo's mass matrix, leg bias forces,
-        minus the passive hinge damping, which the foot's small inertia would not overcome)."""
-        m, d, s = self.model, self.data, self.stepping
-        b = self._foot[i]
-        dofs = self._leg_dofs[i]
-        q = d.qpos[self._leg_qpos[i]]
-        qd = d.qvel[dofs]
-        jp = np.zeros((3, m.nv))
-        mujoco.mj_jacBody(m, d, jp, None, b)
-        Jl = jp[:, dofs]
-        # joint-space parts: hip rotation to 0, ankle to the flat-foot angles
-        R = d.xmat[self._shank[i]].reshape(3, 3).T  # desired foot orientation (I) in the shank frame
-        inv = self._inv_sign[i] * math.atan2(R[2, 1], R[1, 1])
-        dors = math.atan2(R[0, 2], R[0, 0])
-        qdd = np.zeros(6)
-        for k, qk in ((2, 0.0), (4, inv), (5, dors)):
-            qdd[k] = s.kp_rot * (qk - q[k]) - s.kv_rot * qd[k]
-        a = (
-            ad
-            + s.kp_pos * (pd - d.xpos[b])
-            + s.kv_pos * (vd - jp[:, dofs] @ qd - jp @ d.qvel + jp[:, dofs] @ qd)
-        )
-        a = a - Jl[:, [2, 4, 5]] @ qdd[[2, 4, 5]]
-        J3 = Jl[:, [0, 1, 3]]
-        qdd[[0, 1, 3]] = J3.T @ np.linalg.solve(J3 @ J3.T + 1e-4 * np.eye(3), a)
-        M = np.zeros((m.nv, m.nv))
-        mujoco.mj_fullM(m, d, M)
-        tau = M[np.ix_(dofs, dofs)] @ qdd + d.qfrc_bias[dofs] - d.qfrc_passive[dofs]
-        # the ankle's tiny inertia makes M_ll qdd a few N m that unmodelled coupling (the base's
-        # acceleration) swamps: a stiff joint PD on the ankle instead [N m/rad, N m s/rad]
-        # (damping on the foot's own angular velocity in the world, not the joint rate: the
-        # shank turns fast during the swing and the flat foot must not follow it)
-        jr = np.zeros((3, m.nv))
-        mujoco.mj_jacBody(m, d, None, jr, b)
-        w = jr @ d.qvel
-        for k, qk, wk in ((4, inv, self._inv_sign[i] * w[0]), (5, dors, w[1])):
-            tau[k] = s.ankle_kp * (qk - q[k]) - s.ankle_kv * wk + d.qfrc_bias[dofs[k]]
-        return np.clip(tau, -s.swing_torque_max_n_m, s.swing_torque_max_n_m)
+        """The swing leg's torques (:func:`biped.control.swing.swing_leg_torques`)."""
+        return swing_leg_torques(self, i, pd, vd, ad)
 
     def _touch_down(self, t, qpos, qvel, feet, xi):
         i = self.swing
@@ -509,7 +466,7 @@ class SteppingController:
         step["stance_slip_m"] = float(np.linalg.norm(self._sole_pose(1 - i)[0][:2] - self._stance0))
         # Hof et al. 2010: the landing point against the extrapolated COM at touchdown
         step["xcom_m"] = [float(xi[0]), float(xi[1])]
-        step["xcom_offset_m"] = xcom_offset(c[:2], xi, self._sole_pose(1 - i)[0][:2])
+        step["xcom_offset_m"] = cp.xcom_offset(c[:2], xi, self._sole_pose(1 - i)[0][:2])
         if step["lift_off_s"] is None:
             step["lift_off_s"] = step["start_s"]
         mid = 0.5 * (self._sole_pose(0)[0] + self._sole_pose(1)[0])
