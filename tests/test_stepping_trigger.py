@@ -82,7 +82,22 @@ def test_touchdown_xcom_and_slip_against_mujoco():
         xcom_offset(st["position_m"][:2], xi, r.feet_pos[k, stance, :2]), abs=0.01
     )
     assert st["xcom_offset_m"] > 0.0
-    # the stance foot frame's horizontal displacement from the step's start to touchdown
+    # the stance sole centre (the middle of its heel and toe boxes' outer ends, from MuJoCo's
+    # geom poses) from the step's start to touchdown
     k0 = int(np.argmin(np.abs(r.times - st["start_s"])))
-    moved = np.linalg.norm(r.feet_pos[k, stance, :2] - r.feet_pos[k0, stance, :2])
-    assert st["stance_slip_m"] == pytest.approx(moved, abs=0.005)
+    foot = ("left", "right")[stance]
+    moved = np.linalg.norm(_sole_centre(m, d, r.qpos[k], foot) - _sole_centre(m, d, r.qpos[k0], foot))
+    assert st["stance_slip_m"] == pytest.approx(moved, abs=0.002)
+
+
+def _sole_centre(m, d, qpos, foot):
+    d.qpos[:] = qpos
+    mujoco.mj_kinematics(m, d)
+    h, t = (m.geom(f"{foot}_{p}").id for p in ("heel", "toe"))
+    ends = []
+    for g, sign in ((h, -1.0), (t, 1.0)):
+        k = 0  # the boxes' x axis is the foot's long axis (the heel box is wider than long)
+        e = d.geom_xmat[g].reshape(3, 3)[:, k]
+        e = e if (d.geom_xpos[t] - d.geom_xpos[h]) @ e > 0 else -e  # heel -> toe
+        ends.append(d.geom_xpos[g] + sign * m.geom_size[g][k] * e)
+    return 0.5 * (ends[0] + ends[1])[:2]
