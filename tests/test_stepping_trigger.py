@@ -19,13 +19,28 @@ from biped.sim.scene import build_scene
 
 def _sweep_scenario(speed, direction, *flags):
     """One `biped sweep --distribution qp` trial (hold task, 1.8 kg block at 1.2 m, fast physics,
-    early stop), 4 s like the envelopes of docs/sweep.md."""
+    early stop), 4 s like the envelopes of docs/sweep.md, stepping with ``step_trigger = "qp"``."""
     from biped.cli import build_parser
     from biped.cli.sweep import build_spec
 
     args = ["sweep", "--speed", str(speed), "--direction", str(direction), "--distribution", "qp"]
-    spec = build_spec(build_parser().parse_args([*args, "--set", "duration_s=4", *flags]))
+    sets = ["--set", "duration_s=4", "--set", 'step_trigger="qp"']
+    spec = build_spec(build_parser().parse_args([*args, *sets, *flags]))
     return spec.scenario(spec.trials()[0])
+
+
+def test_step_trigger_key():
+    from biped.control.stepping import SteppingConfig
+    from biped.errors import ScenarioError
+    from biped.sim import Scenario
+
+    assert Scenario().step_trigger == "capture" and "step_trigger" not in Scenario().to_dict()
+    assert Scenario(step_trigger="qp").to_dict()["step_trigger"] == "qp"
+    with pytest.raises(ScenarioError, match="step_trigger"):
+        Scenario(step_trigger="late")
+    q = SteppingConfig.for_trigger("qp")
+    assert q.holding_sensed and q.lateral_margin_m == 0.0 and q.limits.max_back == 0.4
+    assert SteppingConfig.for_trigger("capture") == SteppingConfig()
 
 
 def test_trigger_waits_while_the_capture_point_returns():

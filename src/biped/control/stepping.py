@@ -92,8 +92,8 @@ class SteppingConfig:
     swing_height_drop_m, swing_tilt_deg: while a foot swings the stance leg holds the body this
     much lower than the set point (reach) and upright but for this tilt about -y (the set point's
     forward tilt moves the hips back, away from a forward step).
-    lateral_margin_m: the trigger's extra margin along y (0: a 3 cm margin stepped at sideways
-    pushes the feet-in-place QP holds, docs/controller.md).
+    lateral_margin_m: the trigger's extra margin along y (3 cm; "qp" trigger 0: 3 cm stepped at
+    sideways pushes the feet-in-place QP holds, docs/controller.md).
     holding_sensed: before the first step the QP takes the sensed feet, as the QP alone does (W's
     fixed feet made it a weaker feet-in-place controller that fell at pushes the QP alone holds).
     qp_leg_weight: the stepping QP's share of the legs' weight (0: massless legs, as tuned;
@@ -126,7 +126,7 @@ class SteppingConfig:
     swing_rot_gain_scale: float = 4.0
     qp_moment_weight: float | None = 10.0
     qp_leg_weight: float = 0.0
-    holding_sensed: bool = True
+    holding_sensed: bool = False
     trigger_rate_m_s: float | None = None
     post_step_kp_xy: float = 10.0
     post_step_kv_xy: float = 3.5
@@ -136,12 +136,28 @@ class SteppingConfig:
     swing_height_drop_m: float = 0.08
     post_step_height_drop_m: float = 0.08
     swing_tilt_deg: float = 0.0
-    limits: cp.StepLimits = field(default_factory=lambda: cp.StepLimits(max_back=0.4))
-    lateral_margin_m: float = 0.0
+    limits: cp.StepLimits = field(default_factory=cp.StepLimits)
+    lateral_margin_m: float = 0.03
     lateral_offset_m: float = 0.15
     lateral_swing_time_s: float = 0.2
     lateral_rot_gain_scale: float = 4.0
     lateral_limits: cp.StepLimits = field(default_factory=lambda: cp.StepLimits(max_step=0.6, max_width=0.6))
+
+    @classmethod
+    def for_trigger(cls, trigger: str, **kw) -> SteppingConfig:
+        """The parameters of the scenario's ``step_trigger``: "capture" (these defaults) or "qp"
+        (the QP alone until its feet cannot hold: sensed feet before the first step, no
+        sideways margin, backward steps up to 0.40 m)."""
+        if trigger == "qp":
+            kw = {
+                "holding_sensed": True,
+                "lateral_margin_m": 0.0,
+                "limits": cp.StepLimits(max_back=0.4),
+                **kw,
+            }
+        elif trigger != "capture":
+            raise ScenarioError(f"step_trigger must be 'capture' or 'qp'; got {trigger!r}")
+        return cls(**kw)
 
     def __post_init__(self):
         if not (isinstance(self.max_steps, int) and self.max_steps >= 0):

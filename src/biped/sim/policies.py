@@ -65,9 +65,11 @@ def policy_config(
             friction=scenario.friction,
             min_normal_n=scenario.qp_min_normal_n,
             cop_scale=scenario.qp_cop_scale,
-            # with stepping: the feet-in-place QP until the first step (SteppingConfig.qp_leg_weight
-            # for the stepping QP after it)
-            leg_weight=scenario.qp_leg_weight,
+            # stepping: trigger "capture" was tuned with massless-leg cones; "qp": the feet-in-place
+            # QP until the first step (SteppingConfig.qp_leg_weight for the stepping QP after it)
+            leg_weight=0.0
+            if scenario.stepping and scenario.step_trigger == "capture"
+            else scenario.qp_leg_weight,
         )
     model_path = None if scenario.model == subject.DEFAULT else subject.resolve(scenario.model)
     return PolicyConfig(
@@ -117,7 +119,10 @@ def controller_policy(
         from biped.control.stepping import SteppingConfig, SteppingController
 
         return SteppingController(
-            config, SteppingConfig(max_steps=scenario.max_steps), scene.joint_names, tree=tree
+            config,
+            SteppingConfig.for_trigger(scenario.step_trigger, max_steps=scenario.max_steps),
+            scene.joint_names,
+            tree=tree,
         )
     sensed = config.support == "sensed" or config.distribution == "qp"  # as make_policy decides
     return ControllerPolicy(make_policy(config, scene.joint_names, tree=tree), sensed=sensed)

@@ -45,6 +45,7 @@ CONTROLLERS = ("workspace", "joint-pd")
 #: Which feet the workspace controller takes as fixed: "fixed" = both, always (W); "sensed" = the
 #: feet whose soles touch the floor at each control step (see WorkspaceController.compute).
 SUPPORTS = ("fixed", "sensed")
+STEP_TRIGGERS = ("capture", "qp")
 #: The workspace controller's wrench distribution (W Alg. 5): W's min-norm split ("statics", its
 #: print's subscripts "printed") or the contact-feasible QP ("qp", biped.control.distribution).
 DISTRIBUTIONS = ("statics", "printed", "qp")
@@ -132,6 +133,10 @@ class Scenario:
     # not in W: capture-point steps when the feet cannot hold (biped.control.stepping)
     stepping: bool = False
     max_steps: int = 3  # with stepping: most steps per run
+    # with stepping: when to step. "capture": the capture point leaves the feet (3 cm sideways
+    # margin, W's fixed feet and massless legs before the first step); "qp": the QP alone until
+    # its feet cannot hold (docs/controller.md, "Stepping")
+    step_trigger: str = "capture"
     # not in W: a human nervous system (biped.control.neuromotor; docs/validate.md). The preset
     # fills feedback_delay_s, torque_rate_limit_n_m_s, activation_time_s, torque_limits and the
     # four gains when they are not given; "ideal" is W's controller
@@ -348,12 +353,13 @@ _STRINGS = {
     "neuromotor": NEUROMOTOR,
     "perturbation": perturbations.NAMES,
     "force_shape": FORCE_SHAPES,
+    "step_trigger": STEP_TRIGGERS,
 }
 
 
 #: Keys :meth:`Scenario.to_dict` leaves out at their default value, so that a scenario without
 #: them writes the same summary.json / sweep identity as before they existed.
-_OMITTED_AT_DEFAULT = frozenset({"early_stop"})
+_OMITTED_AT_DEFAULT = frozenset({"early_stop", "step_trigger"})
 
 
 def keys() -> tuple[str, ...]:
