@@ -73,6 +73,23 @@ def test_push_the_qp_holds_is_held_without_a_step(speed, direction):
 
 
 @pytest.mark.slow
+def test_front_push_beyond_hofs_bound_ends_at_rest_over_the_new_feet():
+    """20 m/s from the front (0 deg): an impulse above Hof's feet-in-place bound for that
+    direction (J_max = m omega_0 d from MuJoCo's COM and sole corners, biped.analysis) is
+    recovered by the strict rule (at rest over the final feet's set point) with one step back."""
+    from biped.analysis import feet_in_place_bound
+    from biped.sim.sweep.trial import measure
+
+    sc = _sweep_scenario(20, 0, "--stepping")
+    r = simulate(sc)
+    j_max = float(feet_in_place_bound([0.0], sc).j_max_n_s[0])
+    assert measure(r, np.asarray(r.block_velocity)).impulse_n_s > j_max
+    steps = r.extra["steps"]
+    assert len(steps) == 1 and not steps[0]["sideways"], steps
+    assert r.recovered and r.extra["final_com_speed_m_s"] < 0.05
+
+
+@pytest.mark.slow
 def test_touchdown_xcom_and_slip_against_mujoco():
     """A sideways step (15 m/s at 90 deg, beyond the QP's 13): the XCoM recorded at touchdown is
     x + v / omega_0 of the whole-body COM that MuJoCo computes from the recorded state (the scene's
