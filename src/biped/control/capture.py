@@ -40,12 +40,14 @@ __all__ = [
     "lipm_state",
     "min_jerk",
     "omega0",
+    "outward_normal",
     "predict_capture_point",
     "shrink_polygon",
     "signed_distance",
     "sole_corners",
     "step_target",
     "support_polygon",
+    "xcom_offset",
 ]
 
 
@@ -141,6 +143,12 @@ def signed_distance(poly, point) -> float:
     return float(np.max(n @ np.asarray(point, dtype=float)[:2] - b))
 
 
+def outward_normal(poly, point) -> np.ndarray:
+    """The outward unit normal (2,) of the polygon's edge with the largest ``n . x - b``."""
+    n, b = _edges(np.asarray(poly, dtype=float))
+    return n[int(np.argmax(n @ np.asarray(point, dtype=float)[:2] - b))]
+
+
 def shrink_polygon(poly, margin: float) -> np.ndarray:
     """The polygon with every edge moved inward by ``margin`` [m] (vertices of consecutive edge
     lines' intersections; the polygon must stay non-empty: margin below its inradius)."""
@@ -171,7 +179,12 @@ class CaptureTrigger:
     steps too late (:func:`excess` is the test). Re-arming asks for the same extra inside."""
 
     def __init__(
-        self, margin_m: float = 0.0, rearm_margin_m: float = 0.02, hold: int = 3, lateral_margin_m=None
+        self,
+        margin_m: float = 0.0,
+        rearm_margin_m: float = 0.02,
+        hold: int = 3,
+        lateral_margin_m=None,
+        min_rate_m_s: float | None = None,
     ):
         if rearm_margin_m < margin_m:
             raise ScenarioError(f"rearm_margin_m ({rearm_margin_m}) must be >= margin_m ({margin_m})")
@@ -180,12 +193,23 @@ class CaptureTrigger:
             raise ScenarioError(f"lateral_margin_m ({lateral}) must be >= margin_m ({margin_m})")
         self.margin_m, self.rearm_margin_m, self.hold = margin_m, rearm_margin_m, int(hold)
         self.lateral_margin_m = lateral
+        self.min_rate_m_s = min_rate_m_s
         self.armed = True
         self._count = 0
 
-    def update(self, poly, xi) -> bool:
+    def update(self, poly, xi, xi_rate=None) -> bool:
         ex, ey = excess(poly, xi)
         d = max(ex + self.margin_m, ey + self.lateral_margin_m)  # > 0: outside the shrunk polygon
+        if d > 0 and self.min_rate_m_s is not None and xi_rate is not None:
+            # the feet cannot hold only while xi still moves away from the polygon
+            if d == ey + self.lateral_margin_m and ey + self.lateral_margin_m > ex + self.margin_m:
+                y = float(np.asarray(xi, dtype=float)[1])
+                mid = 0.5 * (float(np.max(poly[:, 1])) + float(np.min(poly[:, 1])))
+                n = np.array([0.0, 1.0 if y > mid else -1.0])
+            else:
+                n = outward_normal(poly, xi)
+            if float(n @ np.asarray(xi_rate, dtype=float)[:2]) <= self.min_rate_m_s:
+                d = -1.0
         if not self.armed:
             if d < -(self.rearm_margin_m - self.margin_m):
                 self.armed = True
@@ -260,6 +284,17 @@ def step_target(
     if r > 1e-9:
         xi_td = xi_td + offset_m * d / r
     return clamp_step(xi_td, stance_xy, side, limits)
+
+
+def xcom_offset(landing_xy, xcom_xy, stance_xy) -> float:
+    """How far [m] the landing sole centre lies beyond the extrapolated COM (Hof's XCoM, the
+    capture point) at touchdown, along the line from the stance sole centre through the XCoM:
+    > 0 outward of it (Hof, Vermerris & Gjaltema 2010: people land a constant offset outward)."""
+    u = np.asarray(xcom_xy, dtype=float)[:2] - np.asarray(stance_xy, dtype=float)[:2]
+    r = float(np.linalg.norm(u))
+    if r < 1e-9:
+        return float("nan")
+    return float((np.asarray(landing_xy, dtype=float)[:2] - np.asarray(xcom_xy, dtype=float)[:2]) @ u / r)
 
 
 # ---------------------------------------------------------------------------------------------

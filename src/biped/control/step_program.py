@@ -187,10 +187,10 @@ class StepProgram(SteppingController):
         if step["lift_off_s"] is None and not feet[i]:
             step["lift_off_s"] = t
         if feet[i] and el > 0.5 * self._T and self._lifted:
-            return self._touch_down(t, qpos, qvel, feet)
+            return self._touch_down(t, qpos, qvel, feet, xi)
         if el > self._T + p.give_up_s and not self._lifted:  # it never rose: stand on both again
             step["aborted"] = True
-            return self._touch_down(t, qpos, qvel, feet)
+            return self._touch_down(t, qpos, qvel, feet, xi)
         stance_c, yaw = self._sole_pose(st)
         c, sn = math.cos(yaw), math.sin(yaw)
         rel = self.data.subtree_com[0][:2] - stance_c[:2]

@@ -4,13 +4,15 @@ Koolen et al. 2012, the math :mod:`biped.control.capture`.
 
 Phases (one :class:`SteppingController` call per control period, ``(t, qpos, qvel, feet)``):
 
-- **double support** (as without stepping): W's Alg. 1-6 with the scenario's distribution and
-  set point, contact flags as sensed. Every call the whole-body COM (MuJoCo ``subtree_com`` of
-  the biped's own model) gives the capture point ``xi = x + v / omega_0``, ``omega_0 =
-  sqrt(g / h)``, h the COM height above the floor. When xi has stayed outside the support
-  polygon of the soles in contact, shrunk by ``margin_m``, for ``hold`` periods
-  (:class:`~biped.control.capture.CaptureTrigger`), and fewer than ``max_steps`` steps were
-  taken, a step starts.
+- **double support**: until the first step, exactly the feet-in-place controller of the
+  scenario (with "qp": its QP, the legs' weight in the cones, the sensed feet), so a push that
+  takes no step runs as without stepping. Every call the whole-body COM (MuJoCo ``subtree_com``
+  of the biped's own model) gives the capture point ``xi = x + v / omega_0``, ``omega_0 =
+  sqrt(g / h)``, h the COM height above the floor. The feet cannot hold once xi has left the
+  support polygon of the soles in contact (the QP's CoP limits: no CoP outside it brings xi
+  back, ``xi' = omega_0 (xi - p)``) for ``hold`` periods
+  (:class:`~biped.control.capture.CaptureTrigger`): then, if fewer than ``max_steps`` steps
+  were taken, a step starts.
 - **swing**: swing foot rule: for the first step, the foot off the floor if only one is on it,
   else the foot whose sole centre lies nearer to xi across the body (the push side: a push to
   the biped's right steps with the right foot; no crossover); later steps alternate feet. The stance
@@ -40,7 +42,7 @@ position_m (the sole centre at touchdown), target_m (the last landing target).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field, replace
+from dataclasses import replace
 
 import mujoco
 import numpy as np
@@ -48,6 +50,8 @@ import numpy as np
 from biped.control import capture as cp
 from biped.control.limits import clip_torques
 from biped.control.policy import PolicyConfig, _model_path, make_policy
+from biped.control.stepping_config import SteppingConfig
+from biped.control.swing import swing_leg_torques
 from biped.control.workspace import Gains, Target
 from biped.errors import ScenarioError
 from biped.model import TreeModel, sole_rectangles
@@ -59,82 +63,8 @@ FOOT_BODIES = ("left_foot", "right_foot")
 #: With W's fixed support and "qp", a foot whose sole centre is this far above the floor is left
 #: out of the double-support QP [m].
 AIRBORNE_M = 0.10
-
-
-@dataclass(frozen=True)
-class SteppingConfig:
-    """Parameters of the stepping recovery (SI units; not in W, chosen here, docs/controller.md).
-
-    max_steps: most steps in a run. margin_m, rearm_margin_m, hold: the trigger
-    (:class:`~biped.control.capture.CaptureTrigger`). swing_time_s: planned swing duration T.
-    apex_m: swing-foot clearance at mid-swing. offset_m: how far beyond the predicted capture
-    point the sole centre lands. descent_m_s: the ankle's downward speed after T until contact.
-    kp_pos, kv_pos, kp_rot, kv_rot: the swing foot's task-space gains [1/s^2, 1/s].
-    retarget_until: the landing point is recomputed every period until this fraction of
-    swing_time_s, then frozen (a late change the foot cannot follow would only move the target).
-    refractory_s: no new step within this time after a touchdown. limits: landing limits.
-    swing_rot_gain_scale: W's orientation gains times this (kv by its square root) while a foot
-    swings: the stance leg must stop the trunk's pitch from the push before the foot can reach.
-    qp_moment_weight: with distribution "qp", the QP's moment-row weight used by the stepping
-    policy (None: the scenario's qp_moment_weight): 10 keeps the trunk upright in single support
-    and after touchdown, where force-first (1) lets it pitch over.
-    post_step_kp_xy, post_step_kv_xy: after a step, the horizontal COM gains of W's Alg. 4
-    [1/s^2, 1/s]: W's (50, 7.07) ask a decelerating COM for ~10 m/s^2, five times what the LIPM
-    over the new feet can give (omega_0^2 times the COM-to-toe distance); the QP then gives up
-    the trunk's orientation and the trunk pitches over. kv ~ omega_0 asks for what it can give.
-    reach_m: the desired ankle is kept within this distance of the hip joint (leg 0.826 m).
-    swing_torque_max_n_m: bound of the swing leg's task-space torques.
-    swing_height_drop_m, swing_tilt_deg: while a foot swings the stance leg holds the body this
-    much lower than the set point (reach) and upright but for this tilt about -y (the set point's
-    forward tilt moves the hips back, away from a forward step).
-    lateral_margin_m: the trigger's extra margin along y (sideways: the feet-in-place strategy
-    holds xi just inside the polygon's side while the trunk rolls over; waiting steps too late).
-    lateral_offset_m, lateral_swing_time_s, lateral_limits: a *sideways step* (xi further out of
-    the polygon's y-extent than out of its x-extent when the step starts) lands this far beyond
-    the predicted capture point, swings this fast, within these limits (the LIPM capture point
-    of the whole-body COM ignores the trunk's roll from a hit 1.2 m up: a 3 cm offset and the
-    0.22 m width limit left the foot short and the biped fell over it). Sideways the swing foot is
-    always the push-side one (the other, unloaded as the body rolls, could only step inward: no
-    crossover).
-    """
-
-    max_steps: int = 3
-    margin_m: float = 0.0
-    rearm_margin_m: float = 0.02
-    hold: int = 3
-    swing_time_s: float = 0.25
-    apex_m: float = 0.05
-    offset_m: float = 0.03
-    descent_m_s: float = 0.3
-    kp_pos: float = 400.0
-    kv_pos: float = 40.0
-    kp_rot: float = 400.0
-    kv_rot: float = 40.0
-    refractory_s: float = 0.15
-    retarget_until: float = 1.0
-    reach_m: float = 0.78
-    swing_rot_gain_scale: float = 4.0
-    qp_moment_weight: float | None = 10.0
-    post_step_kp_xy: float = 10.0
-    post_step_kv_xy: float = 3.5
-    ankle_kp: float = 80.0
-    ankle_kv: float = 0.5
-    swing_torque_max_n_m: float = 1000.0
-    swing_height_drop_m: float = 0.08
-    post_step_height_drop_m: float = 0.08
-    swing_tilt_deg: float = 0.0
-    limits: cp.StepLimits = field(default_factory=cp.StepLimits)
-    lateral_margin_m: float = 0.03
-    lateral_offset_m: float = 0.15
-    lateral_swing_time_s: float = 0.2
-    lateral_rot_gain_scale: float = 4.0
-    lateral_limits: cp.StepLimits = field(default_factory=lambda: cp.StepLimits(max_step=0.6, max_width=0.6))
-
-    def __post_init__(self):
-        if not (isinstance(self.max_steps, int) and self.max_steps >= 0):
-            raise ScenarioError(f"max_steps must be an integer >= 0; got {self.max_steps!r}")
-        if not self.swing_time_s > 0:
-            raise ScenarioError(f"swing_time_s must be > 0 s; got {self.swing_time_s!r}")
+#: Time constant of the low-pass filter on the capture point's rate [s].
+RATE_TAU_S = 0.01
 
 
 # the swing path's pieces (pure functions in capture.py; the old names kept for the tests)
@@ -170,7 +100,11 @@ class SteppingController:
 
             inner = replace(
                 inner,
-                qp_weights=replace(config.qp_weights or QPWeights(), moment=self.stepping.qp_moment_weight),
+                qp_weights=replace(
+                    config.qp_weights or QPWeights(),
+                    moment=self.stepping.qp_moment_weight,
+                    leg_weight=self.stepping.qp_leg_weight,
+                ),
             )
         self._inner = make_policy(inner, tree=tree)
         self.ctrl = self._inner.controller
@@ -178,6 +112,11 @@ class SteppingController:
         # that takes no step runs exactly as without stepping
         plain = replace(inner, qp_weights=config.qp_weights)
         self._ctrl_before = make_policy(plain, tree=tree).controller if plain != inner else self.ctrl
+        # after a step, once at rest: the stepping QP with the scenario's moment weight
+        self._ctrl_settle = self.ctrl
+        if self.stepping.settle_after_s is not None and inner.qp_weights is not None and config.qp_weights:
+            w = replace(inner.qp_weights, moment=config.qp_weights.moment)
+            self._ctrl_settle = make_policy(replace(inner, qp_weights=w), tree=tree).controller
         names = tuple(self.ctrl.joint_names)
         self.joint_names = tuple(joint_order) if joint_order is not None else names
         if sorted(self.joint_names) != sorted(names):
@@ -230,7 +169,7 @@ class SteppingController:
     # ------------------------------------------------------------------ state
     def reset(self) -> None:
         s = self.stepping
-        self.trigger = cp.CaptureTrigger(s.margin_m, s.rearm_margin_m, s.hold, s.lateral_margin_m)
+        self.trigger = self._new_trigger()
         self._T, self._offset, self._limits = s.swing_time_s, s.offset_m, s.limits
         self.phase = "double"
         self.target = self.base_target
@@ -243,7 +182,14 @@ class SteppingController:
         self._stance0 = np.zeros(2)  # the stance sole centre when the step started
         self._last_td = -1e9
         self.last_capture_point: np.ndarray | None = None
+        self._t_prev = -math.inf
+        self._xi_rate = np.zeros(2)  # low-passed rate of the capture point [m/s]
+        self._settled = False  # after a step, at rest: the settling controller
         self.arm_time_s = -math.inf  # no step before [s] (the lean release arms it when sensed)
+
+    def _new_trigger(self) -> cp.CaptureTrigger:
+        s = self.stepping
+        return cp.CaptureTrigger(s.margin_m, s.rearm_margin_m, s.hold, s.lateral_margin_m, s.trigger_rate_m_s)
 
     @property
     def holding_controller(self):
@@ -285,6 +231,10 @@ class SteppingController:
         vcom = d.subtree_linvel[0].copy()
         omega = cp.omega0(max(com[2], 0.05), self._gravity)  # the floor is z = 0
         xi = cp.capture_point(com[:2], vcom[:2], omega)
+        if self.last_capture_point is not None and t > self._t_prev:
+            raw = (xi - self.last_capture_point) / (t - self._t_prev)
+            self._xi_rate += min(1.0, (t - self._t_prev) / RATE_TAU_S) * (raw - self._xi_rate)
+        self._t_prev = t
         self.last_capture_point = xi
         if self._mid0 is None:
             self._mid0 = 0.5 * (self._sole_pose(0)[0] + self._sole_pose(1)[0])
@@ -294,15 +244,26 @@ class SteppingController:
             and len(self.steps) < s.max_steps
             and t - self._last_td >= s.refractory_s
             and t >= self.arm_time_s
-            and self.trigger.update(self._polygon((left, right)), xi)
+            and self.trigger.update(self._polygon((left, right)), xi, self._xi_rate)
         ):
             self._start_step(t, xi, (left, right))
         if self.phase == "swing":
             return self._swing_call(t, qpos, qvel, xi, omega, (left, right))
         ctrl = self.ctrl if self.steps else self._ctrl_before
-        tau = ctrl.torques(
-            qpos, qvel, target=self.target, gains=self.gains, feet_in_contact=self._flags(left, right)
-        )
+        if (
+            s.settle_after_s is not None
+            and self.steps
+            and t - self._last_td >= s.settle_after_s
+            and float(np.hypot(vcom[0], vcom[1])) < s.settle_speed_m_s
+        ):
+            self._settled = True
+        if self._settled:
+            ctrl = self._ctrl_settle
+        if not self.steps and s.holding_sensed and self.config.distribution == "qp":
+            flags = (left, right)  # before the first step: the feet-in-place QP exactly
+        else:
+            flags = self._flags(left, right)
+        tau = ctrl.torques(qpos, qvel, target=self.target, gains=self.gains, feet_in_contact=flags)
         return self._out(tau)
 
     def _flags(self, left, right):
@@ -371,7 +332,7 @@ class SteppingController:
             step["lift_off_s"] = t
         # touchdown: on the floor after half the swing, once seen off it (else the swing goes on)
         if feet[i] and el > 0.5 * self._T and step["lift_off_s"] is not None:
-            return self._touch_down(t, qpos, qvel, feet)
+            return self._touch_down(t, qpos, qvel, feet, xi)
         stance_c, yaw = self._sole_pose(st)
         # the stance CoP: the point of the stance sole nearest the COM (the QP pushes it there)
         c, sn = math.cos(yaw), math.sin(yaw)
@@ -422,50 +383,10 @@ class SteppingController:
         return self._out(tau)
 
     def _swing_torques(self, i, pd, vd, ad):
-        """Swing-leg torques: the ankle point follows (pd, vd, ad) by task-space computed torque
-        on hip abduction, hip flexion and knee (3 x 3 Jacobian, MuJoCo mj_jacBody, damped least
-        squares); hip rotation is held at 0 and the two ankle joints at the angles that put the
-        sole flat with zero yaw (from the shank's world orientation), both by joint-space PD;
-        torques ``M_ll qdd + b_l - p_l`` (leg block of MuJoCo's mass matrix, leg bias forces,
-        minus the passive hinge damping, which the foot's small inertia would not overcome)."""
-        m, d, s = self.model, self.data, self.stepping
-        b = self._foot[i]
-        dofs = self._leg_dofs[i]
-        q = d.qpos[self._leg_qpos[i]]
-        qd = d.qvel[dofs]
-        jp = np.zeros((3, m.nv))
-        mujoco.mj_jacBody(m, d, jp, None, b)
-        Jl = jp[:, dofs]
-        # joint-space parts: hip rotation to 0, ankle to the flat-foot angles
-        R = d.xmat[self._shank[i]].reshape(3, 3).T  # desired foot orientation (I) in the shank frame
-        inv = self._inv_sign[i] * math.atan2(R[2, 1], R[1, 1])
-        dors = math.atan2(R[0, 2], R[0, 0])
-        qdd = np.zeros(6)
-        for k, qk in ((2, 0.0), (4, inv), (5, dors)):
-            qdd[k] = s.kp_rot * (qk - q[k]) - s.kv_rot * qd[k]
-        a = (
-            ad
-            + s.kp_pos * (pd - d.xpos[b])
-            + s.kv_pos * (vd - jp[:, dofs] @ qd - jp @ d.qvel + jp[:, dofs] @ qd)
-        )
-        a = a - Jl[:, [2, 4, 5]] @ qdd[[2, 4, 5]]
-        J3 = Jl[:, [0, 1, 3]]
-        qdd[[0, 1, 3]] = J3.T @ np.linalg.solve(J3 @ J3.T + 1e-4 * np.eye(3), a)
-        M = np.zeros((m.nv, m.nv))
-        mujoco.mj_fullM(m, d, M)
-        tau = M[np.ix_(dofs, dofs)] @ qdd + d.qfrc_bias[dofs] - d.qfrc_passive[dofs]
-        # the ankle's tiny inertia makes M_ll qdd a few N m that unmodelled coupling (the base's
-        # acceleration) swamps: a stiff joint PD on the ankle instead [N m/rad, N m s/rad]
-        # (damping on the foot's own angular velocity in the world, not the joint rate: the
-        # shank turns fast during the swing and the flat foot must not follow it)
-        jr = np.zeros((3, m.nv))
-        mujoco.mj_jacBody(m, d, None, jr, b)
-        w = jr @ d.qvel
-        for k, qk, wk in ((4, inv, self._inv_sign[i] * w[0]), (5, dors, w[1])):
-            tau[k] = s.ankle_kp * (qk - q[k]) - s.ankle_kv * wk + d.qfrc_bias[dofs[k]]
-        return np.clip(tau, -s.swing_torque_max_n_m, s.swing_torque_max_n_m)
+        """The swing leg's torques (:func:`biped.control.swing.swing_leg_torques`)."""
+        return swing_leg_torques(self, i, pd, vd, ad)
 
-    def _touch_down(self, t, qpos, qvel, feet):
+    def _touch_down(self, t, qpos, qvel, feet, xi):
         i = self.swing
         assert i is not None and self._mid0 is not None  # a foot swings, after the first call
         step = self.steps[-1]
@@ -475,6 +396,9 @@ class SteppingController:
         # how far the stance sole slid while the foot swung (the swing leg's reaction is not in
         # the stance QP's model: W treats the free leg as passive)
         step["stance_slip_m"] = float(np.linalg.norm(self._sole_pose(1 - i)[0][:2] - self._stance0))
+        # Hof et al. 2010: the landing point against the extrapolated COM at touchdown
+        step["xcom_m"] = [float(xi[0]), float(xi[1])]
+        step["xcom_offset_m"] = cp.xcom_offset(c[:2], xi, self._sole_pose(1 - i)[0][:2])
         if step["lift_off_s"] is None:
             step["lift_off_s"] = step["start_s"]
         mid = 0.5 * (self._sole_pose(0)[0] + self._sole_pose(1)[0])
@@ -493,8 +417,8 @@ class SteppingController:
         self.phase = "double"
         self.swing = None
         self._last_td = t
-        s = self.stepping
-        self.trigger = cp.CaptureTrigger(s.margin_m, s.rearm_margin_m, s.hold, s.lateral_margin_m)
+        self._settled = False
+        self.trigger = self._new_trigger()
         tau = self.ctrl.torques(
             qpos, qvel, target=self.target, gains=self.gains, feet_in_contact=self._flags(*feet)
         )

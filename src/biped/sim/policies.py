@@ -65,8 +65,11 @@ def policy_config(
             friction=scenario.friction,
             min_normal_n=scenario.qp_min_normal_n,
             cop_scale=scenario.qp_cop_scale,
-            # the stepping controller was tuned with massless-leg cones (docs/controller.md)
-            leg_weight=0.0 if scenario.stepping else scenario.qp_leg_weight,
+            # stepping: trigger "capture" was tuned with massless-leg cones; "qp": the feet-in-place
+            # QP until the first step (SteppingConfig.qp_leg_weight for the stepping QP after it)
+            leg_weight=0.0
+            if scenario.stepping and scenario.step_trigger == "capture"
+            else scenario.qp_leg_weight,
         )
     model_path = None if scenario.model == subject.DEFAULT else subject.resolve(scenario.model)
     return PolicyConfig(
@@ -115,7 +118,7 @@ def controller_policy(
     if scenario.stepping:  # not in W: capture-point steps around W's controller
         from biped.control.stepping import SteppingConfig, SteppingController
 
-        stepping = SteppingConfig(max_steps=scenario.max_steps)
+        stepping = SteppingConfig.for_trigger(scenario.step_trigger, max_steps=scenario.max_steps)
         if scenario.step_program == "program":  # planned steps for a delayed, lagged plant
             from biped.control.step_program import StepProgram, StepProgramConfig
 

@@ -48,6 +48,7 @@ STEP_PROGRAMS = ("feedback", "program")
 #: Which feet the workspace controller takes as fixed: "fixed" = both, always (W); "sensed" = the
 #: feet whose soles touch the floor at each control step (see WorkspaceController.compute).
 SUPPORTS = ("fixed", "sensed")
+STEP_TRIGGERS = ("capture", "qp")
 #: The workspace controller's wrench distribution (W Alg. 5): W's min-norm split ("statics", its
 #: print's subscripts "printed") or the contact-feasible QP ("qp", biped.control.distribution).
 DISTRIBUTIONS = ("statics", "printed", "qp")
@@ -139,6 +140,10 @@ class Scenario:
     # biped.control.stepping; "program": weight transfer, then a feed-forward swing with feedback
     # against the delayed plan (biped.control.step_program), for a delayed, lagged plant
     step_program: str = "feedback"
+    # with stepping: when to step. "capture": the capture point leaves the feet (3 cm sideways
+    # margin, W's fixed feet and massless legs before the first step); "qp": the QP alone until
+    # its feet cannot hold (docs/controller.md, "Stepping")
+    step_trigger: str = "capture"
     # not in W: a human nervous system (biped.control.neuromotor; docs/validate.md). The preset
     # fills feedback_delay_s, torque_rate_limit_n_m_s, activation_time_s, torque_limits and the
     # four gains when they are not given; "ideal" is W's controller
@@ -359,13 +364,14 @@ _STRINGS = {
     "perturbation": perturbations.NAMES,
     "force_shape": FORCE_SHAPES,
     "step_program": STEP_PROGRAMS,
+    "step_trigger": STEP_TRIGGERS,
 }
 
 
 #: Keys :meth:`Scenario.to_dict` leaves out at their default value, so that a scenario without
 #: them writes the same summary.json / sweep identity as before they existed.
 _OMITTED_AT_DEFAULT = frozenset(
-    {"early_stop", "step_program", "pull_displacement_m", "pull_velocity_m_s", "pull_start_s"}
+    {"early_stop", "step_program", "step_trigger", "pull_displacement_m", "pull_velocity_m_s", "pull_start_s"}
 )
 
 

@@ -49,6 +49,8 @@ class Measured:
     controller_error: str | None = None
     diverged: str | None = None
     step_count: int = 0  # stepping runs (scenario key stepping): steps taken
+    first_step_xcom_offset_m: float = math.nan  # first step: landing beyond the XCoM at touchdown
+    max_stance_slip_m: float = math.nan  # stepping: the stance sole's largest slide during a swing
     # the perturbation (biped.sim.perturbations) and the response (biped.sim.response)
     paradigm: str = ""
     paradigm_magnitude: float = math.nan  # in paradigm_unit: block m/s, force N, platform m, release deg

@@ -213,10 +213,21 @@ def measure(result: PushResult, block_velocity: np.ndarray, *, scene: Scene | No
         controller_error=result.controller_error,
         diverged=getattr(result, "diverged", None),
         step_count=len(result.extra.get("steps", ())),
+        **_step_columns(result.extra.get("steps", ())),
         **_perturbation_columns(result, scene, float(np.hypot(J[0], J[1]))),
         stop_reason=stop_reason,
         stopped_at_s=float(t[-1]) if n and stop_reason is not None else float("nan"),
     )
+
+
+def _step_columns(steps) -> dict:
+    """The stepping columns of :class:`Measured` from the policy's ``steps`` (docs/controller.md)."""
+    off = [s.get("xcom_offset_m") for s in steps if s.get("xcom_offset_m") is not None]
+    slip = [s["stance_slip_m"] for s in steps if s.get("stance_slip_m") is not None]
+    return {
+        "first_step_xcom_offset_m": float(off[0]) if off else float("nan"),
+        "max_stance_slip_m": float(max(slip)) if slip else float("nan"),
+    }
 
 
 def _perturbation_columns(result: PushResult, scene: Scene | None, block_impulse_h: float) -> dict:

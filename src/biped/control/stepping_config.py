@@ -1,0 +1,119 @@
+"""The parameters of the stepping recovery (:mod:`biped.control.stepping`): one frozen dataclass,
+one set for every direction; :meth:`SteppingConfig.for_trigger` gives the set of a scenario's
+``step_trigger``."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from biped.control import capture as cp
+from biped.errors import ScenarioError
+
+__all__ = ["SteppingConfig"]
+
+
+@dataclass(frozen=True)
+class SteppingConfig:
+    """Parameters of the stepping recovery (SI units; not in W, chosen here, docs/controller.md).
+
+    max_steps: most steps in a run. margin_m, rearm_margin_m, hold: the trigger
+    (:class:`~biped.control.capture.CaptureTrigger`). swing_time_s: planned swing duration T.
+    apex_m: swing-foot clearance at mid-swing. offset_m: how far beyond the predicted capture
+    point the sole centre lands. descent_m_s: the ankle's downward speed after T until contact.
+    kp_pos, kv_pos, kp_rot, kv_rot: the swing foot's task-space gains [1/s^2, 1/s].
+    retarget_until: the landing point is recomputed every period until this fraction of
+    swing_time_s, then frozen (a late change the foot cannot follow would only move the target).
+    refractory_s: no new step within this time after a touchdown. limits: landing limits.
+    swing_rot_gain_scale: W's orientation gains times this (kv by its square root) while a foot
+    swings: the stance leg must stop the trunk's pitch from the push before the foot can reach.
+    qp_moment_weight: with distribution "qp", the QP's moment-row weight used by the stepping
+    policy (None: the scenario's qp_moment_weight): 10 keeps the trunk upright in single support
+    and after touchdown, where force-first (1) lets it pitch over.
+    post_step_kp_xy, post_step_kv_xy: after a step, the horizontal COM gains of W's Alg. 4
+    [1/s^2, 1/s]: W's (50, 7.07) ask a decelerating COM for ~10 m/s^2, five times what the LIPM
+    over the new feet can give (omega_0^2 times the COM-to-toe distance); the QP then gives up
+    the trunk's orientation and the trunk pitches over. kv ~ omega_0 asks for what it can give.
+    reach_m: the desired ankle is kept within this distance of the hip joint (leg 0.826 m).
+    swing_torque_max_n_m: bound of the swing leg's task-space torques.
+    swing_height_drop_m, swing_tilt_deg: while a foot swings the stance leg holds the body this
+    much lower than the set point (reach) and upright but for this tilt about -y (the set point's
+    forward tilt moves the hips back, away from a forward step).
+    lateral_margin_m: the trigger's extra margin along y (3 cm; "qp" trigger 0: 3 cm stepped at
+    sideways pushes the feet-in-place QP holds, docs/controller.md).
+    holding_sensed: before the first step the QP takes the sensed feet, as the QP alone does (W's
+    fixed feet made it a weaker feet-in-place controller that fell at pushes the QP alone holds).
+    qp_leg_weight: the stepping QP's share of the legs' weight (0: massless legs, as tuned;
+    before the first step the scenario's own). trigger_rate_m_s: if set, step only while xi also
+    moves away from the polygon faster than this (changed no envelope cell; off).
+    settle_after_s, settle_speed_m_s: if set, once this long after a touchdown the COM moves
+    slower than settle_speed_m_s, the double support takes the scenario's QP moment weight (100)
+    instead of qp_moment_weight until the next step: weight 10 left the trunk 2.5-5 deg off its
+    set point at rest, outside the strict rule's 2 deg.
+    lateral_offset_m, lateral_swing_time_s, lateral_limits: a *sideways step* (xi further out of
+    the polygon's y-extent than out of its x-extent when the step starts) lands this far beyond
+    the predicted capture point, swings this fast, within these limits (the LIPM capture point
+    of the whole-body COM ignores the trunk's roll from a hit 1.2 m up: a 3 cm offset and the
+    0.22 m width limit left the foot short and the biped fell over it). Sideways the swing foot is
+    always the push-side one (the other, unloaded as the body rolls, could only step inward: no
+    crossover).
+    """
+
+    max_steps: int = 3
+    margin_m: float = 0.0
+    rearm_margin_m: float = 0.02
+    hold: int = 3
+    swing_time_s: float = 0.25
+    apex_m: float = 0.05
+    offset_m: float = 0.03
+    descent_m_s: float = 0.3
+    kp_pos: float = 400.0
+    kv_pos: float = 40.0
+    kp_rot: float = 400.0
+    kv_rot: float = 40.0
+    refractory_s: float = 0.15
+    retarget_until: float = 1.0
+    reach_m: float = 0.78
+    swing_rot_gain_scale: float = 4.0
+    qp_moment_weight: float | None = 10.0
+    qp_leg_weight: float = 0.0
+    holding_sensed: bool = False
+    settle_after_s: float | None = None
+    settle_speed_m_s: float = 0.1
+    trigger_rate_m_s: float | None = None
+    post_step_kp_xy: float = 10.0
+    post_step_kv_xy: float = 3.5
+    ankle_kp: float = 80.0
+    ankle_kv: float = 0.5
+    swing_torque_max_n_m: float = 1000.0
+    swing_height_drop_m: float = 0.08
+    post_step_height_drop_m: float = 0.08
+    swing_tilt_deg: float = 0.0
+    limits: cp.StepLimits = field(default_factory=cp.StepLimits)
+    lateral_margin_m: float = 0.03
+    lateral_offset_m: float = 0.15
+    lateral_swing_time_s: float = 0.2
+    lateral_rot_gain_scale: float = 4.0
+    lateral_limits: cp.StepLimits = field(default_factory=lambda: cp.StepLimits(max_step=0.6, max_width=0.6))
+
+    @classmethod
+    def for_trigger(cls, trigger: str, **kw) -> SteppingConfig:
+        """The parameters of the scenario's ``step_trigger``: "capture" (these defaults) or "qp"
+        (the QP alone until its feet cannot hold: sensed feet before the first step, no
+        sideways margin, backward steps up to 0.40 m)."""
+        if trigger == "qp":
+            kw = {
+                "holding_sensed": True,
+                "lateral_margin_m": 0.0,
+                "limits": cp.StepLimits(max_back=0.4),
+                "settle_after_s": 0.3,
+                **kw,
+            }
+        elif trigger != "capture":
+            raise ScenarioError(f"step_trigger must be 'capture' or 'qp'; got {trigger!r}")
+        return cls(**kw)
+
+    def __post_init__(self):
+        if not (isinstance(self.max_steps, int) and self.max_steps >= 0):
+            raise ScenarioError(f"max_steps must be an integer >= 0; got {self.max_steps!r}")
+        if not self.swing_time_s > 0:
+            raise ScenarioError(f"swing_time_s must be > 0 s; got {self.swing_time_s!r}")

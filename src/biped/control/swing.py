@@ -1,0 +1,54 @@
+"""The swing leg of a capture-point step (:mod:`biped.control.stepping`): task-space computed
+torque on the leg's own joints so the ankle follows the planned path and the sole stays flat."""
+
+from __future__ import annotations
+
+import math
+
+import mujoco
+import numpy as np
+
+__all__ = ["swing_leg_torques"]
+
+
+def swing_leg_torques(ctl, i, pd, vd, ad):
+    """Swing-leg torques of :class:`~biped.control.stepping.SteppingController` ``ctl`` (its
+    model, data at the current state, leg indices and config) for foot ``i``: the ankle point
+    follows (pd, vd, ad) by task-space computed torque on hip abduction, hip flexion and knee
+    (3 x 3 Jacobian, MuJoCo mj_jacBody, damped least squares); hip rotation is held at 0 and the
+    two ankle joints at the angles that put the sole flat with zero yaw (from the shank's world
+    orientation), both by joint-space PD; torques ``M_ll qdd + b_l - p_l`` (leg block of
+    MuJoCo's mass matrix, leg bias forces, minus the passive hinge damping, which the foot's
+    small inertia would not overcome)."""
+    m, d, s = ctl.model, ctl.data, ctl.stepping
+    b = ctl._foot[i]
+    dofs = ctl._leg_dofs[i]
+    q = d.qpos[ctl._leg_qpos[i]]
+    qd = d.qvel[dofs]
+    jp = np.zeros((3, m.nv))
+    mujoco.mj_jacBody(m, d, jp, None, b)
+    Jl = jp[:, dofs]
+    # joint-space parts: hip rotation to 0, ankle to the flat-foot angles
+    R = d.xmat[ctl._shank[i]].reshape(3, 3).T  # desired foot orientation (I) in the shank frame
+    inv = ctl._inv_sign[i] * math.atan2(R[2, 1], R[1, 1])
+    dors = math.atan2(R[0, 2], R[0, 0])
+    qdd = np.zeros(6)
+    for k, qk in ((2, 0.0), (4, inv), (5, dors)):
+        qdd[k] = s.kp_rot * (qk - q[k]) - s.kv_rot * qd[k]
+    a = ad + s.kp_pos * (pd - d.xpos[b]) + s.kv_pos * (vd - jp[:, dofs] @ qd - jp @ d.qvel + jp[:, dofs] @ qd)
+    a = a - Jl[:, [2, 4, 5]] @ qdd[[2, 4, 5]]
+    J3 = Jl[:, [0, 1, 3]]
+    qdd[[0, 1, 3]] = J3.T @ np.linalg.solve(J3 @ J3.T + 1e-4 * np.eye(3), a)
+    M = np.zeros((m.nv, m.nv))
+    mujoco.mj_fullM(m, d, M)
+    tau = M[np.ix_(dofs, dofs)] @ qdd + d.qfrc_bias[dofs] - d.qfrc_passive[dofs]
+    # the ankle's tiny inertia makes M_ll qdd a few N m that unmodelled coupling (the base's
+    # acceleration) swamps: a stiff joint PD on the ankle instead [N m/rad, N m s/rad]
+    # (damping on the foot's own angular velocity in the world, not the joint rate: the
+    # shank turns fast during the swing and the flat foot must not follow it)
+    jr = np.zeros((3, m.nv))
+    mujoco.mj_jacBody(m, d, None, jr, b)
+    w = jr @ d.qvel
+    for k, qk, wk in ((4, inv, ctl._inv_sign[i] * w[0]), (5, dors, w[1])):
+        tau[k] = s.ankle_kp * (qk - q[k]) - s.ankle_kv * wk + d.qfrc_bias[dofs[k]]
+    return np.clip(tau, -s.swing_torque_max_n_m, s.swing_torque_max_n_m)
