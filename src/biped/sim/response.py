@@ -34,6 +34,7 @@ from dataclasses import asdict, dataclass
 import mujoco
 import numpy as np
 
+from biped.sim.loop_measures import LoopRows
 from biped.sim.measure import RowMeasurements, measure_rows
 from biped.sim.perturbations import of as perturbation_of
 
@@ -124,6 +125,15 @@ def body_angles(scene, qpos: np.ndarray, direction) -> tuple[np.ndarray, np.ndar
         z = d.xmat[cb].reshape(3, 3)[:, 2]
         trunk[k] = math.atan2(float(z @ u), float(z[2]))
     return leg, trunk
+
+
+def angles_from_rows(limbs: np.ndarray, trunk_z: np.ndarray, direction) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`body_angles` from the loop's records (:class:`~biped.sim.loop_measures.LoopRows`):
+    ``limbs`` (n, 4, 3) the left and right ankle_1, then hip_1 frame origins, ``trunk_z`` (n, 3)
+    the central body's z axis."""
+    u = np.array([direction[0], direction[1], 0.0])
+    v = limbs[:, 2:4].mean(axis=1) - limbs[:, 0:2].mean(axis=1)
+    return np.arctan2(v @ u, v[:, 2]), np.arctan2(trunk_z @ u, trunk_z[:, 2])
 
 
 def strategy_from_angles(leg: np.ndarray, trunk: np.ndarray) -> tuple[str, float, float, float]:
@@ -292,8 +302,9 @@ def _first_swing(result, k0: int, on, t0: float) -> tuple[float, float]:
     return length, float(t[land] - t0)
 
 
-def measure_response(scene, result, rows: RowMeasurements | None = None) -> Response:
-    """The :class:`Response` of ``result`` (``rows``: its :func:`measure_rows`, computed if None)."""
+def measure_response(scene, result, rows: RowMeasurements | LoopRows | None = None) -> Response:
+    """The :class:`Response` of ``result`` (``rows``: its :func:`measure_rows`, computed if None,
+    or the loop's records of the same quantities, :func:`biped.sim.loop_measures.loop_rows`)."""
     n = len(result.times)
     if n < 2:
         return Response()
@@ -363,7 +374,10 @@ def measure_response(scene, result, rows: RowMeasurements | None = None) -> Resp
     step_len, contact_t = math.nan, math.nan
     if stepped:  # the first swing: a foot off the floor (heel and toe) for >= SWING_S, then down
         step_len, contact_t = _first_swing(result, k0, on, t0)
-    leg, trunk = body_angles(scene, result.qpos[win], u)
+    if isinstance(rows, LoopRows):
+        leg, trunk = angles_from_rows(rows.limbs[win], rows.trunk_z[win], u)
+    else:
+        leg, trunk = body_angles(scene, result.qpos[win], u)
     label, corr, pt, pl = strategy_from_angles(leg, trunk)
     tlabel, ratio = strategy_by_torque(result.torques[win], names)
     if result.fell:
@@ -406,6 +420,7 @@ __all__ = [
     "Response",
     "Traces",
     "traces",
+    "angles_from_rows",
     "body_angles",
     "margin",
     "measure_response",
