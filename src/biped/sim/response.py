@@ -36,6 +36,7 @@ import numpy as np
 
 from biped.sim.loop_measures import LoopRows
 from biped.sim.measure import RowMeasurements, measure_rows
+from biped.sim.mos import margins
 from biped.sim.perturbations import of as perturbation_of
 
 #: the response window after the onset for the strategy [s]
@@ -302,6 +303,30 @@ def _first_swing(result, k0: int, on, t0: float) -> tuple[float, float]:
     return length, float(t[land] - t0)
 
 
+def _margins(xi: np.ndarray, on, result, corners, k0: int) -> np.ndarray:
+    """(n,) Hof's margin of stability of rows k0.. (NaN before and with no foot on the floor):
+    one hull of the soles' corners per contact state and (1 mm, 1e-4) rounded feet pose, from its
+    first row (:func:`biped.sim.mos.margins` is the same rule, compiled)."""
+    n = len(xi)
+    mos = np.full(n, np.nan)
+    hulls: dict = {}
+    for k in range(k0, n):
+        key = (bool(on[0][k]), bool(on[1][k]), *np.round(result.feet_pos[k], 3).ravel(),
+               *np.round(result.feet_quat[k], 4).ravel())  # fmt: skip
+        hulls.setdefault(key, []).append(k)
+    for key, ks in hulls.items():
+        k = ks[0]
+        pts = []
+        for i in range(2):
+            if key[i]:
+                R = np.zeros(9)
+                mujoco.mju_quat2Mat(R, result.feet_quat[k, i])
+                pts.append((result.feet_pos[k, i] + corners[i] @ R.reshape(3, 3).T)[:, :2])
+        if pts:
+            mos[ks] = margin(xi[ks], _hull(np.vstack(pts)))
+    return mos
+
+
 def measure_response(scene, result, rows: RowMeasurements | LoopRows | None = None) -> Response:
     """The :class:`Response` of ``result`` (``rows``: its :func:`measure_rows`, computed if None,
     or the loop's records of the same quantities, :func:`biped.sim.loop_measures.loop_rows`)."""
@@ -334,22 +359,10 @@ def measure_response(scene, result, rows: RowMeasurements | LoopRows | None = No
     m = scene.model
     corners = _sole_corners(m, scene)
     on = (result.left_contact, result.right_contact)
-    mos = np.full(n, np.nan)
-    hulls: dict = {}  # one hull per contact state and (1 mm, 1e-4) rounded feet pose
-    for k in range(k0, n):
-        key = (bool(on[0][k]), bool(on[1][k]), *np.round(result.feet_pos[k], 3).ravel(),
-               *np.round(result.feet_quat[k], 4).ravel())  # fmt: skip
-        hulls.setdefault(key, []).append(k)
-    for key, ks in hulls.items():
-        k = ks[0]
-        pts = []
-        for i in range(2):
-            if key[i]:
-                R = np.zeros(9)
-                mujoco.mju_quat2Mat(R, result.feet_quat[k, i])
-                pts.append((result.feet_pos[k, i] + corners[i] @ R.reshape(3, 3).T)[:, :2])
-        if pts:
-            mos[ks] = margin(xi[ks], _hull(np.vstack(pts)))
+    if isinstance(rows, LoopRows):  # a sweep's row: the same rule, compiled (biped.sim.mos)
+        mos = margins(xi, np.column_stack(on), result.feet_pos, result.feet_quat, corners, k0)
+    else:
+        mos = _margins(xi, on, result, corners, k0)
     # torques per plane, peak |tau| after the onset, over both legs
     names = list(result.joint_names)
     peaks = {}
