@@ -145,15 +145,24 @@ def margins(xi: np.ndarray, on: np.ndarray, feet_pos: np.ndarray, feet_quat: np.
     out = np.full(n, np.nan)
     if k0 >= n:
         return out
-    # one hull per contact state and (1 mm, 1e-4) rounded feet pose, from its first row
-    key = np.column_stack(
-        [
-            on[k0:].astype(float),
-            np.round(feet_pos[k0:].reshape(-1, 6), 3) + 0.0,  # + 0.0: -0.0 and 0.0 are one key
-            np.round(feet_quat[k0:].reshape(-1, 8), 4) + 0.0,
-        ]
-    )
-    _, first, group = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    # one hull per contact state and (1 mm, 1e-4) rounded feet pose, from its first row: the key's
+    # numbers as integers (np.round(x, 3) == rint(1000 x) / 1000: equal exactly when the integers
+    # are), rows sorted by key (stable: a group's first row comes first)
+    with np.errstate(invalid="ignore"):  # a diverged run's NaN poses: one key, NaN margins
+        key = np.column_stack(
+            [
+                on[k0:],
+                np.rint(feet_pos[k0:].reshape(-1, 6) * 1e3),
+                np.rint(feet_quat[k0:].reshape(-1, 8) * 1e4),
+            ]
+        ).astype(np.int64)
+    order = np.lexsort(key.T[::-1])
+    s = key[order]
+    new = np.ones(len(s), dtype=bool)
+    new[1:] = (s[1:] != s[:-1]).any(axis=1)
+    first = order[new]
+    group = np.empty(len(s), dtype=np.int64)
+    group[order] = np.cumsum(new) - 1
     c = np.ascontiguousarray(np.stack([np.asarray(x, dtype=float) for x in corners]))
     _margins(
         np.ascontiguousarray(xi[k0:], dtype=float),
@@ -162,7 +171,7 @@ def margins(xi: np.ndarray, on: np.ndarray, feet_pos: np.ndarray, feet_quat: np.
         np.ascontiguousarray(feet_quat[k0:], dtype=float),
         c,
         first.astype(np.int64),
-        group.reshape(-1).astype(np.int64),
+        group,
         out[k0:],
     )
     return out

@@ -29,6 +29,7 @@ minimum over the run after the onset, and when.
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import asdict, dataclass
 
 import mujoco
@@ -207,8 +208,15 @@ def margin(points: np.ndarray, hull: np.ndarray) -> np.ndarray:
     return np.where(inside, cross.min(axis=1), -dist)
 
 
+_CORNERS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def _sole_corners(m: mujoco.MjModel, scene) -> list:
-    """Per foot (left, right): (body id, (8, 3) corners of its sole boxes in the body's frame)."""
+    """Per foot (left, right): (8, 3) corners of its sole boxes in the body's frame (once a
+    model)."""
+    found = _CORNERS.get(m)
+    if found is not None and found[0] == tuple(scene.sole_geoms):
+        return found[1]
     out = []
     for foot in ("left", "right"):
         body = m.body(f"{foot}_foot").id
@@ -223,6 +231,7 @@ def _sole_corners(m: mujoco.MjModel, scene) -> list:
                 for sy in (-1, 1):
                     pts.append(m.geom_pos[g] + R.reshape(3, 3) @ (np.array([sx, sy, -1.0]) * h))
         out.append(np.array(pts))
+    _CORNERS[m] = (tuple(scene.sole_geoms), out)
     return out
 
 
