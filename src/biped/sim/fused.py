@@ -436,7 +436,7 @@ class FusedRows:
             subtree_vel,
             contact_force,
             frames,
-            np.zeros((geom.shape[0], 6)),
+            np.empty((geom.shape[0], 6)),  # each floor contact's row is written before it is read
             spec.foot_of_geom,
             spec.limbs,
             data.xmat,
