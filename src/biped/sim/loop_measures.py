@@ -21,6 +21,7 @@ again from another warm start, so the two agree to the solver's tolerance
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import mujoco
@@ -57,20 +58,31 @@ class RowSpec:
     limbs: np.ndarray  # (4,) int64
 
 
+_SPECS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # model -> (RowSpec, MjData)
+
+
 def row_spec(scene) -> RowSpec:
-    """The :class:`RowSpec` of a :class:`~biped.sim.scene.Scene`."""
+    """The :class:`RowSpec` of a :class:`~biped.sim.scene.Scene` (once a model)."""
+    found = _SPECS.get(scene.model)
+    if found is not None and (found[0].central_body, found[0].floor) == (
+        scene.central_body,
+        scene.floor_geom,
+    ):
+        return found[0]
     from biped.sim.measure import foot_bodies
 
     m = scene.model
     foot_of_body = np.full(m.nbody, -1, dtype=np.int64)
     for i, ids in enumerate(foot_bodies(m)):
         foot_of_body[ids] = i
-    return RowSpec(
+    spec = RowSpec(
         central_body=int(scene.central_body),
         floor=int(scene.floor_geom),
         foot_of_geom=np.ascontiguousarray(foot_of_body[m.geom_bodyid]),
         limbs=np.array([m.body(b).id for b in LIMB_BODIES], dtype=np.int64),
     )
+    _SPECS[m] = (spec, mujoco.MjData(m))  # an MjData costs ~1 ms to make: fill_rows reuses one
+    return spec
 
 
 @njit(cache=True)
@@ -179,10 +191,11 @@ def fill_rows(scene, qpos, qvel, torques, inputs, rows, out: np.ndarray) -> None
     if not len(rows):
         return
     m = scene.model
-    d = mujoco.MjData(m)
     spec = row_spec(scene)
+    d = _SPECS[m][1]
     f6s = np.zeros((16, 6))
     for k in rows:
+        mujoco.mj_resetData(m, d)  # as a new MjData: no warm start, no state of another run
         d.qpos[:] = qpos[k]
         d.qvel[:] = qvel[k]
         d.ctrl[:] = 0.0
