@@ -21,6 +21,7 @@ again from another warm start, so the two agree to the solver's tolerance
 
 from __future__ import annotations
 
+import threading
 import weakref
 from dataclasses import dataclass
 
@@ -58,17 +59,15 @@ class RowSpec:
     limbs: np.ndarray  # (4,) int64
 
 
-_SPECS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # model -> (RowSpec, MjData)
+_SPECS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()  # model -> RowSpec
+_LOCAL = threading.local()  # .data: model -> an MjData for fill_rows, one a thread (~1 ms to make)
 
 
 def row_spec(scene) -> RowSpec:
     """The :class:`RowSpec` of a :class:`~biped.sim.scene.Scene` (once a model)."""
     found = _SPECS.get(scene.model)
-    if found is not None and (found[0].central_body, found[0].floor) == (
-        scene.central_body,
-        scene.floor_geom,
-    ):
-        return found[0]
+    if found is not None and (found.central_body, found.floor) == (scene.central_body, scene.floor_geom):
+        return found
     from biped.sim.measure import foot_bodies
 
     m = scene.model
@@ -81,7 +80,7 @@ def row_spec(scene) -> RowSpec:
         foot_of_geom=np.ascontiguousarray(foot_of_body[m.geom_bodyid]),
         limbs=np.array([m.body(b).id for b in LIMB_BODIES], dtype=np.int64),
     )
-    _SPECS[m] = (spec, mujoco.MjData(m))  # an MjData costs ~1 ms to make: fill_rows reuses one
+    _SPECS[m] = spec
     return spec
 
 
@@ -192,7 +191,10 @@ def fill_rows(scene, qpos, qvel, torques, inputs, rows, out: np.ndarray) -> None
         return
     m = scene.model
     spec = row_spec(scene)
-    d = _SPECS[m][1]
+    datas = _LOCAL.__dict__.setdefault("data", weakref.WeakKeyDictionary())
+    d = datas.get(m)
+    if d is None:
+        d = datas[m] = mujoco.MjData(m)
     f6s = np.zeros((16, 6))
     for k in rows:
         mujoco.mj_resetData(m, d)  # as a new MjData: no warm start, no state of another run
