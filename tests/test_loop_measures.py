@@ -102,3 +102,41 @@ def test_compiled_margins_are_the_python_rule():
     assert np.isnan(want[:7]).all() and (np.isnan(want) == np.isnan(got)).all()
     assert np.isfinite(want).sum() > 300 and (want > 0).any() and (want < 0).any()
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-11)
+
+
+def test_a_block_sweep_row_carries_the_response():
+    """A block trial of a sweep (early stop, the sweep's hold task) fills the response's columns,
+    the numbers of measure_response on measure_rows (MuJoCo's second pass) of the same run."""
+    from biped.sim.sweep import SweepSpec, hold_scenario
+    from biped.sim.sweep.trial import _scene_for, make_policy, run_trial
+
+    base = hold_scenario(Scenario(physics="fast", distribution="qp", early_stop=True, duration_s=1.0))
+    spec = SweepSpec(axes={"speed_m_s": 6.0, "direction_deg": 180.0}, base=base)
+    setup = spec.setup(spec.trials()[0])
+    row = run_trial(setup)
+    scene = _scene_for(setup.scenario)
+    result = run_closed_loop(setup.scenario, scene, make_policy(setup, scene))
+    want = measure_response(scene, result, measure_rows(scene, result)).to_dict()
+    assert row["paradigm"] == "block" and row["strategy"] in ("ankle", "hip", "step")
+    assert row["strategy"] == want["strategy"] and row["strategy_torque"] == want["strategy_torque"]
+    for key in ("mos_min_m", "peak_com_excursion_m", "peak_cop_excursion_m", "peak_hip_sagittal_n_m"):
+        assert math.isfinite(row[key]), key
+    for key, w in want.items():
+        if key in row and isinstance(w, float):
+            assert (math.isnan(w) and math.isnan(row[key])) or abs(row[key] - w) <= 1e-5, (key, row[key], w)
+
+
+def test_sweep_row_columns_are_the_responses():
+    """sim/sweep/record.Measured repeats sim/response.Response's fields (but its onset_s) in the
+    file's column order: the same names, types and defaults, in the same order."""
+    import dataclasses
+
+    from biped.sim.response import Response
+    from biped.sim.sweep.record import Measured
+
+    want = [(f.name, f.type, f.default) for f in dataclasses.fields(Response) if f.name != "onset_s"]
+    names = [f.name for f in dataclasses.fields(Measured)]
+    i = names.index(want[0][0])
+    got = [(f.name, f.type, f.default) for f in dataclasses.fields(Measured)[i : i + len(want)]]
+    assert [g[:2] for g in got] == [w[:2] for w in want]
+    assert all(g[2] == w[2] or (g[2] != g[2] and w[2] != w[2]) for g, w in zip(got, want, strict=True))
