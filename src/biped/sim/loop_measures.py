@@ -84,8 +84,7 @@ def row_spec(scene) -> RowSpec:
     return spec
 
 
-@njit(cache=True)
-def _feet_forces(ncon, geom, cpos, frames, f6s, foot_of_geom, floor, out):  # pragma: no cover - compiled
+def _feet_forces(ncon, geom, cpos, frames, f6s, foot_of_geom, floor, out):
     """GRF and CoP columns of ``out`` from the ``ncon`` contacts (geom pairs, positions, frames)
     and their forces in the contact frame ``f6s`` (ncon, 6) (biped.sim.measure.measure_rows'
     rules: a contact of the floor and a geom of a foot; the force on the foot; the CoP on z = 0)."""
@@ -125,14 +124,19 @@ def _feet_forces(ncon, geom, cpos, frames, f6s, foot_of_geom, floor, out):  # pr
             out[13 + 2 * i] = np.nan
 
 
-@njit(cache=True)
-def _bodies(cb, limbs, xpos, xmat, scom, slin, out):  # pragma: no cover - compiled
+def _bodies(cb, limbs, xpos, xmat, scom, slin, out):
     for j in range(3):
         out[j] = scom[cb, j]
         out[3 + j] = slin[cb, j]
         out[28 + j] = xmat[cb, 2 + 3 * j]  # the z axis: xmat's third column
         for b in range(4):
             out[16 + 3 * b + j] = xpos[limbs[b], j]
+
+
+# the two above run as Python in record_python (no compile for the Python loop and fill_rows) and
+# compiled in record_row: the same operations in the same order, so the same numbers bit for bit
+_feet_forces_c = njit(cache=True)(_feet_forces)
+_bodies_c = njit(cache=True)(_bodies)
 
 
 @njit(cache=True)
@@ -160,12 +164,12 @@ def record_row(
     ``mj_subtreeVel`` (``subtree_vel``) and ``mj_contactForce`` (``contact_force``) on the model and
     data at addresses ``m``, ``d``; ``f6s`` (capacity, 6) scratch for the contact forces."""  # fmt: skip
     subtree_vel(m, d)
-    _bodies(cb, limbs, xpos, xmat, scom, slin, out)
+    _bodies_c(cb, limbs, xpos, xmat, scom, slin, out)
     n = min(ncon, f6s.shape[0])
     for c in range(n):
         if geom[c, 0] == floor or geom[c, 1] == floor:
             contact_force(m, d, np.int32(c), f6s[c].ctypes.data)
-    _feet_forces(n, geom, cpos, frames, f6s, foot_of_geom, floor, out)
+    _feet_forces_c(n, geom, cpos, frames, f6s, foot_of_geom, floor, out)
 
 
 def record_python(m, d, spec: RowSpec, out: np.ndarray, f6s: np.ndarray) -> None:
