@@ -50,8 +50,8 @@ def _hull(pts, out):  # pragma: no cover - compiled
     m = pts.shape[0]
     p = np.empty((m, 2))
     for i in range(m):
-        p[i, 0] = np.round(pts[i, 0], 12)
-        p[i, 1] = np.round(pts[i, 1], 12)
+        p[i, 0] = np.rint(pts[i, 0] * 1e12) / 1e12  # np.round(x, 12): rint(x 10^12) / 10^12
+        p[i, 1] = np.rint(pts[i, 1] * 1e12) / 1e12
     for i in range(1, m):  # insertion sort by (x, y)
         x, y = p[i, 0], p[i, 1]
         j = i - 1
