@@ -84,7 +84,8 @@ def row_spec(scene) -> RowSpec:
     return spec
 
 
-def _feet_forces(ncon, geom, cpos, frames, f6s, foot_of_geom, floor, out):
+@njit(cache=True)
+def _feet_forces(ncon, geom, cpos, frames, f6s, foot_of_geom, floor, out):  # pragma: no cover - compiled
     """GRF and CoP columns of ``out`` from the ``ncon`` contacts (geom pairs, positions, frames)
     and their forces in the contact frame ``f6s`` (ncon, 6) (biped.sim.measure.measure_rows'
     rules: a contact of the floor and a geom of a foot; the force on the foot; the CoP on z = 0)."""
@@ -124,19 +125,14 @@ def _feet_forces(ncon, geom, cpos, frames, f6s, foot_of_geom, floor, out):
             out[13 + 2 * i] = np.nan
 
 
-def _bodies(cb, limbs, xpos, xmat, scom, slin, out):
+@njit(cache=True)
+def _bodies(cb, limbs, xpos, xmat, scom, slin, out):  # pragma: no cover - compiled
     for j in range(3):
         out[j] = scom[cb, j]
         out[3 + j] = slin[cb, j]
         out[28 + j] = xmat[cb, 2 + 3 * j]  # the z axis: xmat's third column
         for b in range(4):
             out[16 + 3 * b + j] = xpos[limbs[b], j]
-
-
-# the two above run as Python in record_python (no compile for the Python loop and fill_rows) and
-# compiled in record_row: the same operations in the same order, so the same numbers bit for bit
-_feet_forces_c = njit(cache=True)(_feet_forces)
-_bodies_c = njit(cache=True)(_bodies)
 
 
 @njit(cache=True)
@@ -164,27 +160,57 @@ def record_row(
     ``mj_subtreeVel`` (``subtree_vel``) and ``mj_contactForce`` (``contact_force``) on the model and
     data at addresses ``m``, ``d``; ``f6s`` (capacity, 6) scratch for the contact forces."""  # fmt: skip
     subtree_vel(m, d)
-    _bodies_c(cb, limbs, xpos, xmat, scom, slin, out)
+    _bodies(cb, limbs, xpos, xmat, scom, slin, out)
     n = min(ncon, f6s.shape[0])
     for c in range(n):
         if geom[c, 0] == floor or geom[c, 1] == floor:
             contact_force(m, d, np.int32(c), f6s[c].ctypes.data)
-    _feet_forces_c(n, geom, cpos, frames, f6s, foot_of_geom, floor, out)
+    _feet_forces(n, geom, cpos, frames, f6s, foot_of_geom, floor, out)
 
 
-def record_python(m, d, spec: RowSpec, out: np.ndarray, f6s: np.ndarray) -> None:
-    """:func:`record_row` through the bindings (the Python loop, and :func:`fill_rows`)."""
+def record_python(m, d, spec: RowSpec, out: np.ndarray, f6: np.ndarray) -> None:
+    """:func:`record_row` through the bindings, in Python (the Python loop and :func:`fill_rows`;
+    nothing to compile): the same operations in the same order on the same doubles, so the same
+    numbers bit for bit (``tests/test_sim_fused.py``). ``f6`` (6,) scratch."""
     mujoco.mj_subtreeVel(m, d)
-    _bodies(spec.central_body, spec.limbs, d.xpos, d.xmat, d.subtree_com, d.subtree_linvel, out)
+    cb = spec.central_body
+    out[WCOM] = d.subtree_com[cb]
+    out[WVEL] = d.subtree_linvel[cb]
+    out[LIMBS] = d.xpos[spec.limbs].ravel()
+    out[TRUNK] = d.xmat[cb, 2::3]  # the z axis: xmat's third column
+    fx, fy, fz, mx, my = [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0], [0.0, 0.0]
     n = d.ncon
-    if len(f6s) < n:
-        f6s = np.zeros((n, 6))
-    con = d.contact
-    geom = con.geom
-    for c in range(n):
-        if geom[c, 0] == spec.floor or geom[c, 1] == spec.floor:
-            mujoco.mj_contactForce(m, d, c, f6s[c])
-    _feet_forces(n, geom, con.pos, con.frame, f6s, spec.foot_of_geom, spec.floor, out)
+    if n:
+        con = d.contact
+        geom, pos, frames = con.geom.tolist(), con.pos.tolist(), con.frame.tolist()
+        floor, foot_of = spec.floor, spec.foot_of_geom
+        for c in range(n):
+            g0, g1 = geom[c]
+            if g0 == floor:
+                other, sign = g1, 1.0
+            elif g1 == floor:
+                other, sign = g0, -1.0
+            else:
+                continue
+            i = int(foot_of[other])
+            if i < 0:
+                continue
+            mujoco.mj_contactForce(m, d, c, f6)
+            a, b, e = float(f6[0]), float(f6[1]), float(f6[2])
+            fr = frames[c]
+            f = [sign * (fr[j] * a + fr[3 + j] * b + fr[6 + j] * e) for j in range(3)]
+            x, y, z = pos[c]
+            fx[i] += f[0]
+            fy[i] += f[1]
+            fz[i] += f[2]
+            mx[i] += y * f[2] - z * f[1]
+            my[i] += z * f[0] - x * f[2]
+    for i in range(2):
+        out[6 + 3 * i : 9 + 3 * i] = fx[i], fy[i], fz[i]
+        if fz[i] > 0.0:
+            out[12 + 2 * i : 14 + 2 * i] = -my[i] / fz[i], mx[i] / fz[i]
+        else:
+            out[12 + 2 * i : 14 + 2 * i] = np.nan
 
 
 def fill_rows(scene, qpos, qvel, torques, inputs, rows, out: np.ndarray) -> None:
@@ -199,7 +225,7 @@ def fill_rows(scene, qpos, qvel, torques, inputs, rows, out: np.ndarray) -> None
     d = datas.get(m)
     if d is None:
         d = datas[m] = mujoco.MjData(m)
-    f6s = np.zeros((16, 6))
+    f6 = np.zeros(6)
     for k in rows:
         mujoco.mj_resetData(m, d)  # as a new MjData: no warm start, no state of another run
         d.qpos[:] = qpos[k]
@@ -213,7 +239,7 @@ def fill_rows(scene, qpos, qvel, torques, inputs, rows, out: np.ndarray) -> None
                 d.xfrc_applied[:] = inputs["xfrc"][j]
         d.ctrl[scene.actuator_index] = torques[k]
         mujoco.mj_forward(m, d)
-        record_python(m, d, spec, out[k], f6s)
+        record_python(m, d, spec, out[k], f6)
 
 
 @dataclass(frozen=True, eq=False)

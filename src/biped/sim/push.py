@@ -218,7 +218,7 @@ def run_closed_loop(
     records: dict = {"qpos": qpos, "qvel": qvel, "com": com, "torques": torques, "bits": bits}
     records.update(feet_pos=feet_pos, feet_quat=feet_quat, feet_bodies=(f0, f1))
     measures = records["measures"] = np.full((n, NCOL), np.nan)  # biped.sim.loop_measures
-    spec, f6s = row_spec(scene), np.zeros((16, 6))
+    spec, f6 = row_spec(scene), np.zeros(6)
     feet_rows = 0  # rows whose foot poses were read in the loop
     iq, iv = _as_slice(scene.biped_qpos_index), _as_slice(scene.biped_qvel_index)
     act = scene.actuator_index
@@ -320,7 +320,7 @@ def run_closed_loop(
             feet_pos[k, 1] = xpos[f1]
             feet_quat[k, 0] = xquat[f0]
             feet_quat[k, 1] = xquat[f1]
-            record_python(m, d, spec, measures[k], f6s)
+            record_python(m, d, spec, measures[k], f6)
             feet_rows = k + 1
             if sub > 1:
                 mujoco.mj_step(m, d, sub - 1)  # = mj_step(m, d, sub): MuJoCo loops the same way
