@@ -62,6 +62,13 @@ def main(argv=None) -> int:
         help="also time W's default push closed loop, statics vs qp, N times each",
     )
     ap.add_argument("--model", help="a robot's name or MJCF path (docs/robots.md) instead of W's biped")
+    ap.add_argument(
+        "--state",
+        choices=("standing", "random", "still"),
+        default="standing",
+        help="--model's state: standing (feet still: leg velocities from a random root twist; "
+        "default), random (random leg velocities too: the feet move), still (zero velocity)",
+    )
     args = ap.parse_args(argv)
     if args.model:
         return robot_bench(args)
@@ -167,14 +174,36 @@ def main(argv=None) -> int:
     return 0
 
 
+def standing_velocity(m, d, desc, tree, qpos, rng) -> np.ndarray:
+    """A velocity of the robot standing: a random floating-body twist (0.1 m/s, rad/s) and the leg
+    joint velocities that keep both feet still (each leg's 6 x 6 Jacobian solved, MuJoCo's
+    ``mj_jacBody``); the held joints still."""
+    qvel = np.zeros(m.nv)
+    r = tree.dof_adr[0]
+    qvel[r : r + 6] = rng.normal(0.0, 0.1, 6)
+    d.qpos[:] = qpos
+    mujoco.mj_kinematics(m, d)
+    mujoco.mj_comPos(m, d)
+    legs = np.asarray(tree.dof_adr[1:])
+    for foot in desc.feet:
+        jp, jr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
+        mujoco.mj_jacBody(m, d, jp, jr, m.body(foot).id)
+        J = np.vstack([jp, jr])
+        mine = [a for a in legs if abs(J[:, a]).sum() > 0]
+        qvel[mine] = np.linalg.solve(J[:, mine], -J[:, r : r + 6] @ qvel[r : r + 6])
+    return qvel
+
+
 def robot_bench(args) -> int:
     """The controller on a robot's folded tree against Pinocchio on the same tree and on the file."""
     import tempfile
 
     import pinocchio as pin
 
+    from biped.control.setpoint import Target
     from biped.models.robot import ROBOTS, controller_spec, describe, robot_path
     from biped.sim.robot import robot_controller, standing_qpos
+    from biped.spatial import rot_to_quat
 
     path = robot_path(args.model) if args.model in ROBOTS else args.model
     desc = describe(path)
@@ -184,14 +213,25 @@ def robot_bench(args) -> int:
     tree = ctrls["qp"].tree
     rng = np.random.default_rng(0)
     qpos = standing_qpos(desc, ctrls["qp"])
-    qvel = np.zeros(tree.nv)
-    qvel[tree.dof_adr[0] : tree.dof_adr[0] + 6] = rng.normal(0.0, 0.1, 6)
-    qvel[tree.dof_adr[1:]] = rng.normal(0.0, 0.3, len(tree.dof_adr) - 1)
+    g0 = ctrls["qp"].link_poses(qpos)[0]
+    for c in ctrls.values():  # the standing set point, as robot_push (without it: W's, 1.035 m high)
+        c.target = Target(com=tuple(g0[:3, 3]), quat=tuple(rot_to_quat(np.ascontiguousarray(g0[:3, :3]))))
+    m = mujoco.MjModel.from_xml_path(str(desc.path))
+    d = mujoco.MjData(m)
+    qvel = standing_velocity(m, d, desc, tree, qpos, rng) if args.state == "standing" else np.zeros(tree.nv)
+    if args.state == "random":  # random leg velocities: the feet move, which standing excludes
+        qvel[tree.dof_adr[0] : tree.dof_adr[0] + 6] = rng.normal(0.0, 0.1, 6)
+        qvel[tree.dof_adr[1:]] = rng.normal(0.0, 0.3, len(tree.dof_adr) - 1)
     for c in ctrls.values():
         c.compute(qpos, qvel)  # compiles, or loads numba's cache
     t_first = time.perf_counter() - t0
-    m = mujoco.MjModel.from_xml_path(str(desc.path))
-    d = mujoco.MjData(m)
+    qp = ctrls["qp"].qp
+    x, _, flag, info = qp._daqp(qp.Gq, -qp.av, qp.Ct, qp._upper, qp.b, qp._sense)
+    act = int(np.sum(np.abs(qp.Ct[: qp.rows] @ x - qp.b[: qp.rows]) < 1e-7))
+    print(
+        f"state {args.state}: the QP with limits: {qp.rows} rows, daqp {info['iterations']} iterations, "
+        f"{act} active rows, normal forces {x[2]:.1f} and {x[8]:.1f} N (weight {desc.mass * 9.81:.1f} N)"
+    )
     d.qpos[:], d.qvel[:] = qpos, rng.normal(0.0, 0.3, m.nv)
     spec = controller_spec(desc)
     spec.compile()  # fuses the jointless bodies; to_xml then writes the fused tree

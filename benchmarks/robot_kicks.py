@@ -9,7 +9,7 @@ central-body COM back within 1 cm of its set point 2.5 s later; bisection in ``-
 [0, 1.6] m/s, feet in place, QP, actuator limits. Printed beside the impulse (mass x velocity
 change) and Hof's feet-in-place bound J_max = m sqrt(g / h) d in that direction
 (:func:`biped.analysis.robot.robot_hof_bound`). A bisection assumes recovery is monotone in the
-kick; docs/robots.md notes where it is not (T1 sideways). One process per robot (``--jobs``).
+kick; docs/robots.md notes where it was not (T1 before the crouch). One process per robot (``--jobs``).
 """
 
 from __future__ import annotations

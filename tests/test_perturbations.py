@@ -259,6 +259,7 @@ def test_block_sweep_keys_are_those_of_before_the_paradigms():
         ("force", 100.0, "force_n", (0.0, -100.0, 0.0)),  # pushes toward -y: the force points there
         ("platform", 0.1, "platform_displacement_m", (0.0, 0.1)),  # the floor moves the other way
         ("release", 10.0, "release_direction_deg", 90.0),  # world -y is the biped's left
+        ("pull", 0.1, "pull_displacement_m", (0.0, -0.1)),  # the motor pulls toward -y
     ],
 )
 def test_sweep_magnitude_and_direction_set_the_paradigm(paradigm, magnitude, key, want):

@@ -210,3 +210,31 @@ def test_biped_push_model_path_routes_a_robot_file_and_refuses_neither(tmp_path,
     assert len(err.splitlines()) == 1
     assert "neither W's biped structure" in err and "has no keyframe" in err
     assert not (tmp_path / "bad").exists()
+
+
+def test_straight_knees_are_crouched_off_the_singularity_and_stand_with_ws_big_base():
+    """G1's keyframe has straight knees: each leg's 6 x 6 Jacobian (MuJoCo's mj_jacBody) is
+    singular there. The standing pose crouches both legs until its smallest singular value is
+    LEG_SV_MIN_M, the feet keeping their orientation (MuJoCo's xmat, 1e-9); keyframes already bent
+    (Apollo) are kept as they are. Crouched, G1 stands 2 s with W's big-base factor 1e6, which
+    threw it off its straight keyframe within 0.2 s."""
+    from biped.models.robot_pose import LEG_SV_MIN_M, leg_sv
+
+    desc = describe("g1")
+    m = plant_model(desc)
+    feet = [m.body(f).id for f in desc.feet]
+    dofs = [[int(m.jnt_dofadr[m.joint(j).id]) for j in desc.leg_joints[6 * s : 6 * s + 6]] for s in (0, 1)]
+    key = m.key_qpos[0]
+    assert max(leg_sv(m, key, f, c) for f, c in zip(feet, dofs, strict=True)) < 1e-5
+    svs = [leg_sv(m, desc.key_qpos, f, c) for f, c in zip(feet, dofs, strict=True)]
+    assert min(svs) == pytest.approx(LEG_SV_MIN_M, rel=1e-6) and desc.crouch_rad > 0.1
+    d0, d1 = mujoco.MjData(m), mujoco.MjData(m)
+    d0.qpos[:], d1.qpos[:] = key, desc.key_qpos
+    mujoco.mj_kinematics(m, d0)
+    mujoco.mj_kinematics(m, d1)
+    for f in feet:
+        np.testing.assert_allclose(d1.xmat[f], d0.xmat[f], atol=1e-9)
+    apollo = describe("apollo")
+    assert apollo.crouch_rad == 0.0 and np.array_equal(apollo.key_qpos, plant_model(apollo).key_qpos[0])
+    run = robot_push(desc, 2.0, big_base=1e6)
+    assert not run.fell and run.final_offset_m < 1e-3

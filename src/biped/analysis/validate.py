@@ -95,7 +95,7 @@ HUMAN = {
         "the same, older adults", "m", 0.118, 0.021, KOUSHYAR
     ),
     "waist_pull.percent_bos": HumanValue(
-        "forward pelvis displacement of the largest fast pull survived without a step, % of the "
+        "the largest fast forward waist-pull displacement recovered without a step, % of the "
         "ankle-to-toe length",
         "% BoS",
         72.0,
@@ -166,8 +166,12 @@ def _platform(d: float) -> dict:
     return {"platform_displacement_m": (float(d), 0.0)}  # +x: the feet go backward
 
 
-def _pull(f: float) -> dict:
-    return {"force_n": (-float(f), 0.0, 0.0)}  # -x: forward, the way the biped faces
+def _pull(d: float) -> dict:
+    return {"pull_displacement_m": (-float(d), 0.0)}  # -x: forward, the way the biped faces
+
+
+#: The waist pull's motor speed [m/s] (chosen in Mille's fast range before any run; docs/validate.md).
+PULL_VELOCITY_M_S = 0.5
 
 
 _COMMON = {"friction": 0.8, "duration_s": 2.5}
@@ -223,14 +227,17 @@ EXPERIMENTS = {
     ),
     "waist_pull": Experiment(
         "waist_pull",
-        "forward waist pull (Mille et al. 2003)",
-        "a 0.15 s rectangular horizontal pull forward at the pelvis from quiet stance; the "
-        "largest pull recovered with the feet in place (a step is needed beyond it)",
-        {**_COMMON, "perturbation": "force", "force_start_s": 0.1, "force_duration_s": 0.15},
+        "forward waist pull imposing a displacement (Mille et al. 2003)",
+        "a stiff cable from the pelvis to a motor that travels the displacement forward at a peak "
+        f"velocity of {PULL_VELOCITY_M_S:g} m/s (the platform's trapezoid; ~250 % of the ankle-to-toe "
+        "length per s, in Mille's fast range, above the ~121 % BoS/s beyond which velocity no longer "
+        "mattered), then lets go, from quiet stance; the largest displacement recovered with the feet "
+        "in place (a step is needed beyond it), as % of the ankle-to-toe length",
+        {**_COMMON, "perturbation": "pull", "pull_start_s": 0.1, "pull_velocity_m_s": PULL_VELOCITY_M_S},
         _pull,
-        "N",
-        5.0,
-        2000.0,
+        "m",
+        0.005,
+        0.5,
         ("waist_pull.threshold", "waist_pull.percent_bos"),
     ),
 }
@@ -250,7 +257,9 @@ class Trial:
     onset_ms: float
     hip_knee_motion_deg: float
     wall_time_s: float
-    percent_bos: float = math.nan  # peak forward central-body displacement, % ankle-to-toe length
+    percent_bos: float = (
+        math.nan
+    )  # the pull's displacement (else the central body's peak forward one), % ankle-to-toe
     steps: int = 0  # steps taken (stepping runs)
     step_length_m: float = math.nan  # the first step: the stepping foot's horizontal displacement
     contact_ms: float = math.nan  # the first step: from release (or 0) to that foot's contact
@@ -300,7 +309,10 @@ def run_trial(exp: Experiment, neuromotor: str, magnitude: float) -> Trial:
         raise KeyboardInterrupt
     survived = not r.fell and r.diverged is None and r.controller_error is None and not r.interrupted
     peak, onset, motion = _ankle_measures(r, s)
-    forward = float(np.max(r.com[0, 0] - r.com[:, 0]))  # the biped faces -x
+    if s.perturbation == "pull":  # Mille's measure: the pull's displacement
+        forward = float(np.hypot(*s.pull_displacement_m))
+    else:  # the central body's peak forward displacement (the biped faces -x)
+        forward = float(np.max(r.com[0, 0] - r.com[:, 0]))
     bos = 100.0 * forward / ankle_to_toe_m(s.model)
     n_steps, length, contact = _step_measures(r, s)
     return Trial(exp.key, neuromotor, float(magnitude), exp.unit, bool(survived), r.fall_time_s, peak, onset,

@@ -83,8 +83,8 @@ def register(subparsers) -> None:
     p.add_argument("--controller", choices=("workspace", "joint-pd"), default=None)
     p.add_argument("--distribution", choices=("statics", "printed", "qp"), default=None)
     p.add_argument("--stepping", action="store_true", default=None, help="capture-point steps")
-    p.add_argument("--torque-limits", choices=("none", "human"), default=None)
-    p.add_argument("--model", metavar="FILE.xml", help="the biped (as biped sweep)")
+    p.add_argument("--torque-limits", choices=("none", "human", "model"), default=None)
+    p.add_argument("--model", metavar="FILE.xml", help="the biped or a robot (as biped sweep)")
     p.add_argument("--duration", type=float, metavar="S", help="simulated time per trial [s] (3)")
     p.add_argument("--physics", choices=("faithful", "fast"), default=None, help="physics preset (fast)")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="any scenario key")
@@ -131,7 +131,7 @@ def directions(text: str) -> tuple[float, ...]:
 
 def build(args):
     """(SweepSpec of the lattice x directions, out path)."""
-    from biped.cli.sweep import _variant_suffix, build_spec
+    from biped.cli.sweep import _variant_suffix, build_spec, robot_suffix
     from biped.sim.sweep.envelope import lattice, paradigm_lattice
 
     dirs = directions(args.directions)
@@ -166,7 +166,8 @@ def build(args):
     out = (
         Path(args.out)
         if args.out
-        else Path("runs") / f"envelope-{b.controller}{_variant_suffix(b)}-{spec.torque_limits}.parquet"
+        else Path("runs")
+        / f"envelope-{b.controller}{_variant_suffix(b)}{robot_suffix(spec)}-{spec.torque_limits}.parquet"
     )
     return spec, out
 
@@ -205,10 +206,11 @@ def _run(args) -> int:
     stop = "on" if early_stop_applies(spec.base) else "off"
     if spec.base.early_stop and stop == "off":
         stop = "off (the block's rule only: trials run their duration)"
+    physics = "the robot's own" if spec.robot else spec.base.physics
     what = (
         f"{args.perturbation}: {n_dir} directions x {n_size} sizes ({min(size):g}-{max(size):g} {lat.unit} "
         f"by {args.resolution:g}), controller {spec.base.controller}, distribution "
-        f"{spec.base.distribution}, torque limits {spec.torque_limits}, physics {spec.base.physics}, "
+        f"{spec.base.distribution}, torque limits {spec.torque_limits}, physics {physics}, "
         f"early stop {stop}, on {where} -> {out}"
     )
     if args.dry_run:
@@ -248,7 +250,15 @@ def _run(args) -> int:
         print(file=sys.stderr)
     from biped.analysis.envelope_table import envelope_table
 
-    table = envelope_table(result)
+    bound = None
+    if spec.robot:  # the robot's own mass and Hof bound (docs/robots.md), not W's biped's
+        from biped.analysis.robot import robot_hof_bound
+        from biped.models.robot import robot_for
+
+        robot = robot_for(spec.robot)
+        assert robot is not None  # build_spec took it for a robot
+        bound = robot_hof_bound(robot, [d.direction_deg for d in result.directions])
+    table = envelope_table(result, bound=bound)
     print(table.format())
     print(
         f"{result.ran} trials run, {result.reused} reused from {out}, wall {result.wall_time_s:.1f} s "

@@ -74,9 +74,9 @@ def register(subparsers) -> None:
     )
     p.add_argument(
         "--perturbation",
-        choices=("block", "force", "platform", "release"),
-        help="the experiment: W's thrown block (default), a force pulse, a platform translation or a "
-        "lean-and-release; its keys with --set (docs/perturbations.md)",
+        choices=("block", "force", "platform", "release", "pull"),
+        help="the experiment: W's thrown block (default), a force pulse, a platform translation, a "
+        "lean-and-release or a motor-driven waist pull; its keys with --set (docs/perturbations.md)",
     )
     p.add_argument("--timestep", type=float, metavar="S", help="physics step [s], <= 0.001")
     p.add_argument("--seed", type=int, help="seed of the initial-state noise (joint_noise_deg)")
@@ -421,7 +421,8 @@ def _run_robot(args, desc) -> int:
     from biped.errors import ScenarioError
     from biped.models import total_mass_kg
     from biped.outputs.robot import write_robot_outputs
-    from biped.sim.robot import Block, block_for, robot_controller, robot_push
+    from biped.sim.robot import Block, ForcePulse, block_for, robot_controller, robot_push
+    from biped.sim.scenario import Scenario
 
     unsupported = {
         "--scenario": args.scenario,
@@ -431,6 +432,9 @@ def _run_robot(args, desc) -> int:
         "--stepping": getattr(args, "stepping", None),
         "--seed": args.seed,
     }
+    pert = getattr(args, "perturbation", None) or "block"
+    if pert not in ("block", "force"):
+        unsupported[f"--perturbation {pert}"] = True  # W's scene only (docs/robots.md)
     given = [k for k, v in unsupported.items() if v]
     if given:
         raise ScenarioError(
@@ -444,17 +448,36 @@ def _run_robot(args, desc) -> int:
     ctrl = robot_controller(desc, distribution)  # checks the feet, soles and limits first
     out = _out_dir(args)
     b = block_for(desc, total_mass_kg(), ctrl)
-    block = Block(
+    block: Block | None = Block(
         tuple(args.block_position) if args.block_position else b.position_m,
         tuple(args.block_velocity) if args.block_velocity else b.velocity_m_s,
         args.block_mass if args.block_mass is not None else b.mass_kg,
     )
-    run = robot_push(desc, seconds, distribution=distribution, block=block, timestep_s=args.timestep)
-    summary = write_robot_outputs(out, desc, run, block, distribution)
+    force = None
+    if pert == "force":  # W's pulse (60 N from behind for 0.15 s) scaled with the robot's mass
+        if args.block_position or args.block_velocity or args.block_mass is not None:
+            raise ScenarioError("--perturbation force takes no --block-* options")
+        w = Scenario()
+        scale = desc.mass / total_mass_kg()
+        force = ForcePulse(
+            (-w.force_n[0] * scale, 0.0, 0.0), w.force_start_s, w.force_duration_s, w.force_shape
+        )
+        block = None
+    run = robot_push(
+        desc, seconds, distribution=distribution, block=block, force=force, timestep_s=args.timestep
+    )
+    summary = write_robot_outputs(out, desc, run, block, distribution, force)
     status = "recovered" if summary["recovered"] else "fell" if run.fell else "not recovered"
+    what = (
+        f"block {block.mass_kg:.3f} kg at {block.velocity_m_s[0]:g} m/s"
+        if block is not None
+        else f"force {force.force_n[0]:.1f} N for {force.duration_s:g} s"
+        if force is not None
+        else ""
+    )
     print(
-        f"{args.model} ({desc.mass:.1f} kg): {status}; block {block.mass_kg:.3f} kg at "
-        f"{block.velocity_m_s[0]:g} m/s, peak COM velocity {summary['peak_com_velocity_x_m_s']:.3f} m/s, "
+        f"{args.model} ({desc.mass:.1f} kg): {status}; {what}, peak COM velocity "
+        f"{summary['peak_com_velocity_x_m_s']:.3f} m/s, "
         f"final COM offset {summary['final_com_offset_m'] * 1e3:.2f} mm, peak torque "
         f"{summary['peak_torque_fraction_of_limit'] * 100:.0f}% of the limits -> {out}"
     )

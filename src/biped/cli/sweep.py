@@ -43,9 +43,9 @@ def register(subparsers) -> None:
         p.add_argument(f"--{opt.replace('_', '-')}", metavar="VALUES", dest=opt, help=what)
     p.add_argument(
         "--perturbation",
-        choices=("block", "force", "platform", "release"),
+        choices=("block", "force", "platform", "release", "pull"),
         help="the experiment swept: W's thrown block (default; --speed), a force pulse, a platform "
-        "translation or a lean-and-release (--magnitude in its unit; --direction: the way it pushes the "
+        "translation, a lean-and-release or a waist pull (--magnitude in its unit; --direction: the way it pushes the "
         "body, from +x toward +y); docs/perturbations.md",
     )
     p.add_argument(
@@ -83,15 +83,17 @@ def register(subparsers) -> None:
     )
     p.add_argument(
         "--torque-limits",
-        choices=("none", "human"),
+        choices=("none", "human", "model"),
         default=None,
-        help="joint torque limits: none (W) or human-like (docs/sweep.md)",
+        help="joint torque limits: none (W) or human-like (docs/sweep.md); on a robot model "
+        "(default: its joints' actuatorfrcrange) or none",
     )
     p.add_argument(
         "--model",
         metavar="FILE.xml",
         help="the biped: an MJCF file with W's structure (e.g. from `biped model`); W's "
-        "initial state, set point and aim height move onto it (docs/model.md)",
+        "initial state, set point and aim height move onto it (docs/model.md); or a robot: g1, "
+        "t1, berkeley_humanoid, apollo or a robot MJCF (docs/robots.md)",
     )
     p.add_argument("--duration", type=float, metavar="S", help="simulated time per trial [s] (3)")
     p.add_argument(
@@ -192,7 +194,14 @@ def build_spec(args):
         or (base.model if base.model != "wendlandt" else None)
     )
     overrides.pop("model", None)
-    if model:  # W's scenario moved onto the model, then the grid file's [scenario] keys
+    from biped import models
+    from biped.models.robot import robot_for
+
+    robot = robot_for(model) if model else None  # a robot's own MJCF (docs/robots.md)
+    if robot is not None:
+        _check_robot_args(args)
+        overrides.setdefault("distribution", "qp")
+    elif model:  # W's scenario moved onto the model, then the grid file's [scenario] keys
         base = Scenario.for_model(model, **_grid_file(args.grid)[0])
     task = args.task or (None if spec else "hold")
     if task == "hold":
@@ -209,9 +218,16 @@ def build_spec(args):
         overrides["duration_s"] = args.duration
     if args.physics:
         overrides["physics"] = args.physics
+    elif robot is not None:
+        pass  # the robot's own physics (its file's step, at most 2 ms): no preset
     elif not ({"physics", *_PHYSICS_KEYS} & (set(overrides) | _grid_scenario_keys(args.grid))):
         overrides["physics"] = "fast"  # the sweep's default preset (docs/sweep.md)
-    if "early_stop" not in overrides and "early_stop" not in _grid_scenario_keys(args.grid):
+    if robot is not None and "block_mass_kg" not in overrides and args.mass is None:
+        from biped.sim.robot_trial import robot_block_defaults
+
+        mass, height = robot_block_defaults(robot.spec, models.total_mass_kg())
+        overrides["block_mass_kg"] = mass  # W's block scaled with the robot's mass
+    if robot is None and "early_stop" not in overrides and "early_stop" not in _grid_scenario_keys(args.grid):
         overrides["early_stop"] = True  # end each trial once its outcome is decided (docs/sweep.md)
     if overrides:
         base = base.with_overrides(**overrides)
@@ -224,11 +240,25 @@ def build_spec(args):
         axes.update(direction_deg=tuple(range(0, 360, 45)))
         if base.perturbation == "block":
             axes.update(speed_m_s=(2.0, 4.0, 6.0))
-    if model and not args.height and "height_m" not in _grid_file(args.grid)[1]:
+    if robot is not None and base.perturbation == "block" and not args.height:
+        from biped.sim.robot_trial import robot_block_defaults
+
+        # W's aim height at the same fraction of the robot's central-body COM height
+        axes["height_m"] = (robot_block_defaults(robot.spec, models.total_mass_kg())[1],)
+    elif model and not args.height and "height_m" not in _grid_file(args.grid)[1]:
         axes["height_m"] = (base.block_position_m[2],)  # W's aim height moved onto the model
     samples = args.samples if args.samples is not None else (spec.samples if spec else None)
     seed = args.seed if args.seed is not None else (spec.seed if spec else 0)
-    limits = args.torque_limits or (spec.torque_limits if spec else "none")
+    limits = args.torque_limits or (spec.torque_limits if spec else "model" if robot else "none")
+    if robot is not None:
+        from biped.sim.robot_trial import check_robot_scenario
+
+        check_robot_scenario(base)
+    elif limits == "model":
+        raise ScenarioError(
+            "--torque-limits model is a robot's own limits (--model g1 etc., docs/robots.md); "
+            "W's structure takes none or human"
+        )
     return SweepSpec(
         axes=axes,
         base=base,
@@ -236,7 +266,26 @@ def build_spec(args):
         seed=seed,
         torque_limits=limits,
         launch_distance_m=spec.launch_distance_m if spec else 0.5,
+        robot=robot.spec if robot is not None else "",
     )
+
+
+def _check_robot_args(args) -> None:
+    """Options a robot's sweep or envelope does not take (before any work)."""
+    given = [
+        opt
+        for opt, v in (
+            ("--physics", args.physics),
+            ("--task wendlandt", args.task == "wendlandt"),
+            ("--grid", getattr(args, "grid", None)),
+        )
+        if v
+    ]
+    if given:
+        raise ScenarioError(
+            f"--model {args.model}: {', '.join(given)} not available on robots (their own physics, the "
+            f"hold task; axes on the command line); docs/robots.md"
+        )
 
 
 def _variant_suffix(base) -> str:
@@ -248,6 +297,11 @@ def _variant_suffix(base) -> str:
     )
     pert = f"-{base.perturbation}" if base.perturbation != "block" else ""
     return pert + dist + ("-stepping" if base.stepping else "")
+
+
+def robot_suffix(spec) -> str:
+    """The robot's file stem in a default output name ("-g1"), else ""."""
+    return f"-{Path(spec.robot).stem}" if spec.robot else ""
 
 
 def _grid_file(grid) -> tuple[dict, dict]:
@@ -325,7 +379,10 @@ def _run(args) -> int:
         Path(args.out)
         if args.out
         else Path("runs")
-        / (f"sweep-{spec.base.controller}{_variant_suffix(spec.base)}-{spec.torque_limits}.parquet")
+        / (
+            f"sweep-{spec.base.controller}{_variant_suffix(spec.base)}{robot_suffix(spec)}-"
+            f"{spec.torque_limits}.parquet"
+        )
     )
     if args.refine is not None:
         refine_spec(spec, args.refine)  # its errors before any work
@@ -365,7 +422,8 @@ def _sweep(args, spec, out: Path, n: int, where: str, client) -> int:
     print(
         f"biped sweep: {n} trials of {spec.base.duration_s:g} s, controller "
         f"{spec.base.controller}, torque limits {spec.torque_limits}, physics "
-        f"{spec.base.physics}, early stop {'on' if spec.base.early_stop else 'off'}, on {where} -> {out}",
+        f"{'the robot' + chr(39) + 's own' if spec.robot else spec.base.physics}, early stop "
+        f"{'on' if spec.base.early_stop and not spec.robot else 'off'}, on {where} -> {out}",
         file=sys.stderr,
     )
     if args.scheduler is None:  # compile before the local workers start: they load the cache

@@ -26,7 +26,8 @@ two legs and :func:`controller_model` folds the rest away, by these documented r
   lowest point, a capsule's two lowest, a box's corners, a mesh's vertices, a cylinder's rims)
   within :data:`SOLE_TOLERANCE_M` of the lowest along "up" are the sole; its rectangle is their
   bounding box along "forward" and the axis across.
-- **Standing pose**: the model's keyframe (the first, or ``keyframe=``).
+- **Standing pose**: the model's keyframe (the first, or ``keyframe=``), its legs crouched when
+  they are near the stretched-knee singularity (:mod:`biped.models.robot_pose`).
 - **Plant** (:func:`plant_spec`): the leg actuators become torque motors (``ctrlrange`` = the
   joint's ``actuatorfrcrange``, else the actuator's ``forcerange``); held joints keep their
   position servos, commanded to the keyframe angles.
@@ -94,6 +95,16 @@ class RobotDescription:
     keyframe: str
     key_qpos: np.ndarray
     mass: float
+    #: the robot file (:mod:`biped.models.robot_file`) it was read from; "" when detected
+    source: str = ""
+    #: how far the keyframe's legs were crouched [rad] (:mod:`biped.models.robot_pose`; 0: not)
+    crouch_rad: float = 0.0
+
+    @property
+    def spec(self) -> str:
+        """What names this robot for :func:`robot_for` again (a sweep's ``robot``): its robot
+        file, else its MJCF."""
+        return self.source or str(self.path)
 
 
 def _name(m, obj, i) -> str:
@@ -213,6 +224,9 @@ def describe(
         for j in range(m.njnt)
         if j not in leg and m.jnt_type[j] != free and m.body_rootid[m.jnt_bodyid[j]] == root
     ]
+    from biped.models.robot_pose import bend_legs
+
+    qpos, crouch = bend_legs(m, d.qpos.copy(), (left, right), leg)  # off the straight-knee singularity
     return RobotDescription(
         path=path,
         root=body_names[root],
@@ -220,8 +234,9 @@ def describe(
         leg_joints=tuple(jn[j] for j in leg),
         held_joints=tuple(held),
         keyframe=key,
-        key_qpos=d.qpos.copy(),
+        key_qpos=qpos,
         mass=float(m.body_subtreemass[root]),
+        crouch_rad=crouch,
     )
 
 
@@ -243,13 +258,18 @@ def _names_w_body(path: Path) -> bool:
 
 def robot_for(model: str | PathLike | None) -> RobotDescription | None:
     """The robot that ``--model`` names, or None for W's structure: a :data:`ROBOTS` name is a
-    robot; a path that is not a file, not MJCF, or names W's body :data:`W_BODY` is W's (its
+    robot, and so is a ``.toml`` robot file (:mod:`biped.models.robot_file`); a
+    path that is not a file, not MJCF, or names W's body :data:`W_BODY` is W's (its
     checks give the errors, as before); any other MJCF must be a robot (:func:`describe`), else a
     one-line error saying it is neither."""
     if model is None:
         return None
     if str(model) in ROBOTS:
         return describe(str(model))
+    if Path(model).suffix.lower() == ".toml":  # a robot file names its feet (and legs, keyframe)
+        from biped.models.robot_file import read_robot_file
+
+        return read_robot_file(Path(model))
     from biped import models
 
     if str(model) in models.names():  # a shipped W-structured model's name, even if a file is so named

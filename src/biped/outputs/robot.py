@@ -12,10 +12,16 @@ import numpy as np
 from biped.files import write_text
 from biped.models.robot import RobotDescription
 from biped.outputs._json import write_json
-from biped.sim.robot import Block, RobotRun
+from biped.sim.robot import Block, ForcePulse, RobotRun
 
 
-def robot_summary(desc: RobotDescription, run: RobotRun, block: Block | None, distribution: str) -> dict:
+def robot_summary(
+    desc: RobotDescription,
+    run: RobotRun,
+    block: Block | None,
+    distribution: str,
+    force: ForcePulse | None = None,
+) -> dict:
     """The run's numbers (SI units); ``recovered``: did not fall and its central-body COM ended
     within 1 cm of the set point horizontally."""
     vx = np.gradient(run.com[:, 0], run.t) if len(run.t) > 2 else np.zeros(1)
@@ -29,6 +35,12 @@ def robot_summary(desc: RobotDescription, run: RobotRun, block: Block | None, di
         "distribution": distribution,
         "torque_limits": "model (the joints' actuatorfrcrange)",
         "block": dataclasses.asdict(block) if block is not None else None,
+        "force": dataclasses.asdict(force) if force is not None else None,
+        "force_impulse_n_s": (
+            run.force_impulse_n_s.tolist()
+            if force is not None and run.force_impulse_n_s is not None
+            else None
+        ),
         "block_momentum_per_kg_m_s": (
             block.mass_kg * float(np.linalg.norm(block.velocity_m_s)) / desc.mass if block else None
         ),
@@ -42,8 +54,15 @@ def robot_summary(desc: RobotDescription, run: RobotRun, block: Block | None, di
     }
 
 
-def write_robot_outputs(out: Path, desc: RobotDescription, run: RobotRun, block, distribution: str) -> dict:
-    summary = robot_summary(desc, run, block, distribution)
+def write_robot_outputs(
+    out: Path,
+    desc: RobotDescription,
+    run: RobotRun,
+    block,
+    distribution: str,
+    force: ForcePulse | None = None,
+) -> dict:
+    summary = robot_summary(desc, run, block, distribution, force)
     write_json(out / "summary.json", summary)
     head = "t_s,central_com_x_m,central_com_y_m,central_com_z_m,com_x_m,com_y_m,com_z_m," + ",".join(
         f"tau_{j}_n_m" for j in desc.leg_joints

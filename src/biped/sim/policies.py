@@ -115,9 +115,14 @@ def controller_policy(
     if scenario.stepping:  # not in W: capture-point steps around W's controller
         from biped.control.stepping import SteppingConfig, SteppingController
 
-        return SteppingController(
-            config, SteppingConfig(max_steps=scenario.max_steps), scene.joint_names, tree=tree
-        )
+        stepping = SteppingConfig(max_steps=scenario.max_steps)
+        if scenario.step_program == "program":  # planned steps for a delayed, lagged plant
+            from biped.control.step_program import StepProgram, StepProgramConfig
+
+            program = StepProgramConfig(delay_s=scenario.feedback_delay_s, lead_s=scenario.activation_time_s,
+                                        damping_n_m_s=scenario.joint_damping_n_m_s)  # fmt: skip
+            return StepProgram(config, stepping, scene.joint_names, tree=tree, program=program)
+        return SteppingController(config, stepping, scene.joint_names, tree=tree)
     sensed = config.support == "sensed" or config.distribution == "qp"  # as make_policy decides
     return ControllerPolicy(make_policy(config, scene.joint_names, tree=tree), sensed=sensed)
 

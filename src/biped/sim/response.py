@@ -91,13 +91,12 @@ class Response:
 
 def onset_s(result) -> float:
     """When the perturbation starts acting [s]: the block's hit (the start if it never hits), the
-    force's start, the platform's start, the tether's release."""
+    force's start, the platform's start, the tether's release, the pull's start."""
     s = result.scenario
     if s.perturbation == "block":
         return float(result.block_contact_time_s) if result.block_contact_time_s is not None else 0.0
-    return float({"force": s.force_start_s, "platform": s.platform_start_s, "release": s.release_time_s}[
-        s.perturbation
-    ])  # fmt: skip
+    return float({"force": s.force_start_s, "platform": s.platform_start_s, "release": s.release_time_s,
+                  "pull": s.pull_start_s}[s.perturbation])  # fmt: skip
 
 
 def push_direction(result) -> np.ndarray:

@@ -37,11 +37,10 @@ from biped.spatial import rot_to_quat
 
 FLOOR = "robot_floor"
 BLOCK, BLOCK_JOINT = "robot_block", "robot_block_root"
-#: W Alg. 3's big-base factor on the robots. W's 1e6 makes Unitree G1 unstable: one physics step
-#: after its sphere soles first touch the floor the feet move a little, the 1e6-heavy feet's
-#: velocity terms swamp the bias wrench and the QP saturates every leg joint; with 1e2 G1,
-#: T1 and Berkeley Humanoid stand and recover 0.2 m/s kicks (docs/robots.md).
-ROBOT_BIG_BASE = 1e2
+#: W Alg. 3's big-base factor on the robots: W's own. (It was 1e2 while robots stood on their
+#: keyframes' straight knees, where the legs' Jacobians are singular and 1e6 threw them at once;
+#: :mod:`biped.models.robot_pose` now crouches such legs; docs/robots.md.)
+ROBOT_BIG_BASE = 1e6
 #: W's push moved onto a robot (:func:`block_for`): W's block (1.8 kg, 4.5 m/s, 0.2 m/s up,
 #: 1.2 m high against W's central-body COM at 1.035 m, 0.5 m from it), its mass scaled by the
 #: robot's mass over W's biped's (73.06 kg), its height by the central-body COM heights.
@@ -63,6 +62,10 @@ class RobotRun:
     fall_time_s: float | None
     target_com: np.ndarray
     mass: float
+    #: the block's COM velocity (n, 3) [m/s] after each step (None: no block)
+    block_velocity: np.ndarray | None = None
+    #: the force pulse's impulse as applied (3,) [N s] (zeros: no pulse)
+    force_impulse_n_s: np.ndarray | None = None
 
     @property
     def max_torque_fraction(self) -> float:
@@ -99,6 +102,19 @@ def block_for(
         (w["speed_m_s"], 0.0, w["vz_m_s"]),
         w["mass_kg"] * desc.mass / w_biped_mass_kg,
     )
+
+
+@dataclass(frozen=True)
+class ForcePulse:
+    """A force ``force_n`` (3,) [N, world] from ``start_s`` for ``duration_s`` (whole physics
+    steps), ``shape`` "rectangular" or "half-sine", at the midpoint of the two hip joints (W's
+    "pelvis" point) on the floating body: MuJoCo's ``xfrc_applied`` of that body, the force at its
+    COM plus the moment of the point's offset, recomputed every physics step."""
+
+    force_n: tuple
+    start_s: float
+    duration_s: float
+    shape: str = "rectangular"
 
 
 #: The plant's physics step: the file's, at most this [s] (the controller runs every step).
@@ -176,6 +192,7 @@ def robot_push(
     timestep_s: float | None = None,
     big_base: float = ROBOT_BIG_BASE,
     block: Block | None = None,
+    force: ForcePulse | None = None,
 ) -> RobotRun:
     """Stand the robot for ``seconds`` under W's controller, kicked by ``push_m_s`` of COM
     velocity change at ``push_time_s`` (zero: no push) and/or hit by ``block`` (thrown at t = 0);
@@ -210,22 +227,45 @@ def robot_push(
     lim = np.array([m.actuator_ctrlrange[a, 1] for a in legs])
     n = int(round(seconds / m.opt.timestep))
     t, cc, com, tau = np.zeros(n), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 12))
+    bv = np.zeros((n, 3)) if block is not None else None
+    bq = m.joint(BLOCK_JOINT).dofadr[0] if block is not None else 0
     root_v = tree.dof_adr[0]
     kick = int(round(push_time_s / m.opt.timestep))
+    rb = m.body(desc.root).id
+    hips = [m.joint(tree.joint_names[k]).id for k in range(12) if tree.parent[k + 1] == 0]
+    f0 = f1 = -1
+    impulse = np.zeros(3)
+    if force is not None:
+        f0 = int(round(force.start_s / m.opt.timestep))
+        f1 = f0 + max(1, int(round(force.duration_s / m.opt.timestep)))
     fell_at = None
     for i in range(n):
         if i == kick and np.any(push_m_s):
             # free joint linear velocity is in the world frame in MuJoCo: every body gets +dv
             d.qvel[root_v : root_v + 3] += np.asarray(push_m_s, float)
+        if force is not None and f0 <= i <= f1:
+            d.xfrc_applied[rb] = 0.0
+            if i < f1:
+                w = 1.0 if force.shape == "rectangular" else np.sin(np.pi * (i - f0 + 0.5) / (f1 - f0))
+                f = w * np.asarray(force.force_n, float)
+                p = d.xanchor[hips].mean(axis=0)  # the hip joints' midpoint, world [m]
+                d.xfrc_applied[rb, :3] = f
+                d.xfrc_applied[rb, 3:] = np.cross(p - d.xipos[rb], f)
+                impulse += f * m.opt.timestep
         u = ctrl.torques(d.qpos[: tree.nq], d.qvel[: tree.nv])  # the robot's own layout comes first
         tau[i] = u
         d.ctrl[legs] = u
         mujoco.mj_step(m, d)
         t[i] = d.time
+        if bv is not None:
+            bv[i] = d.qvel[bq : bq + 3]
         cc[i] = ctrl.link_poses(d.qpos[: tree.nq])[0][:3, 3] if i % 10 == 0 or i == n - 1 else cc[i - 1]
         com[i] = d.subtree_com[m.body(desc.root).id]
         if cc[i, 2] < g[2, 3] - fall_drop_m:
             fell_at = float(d.time)
             t, cc, com, tau = t[: i + 1], cc[: i + 1], com[: i + 1], tau[: i + 1]
+            bv = bv[: i + 1] if bv is not None else None
             break
-    return RobotRun(t, cc, com, tau, lim, fell_at is not None, fell_at, g[:3, 3].copy(), desc.mass)
+    return RobotRun(
+        t, cc, com, tau, lim, fell_at is not None, fell_at, g[:3, 3].copy(), desc.mass, bv, impulse
+    )

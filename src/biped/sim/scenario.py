@@ -42,6 +42,9 @@ from biped.sim.scenario_checks import INTS, MAX_SEED, RANGES, VECTORS, is_number
 W_JOINT_ANGLES_DEG = W_INITIAL_ANGLES_DEG
 
 CONTROLLERS = ("workspace", "joint-pd")
+#: How a stepping run makes a step (key ``step_program``): the task-space feedback swing of
+#: biped.control.stepping, or biped.control.step_program's weight transfer and planned swing.
+STEP_PROGRAMS = ("feedback", "program")
 #: Which feet the workspace controller takes as fixed: "fixed" = both, always (W); "sensed" = the
 #: feet whose soles touch the floor at each control step (see WorkspaceController.compute).
 SUPPORTS = ("fixed", "sensed")
@@ -132,6 +135,10 @@ class Scenario:
     # not in W: capture-point steps when the feet cannot hold (biped.control.stepping)
     stepping: bool = False
     max_steps: int = 3  # with stepping: most steps per run
+    # with stepping: how a step is made. "feedback": the task-space swing loop of
+    # biped.control.stepping; "program": weight transfer, then a feed-forward swing with feedback
+    # against the delayed plan (biped.control.step_program), for a delayed, lagged plant
+    step_program: str = "feedback"
     # not in W: a human nervous system (biped.control.neuromotor; docs/validate.md). The preset
     # fills feedback_delay_s, torque_rate_limit_n_m_s, activation_time_s, torque_limits and the
     # four gains when they are not given; "ideal" is W's controller
@@ -153,6 +160,9 @@ class Scenario:
     platform_displacement_m: tuple = (0.05, 0.0)  # (x, y) [m]: +x moves the feet backward
     platform_start_s: float = 0.1
     platform_duration_s: float = 0.3  # the ramp [s]
+    pull_displacement_m: tuple = (-0.1, 0.0)  # (x, y) [m], the motor's travel: -x pulls forward
+    pull_velocity_m_s: float = 0.4  # the motor's speed [m/s]
+    pull_start_s: float = 0.1
     release_lean_deg: float = 5.0
     release_direction_deg: float = 0.0  # 0 forward (world -x), 90 to the biped's left (world -y)
     release_time_s: float = 0.1  # >= duration_s: the tether never goes
@@ -348,12 +358,15 @@ _STRINGS = {
     "neuromotor": NEUROMOTOR,
     "perturbation": perturbations.NAMES,
     "force_shape": FORCE_SHAPES,
+    "step_program": STEP_PROGRAMS,
 }
 
 
 #: Keys :meth:`Scenario.to_dict` leaves out at their default value, so that a scenario without
 #: them writes the same summary.json / sweep identity as before they existed.
-_OMITTED_AT_DEFAULT = frozenset({"early_stop"})
+_OMITTED_AT_DEFAULT = frozenset(
+    {"early_stop", "step_program", "pull_displacement_m", "pull_velocity_m_s", "pull_start_s"}
+)
 
 
 def keys() -> tuple[str, ...]:

@@ -33,6 +33,7 @@ VECTORS = {
     "kv_rot": (3, "diagonal gains (x, y, z) [1/s]"),
     "force_n": (3, "(Fx, Fy, Fz) in N, world frame"),
     "platform_displacement_m": (2, "(x, y) in m, world frame"),
+    "pull_displacement_m": (2, "(x, y) in m, world frame"),
 }
 #: Integer keys.
 INTS = {"seed", "max_steps"}
@@ -245,14 +246,20 @@ def _check_perturbation(s: Scenario) -> None:
         ("force_start_s", "s after the start"),
         ("platform_start_s", "s after the start"),
         ("release_time_s", "s after the start"),
+        ("pull_start_s", "s after the start"),
     ):
         if _positive(s, key, what, zero_ok=True) > 60.0:
             raise ScenarioError(f"{key} must be in [0, 60] ({what}); got {getattr(s, key)!r}")
-    for key in ("force_duration_s", "platform_duration_s"):
+    for key, paradigm in (("force_duration_s", "force"), ("platform_duration_s", "platform")):
         v = _positive(s, key, "duration in s")
-        if v > 60.0 or v < 1.0 / s.control_rate_hz:
+        if v > 60.0:
+            raise ScenarioError(f"{key} must be in (0, 60] s; got {v!r}")
+        # at least one control period, checked when the paradigm runs (an unused paradigm's
+        # default must not refuse a scenario that only changed control_rate_hz)
+        if s.perturbation == paradigm and v < 1.0 / s.control_rate_hz:
             raise ScenarioError(
-                f"{key} must be in [{1.0 / s.control_rate_hz:g}, 60] s (at least one control period); got {v!r}"
+                f"{key} must be at least one control period, 1 / control_rate_hz = "
+                f"{1.0 / s.control_rate_hz:g} s (and at most 60 s); got {v!r}"
             )
     if math.hypot(*s.force_n) > 1e5:
         raise ScenarioError(f"force_n must be at most 1e5 N in size (a push on a body); got {s.force_n}")
@@ -277,6 +284,13 @@ def _check_perturbation(s: Scenario) -> None:
             f"platform_displacement_m must be at most {MAX_DISPLACEMENT_M:g} m long (the feet stay on the "
             f"platform, a {2 * MAX_DISPLACEMENT_M + 2:g} m slab); got {s.platform_displacement_m}"
         )
+    if math.hypot(*s.pull_displacement_m) > 2.0:
+        raise ScenarioError(
+            f"pull_displacement_m must be at most 2 m long (a pull at the waist); got {s.pull_displacement_m}"
+        )
+    v = _positive(s, "pull_velocity_m_s", "the motor's speed in m/s")
+    if v > 10.0:
+        raise ScenarioError(f"pull_velocity_m_s must be in (0, 10] m/s (the motor's speed); got {v!r}")
     lean = _finite("release_lean_deg", s.release_lean_deg, "deg")
     if not 0.0 <= lean <= 45.0:
         raise ScenarioError(

@@ -170,6 +170,9 @@ def _paradigm_title(s) -> str:
     if s.perturbation == "platform":
         d = float(np.hypot(*s.platform_displacement_m))
         return f"platform translation: {d * 100:.3g} cm in {s.platform_duration_s:g} s"
+    if s.perturbation == "pull":
+        d = float(np.hypot(*s.pull_displacement_m))
+        return f"waist pull: {d * 100:.3g} cm at {s.pull_velocity_m_s:g} m/s"
     return f"lean and release: {s.release_lean_deg:g} deg, released at {s.release_time_s:g} s"
 
 

@@ -4,7 +4,8 @@ module each behind one interface (:mod:`biped.sim.perturbations.base`); docs/per
 - ``block``: W's thrown block (:mod:`~biped.sim.perturbations.block`), the default;
 - ``force``: a force pulse at a point of the body (:mod:`~biped.sim.perturbations.force`);
 - ``platform``: the floor under the feet translates (:mod:`~biped.sim.perturbations.platform`);
-- ``release``: lean, tethered, then let go (:mod:`~biped.sim.perturbations.release`).
+- ``release``: lean, tethered, then let go (:mod:`~biped.sim.perturbations.release`);
+- ``pull``: a motor-driven waist pull imposing a displacement (:mod:`~biped.sim.perturbations.pull`).
 
 A new paradigm is one module with a :class:`~biped.sim.perturbations.base.Perturbation` subclass
 and one line in :data:`PARADIGMS`.
@@ -20,13 +21,14 @@ from biped.sim.perturbations.base import Driver, Perturbation, Size
 from biped.sim.perturbations.block import Block
 from biped.sim.perturbations.force import Force
 from biped.sim.perturbations.platform import Platform
+from biped.sim.perturbations.pull import Pull
 from biped.sim.perturbations.release import Release
 
 if TYPE_CHECKING:
     from biped.sim.scenario import Scenario
 
 #: name -> paradigm class
-PARADIGMS: dict[str, type[Perturbation]] = {p.name: p for p in (Block, Force, Platform, Release)}
+PARADIGMS: dict[str, type[Perturbation]] = {p.name: p for p in (Block, Force, Platform, Release, Pull)}
 NAMES = tuple(PARADIGMS)
 
 
@@ -66,6 +68,7 @@ __all__ = [
     "Force",
     "Perturbation",
     "Platform",
+    "Pull",
     "Release",
     "Size",
     "of",

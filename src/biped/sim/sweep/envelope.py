@@ -33,7 +33,13 @@ from biped.errors import ScenarioError
 from biped.sim.sweep import store
 from biped.sim.sweep.pool import LocalPool
 from biped.sim.sweep.record import row_survived
-from biped.sim.sweep.runner import _sigterm_raises, check_run_args, default_workers, execute_trial
+from biped.sim.sweep.runner import (
+    _sigterm_raises,
+    check_run_args,
+    default_trial_fn,
+    default_workers,
+    execute_trial,
+)
 from biped.sim.sweep.search import SearchResult, search
 from biped.sim.sweep.spec import AXES, SweepSpec, Trial
 
@@ -244,9 +250,7 @@ def run_envelope(
         start_i = int(np.argmin(np.abs(np.asarray(sizes) - float(start))))
     out = check_run_args(out, workers=workers, scheduler=scheduler)
     if trial_fn is None:
-        from biped.sim.sweep.trial import run_trial
-
-        trial_fn = run_trial
+        trial_fn = default_trial_fn(spec)
     trials = spec.trials()
     by_point: dict[tuple[float, float], Trial] = {(t.direction_deg, getattr(t, axis)): t for t in trials}
     out.parent.mkdir(parents=True, exist_ok=True)

@@ -71,6 +71,19 @@ def execute_trial(trial_fn: Callable[[TrialSetup], Any], setup: TrialSetup) -> d
     return row
 
 
+def default_trial_fn(spec: SweepSpec) -> Callable[[TrialSetup], Any]:
+    """The trial a sweep runs when none is given: the push simulation of W's structure
+    (:func:`biped.sim.sweep.trial.run_trial`), or on a robot (``spec.robot``)
+    :func:`biped.sim.robot_trial.run_robot_trial`; imported only when used."""
+    if spec.robot:
+        from biped.sim.robot_trial import run_robot_trial
+
+        return run_robot_trial
+    from biped.sim.sweep.trial import run_trial
+
+    return run_trial
+
+
 @dataclass(frozen=True)
 class SweepSummary:
     """What :func:`run_sweep` did.
@@ -310,9 +323,7 @@ def run_sweep(
     out = check_run_args(out, workers=workers, batch=batch, scheduler=scheduler)
     check_setups(spec)
     if trial_fn is None:
-        from biped.sim.sweep.trial import run_trial  # the MuJoCo trial, only when it is used
-
-        trial_fn = run_trial
+        trial_fn = default_trial_fn(spec)
     trials = spec.trials()
     own_client = None
     if isinstance(scheduler, str):  # connected before anything exists on disk

@@ -49,6 +49,8 @@ W_THROW = {
     "magnitude": 0.0,  # unused by the block; another paradigm's default: its base scenario's size
 }
 #: The axes a block sweep's trial keys hash (those before the paradigms existed: its keys stay).
+#: torque limits of a robot sweep: its joints' ``actuatorfrcrange`` inside the QP, or none.
+ROBOT_TORQUE_LIMITS = ("model", "none")
 BLOCK_AXES = ("speed_m_s", "direction_deg", "block_mass_kg", "height_m", "gain_scale")
 
 #: Axis values are kept to this many significant digits, so that ``1:2:11`` and the same values
@@ -96,6 +98,9 @@ class TrialSetup:
     scenario: Scenario
     trial: Trial
     torque_limits: str = "none"
+    #: a robot's MJCF (:mod:`biped.models.robot`) the trial runs on instead of the scenario's
+    #: biped ("" for W's structure); its trials run :func:`biped.sim.robot_trial.run_robot_trial`
+    robot: str = ""
 
 
 def _is_number(v: Any) -> bool:
@@ -209,6 +214,9 @@ class SweepSpec:
     launch_distance_m: float = 0.5
     model: str = "wendlandt"
     torque_limits: str = "none"
+    #: a robot's MJCF path (:mod:`biped.models.robot`, ``--model NAME|PATH``): the trials run on it
+    #: (W's block moved onto it by ``biped sweep``); "" for W's structure (``base.model``)
+    robot: str = ""
 
     def __post_init__(self) -> None:
         if not isinstance(self.base, Scenario):
@@ -278,7 +286,17 @@ class SweepSpec:
                 f"model must be the name of a shipped model ({', '.join(models.names())}); got {self.model!r}"
             )
         models.path(self.model)  # unknown model names raise ModelError listing the valid ones
-        if not isinstance(self.torque_limits, str) or self.torque_limits not in TORQUE_LIMIT_KINDS:
+        if not isinstance(self.robot, str):
+            raise ScenarioError(
+                f"robot must be the path of a robot MJCF (docs/robots.md); got {self.robot!r}"
+            )
+        if self.robot:
+            if self.torque_limits not in ROBOT_TORQUE_LIMITS:
+                raise ScenarioError(
+                    f"torque_limits on a robot must be one of {', '.join(map(repr, ROBOT_TORQUE_LIMITS))} "
+                    f"(its joints' actuatorfrcrange, or none); got {self.torque_limits!r}"
+                )
+        elif not isinstance(self.torque_limits, str) or self.torque_limits not in TORQUE_LIMIT_KINDS:
             raise ScenarioError(
                 f"torque_limits must be one of "
                 f"{', '.join(map(repr, TORQUE_LIMIT_KINDS))}; "
@@ -298,7 +316,16 @@ class SweepSpec:
     def from_dict(cls, values: Mapping) -> SweepSpec:
         """From ``{"grid": {axis: values}, "scenario": {key: value}, "samples": N, "seed": S,
         "launch_distance_m": L}`` (the TOML layout, see :meth:`from_toml`)."""
-        valid = {"grid", "scenario", "samples", "seed", "launch_distance_m", "model", "torque_limits"}
+        valid = {
+            "grid",
+            "scenario",
+            "samples",
+            "seed",
+            "launch_distance_m",
+            "model",
+            "torque_limits",
+            "robot",
+        }
         for k in values:
             if k not in valid:
                 raise ScenarioError(f"unknown sweep key {k!r}; valid keys: {', '.join(sorted(valid))}")
@@ -317,6 +344,7 @@ class SweepSpec:
             launch_distance_m=values.get("launch_distance_m", 0.5),
             model=values.get("model", "wendlandt"),
             torque_limits=values.get("torque_limits", "none"),
+            robot=values.get("robot", ""),
         )
 
     @classmethod
@@ -341,7 +369,7 @@ class SweepSpec:
 
     # ------------------------------------------------------------------ identity
     def to_dict(self) -> dict:
-        return {
+        out = {
             "grid": {k: list(v) for k, v in self.axes},
             "scenario": self.base.to_dict(),
             "samples": self.samples,
@@ -350,6 +378,9 @@ class SweepSpec:
             "model": self.model,
             "torque_limits": self.torque_limits,
         }
+        if self.robot:  # only then: W's sweeps keep their stored layout
+            out["robot"] = self.robot
+        return out
 
     @property
     def model_path(self) -> Path:
@@ -398,6 +429,9 @@ class SweepSpec:
             "torque_limits": self.torque_limits,
             "schema": SCHEMA_VERSION,
         }
+        if self.robot:  # the robot's file and its bytes (W's sweeps: their identity as before)
+            ident["robot"] = self.robot
+            ident["robot_sha256"] = hashlib.sha256(Path(self.robot).read_bytes()).hexdigest()
         return hashlib.sha256(json.dumps(ident, sort_keys=True).encode()).hexdigest()[:16]
 
     @property
@@ -437,7 +471,7 @@ class SweepSpec:
         return trial_scenario(self.base, trial, launch_distance_m=self.launch_distance_m)
 
     def setup(self, trial: Trial) -> TrialSetup:
-        return TrialSetup(self.scenario(trial), trial, self.torque_limits)
+        return TrialSetup(self.scenario(trial), trial, self.torque_limits, self.robot)
 
 
 def hold_scenario(base: Scenario | None = None) -> Scenario:

@@ -232,7 +232,7 @@ def _defaults_of_new_keys() -> dict:
     d = Scenario().to_dict()
     keys = {"perturbation", *(k for cls in PARADIGMS.values() if cls.name != "block" for k in cls.keys)}
     keys |= {"neuromotor", "feedback_delay_s", "torque_rate_limit_n_m_s", "activation_time_s", "ankle_only"}
-    return {k: d[k] for k in keys}
+    return {k: d[k] for k in keys if k in d}  # keys left out at their default are absent anyway
 
 
 def _same(a: Any, b: Any) -> bool:
@@ -264,9 +264,9 @@ def spec_difference(
             continue  # a key added since the file was written, at its default: the same experiment
         if old_scen.get(k) != new_scen.get(k):
             diffs.append(f"scenario key {k}: {old_scen.get(k)!r} in the file, {new_scen.get(k)!r} now")
-    for k in ("launch_distance_m", "model", "torque_limits", "samples", "seed"):
-        if old.get(k) != new[k]:
-            diffs.append(f"{k}: {old.get(k)!r} in the file, {new[k]!r} now")
+    for k in ("launch_distance_m", "model", "torque_limits", "samples", "seed", "robot"):
+        if old.get(k) != new.get(k):
+            diffs.append(f"{k}: {old.get(k)!r} in the file, {new.get(k)!r} now")
     if old_compiled_sha256:
         now = spec.model_compiled_sha256
         if old_compiled_sha256 != now:

