@@ -224,7 +224,8 @@ def _run(args) -> int:
         from biped.sim.jit import kernels_for, warm_up
 
         warm_up(
-            kernels_for(spec.base.controller, spec.base.distribution), log=lambda s: print(s, file=sys.stderr)
+            kernels_for(spec.base.controller, spec.base.distribution, sweep=True),
+            log=lambda s: print(s, file=sys.stderr),
         )
 
     def progress(done: int, running: int) -> None:

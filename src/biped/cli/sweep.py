@@ -430,7 +430,7 @@ def _sweep(args, spec, out: Path, n: int, where: str, client) -> int:
         from biped.sim.jit import kernels_for, warm_up
 
         warm_up(
-            kernels_for(spec.base.controller, spec.base.distribution),
+            kernels_for(spec.base.controller, spec.base.distribution, sweep=True),
             log=lambda line: print(line, file=sys.stderr),
             tick=sys.stderr,
         )

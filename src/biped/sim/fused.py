@@ -49,7 +49,8 @@ from biped.sim import mjdata
 from biped.sim.contact import contact_code
 from biped.sim.daqp_c import C_TYPES, c_arguments, c_solve, sync_status
 from biped.sim.fused_qp import QP_TYPES, call_solve, qp_arguments, register_qp
-from biped.sim.mjdata import STEP_SIG, mj_step_function, mjdata_layout
+from biped.sim.loop_measures import record_row, row_spec
+from biped.sim.mjdata import FORCE_SIG, STEP_SIG, contact_frames, mj_function, mj_step_function, mjdata_layout
 
 # why run_rows returned (low 3 bits of its result; the row is result >> 3)
 DONE, FELL, LAST, DIVERGED, PYTHON = 0, 1, 2, 3, 4
@@ -66,7 +67,8 @@ P_SUB, P_NCTRL, P_CB, P_F0, P_F1, P_NCON, P_CPTR, P_CBASE, P_SENSED, P_BADQACC, 
 P_QP, P_NLIM, P_SLOT = range(13, 16)  # the QP distribution: on, with torque-limit rows, its slot
 P_CSOLVE = 16  # the QP solved by daqp's C function (biped.sim.daqp_c), not through objmode
 P_DELAY, P_NEURO = 17, 18  # feedback delay [periods], the neural filter on (biped.sim.neuro)
-_NP = 19
+P_FLOOR = 19  # the floor geom (biped.sim.loop_measures)
+_NP = 20
 
 _SIGNATURE = types.int64(
     types.FunctionType(STEP_SIG),  # mj_step
@@ -113,6 +115,16 @@ _SIGNATURE = types.int64(
     types.int64[::1],  # contact bits
     types.float64[:, :, ::1],  # feet positions
     types.float64[:, :, ::1],  # feet quaternions
+    types.float64[:, ::1],  # the response's row records (biped.sim.loop_measures)
+    types.FunctionType(STEP_SIG),  # mj_subtreeVel (the same C signature as mj_step)
+    types.FunctionType(FORCE_SIG),  # mj_contactForce
+    types.float64[:, :],  # the contacts' frames (capacity, 9), a strided view of the arena
+    types.float64[:, ::1],  # scratch for their forces (capacity, 6)
+    types.int64[::1],  # each geom's foot (0, 1; -1 none)
+    types.int64[::1],  # the limb bodies of loop_measures.LIMB_BODIES
+    types.float64[:, ::1],  # d.xmat
+    types.float64[:, ::1],  # d.subtree_com
+    types.float64[:, ::1],  # d.subtree_linvel
     types.float64[:, ::1],  # neuro (biped.sim.neuro.NeuroLoop): ring of the biped's qpos
     types.float64[:, ::1],  # ring of its qvel
     types.int64[::1],  # ring of the contact bits
@@ -129,7 +141,8 @@ _SIGNATURE = types.int64(
 def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
     step, m, d, k0, k1, p, fall_h, s32, s64, geom, cpos, codes, seams, dq, dv, q, v, xipos, xpos, xquat,
     gxpos, gxmat, ctrl, act, warn, target, gains, contact, mi, mf, work, out, lower, upper, pd_q, pd_v, pd,
-    rq, rv, rcom, rtau, rbits, rfpos, rfquat, nrq, nrv, nrb, nact, nalpha, nrate, soles, dims, prm, qlo, qhi,
+    rq, rv, rcom, rtau, rbits, rfpos, rfquat, rmeas, subv, cforce, cframe, f6s, footg, limbs, xmat, scom, slin,
+    nrq, nrv, nrb, nact, nalpha, nrate, soles, dims, prm, qlo, qhi,
     qa, qt, qf, qtau, qcol, qg, qav, qct, qb, qx, qwg, dqfn, dqaddr, dqres, dqsense, dqupper, dqf, dqx, dqstat,
 ):  # the arguments of _SIGNATURE, in its order
     # fmt: on
@@ -207,6 +220,13 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
         rfpos[k, 1, :] = xpos[f1]
         rfquat[k, 0, :] = xquat[f0]
         rfquat[k, 1, :] = xquat[f1]
+        if s32[p[P_NCON]] and s64[p[P_CPTR]] != np.uint64(p[P_CBASE]):
+            rmeas[k, 0] = np.nan  # the contacts moved: run_closed_loop redoes the row (fill_rows)
+        else:  # the response's row: this step's forward pass at row k's state
+            record_row(
+                subv, cforce, m, d, s32[p[P_NCON]], geom, cpos, cframe, f6s, footg, p[P_FLOOR], cb, limbs, xpos,
+                xmat, scom, slin, rmeas[k],
+            )  # fmt: skip
         for _ in range(sub - 1):
             step(m, d)
         if warn[p[P_BADQACC]] != 0:
@@ -227,7 +247,7 @@ def _key_cache_by_what_it_compiles_in() -> None:
     import biped.control.recursions
     import biped.control.statics
     import biped.spatial
-    from biped.sim import daqp_c, fused_qp
+    from biped.sim import daqp_c, fused_qp, loop_measures
 
     modules = (
         biped.control.recursions,
@@ -240,6 +260,7 @@ def _key_cache_by_what_it_compiles_in() -> None:
         daqp_c,
         contact_mod,
         biped.control.neuromotor,
+        loop_measures,
     )
     try:
         cache_file = _run_rows._cache._cache_file  # type: ignore[attr-defined]
@@ -318,11 +339,15 @@ class FusedRows:
 
     def __init__(self, *, model, data, scene, scenario, controller, sensed, limits, codes, seams, records):
         step = mj_step_function()
-        lay = mjdata_layout(model, data) if step is not None else None
+        subtree_vel, contact_force = mj_function("mj_subtreeVel", STEP_SIG), mj_function("mj_contactForce", FORCE_SIG)
+        found = step is not None and subtree_vel is not None and contact_force is not None
+        lay = mjdata_layout(model, data) if found else None
         if lay is None:
-            why = mjdata.last_failure if step is not None else "libmujoco's mj_step not found"
+            why = mjdata.last_failure if found else "libmujoco's mj_step, mj_subtreeVel or mj_contactForce not found"
             raise LookupError(f"the compiled loop cannot read this MuJoCo's data: {why}")
         s32, s64, cptr_i, cbase, geom, cpos = lay
+        frames = contact_frames(model, data, cbase)
+        spec = row_spec(scene)
         ncon_i = mjdata._OFFSETS[0][0]
         compile_kernel()
         iq, iv = scene.biped_qpos_index, scene.biped_qvel_index
@@ -335,6 +360,7 @@ class FusedRows:
         p[P_NCON], p[P_CPTR], p[P_CBASE] = ncon_i, cptr_i, np.int64(np.uint64(cbase).view(np.int64))
         p[P_SENSED] = 1 if sensed else 0
         p[P_BADQACC] = int(mujoco.mjtWarning.mjWARN_BADQACC)
+        p[P_FLOOR] = spec.floor
         p[P_NJ] = nj
         p[P_CLIP] = 0 if limits is None else 1
         lower = np.full(nj, -np.inf) if limits is None else np.ascontiguousarray(limits.lower, dtype=float)
@@ -405,8 +431,21 @@ class FusedRows:
             filt = (neuro.act, float(neuro.alpha), neuro.rate_step)
             if not neuro.filtered:  # the delay alone: the filter's constants make it a no-op
                 filt = (neuro.act, 1.0, np.full(nj, np.inf))
+        measures = (
+            records["measures"],
+            subtree_vel,
+            contact_force,
+            frames,
+            np.empty((geom.shape[0], 6)),  # each floor contact's row is written before it is read
+            spec.foot_of_geom,
+            spec.limbs,
+            data.xmat,
+            data.subtree_com,
+            data.subtree_linvel,
+        )
         self._records = (
             tuple(records[k] for k in ("qpos", "qvel", "com", "torques", "bits", "feet_pos", "feet_quat"))
+            + measures
             + ring
             + filt
             + qp_args

@@ -48,20 +48,23 @@ KERNELS = {
     "qp": ("the contact QP", 5),
     "contact": ("the contact monitor", 1),
     "loop": ("the compiled push loop", 20),
+    "response": ("the sweep's margin of stability", 10),
 }
 
 #: Kernels found compiled or cached in this process (no need to look again).
 _WARM: set[str] = set()
 
 
-def kernels_for(controller: str, distribution: str = "statics") -> tuple[str, ...]:
+def kernels_for(controller: str, distribution: str = "statics", *, sweep: bool = False) -> tuple[str, ...]:
     """The kernels a push run with ``controller`` (``"workspace"`` or ``"joint-pd"``) and the
-    workspace controller's ``distribution`` uses."""
+    workspace controller's ``distribution`` uses; ``sweep``: and a sweep row's response
+    (:mod:`biped.sim.mos`)."""
+    more = ("response",) if sweep else ()
     if controller != "workspace":
-        return ("contact",)
+        return ("contact", *more)
     if distribution == "qp":
-        return ("controller", "qp", "contact")
-    return ("controller", "loop", "contact")  # the loop calls the controller's kernel
+        return ("controller", "qp", "contact", *more)
+    return ("controller", "loop", "contact", *more)  # the loop calls the controller's kernel
 
 
 def _dispatcher(name: str):
@@ -81,6 +84,10 @@ def _dispatcher(name: str):
         from biped.sim.fused import _run_rows
 
         return _run_rows
+    if name == "response":
+        from biped.sim.mos import _margins
+
+        return _margins
     raise ValueError(f"unknown kernel {name!r}; valid: {', '.join(KERNELS)}")
 
 
@@ -158,6 +165,15 @@ def _compile(name: str) -> None:
         from biped.sim.fused import compile_kernel as compile_loop
 
         compile_loop()
+        return
+    if name == "response":
+        from biped.sim.mos import margins
+
+        n = 3
+        feet = np.zeros((n, 2, 4))
+        feet[..., 0] = 1.0
+        corners = [np.array([[x, y, 0.0] for x in (-0.1, 0.1) for y in (-0.05, 0.05)])] * 2
+        margins(np.zeros((n, 2)), np.ones((n, 2), dtype=bool), np.zeros((n, 2, 3)), feet, corners, 0)
         return
     import biped.models
     from biped.control import WorkspaceController

@@ -16,24 +16,35 @@ import mujoco
 import numpy as np
 from numba import types
 
-__all__ = ["STEP_SIG", "last_failure", "mj_step_function", "mjdata_layout"]
+__all__ = [
+    "FORCE_SIG",
+    "STEP_SIG",
+    "contact_frames",
+    "last_failure",
+    "mj_function",
+    "mj_step_function",
+    "mjdata_layout",
+]
 
 STEP_SIG = types.void(types.uintp, types.uintp)  # mj_step(const mjModel*, mjData*)
+#: mj_contactForce(const mjModel*, const mjData*, int id, mjtNum result[6]) (the pointer as an integer)
+FORCE_SIG = types.void(types.uintp, types.uintp, types.int32, types.uintp)
 
 
-class _MjStep(types.WrapperAddressProtocol):
-    """MuJoCo's C ``mj_step`` as a numba first-class function (its address is an argument, so the
-    compiled loop can be cached)."""
+class _MjFunction(types.WrapperAddressProtocol):
+    """A function of MuJoCo's C API as a numba first-class function (its address is an argument,
+    so the compiled loop can be cached)."""
 
-    def __init__(self):
+    def __init__(self, name: str, sig):
         lib = ctypes.CDLL(os.path.join(os.path.dirname(mujoco.__file__), _libname()))
-        self._address = ctypes.cast(lib.mj_step, ctypes.c_void_p).value
+        self._address = ctypes.cast(getattr(lib, name), ctypes.c_void_p).value
+        self._sig = sig
 
     def __wrapper_address__(self):
         return self._address
 
     def signature(self):
-        return STEP_SIG
+        return self._sig
 
 
 def _libname() -> str:
@@ -41,17 +52,23 @@ def _libname() -> str:
     return sorted(names, key=len)[-1] if names else "libmujoco.so"
 
 
-_STEP: list = []
+_FUNCTIONS: dict = {}
+
+
+def mj_function(name: str, sig):
+    """The :class:`_MjFunction` ``name`` of libmujoco with signature ``sig`` (made once a process),
+    or None if libmujoco or the symbol cannot be found."""
+    if name not in _FUNCTIONS:
+        try:
+            _FUNCTIONS[name] = _MjFunction(name, sig)
+        except (OSError, AttributeError):
+            _FUNCTIONS[name] = None
+    return _FUNCTIONS[name]
 
 
 def mj_step_function():
-    """The :class:`_MjStep` of this process (made once), or None if libmujoco cannot be found."""
-    if not _STEP:
-        try:
-            _STEP.append(_MjStep())
-        except (OSError, AttributeError):
-            _STEP.append(None)
-    return _STEP[0]
+    """MuJoCo's ``mj_step`` (:func:`mj_function`), or None if libmujoco cannot be found."""
+    return mj_function("mj_step", STEP_SIG)
 
 
 _PROBE_XML = """<mujoco><worldbody><geom name="floor" type="plane" size="1 1 .1"/>
@@ -112,6 +129,9 @@ def _offsets():
     geom, pos = d.contact.geom, d.contact.pos
     if pos.strides != (geom.strides[0], 8):
         return f"contact.pos strides {pos.strides}, geom stride {geom.strides[0]}"
+    frame = d.contact.frame
+    if frame.strides != (geom.strides[0], 8):
+        return f"contact.frame strides {frame.strides}, geom stride {geom.strides[0]}"
     return (
         ncon_at // 4,
         arena_at,
@@ -119,6 +139,7 @@ def _offsets():
         geom.ctypes.data - contact0,
         geom.strides[0],
         pos.ctypes.data - contact0,
+        frame.ctypes.data - contact0,
     )
 
 
@@ -140,7 +161,7 @@ def mjdata_layout(model, data):
             last_failure = found
             return None
         _OFFSETS.append(found)
-    ncon_i, arena_at, contact_at, geom_at, stride, pos_at = _OFFSETS[0]
+    ncon_i, arena_at, contact_at, geom_at, stride, pos_at, _ = _OFFSETS[0]
     s32, s64 = _struct_views(data, contact_at + 8)  # up to the contact pointer, within the struct
     if s32[ncon_i] != data.ncon:
         last_failure = f"ncon read as {s32[ncon_i]}, the bindings say {data.ncon}"
@@ -159,3 +180,17 @@ def mjdata_layout(model, data):
         last_failure = "the contacts are not at the start of the arena"
         return None
     return s32, s64, contact_at // 8, contact0, geom, pos
+
+
+def contact_frames(model, data, contact0: int) -> np.ndarray:
+    """(capacity, 9) float64 view of the contacts' frames (mjContact.frame: the normal, then the
+    two tangents, as rows) of ``data``, whose contacts start at ``contact0`` (from
+    :func:`mjdata_layout`, which must have passed)."""
+    stride, frame_at = _OFFSETS[0][4], _OFFSETS[0][6]
+    capacity = max(1, int(model.narena) // stride)
+    arena = (ctypes.c_uint8 * (capacity * stride)).from_address(contact0)
+    frames = np.ndarray((capacity, 9), dtype=np.float64, buffer=arena, offset=frame_at, strides=(stride, 8))
+    n = data.ncon
+    if n and not np.array_equal(frames[:n], data.contact.frame):
+        raise LookupError("the contact frames are not where the probe found them")
+    return frames

@@ -38,6 +38,7 @@ from biped.sim.contact import SOLE_GEOMS, ContactMonitor
 from biped.sim.early_stop import AT_REST, EarlyStop
 from biped.sim.early_stop import applies as early_stop_applies
 from biped.sim.jit import announce_and_warm, kernels_for
+from biped.sim.loop_measures import NCOL, fill_rows, record_python, row_spec
 from biped.sim.neuro import neuro_loop
 from biped.sim.policies import (  # noqa: F401 - offered here too, as before the split
     ControllerPolicy,
@@ -78,7 +79,8 @@ class PushResult:
     are those held on [t_k, t_k+1)); block (n, 3) block centre [m]; block_velocity (n, 3) [m/s];
     contacts (n, 4) bool sole-part contacts in :data:`biped.sim.contact.SOLE_GEOMS` order;
     feet_pos (n, 2, 3) [m] and feet_quat (n, 2, 4) the poses of the :data:`FOOT_BODIES` frames
-    (MuJoCo kinematics of ``qpos``).
+    (MuJoCo kinematics of ``qpos``); loop_measures (n, :data:`biped.sim.loop_measures.NCOL`) what
+    the response needs of each row, from the loop's own forward passes (:mod:`biped.sim.loop_measures`).
     """
 
     scenario: Scenario
@@ -114,6 +116,7 @@ class PushResult:
     feet_pos: np.ndarray | None = None
     feet_quat: np.ndarray | None = None
     extra: dict = field(default_factory=dict)
+    loop_measures: np.ndarray | None = None
 
     @property
     def left_contact(self) -> np.ndarray:
@@ -214,6 +217,8 @@ def run_closed_loop(
     f0, f1 = (m.body(f).id for f in FOOT_BODIES)
     records: dict = {"qpos": qpos, "qvel": qvel, "com": com, "torques": torques, "bits": bits}
     records.update(feet_pos=feet_pos, feet_quat=feet_quat, feet_bodies=(f0, f1))
+    measures = records["measures"] = np.full((n, NCOL), np.nan)  # biped.sim.loop_measures
+    spec, f6 = row_spec(scene), np.zeros(6)
     feet_rows = 0  # rows whose foot poses were read in the loop
     iq, iv = _as_slice(scene.biped_qpos_index), _as_slice(scene.biped_qvel_index)
     act = scene.actuator_index
@@ -315,6 +320,7 @@ def run_closed_loop(
             feet_pos[k, 1] = xpos[f1]
             feet_quat[k, 0] = xquat[f0]
             feet_quat[k, 1] = xquat[f1]
+            record_python(m, d, spec, measures[k], f6)
             feet_rows = k + 1
             if sub > 1:
                 mujoco.mj_step(m, d, sub - 1)  # = mj_step(m, d, sub): MuJoCo loops the same way
@@ -364,6 +370,9 @@ def run_closed_loop(
     sim_time = max(rows - 1, 0) * period
     if feet_rows < rows:  # the last row (no step after it) and any row a stop left unread
         feet_pos[feet_rows:rows], feet_quat[feet_rows:rows] = _feet_poses(scene, qpos[feet_rows:rows])
+    extra = perturbations.run_extra(scenario, scene, driver, d, inputs)
+    redo = np.flatnonzero(np.isnan(measures[:feet_rows, 0])).tolist()  # the compiled loop left (fused)
+    fill_rows(scene, qpos, qvel, torques, extra.get("inputs"), redo + list(range(feet_rows, rows)), measures)
     result = PushResult(
         scenario=scenario,
         joint_names=scene.joint_names,
@@ -397,7 +406,8 @@ def run_closed_loop(
         block_velocity=block_vel[sl],
         feet_pos=feet_pos[sl],
         feet_quat=feet_quat[sl],
-        extra=perturbations.run_extra(scenario, scene, driver, d, inputs),
+        extra=extra,
+        loop_measures=measures[sl],
     )
     if hasattr(policy, "steps"):  # a stepping policy: its steps and its own recovered rule
         from biped.sim.stepping import stepping_outcome

@@ -29,12 +29,15 @@ minimum over the run after the onset, and when.
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import asdict, dataclass
 
 import mujoco
 import numpy as np
 
+from biped.sim.loop_measures import LoopRows
 from biped.sim.measure import RowMeasurements, measure_rows
+from biped.sim.mos import margins
 from biped.sim.perturbations import of as perturbation_of
 
 #: the response window after the onset for the strategy [s]
@@ -125,6 +128,15 @@ def body_angles(scene, qpos: np.ndarray, direction) -> tuple[np.ndarray, np.ndar
     return leg, trunk
 
 
+def angles_from_rows(limbs: np.ndarray, trunk_z: np.ndarray, direction) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`body_angles` from the loop's records (:class:`~biped.sim.loop_measures.LoopRows`):
+    ``limbs`` (n, 4, 3) the left and right ankle_1, then hip_1 frame origins, ``trunk_z`` (n, 3)
+    the central body's z axis."""
+    u = np.array([direction[0], direction[1], 0.0])
+    v = limbs[:, 2:4].mean(axis=1) - limbs[:, 0:2].mean(axis=1)
+    return np.arctan2(v @ u, v[:, 2]), np.arctan2(trunk_z @ u, trunk_z[:, 2])
+
+
 def strategy_from_angles(leg: np.ndarray, trunk: np.ndarray) -> tuple[str, float, float, float]:
     """("ankle" | "hip", correlation, peak |d trunk| [deg], peak |d leg| [deg]) of the angle
     changes ``leg``, ``trunk`` (n,) [rad] over the response window (module docstring)."""
@@ -195,8 +207,15 @@ def margin(points: np.ndarray, hull: np.ndarray) -> np.ndarray:
     return np.where(inside, cross.min(axis=1), -dist)
 
 
+_CORNERS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
 def _sole_corners(m: mujoco.MjModel, scene) -> list:
-    """Per foot (left, right): (body id, (8, 3) corners of its sole boxes in the body's frame)."""
+    """Per foot (left, right): (8, 3) corners of its sole boxes in the body's frame (once a
+    model)."""
+    found = _CORNERS.get(m)
+    if found is not None and found[0] == tuple(scene.sole_geoms):
+        return found[1]
     out = []
     for foot in ("left", "right"):
         body = m.body(f"{foot}_foot").id
@@ -211,6 +230,7 @@ def _sole_corners(m: mujoco.MjModel, scene) -> list:
                 for sy in (-1, 1):
                     pts.append(m.geom_pos[g] + R.reshape(3, 3) @ (np.array([sx, sy, -1.0]) * h))
         out.append(np.array(pts))
+    _CORNERS[m] = (tuple(scene.sole_geoms), out)
     return out
 
 
@@ -291,8 +311,33 @@ def _first_swing(result, k0: int, on, t0: float) -> tuple[float, float]:
     return length, float(t[land] - t0)
 
 
-def measure_response(scene, result, rows: RowMeasurements | None = None) -> Response:
-    """The :class:`Response` of ``result`` (``rows``: its :func:`measure_rows`, computed if None)."""
+def _margins(xi: np.ndarray, on, result, corners, k0: int) -> np.ndarray:
+    """(n,) Hof's margin of stability of rows k0.. (NaN before and with no foot on the floor):
+    one hull of the soles' corners per contact state and (1 mm, 1e-4) rounded feet pose, from its
+    first row (:func:`biped.sim.mos.margins` is the same rule, compiled)."""
+    n = len(xi)
+    mos = np.full(n, np.nan)
+    hulls: dict = {}
+    for k in range(k0, n):
+        key = (bool(on[0][k]), bool(on[1][k]), *np.round(result.feet_pos[k], 3).ravel(),
+               *np.round(result.feet_quat[k], 4).ravel())  # fmt: skip
+        hulls.setdefault(key, []).append(k)
+    for key, ks in hulls.items():
+        k = ks[0]
+        pts = []
+        for i in range(2):
+            if key[i]:
+                R = np.zeros(9)
+                mujoco.mju_quat2Mat(R, result.feet_quat[k, i])
+                pts.append((result.feet_pos[k, i] + corners[i] @ R.reshape(3, 3).T)[:, :2])
+        if pts:
+            mos[ks] = margin(xi[ks], _hull(np.vstack(pts)))
+    return mos
+
+
+def measure_response(scene, result, rows: RowMeasurements | LoopRows | None = None) -> Response:
+    """The :class:`Response` of ``result`` (``rows``: its :func:`measure_rows`, computed if None,
+    or the loop's records of the same quantities, :func:`biped.sim.loop_measures.loop_rows`)."""
     n = len(result.times)
     if n < 2:
         return Response()
@@ -322,22 +367,10 @@ def measure_response(scene, result, rows: RowMeasurements | None = None) -> Resp
     m = scene.model
     corners = _sole_corners(m, scene)
     on = (result.left_contact, result.right_contact)
-    mos = np.full(n, np.nan)
-    hulls: dict = {}  # one hull per contact state and (1 mm, 1e-4) rounded feet pose
-    for k in range(k0, n):
-        key = (bool(on[0][k]), bool(on[1][k]), *np.round(result.feet_pos[k], 3).ravel(),
-               *np.round(result.feet_quat[k], 4).ravel())  # fmt: skip
-        hulls.setdefault(key, []).append(k)
-    for key, ks in hulls.items():
-        k = ks[0]
-        pts = []
-        for i in range(2):
-            if key[i]:
-                R = np.zeros(9)
-                mujoco.mju_quat2Mat(R, result.feet_quat[k, i])
-                pts.append((result.feet_pos[k, i] + corners[i] @ R.reshape(3, 3).T)[:, :2])
-        if pts:
-            mos[ks] = margin(xi[ks], _hull(np.vstack(pts)))
+    if isinstance(rows, LoopRows):  # a sweep's row: the same rule, compiled (biped.sim.mos)
+        mos = margins(xi, np.column_stack(on), result.feet_pos, result.feet_quat, corners, k0)
+    else:
+        mos = _margins(xi, on, result, corners, k0)
     # torques per plane, peak |tau| after the onset, over both legs
     names = list(result.joint_names)
     peaks = {}
@@ -362,7 +395,10 @@ def measure_response(scene, result, rows: RowMeasurements | None = None) -> Resp
     step_len, contact_t = math.nan, math.nan
     if stepped:  # the first swing: a foot off the floor (heel and toe) for >= SWING_S, then down
         step_len, contact_t = _first_swing(result, k0, on, t0)
-    leg, trunk = body_angles(scene, result.qpos[win], u)
+    if isinstance(rows, LoopRows):
+        leg, trunk = angles_from_rows(rows.limbs[win], rows.trunk_z[win], u)
+    else:
+        leg, trunk = body_angles(scene, result.qpos[win], u)
     label, corr, pt, pl = strategy_from_angles(leg, trunk)
     tlabel, ratio = strategy_by_torque(result.torques[win], names)
     if result.fell:
@@ -405,6 +441,7 @@ __all__ = [
     "Response",
     "Traces",
     "traces",
+    "angles_from_rows",
     "body_angles",
     "margin",
     "measure_response",

@@ -234,6 +234,7 @@ def _perturbation_columns(result: PushResult, scene: Scene | None, block_impulse
     """The paradigm's and the response's columns of :class:`Measured` (docs/perturbations.md)."""
     from dataclasses import fields
 
+    from biped.sim.loop_measures import loop_rows
     from biped.sim.perturbations import of
     from biped.sim.response import measure_response
 
@@ -251,12 +252,9 @@ def _perturbation_columns(result: PushResult, scene: Scene | None, block_impulse
         "horizontal_impulse_n_s": jh,
         "com_velocity_change_m_s": dv,
     }
-    if sc.perturbation == "block":
-        # W's block: the response's columns stay empty in a sweep row. They cost ~4x an
-        # early-stopped trial (a MuJoCo forward pass and the contact forces of every row) and
-        # made block sweeps and envelopes 2-3x slower; `biped push` reports them for one run.
-        return out
-    resp = measure_response(scene, result)
+    # from the loop's own forward passes (biped.sim.loop_measures): a second pass over the rows
+    # (measure_rows) cost ~4x an early-stopped block trial
+    resp = measure_response(scene, result, loop_rows(scene, result))
     keep = {f.name for f in fields(Measured)}
     out.update({k: v for k, v in resp.to_dict().items() if k in keep})
     return out
