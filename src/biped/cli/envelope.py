@@ -203,8 +203,6 @@ def _run(args) -> int:
     n_dir, n_size = len(axes["direction_deg"]), len(size)
     where = args.scheduler or f"{args.workers or 'all'} local worker(s)"
     stop = "on" if early_stop_applies(spec.base) else "off"
-    if spec.base.early_stop and stop == "off":
-        stop = "off (the block's rule only: trials run their duration)"
     what = (
         f"{args.perturbation}: {n_dir} directions x {n_size} sizes ({min(size):g}-{max(size):g} {lat.unit} "
         f"by {args.resolution:g}), controller {spec.base.controller}, distribution "
