@@ -18,10 +18,15 @@ simulated time (every row of that window):
 1. the perturbation is over: the window starts at or after the paradigm's
    :meth:`~biped.sim.perturbations.base.Perturbation.over_row` (the row from which every input
    it sets holds constant: a force pulse's end, a platform ramp's end, the sensed release; the
-   block has none), and every body outside the biped is at rest: the block (speed <
-   :data:`BLOCK_SPEED_M_S`, spin < :data:`BLOCK_SPIN_RAD_S`, wherever it lies; parked and
-   still for the other paradigms) and any other degree of freedom of the scene (the platform's
-   slide: < :data:`BLOCK_SPEED_M_S`);
+   block has none), every other degree of freedom of the scene is still (the platform's slide:
+   < :data:`BLOCK_SPEED_M_S`), and the block can no longer touch the biped: it is still (speed <
+   :data:`BLOCK_SPEED_M_S`, spin < :data:`BLOCK_SPIN_RAD_S`, wherever it lies; parked and still
+   for the other paradigms), or it is out of reach: it does not touch the biped and its
+   horizontal distance from the central-body COM exceeds the biped's reach (the farthest of its
+   geoms' bounding spheres from that COM in the first state, the feet) plus the block's half
+   diagonal plus :data:`REACH_FACTOR` x the farthest its energy could carry it against floor
+   friction, ``(v^2 + (I/m) w^2 + 2 g dz) / (2 mu g)`` (its speed, spin and height above rest;
+   exact for a sliding block, the factor 2 for a tumbling one);
 2. the biped is at rest: central-body speed < :data:`BODY_SPEED_M_S`, its angular speed <
    :data:`BODY_SPIN_RAD_S`, every joint slower than :data:`JOINT_SPEED_RAD_S`;
 3. both feet stand flat (heel and toe of each on the floor);
@@ -48,7 +53,7 @@ from __future__ import annotations
 import numpy as np
 
 #: Simulated time the rest conditions must hold before a run may stop [s].
-HOLD_S = 0.25
+HOLD_S = 0.1
 #: How often the rule is evaluated [s] (rows = CHECK_S * control rate).
 CHECK_S = 0.05
 #: Fraction of the recovery tolerances the errors must stay under.
@@ -58,6 +63,8 @@ BODY_SPIN_RAD_S = 0.05
 JOINT_SPEED_RAD_S = 0.1
 BLOCK_SPEED_M_S = 0.02
 BLOCK_SPIN_RAD_S = 0.2
+#: Safety factor on the distance the block's energy could carry it against floor friction.
+REACH_FACTOR = 2.0
 
 AT_REST = "at_rest"
 
@@ -101,6 +108,55 @@ class EarlyStop:
         # every other degree of freedom of the scene (a paradigm's bodies: the platform's slide)
         self.others = np.setdiff1d(np.arange(scene.model.nv), np.r_[iv, bv]).astype(np.int64)
         self.flat = (1 << 4) - 1  # the four sole-part bits (biped.sim.contact.SOLE_GEOMS)
+        self.block_bit = 1 << 4  # the block touches the biped (biped.sim.contact)
+        self.block_pos = np.asarray(scene.block_qpos_index)[:3]
+        size = np.asarray(scenario.block_size_m, dtype=float)
+        self.block_half_diag = 0.5 * float(np.linalg.norm(size))
+        self.block_rest_z = 0.5 * float(np.min(size))  # its centre's lowest height on the floor
+        self.block_inertia_per_mass = float(size @ size) / 12.0  # >= a box's largest I / m
+        self.friction = float(scenario.friction)
+        self.gravity = float(-scene.model.opt.gravity[2])
+        self.reach: float | None = None  # the biped's reach plus the block's half diagonal [m]
+
+    def _block_still(self, v: np.ndarray) -> bool:
+        return bool(
+            np.max(np.linalg.norm(v[:, self.block_lin], axis=1)) < BLOCK_SPEED_M_S
+            and np.max(np.linalg.norm(v[:, self.block_ang], axis=1)) < BLOCK_SPIN_RAD_S
+        )
+
+    def _block_out_of_reach(self, w: slice) -> bool:
+        """The block cannot touch the biped again (module docstring, condition 1)."""
+        r = self.records
+        if np.any(r["bits"][w] & self.block_bit):
+            return False
+        if self.reach is None:
+            self.reach = self._biped_reach(r["qpos"][0]) + self.block_half_diag
+        q, v = r["qpos"][w], r["qvel"][w]
+        p = q[:, self.block_pos]
+        lin, ang = v[:, self.block_lin], v[:, self.block_ang]
+        g = self.gravity
+        # the block's mechanical energy above rest on the floor, per unit mass, as a speed squared
+        v2 = (
+            np.einsum("ij,ij->i", lin, lin)
+            + self.block_inertia_per_mass * np.einsum("ij,ij->i", ang, ang)
+            + 2.0 * g * np.maximum(p[:, 2] - self.block_rest_z, 0.0)
+        )
+        travel = REACH_FACTOR * v2 / (2.0 * self.friction * g)
+        d = np.linalg.norm(p[:, :2] - r["com"][w][:, :2], axis=1)
+        return bool(np.all(d > self.reach + travel))
+
+    def _biped_reach(self, qpos0: np.ndarray) -> float:
+        """The largest horizontal distance of a biped geom's bounding sphere from the central-body
+        COM in the run's first state (the feet, for a standing biped) [m]."""
+        import mujoco
+
+        m = self.scene.model
+        d = mujoco.MjData(m)
+        d.qpos[:] = qpos0
+        mujoco.mj_kinematics(m, d)
+        c = d.xipos[self.scene.central_body, :2]
+        g = np.asarray(self.scene.biped_geoms)
+        return float(np.max(np.linalg.norm(d.geom_xpos[g, :2] - c, axis=1) + m.geom_rbound[g]))
 
     def check(self, rows: int) -> bool:
         """Whether the run may stop after row ``rows - 1`` (see the module docstring)."""
@@ -111,9 +167,7 @@ class EarlyStop:
         if not bool(np.all((r["bits"][w] & self.flat) == self.flat)):
             return False
         v = r["qvel"][w]
-        if np.max(np.linalg.norm(v[:, self.block_lin], axis=1)) >= BLOCK_SPEED_M_S:
-            return False
-        if np.max(np.linalg.norm(v[:, self.block_ang], axis=1)) >= BLOCK_SPIN_RAD_S:
+        if not (self._block_still(v) or self._block_out_of_reach(w)):
             return False
         if len(self.others) and np.max(np.abs(v[:, self.others])) >= BLOCK_SPEED_M_S:
             return False
