@@ -162,8 +162,17 @@ class EarlyStop:
         """Whether the run may stop after row ``rows - 1`` (see the module docstring)."""
         if rows - self.hold < self.over:
             return False
-        w = slice(rows - self.hold, rows)
         r = self.records
+        last = rows - 1  # the last row first, the cheapest test: most checks fail on it
+        if (int(r["bits"][last]) & self.flat) != self.flat:
+            return False
+        v1 = r["qvel"][last]
+        if np.max(np.abs(v1[self.joints])) >= JOINT_SPEED_RAD_S:
+            return False
+        lin = v1[self.lin]
+        if float(lin @ lin) >= BODY_SPEED_M_S**2:
+            return False
+        w = slice(rows - self.hold, rows)
         if not bool(np.all((r["bits"][w] & self.flat) == self.flat)):
             return False
         v = r["qvel"][w]
