@@ -50,6 +50,8 @@ the Python loop, so both loops stop at the same row.
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 
 #: Simulated time the rest conditions must hold before a run may stop [s].
@@ -67,6 +69,8 @@ BLOCK_SPIN_RAD_S = 0.2
 REACH_FACTOR = 2.0
 
 AT_REST = "at_rest"
+
+_KINEMATICS: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
 
 __all__ = ["AT_REST", "CHECK_S", "HOLD_S", "MARGIN", "EarlyStop", "applies"]
 
@@ -151,7 +155,9 @@ class EarlyStop:
         import mujoco
 
         m = self.scene.model
-        d = mujoco.MjData(m)
+        d = _KINEMATICS.get(m)
+        if d is None:  # one MjData per model (a new one costs ~1.5 ms, a sweep asks once a trial)
+            d = _KINEMATICS[m] = mujoco.MjData(m)
         d.qpos[:] = qpos0
         mujoco.mj_kinematics(m, d)
         c = d.xipos[self.scene.central_body, :2]
