@@ -62,3 +62,14 @@ def test_the_block_out_of_reach_need_not_lie_still():
     assert speed > early_stop.BLOCK_SPEED_M_S  # not still: out of reach
     travel = early_stop.REACH_FACTOR * speed**2 / (2 * 0.3 * 9.81)
     assert np.linalg.norm(early.block[-1][:2] - early.com[-1][:2]) > 0.3 + travel
+
+
+def test_a_paradigm_that_does_not_say_when_it_is_over_runs_to_its_end(monkeypatch):
+    """The interface's default over_row is 'never': a new paradigm without its own runs its
+    duration even when the biped stands at rest (here the force with Force.over_row removed)."""
+    from biped.sim.perturbations import Force, Perturbation
+
+    monkeypatch.setattr(Force, "over_row", Perturbation.over_row)
+    axes = {"magnitude": (150.0,), "direction_deg": (90.0,)}
+    run = _run(True, axes, perturbation="force", duration_s=1.0)
+    assert run.recovered and run.stop_reason is None and run.times[-1] == 1.0
