@@ -10,6 +10,10 @@ the early-stopped trials ended.
     python benchmarks/early_stop.py --speed 1:15:15 --direction 0:315:8 --distribution qp \\
         [--controller joint-pd] [--torque-limits human] [--stepping] [--physics faithful] \\
         [--workers 2] [--out runs/early-stop]
+    python benchmarks/early_stop.py --perturbation force --magnitude 100:400:4 --direction 0:270:4
+
+Another paradigm (``--perturbation force|platform|release``, docs/perturbations.md) is swept by
+``--magnitude`` (its own unit) and ``--direction`` instead of ``--speed``.
 
 The sweep files go to ``--out`` (named by the options); run again to resume or to reuse them.
 """
@@ -40,6 +44,9 @@ def _cpu() -> float:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--speed", default="1:15:15")
+    ap.add_argument("--perturbation", default="block", choices=("block", "force", "platform", "release"))
+    ap.add_argument("--magnitude", default=None, help="another paradigm's sizes (its unit), as --speed")
+    ap.add_argument("--duration", type=float, default=None, help="trial duration [s] (default the sweep's)")
     ap.add_argument("--direction", default="0:315:8")
     ap.add_argument("--controller", default="workspace", choices=("workspace", "joint-pd"))
     ap.add_argument("--distribution", default="statics", choices=("statics", "printed", "qp"))
@@ -51,14 +58,20 @@ def main() -> int:
     ap.add_argument("--out", default="runs/early-stop")
     ap.add_argument("--fresh", action="store_true", help="rerun both sweeps (overwrite the files)")
     args = ap.parse_args()
+    block = args.perturbation == "block"
+    size_axis = "speed_m_s" if block else "magnitude"
+    if not block and args.magnitude is None:
+        ap.error(f"--perturbation {args.perturbation} needs --magnitude")
     axes = {
-        "speed_m_s": parse_axis("speed_m_s", args.speed),
+        size_axis: parse_axis(size_axis, args.speed if block else args.magnitude),
         "direction_deg": parse_axis("direction_deg", args.direction),
     }
     name = (
-        f"{args.controller}-{args.distribution}{'-stepping' if args.stepping else ''}-"
-        f"{args.torque_limits}-{args.physics}-{len(axes['speed_m_s'])}x{len(axes['direction_deg'])}"
+        ("" if block else f"{args.perturbation}-")
+        + f"{args.controller}-{args.distribution}{'-stepping' if args.stepping else ''}-"
+        f"{args.torque_limits}-{args.physics}-{len(axes[size_axis])}x{len(axes['direction_deg'])}"
         + (f"-s{args.samples}" if args.samples else "")
+        + (f"-{args.duration:g}s" if args.duration else "")
     )
     out = Path(args.out)
     files, walls = {}, {}
@@ -70,6 +83,8 @@ def main() -> int:
             stepping=args.stepping,
             physics=args.physics,
             early_stop=es,
+            **({} if block else {"perturbation": args.perturbation}),
+            **({"duration_s": args.duration} if args.duration else {}),
         )
         spec = SweepSpec(axes=axes, base=base, torque_limits=args.torque_limits, samples=args.samples)
         files[es] = out / f"{name}-{'early' if es else 'full'}.parquet"
@@ -79,7 +94,7 @@ def main() -> int:
         walls[es] = (time.perf_counter() - t0, s.ran, _cpu() - c0)
     load2 = os.getloadavg()
     full, early = (load(files[es]).table.to_pylist() for es in (False, True))
-    key = ("speed_m_s", "direction_deg")
+    key = (size_axis, "direction_deg")
     by = {tuple(r[k] for k in key): r for r in full}
     diffs = []
     ok_f = survived(load(files[False]))

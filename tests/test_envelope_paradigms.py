@@ -1,4 +1,4 @@
-"""`biped envelope --perturbation force|platform|release` (docs/envelope.md, "Other perturbations").
+"""`biped envelope --perturbation force|platform|release|pull` (docs/envelope.md, "Other perturbations").
 
 - End to end on real physics (a force pulse, two directions, a three-size lattice, short trials):
   the limit each direction reports lies one lattice step below a failed trial and on a survived
@@ -17,6 +17,7 @@ import pytest
 
 from biped.analysis import survived
 from biped.cli import main
+from biped.errors import BipedError
 from biped.sim.sweep import load
 from biped.sim.sweep.envelope import paradigm_lattice
 
@@ -52,12 +53,26 @@ def test_force_envelope_limit_lies_between_a_survived_and_a_failed_row(tmp_path,
 
 
 def test_paradigm_lattices_stay_inside_their_scenario_checks():
+    from biped.sim import Scenario
+    from biped.sim.perturbations import of
     from biped.sim.perturbations.platform import MAX_DISPLACEMENT_M
 
-    for name, unit in (("block", "m/s"), ("force", "N"), ("platform", "m"), ("release", "deg")):
+    for name, unit in (
+        ("block", "m/s"),
+        ("force", "N"),
+        ("platform", "m"),
+        ("release", "deg"),
+        ("pull", "m"),
+    ):
         lat = paradigm_lattice(name)
         assert lat.unit == unit and lat.max <= lat.limit and lat.resolution < lat.max
     assert paradigm_lattice("platform").limit == MAX_DISPLACEMENT_M
+    # the pull's limit is what its scenario accepts: a motor travel of the limit passes, more fails
+    pull = Scenario(perturbation="pull")
+    lim = paradigm_lattice("pull").limit
+    Scenario.from_dict({**pull.to_dict(), **of(pull).sized(pull, lim, 0.0)})
+    with pytest.raises(BipedError, match="pull_displacement_m"):
+        Scenario.from_dict({**pull.to_dict(), **of(pull).sized(pull, lim * 1.01, 0.0)})
 
 
 @pytest.mark.parametrize(
@@ -66,6 +81,7 @@ def test_paradigm_lattices_stay_inside_their_scenario_checks():
         (["--perturbation", "force", "--max", "2e5"], "--max must be at most 100000 N"),
         (["--perturbation", "platform", "--max", "1.5"], "--max must be at most 1 m"),
         (["--perturbation", "release", "--max", "50"], "--max must be at most 45 deg"),
+        (["--perturbation", "pull", "--max", "2.5"], "--max must be at most 2 m"),
         (["--perturbation", "platform", "--resolution", "0.03"], "whole number of --resolution steps"),
         (["--perturbation", "force", "--mass", "3"], "block_mass_kg is the block's"),
         (["--perturbation", "wind"], "invalid choice"),

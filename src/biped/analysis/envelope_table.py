@@ -89,6 +89,10 @@ class EnvelopeTable:
             f"{'[m/s]':>7}  {'':>7}  {'':>6}"
         )
         lines = [head, units]
+        # as many decimals as the resolution needs (0.25 m/s: 2; 5 mm: 3), at least 2
+        digits = 2
+        while digits < 6 and abs(round(self.resolution, digits) - self.resolution) > 1e-9 * self.resolution:
+            digits += 1
         for r in self.rows:
             note = ""
             if not r.complete:
@@ -106,7 +110,7 @@ class EnvelopeTable:
                 note = (note + "; " if note else "") + f"first fail is an error: {r.first_fail_error[:70]}"
             pct = f"{r.percent_j_max:6.0f}%" if math.isfinite(r.percent_j_max) else f"{'-':>7}"
             lines.append(
-                f"{r.direction_deg:9.1f}  {_f(r.limit, 7, 2)}  {_f(r.first_fail, 10, 2)}  "
+                f"{r.direction_deg:9.1f}  {_f(r.limit, 7, digits)}  {_f(r.first_fail, 10, digits)}  "
                 f"{_f(r.impulse_n_s, 8, 1)}  {_f(r.delta_v_m_s, 7, 3)}  {pct}  "
                 f"{r.n_trials:6d}  {note}"
             )

@@ -54,7 +54,10 @@ class Parser(argparse.ArgumentParser):
         return namespace, rest
 
 
-def build_parser() -> argparse.ArgumentParser:
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The parser of every subcommand, or of ``command`` alone (a name of :data:`SUBCOMMANDS`:
+    a command line naming it parses the same, without importing the others' modules, e.g.
+    ``biped posture``'s scipy)."""
     from biped import __version__
 
     parser = Parser(
@@ -63,7 +66,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"biped {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    for name in SUBCOMMANDS:
+    for name in SUBCOMMANDS if command not in SUBCOMMANDS else (command,):
         try:
             module = importlib.import_module(f"biped.cli.{name}")
         except ModuleNotFoundError as exc:  # a subcommand not built yet
@@ -78,9 +81,9 @@ def main(argv: list[str] | None = None) -> int:
     """Run one command; returns its exit status (module docstring). argparse's errors exit 2."""
     from biped.cli._common import finish_runs
 
-    parser = build_parser()
-    args, rest = parser.parse_known_args(argv)
     words = list(sys.argv[1:] if argv is None else argv)
+    parser = build_parser(words[0] if words else None)
+    args, rest = parser.parse_known_args(argv)
     bare = next((w for w in words if w.startswith("-") and w.endswith("=--")), None)
     if bare is not None:  # argparse hands '--opt=--' on as an empty list, not as the text '--'
         sub = getattr(args, "_parser", parser)

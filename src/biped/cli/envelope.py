@@ -24,6 +24,7 @@ _PLOT_BY = {
     "force": ("magnitude", "horizontal_impulse_n_s"),
     "platform": ("magnitude",),
     "release": ("magnitude",),
+    "pull": ("magnitude",),
 }
 
 
@@ -38,7 +39,7 @@ def register(subparsers) -> None:
     )
     p.add_argument(
         "--perturbation",
-        choices=("block", "force", "platform", "release"),
+        choices=("block", "force", "platform", "release", "pull"),
         default="block",
         help="the experiment (as biped sweep): W's block (default; size: speed m/s), a force pulse "
         "(peak N), a platform move (m) or a lean-and-release (deg); docs/perturbations.md",
@@ -204,8 +205,6 @@ def _run(args) -> int:
     n_dir, n_size = len(axes["direction_deg"]), len(size)
     where = args.scheduler or f"{args.workers or 'all'} local worker(s)"
     stop = "on" if early_stop_applies(spec.base) else "off"
-    if spec.base.early_stop and stop == "off":
-        stop = "off (the block's rule only: trials run their duration)"
     physics = "the robot's own" if spec.robot else spec.base.physics
     what = (
         f"{args.perturbation}: {n_dir} directions x {n_size} sizes ({min(size):g}-{max(size):g} {lat.unit} "

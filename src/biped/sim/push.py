@@ -256,7 +256,7 @@ def run_closed_loop(
         raise ScenarioError(fused_mod.refusal())
     synced = 0  # rows [0, synced) went through the monitor
     chunk = progress_every if progress is not None else 10 * progress_every  # rows a call
-    stopper = EarlyStop(scenario, scene, records, policy) if early_stop_applies(scenario) else None
+    stopper = EarlyStop(scenario, scene, records, policy, driver) if early_stop_applies(scenario) else None
     if stopper is not None:  # the rule is checked between compiled calls: one check interval a call
         chunk = stopper.every
     stopped = False

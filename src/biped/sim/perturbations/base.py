@@ -119,6 +119,15 @@ class Perturbation:
         """(time [s], label) of the perturbation's moments, for the replay's timeline."""
         return []
 
+    def over_row(self) -> int | None:
+        """The control period from which the perturbation no longer acts: every input it sets
+        (forces, its actuators' references, the controller's set point) holds constant from this
+        row on, so its state is the run's own (the early-stop rule, :mod:`biped.sim.early_stop`,
+        counts a rest only after it). None: the scene's state says when it is over (the block:
+        once it lies at rest; the rule checks that). This default, for a paradigm that does not
+        say: the row after the run's last, i.e. never (its runs go to their end)."""
+        return self.scenario.control_steps + 1
+
     def arrows(self, scene: Scene, result: Any) -> np.ndarray | None:
         """(n, 2, 3) an arrow per row of ``result`` to draw (from, to; world [m]; NaN: none), the
         push or the tether, for the video; None: nothing to draw."""

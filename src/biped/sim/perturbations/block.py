@@ -27,6 +27,11 @@ class Block(Perturbation):
     def initial_state(self, scene, qpos: np.ndarray, qvel: np.ndarray) -> None:
         pass
 
+    def over_row(self) -> None:
+        """None: the block is over once it lies still or out of reach (the early-stop rule checks
+        the scene's state, :mod:`biped.sim.early_stop`)."""
+        return None
+
     def size(self, total_mass_kg: float) -> Size:
         v = self.scenario.block_velocity_m_s
         return Size(self.name, math.hypot(v[0], v[1]), self.unit, world_direction_deg(v))

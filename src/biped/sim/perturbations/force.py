@@ -105,6 +105,11 @@ class Force(Perturbation):
         ctrl = workspace_controller(policy)
         return ForceDriver(self.scenario, model, body, point, ctrl, scene.central_body)
 
+    def over_row(self) -> int:
+        """The row after the pulse's last (the driver zeroes the force there)."""
+        s = self.scenario
+        return pulse_rows(s.force_start_s, s.force_duration_s, s.control_rate_hz)[1]
+
     def markers(self) -> list[tuple[float, str]]:
         s = self.scenario
         k0, k1 = pulse_rows(s.force_start_s, s.force_duration_s, s.control_rate_hz)

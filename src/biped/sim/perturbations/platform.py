@@ -78,6 +78,12 @@ def profile(t: np.ndarray | float, distance: float, duration: float) -> tuple:
     return x, vel, acc
 
 
+def ramp_rows(scenario) -> tuple[int, int]:
+    """(first row, the row of the ramp's end) of the platform's move on control periods."""
+    k0 = round(scenario.platform_start_s * scenario.control_rate_hz)
+    return k0, k0 + max(1, round(scenario.platform_duration_s * scenario.control_rate_hz))
+
+
 class PlatformDriver(Driver):
     """Sets the servo's references each control period of the ramp. With W's workspace
     controller, it also moves the controller's COM set point with the platform (by the platform's
@@ -87,8 +93,7 @@ class PlatformDriver(Driver):
     def __init__(self, scenario, model: mujoco.MjModel, controller=None, central: int = 0):
         s = scenario
         self.period = 1.0 / s.control_rate_hz
-        self.k0 = round(s.platform_start_s * s.control_rate_hz)
-        self.k1 = self.k0 + max(1, round(s.platform_duration_s * s.control_rate_hz))
+        self.k0, self.k1 = ramp_rows(s)
         self.rows = np.unique(np.r_[0, np.arange(self.k0, self.k1 + 1)]).astype(np.int64)
         self.distance = math.hypot(*s.platform_displacement_m)
         self.duration = (self.k1 - self.k0) * self.period
@@ -166,10 +171,15 @@ class Platform(Perturbation):
                 ctrllimited=0,
             )
 
+    def over_row(self) -> int:
+        """The ramp's end: the servo's references (and the controller's set point) hold from
+        there; the platform's own motion after it is checked by the rule (every body outside
+        the biped at rest)."""
+        return ramp_rows(self.scenario)[1]
+
     def markers(self) -> list[tuple[float, str]]:
         s = self.scenario
-        k0 = round(s.platform_start_s * s.control_rate_hz)
-        k1 = k0 + max(1, round(s.platform_duration_s * s.control_rate_hz))
+        k0, k1 = ramp_rows(s)
         return [
             (k0 / s.control_rate_hz, "platform starts moving"),
             (k1 / s.control_rate_hz, "platform stops"),

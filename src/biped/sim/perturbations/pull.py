@@ -124,6 +124,10 @@ class Pull(Perturbation):
         body = scene.central_body
         return PullDriver(self.scenario, model, body, pelvis_point(model, body), workspace_controller(policy))
 
+    def over_row(self) -> int:
+        """The row the cable is let go (the driver zeroes its force there; nothing acts after)."""
+        return pull_rows(self.scenario)[1]
+
     def markers(self) -> list[tuple[float, str]]:
         s = self.scenario
         k0, k1 = pull_rows(s)

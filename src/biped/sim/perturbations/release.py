@@ -240,6 +240,14 @@ class Release(Perturbation):
             stepper.arm_time_s = drv.k_sense * drv.period
         return drv
 
+    def over_row(self) -> int:
+        """The row the release is sensed (``release_time_s`` plus the feedback delay): the
+        tether is gone and the set point upright from there. A release at or after the run's
+        end: row 0 (the tether and the lean's set point hold the whole run)."""
+        s = self.scenario
+        k = round(s.release_time_s * s.control_rate_hz)
+        return k + s.delay_steps if 0 < k <= s.control_steps else (s.delay_steps if k == 0 else 0)
+
     def markers(self) -> list[tuple[float, str]]:
         s = self.scenario
         k = round(s.release_time_s * s.control_rate_hz)

@@ -63,12 +63,12 @@ class Lattice:
 
 
 def paradigm_lattice(perturbation: str) -> Lattice:
-    """The :class:`Lattice` of ``perturbation`` (``block``, ``force``, ``platform``, ``release``;
-    docs/envelope.md): force 10 N to 1000 N (the pulse's ``force_duration_s``, 0.15 s by
+    """The :class:`Lattice` of ``perturbation`` (``block``, ``force``, ``platform``, ``release``,
+    ``pull``; docs/envelope.md): force 10 N to 1000 N (the pulse's ``force_duration_s``, 0.15 s by
     default: up to 150 N s, six times W's block limit); platform 0.01 m to the floor's 1 m;
     release 0.5 deg to 14.5 deg (what W's friction 0.3 holds in every direction: 14.5 deg sideways,
     15.2 deg forward and backward; a larger lean's trial is a row with friction's error, counted
-    as not survived)."""
+    as not survived); pull 5 mm to 0.5 m of the motor's travel (at ``pull_velocity_m_s``)."""
     from biped.sim.perturbations.platform import MAX_DISPLACEMENT_M
 
     table = {
@@ -83,6 +83,7 @@ def paradigm_lattice(perturbation: str) -> Lattice:
             f"the feet stay on the platform: at most {MAX_DISPLACEMENT_M:g} m",
         ),  # fmt: skip
         "release": Lattice("magnitude", "deg", 0.5, 14.5, 45.0, "release_lean_deg is at most 45 deg"),
+        "pull": Lattice("magnitude", "m", 0.005, 0.5, 2.0, "pull_displacement_m is at most 2 m long"),
     }
     if perturbation not in table:
         raise ScenarioError(f"perturbation must be one of {', '.join(table)}; got {perturbation!r}")

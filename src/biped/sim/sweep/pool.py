@@ -89,8 +89,10 @@ def worker_main(parent_pid: int) -> None:
     trial_fn = _read_frame(inp)
     while True:
         setups = _read_frame(inp)
-        if setups is None:  # the parent closed the pipe: done
-            return
+        if setups is None:  # the parent closed the pipe: done; every row is written (unbuffered)
+            sys.stdout.flush()
+            sys.stderr.flush()
+            os._exit(0)  # no interpreter teardown: it took ~1-4 s with numba and MuJoCo loaded
         for setup in setups:
             _write_all(out, _frame(execute_trial(trial_fn, setup)))
 
@@ -160,8 +162,17 @@ class LocalPool:
         self.workers: list[_Worker] = []
         self.respawns = 4 * workers
         self.n = workers
+        self.prepare: Callable[[Any], Any] | None = None
 
-    def run(self, chunks: Sequence[Sequence[Any]], record: Callable[[list[dict]], None]) -> int:
+    def run(
+        self,
+        chunks: Sequence[Sequence[Any]],
+        record: Callable[[list[dict]], None],
+        prepare: Callable[[Any], Any] | None = None,
+    ) -> int:
+        """``prepare(item)``, when given, makes each item of a chunk its trial setup as the chunk
+        is sent (a sweep's 1000 scenarios are not built before the first worker starts)."""
+        self.prepare = prepare
         todo = list(reversed(chunks))
         lost = 0
         sel = selectors.DefaultSelector()
@@ -174,16 +185,15 @@ class LocalPool:
                     data = os.read(w.fd, 1 << 16)
                     if data:
                         rows = w.rows(data)
+                        w.remaining -= len(rows)
+                        if w.remaining == 0 and todo:  # its next work first, then the bookkeeping
+                            self._assign(w, todo.pop())
                         if rows:
-                            w.remaining -= len(rows)
                             record(rows)
                         if w.remaining == 0:
-                            if todo:
-                                self._assign(w, todo.pop())
-                            else:
-                                sel.unregister(w.fd)
-                                self.workers.remove(w)
-                                w.close()
+                            sel.unregister(w.fd)
+                            self.workers.remove(w)
+                            w.close()
                         continue
                     # end of file: the worker died
                     lost += w.remaining
@@ -269,10 +279,9 @@ class LocalPool:
         sel.register(w.fd, selectors.EVENT_READ, w)
         self._assign(w, todo.pop())
 
-    @staticmethod
-    def _assign(w: _Worker, chunk: Sequence[Any]) -> None:
+    def _assign(self, w: _Worker, chunk: Sequence[Any]) -> None:
         w.remaining = len(chunk)
-        w.send(list(chunk))
+        w.send([self.prepare(x) for x in chunk] if self.prepare is not None else list(chunk))
 
 
 __all__ = ["LocalPool", "worker_main"]

@@ -442,7 +442,7 @@ def _run_locked(
         else:
             n = min(n_workers, len(chunks))
             backend = f"processes:{n}"
-            lost = LocalPool(n, trial_fn).run([[spec.setup(t) for t in c] for c in chunks], record)
+            lost = LocalPool(n, trial_fn).run(chunks, record, prepare=spec.setup)
     except KeyboardInterrupt:
         if state["terminated"]:
             raise Terminated from None
