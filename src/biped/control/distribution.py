@@ -44,6 +44,17 @@ import numpy as np
 from numba import njit
 
 from biped.control.cones import ROWS_PER_FOOT, carry_leg_weight, cone_rows, leg_weight_wrench
+from biped.control.daqp_c import bind_c, unconstrained
+from biped.control.qp_buffers import (
+    H_LIMITED,
+    H_ROWS,
+    QPState,
+    float_size,
+    int_size,
+    qp_int_views,
+    qp_views,
+    solve_flat,
+)
 from biped.control.recursions import alg6_torques
 from biped.errors import ScenarioError
 
@@ -315,7 +326,7 @@ def qp_finish(x, contact, A, T, soles, tau, Fl_tilde, Fr_tilde, Fl, Fr, parent, 
 # ----------------------------------------------------------------------------- the object
 
 
-class ContactQP:
+class ContactQP(QPState):
     """Preallocated QP distribution for one :class:`~biped.control.WorkspaceController`.
 
     ``soles``: (left, right) :class:`~biped.model.SoleRectangle`; ``weights``: :class:`QPWeights`;
@@ -334,42 +345,38 @@ class ContactQP:
         self._tree = tree
         self._beyond = tree.beyond_foot.astype(np.int64)
         self.soles = soles
-        self._soles = np.ascontiguousarray(np.stack([s.g_foot_sole for s in soles]), dtype=float)
-        self._dims = self.weights.cop_scale * np.array(
-            [[s.half_length, s.half_width] for s in soles], dtype=float
-        )
         if (lower is None) != (upper is None):
             raise ScenarioError("torque limits for the QP need both lower and upper bounds, or neither")
         self.limited = lower is not None
-        self._lo = np.zeros(nj) if lower is None else np.asarray(lower, dtype=float).copy()
-        self._hi = np.zeros(nj) if upper is None else np.asarray(upper, dtype=float).copy()
-        if self._lo.shape != (nj,) or self._hi.shape != (nj,):
+        lo = np.zeros(nj) if lower is None else np.asarray(lower, dtype=float)
+        hi = np.zeros(nj) if upper is None else np.asarray(upper, dtype=float)
+        if lo.shape != (nj,) or hi.shape != (nj,):
             raise ScenarioError(
-                f"QP torque limits need {nj} lower and upper bounds; got {self._lo.shape}, {self._hi.shape}"
+                f"QP torque limits need {nj} lower and upper bounds; got {lo.shape}, {hi.shape}"
             )
         n_lim = sum(1 for j in range(nj) if tree.leg[j + 1] >= 0 and not tree.beyond_foot[j + 1])
         rows = 2 * ROWS_PER_FOOT + (2 * n_lim if self.limited else 0)
-        self.A = np.zeros((2, 6, 6))
-        self.T = np.zeros((nj, 12))
-        self._F = np.zeros((tree.n_links, 6))
-        self._tau = np.zeros(nj)
-        self._col = np.zeros((2, 6))
-        self.Gq = np.zeros((12, 12))
-        self.av = np.zeros(12)
-        self.Ct = np.zeros((rows, 12))
-        self.b = np.zeros(rows)
-        self.x = np.zeros(12)
-        self.wg = np.zeros((2, 6))
-        self.meq = 0
-        self.rows = 0
-        self.first = (-1, -1)
-        self.status = SOLVED
-        self.fallbacks = {RELAXED: 0, ZEROED: 0}
-        self._prm = self.weights.array
-        self._upper = np.full(rows, 1e30)  # daqp's upper bounds: none, b itself on equality rows
-        self._sense = np.zeros(rows, dtype=np.int32)
+        # every array a view of two flat buffers (biped.control.qp_buffers: one compiled call takes them)
+        self._qf = np.zeros(float_size(nj, rows))
+        self._qi = np.zeros(int_size(rows), dtype=np.int64)
+        self._qi[H_LIMITED], self._qi[H_ROWS] = self.limited, rows
+        (self._soles, self._dims, self._prm, self._lo, self._hi, self.A, self.T, self._F, self._tau, self._col,
+         self.Gq, self.av, self.Ct, self.b, self.x, self.wg, self._upper, self._f, self._xs, self._lam) = qp_views(
+            self._qf, nj, rows
+        )  # fmt: skip
+        self._qstat, self._res32, self._sense = qp_int_views(self._qi, rows)
+        self._soles[:] = np.stack([s.g_foot_sole for s in soles])
+        self._dims[:] = self.weights.cop_scale * np.array([[s.half_length, s.half_width] for s in soles])
+        self._lo[:], self._hi[:] = lo, hi
+        self._prm[:] = self.weights.array
+        self._meq = 0
+        self._rows = 0
+        self._first = (-1, -1)
+        self._status = SOLVED
+        self._fallbacks = {RELAXED: 0, ZEROED: 0}
+        self._upper[:] = 1e30  # daqp's upper bounds: none, b itself on equality rows
         self._meq_sense = 0
-        self._f = np.zeros(12)
+        self._c = None
         if solver == "quadprog":
             import quadprog
 
@@ -378,6 +385,7 @@ class ContactQP:
             import daqp
 
             self._daqp = daqp.solve
+            self._c = bind_c(self)  # daqp's C function for compiled calls, or None
 
     def build(self, g, gl, contact, Fd):
         """Fill the QP for one state (the kernel's work buffers ``g``, ``gl`` and ``F_1^bd``)."""
@@ -417,6 +425,8 @@ class ContactQP:
     def _solve_once(self):
         if self.solver == "quadprog":
             return self._quadprog(self.Gq, self.av, self.Ct.T, self.b, self.meq)[0]
+        if self.meq == 0 and unconstrained(self.Gq, self.av, self.Ct, self.b, self.rows, self._xs):
+            return self._xs[:12]  # daqp's solution to rounding, as the C path (biped.control.daqp_c)
         if self.meq != self._meq_sense:
             self._sense[:] = 0
             self._sense[: self.meq] = 5  # daqp: ACTIVE + IMMUTABLE, an equality row
@@ -432,6 +442,9 @@ class ContactQP:
     def solve(self) -> np.ndarray:
         """Solve the built QP into ``self.x`` (with the documented fallbacks); returns ``self.x``."""
         x = self.x
+        if self._c is not None:  # daqp's C function from compiled code: the same solve, no Python
+            solve_flat(self._qf, self._qi, len(self._tau), self.meq, self.rows, *self.first)
+            return x
         try:
             x[:] = self._solve_once()
             self.status = SOLVED

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from biped._numba_cache import say_if_cold
+from biped.control.qp_call import qp_kernel
 from biped.control.recursions import (
     NONFINITE_RESULT,
     NONFINITE_STATE,
@@ -179,6 +180,8 @@ class WorkspaceController:
             )
         )
         self.qp: ContactQP | None = None
+        self._qf: np.ndarray | None = None  # the ContactQP's flat buffers when qp_kernel solves it in C
+        self._qi: np.ndarray | None = None
         if distribution == "qp":
             self._init_qp(qp_weights, torque_limits, soles, qp_solver)
 
@@ -200,6 +203,8 @@ class WorkspaceController:
             lim = limits.reorder(tree.joint_names)
             lower, upper = lim.lower, lim.upper
         self.qp = ContactQP(tree, soles, weights, lower, upper, solver)
+        if self.qp._c is not None:
+            self._qf, self._qi = self.qp._qf, self.qp._qi
         out, lay = self._out, self._layout
         v = {
             k: out[o : o + int(np.prod(sh))].reshape(sh) for k, (o, sh) in lay["out"].items() if k != "_size"
@@ -286,9 +291,23 @@ class WorkspaceController:
         t = (target or self.target).array
         k = (gains or self.gains).array
         try:
-            status = compute_kernel(
-                qpos, qvel, t, k, self._contact(feet_in_contact), self._mi, self._mf, self._work, self._out
-            )
+            if self._qf is not None:  # the QP in the same compiled call (biped.control.qp_call)
+                status = qp_kernel(
+                    qpos, qvel, t, k, self._contact(feet_in_contact), self._mi, self._mf, self._work, self._out,
+                    self._qf, self._qi,
+                )  # fmt: skip
+            else:
+                status = compute_kernel(
+                    qpos,
+                    qvel,
+                    t,
+                    k,
+                    self._contact(feet_in_contact),
+                    self._mi,
+                    self._mf,
+                    self._work,
+                    self._out,
+                )
         except ZeroDivisionError:  # numba's float division: a quaternion of overflowing norm
             status = NONFINITE_RESULT
         if status in (ZERO_QUATERNION, NONFINITE_RESULT):
@@ -314,7 +333,7 @@ class WorkspaceController:
                     "the controller produced non-finite values at this state: velocities too large for "
                     "double precision, or a joint axis with zero articulated inertia (W Alg. 3)"
                 )
-        if self.qp is not None:
+        if self.qp is not None and self._qf is None:
             g, gl, Fd, tau, Flt, Frt, Fl, Fr = self._qp_views
             c = self._contact(feet_in_contact)
             self.qp.build(g, gl, c, Fd)

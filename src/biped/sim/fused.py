@@ -39,6 +39,7 @@ import numpy as np
 from numba import njit, types
 
 from biped.control.buffers import unpack
+from biped.control.daqp_c import C_TYPES, c_arguments, c_solve, sync_status
 from biped.control.distribution import qp_build, qp_finish
 from biped.control.joint_pd import JointPDController
 from biped.control.neuromotor import neural_filter
@@ -47,7 +48,6 @@ from biped.control.workspace import WorkspaceController
 from biped.sim import contact as contact_mod
 from biped.sim import mjdata
 from biped.sim.contact import contact_code
-from biped.sim.daqp_c import C_TYPES, c_arguments, c_solve, sync_status
 from biped.sim.fused_qp import QP_TYPES, call_solve, qp_arguments, register_qp
 from biped.sim.mjdata import STEP_SIG, mj_step_function, mjdata_layout
 
@@ -227,7 +227,8 @@ def _key_cache_by_what_it_compiles_in() -> None:
     import biped.control.recursions
     import biped.control.statics
     import biped.spatial
-    from biped.sim import daqp_c, fused_qp
+    from biped.control import daqp_c
+    from biped.sim import fused_qp
 
     modules = (
         biped.control.recursions,
