@@ -43,7 +43,14 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
-from biped.control.cones import ROWS_PER_FOOT, carry_leg_weight, cone_rows, leg_weight_wrench
+from biped.control.cones import (
+    ROWS_PER_FOOT,
+    carry_leg_weight,
+    cone_rows,
+    leg_weight_wrench,
+    sole_position,
+    sole_rotation_row,
+)
 from biped.control.daqp_c import bind_c, unconstrained
 from biped.control.qp_buffers import (
     H_LIMITED,
@@ -147,22 +154,18 @@ class QPWeights:
 def _sole_to_body(gf, gfs, g1, A):
     """A = Ad^T_{g_{sole,1}}: maps a wrench in the sole frame at the sole centre to the same
     wrench in the central body's frame (gf = g_{0,foot}, gfs = g_{foot,sole}, g1 = g_{0,1})."""
-    Rs = np.empty((3, 3))
-    ps = np.empty(3)
-    for i in range(3):
-        for j in range(3):
-            Rs[i, j] = gf[i, 0] * gfs[0, j] + gf[i, 1] * gfs[1, j] + gf[i, 2] * gfs[2, j]
-        ps[i] = gf[i, 3] + gf[i, 0] * gfs[0, 3] + gf[i, 1] * gfs[1, 3] + gf[i, 2] * gfs[2, 3]
+    Rs = (sole_rotation_row(gf, gfs, 0), sole_rotation_row(gf, gfs, 1), sole_rotation_row(gf, gfs, 2))
+    ps = (sole_position(gf, gfs, 0), sole_position(gf, gfs, 1), sole_position(gf, gfs, 2))
     # g_{s,1} = (R, p), R = Rs^T R1, p = Rs^T (p1 - ps); A = [[R^T, 0], [-R^T p^, R^T]]
-    d = np.empty(3)
-    for i in range(3):
-        d[i] = g1[i, 3] - ps[i]
-    p = np.empty(3)
-    for i in range(3):
-        p[i] = Rs[0, i] * d[0] + Rs[1, i] * d[1] + Rs[2, i] * d[2]
+    d0, d1, d2 = g1[0, 3] - ps[0], g1[1, 3] - ps[1], g1[2, 3] - ps[2]
+    p = (
+        Rs[0][0] * d0 + Rs[1][0] * d1 + Rs[2][0] * d2,
+        Rs[0][1] * d0 + Rs[1][1] * d1 + Rs[2][1] * d2,
+        Rs[0][2] * d0 + Rs[1][2] * d1 + Rs[2][2] * d2,
+    )
     for i in range(3):
         for j in range(3):
-            rt = g1[0, i] * Rs[0, j] + g1[1, i] * Rs[1, j] + g1[2, i] * Rs[2, j]  # (R^T)_{ij}
+            rt = g1[0, i] * Rs[0][j] + g1[1, i] * Rs[1][j] + g1[2, i] * Rs[2][j]  # (R^T)_{ij}
             A[i, j] = rt
             A[3 + i, 3 + j] = rt
             A[i, 3 + j] = 0.0
@@ -253,10 +256,13 @@ def qp_build(
                 b[m] = 0.0
                 m += 1
     meq = m
-    first = np.full(2, -1)
+    first0 = first1 = -1
     for f in range(2):
         if contact[f] != 0:
-            first[f] = m
+            if f == 0:
+                first0 = m
+            else:
+                first1 = m
             m0 = m
             m = cone_rows(dims[f, 0], dims[f, 1], prm[6], prm[5], prm[7], 6 * f, Ct, b, m)
             if prm[8] != 0.0:  # the cone holds the ground's wrench: the QP's share plus the leg's weight
@@ -278,7 +284,7 @@ def qp_build(
         for i in range(12):
             Ct[r, i] = 0.0
         b[r] = -1.0
-    return meq, used, first[0], first[1]
+    return meq, used, first0, first1
 
 
 @njit(cache=True)

@@ -168,6 +168,8 @@ class WorkspaceController:
         self._contact_buf = np.ones(2, dtype=np.int64)
         self._work = np.zeros(lay["work"]["_size"][0])
         self._out = np.zeros(lay["out"]["_size"][0])
+        self._tau_out = self._out[: n - 1]  # what torques() returns (tau is the out buffer's head)
+        self._shapes = ((tree.nq,), (tree.nv,))
         # named views of the buffers, the kernel's own unpack, for the debugging methods below
         # (not the hot path)
         _, self._m, self._w, _ = unpack(self._mi, self._mf, self._work, self._out)
@@ -286,62 +288,55 @@ class WorkspaceController:
         return out
 
     def _run(self, qpos, qvel, target, gains, feet_in_contact=None):
-        if qpos.shape != (self.tree.nq,) or qvel.shape != (self.tree.nv,):
+        if qpos.shape != self._shapes[0] or qvel.shape != self._shapes[1]:
             self._check_state(qpos, qvel)
         t = (target or self.target).array
         k = (gains or self.gains).array
+        c = self._both if feet_in_contact is None else self._contact(feet_in_contact)
         try:
             if self._qf is not None:  # the QP in the same compiled call (biped.control.qp_call)
                 status = qp_kernel(
-                    qpos, qvel, t, k, self._contact(feet_in_contact), self._mi, self._mf, self._work, self._out,
-                    self._qf, self._qi,
-                )  # fmt: skip
-            else:
-                status = compute_kernel(
-                    qpos,
-                    qvel,
-                    t,
-                    k,
-                    self._contact(feet_in_contact),
-                    self._mi,
-                    self._mf,
-                    self._work,
-                    self._out,
+                    qpos, qvel, t, k, c, self._mi, self._mf, self._work, self._out, self._qf, self._qi
                 )
+            else:
+                status = compute_kernel(qpos, qvel, t, k, c, self._mi, self._mf, self._work, self._out)
         except ZeroDivisionError:  # numba's float division: a quaternion of overflowing norm
             status = NONFINITE_RESULT
-        if status in (ZERO_QUATERNION, NONFINITE_RESULT):
-            unit = self._unit_quaternion(qpos)  # a badly scaled quaternion: normalize safely
-            if unit is not None:
-                return self._run(unit, qvel, target, gains, feet_in_contact)
         if status:
-            if status in (NONFINITE_STATE, ZERO_QUATERNION):
-                self._check_state(qpos, qvel)
-                a = self.tree.qpos_adr[0] + 3
-                raise StateError(
-                    f"the root quaternion qpos[{a}:{a + 4}] = {qpos[a : a + 4].tolist()} "
-                    f"cannot be normalized in double precision"
-                )
-            if status == SINGULAR_DISTRIBUTION:
-                raise SingularityError(
-                    "wrench distribution: G G^T is singular to working precision (W Alg. 5); it is the "
-                    "sum of two positive-definite matrices, so this means feet absurdly far from the "
-                    "central body for double precision"
-                )
-            if status == NONFINITE_RESULT:
-                raise SingularityError(
-                    "the controller produced non-finite values at this state: velocities too large for "
-                    "double precision, or a joint axis with zero articulated inertia (W Alg. 3)"
-                )
+            self._failed(status, qpos, qvel, target, gains, feet_in_contact)
+            return
         if self.qp is not None and self._qf is None:
             g, gl, Fd, tau, Flt, Frt, Fl, Fr = self._qp_views
-            c = self._contact(feet_in_contact)
             self.qp.build(g, gl, c, Fd)
             if c[0] == 0 and c[1] == 0:
                 self.qp.x[:] = 0.0
             else:
                 self.qp.solve()
             self.qp.finish(c, tau, Flt, Frt, Fl, Fr)
+
+    def _failed(self, status, qpos, qvel, target, gains, feet_in_contact):
+        """After a kernel status other than 0: run again on a safely normalized quaternion, or raise."""
+        if status in (ZERO_QUATERNION, NONFINITE_RESULT):
+            unit = self._unit_quaternion(qpos)  # a badly scaled quaternion: normalize safely
+            if unit is not None:
+                return self._run(unit, qvel, target, gains, feet_in_contact)
+        if status in (NONFINITE_STATE, ZERO_QUATERNION):
+            self._check_state(qpos, qvel)
+            a = self.tree.qpos_adr[0] + 3
+            raise StateError(
+                f"the root quaternion qpos[{a}:{a + 4}] = {qpos[a : a + 4].tolist()} "
+                f"cannot be normalized in double precision"
+            )
+        if status == SINGULAR_DISTRIBUTION:
+            raise SingularityError(
+                "wrench distribution: G G^T is singular to working precision (W Alg. 5); it is the "
+                "sum of two positive-definite matrices, so this means feet absurdly far from the "
+                "central body for double precision"
+            )
+        raise SingularityError(
+            "the controller produced non-finite values at this state: velocities too large for "
+            "double precision, or a joint axis with zero articulated inertia (W Alg. 3)"
+        )
 
     def compute(
         self,
@@ -438,7 +433,7 @@ class WorkspaceController:
         arrays; ``target``, ``gains`` and ``feet_in_contact`` as in :meth:`compute`, which
         returns fresh arrays instead."""
         self._run(qpos, qvel, target, gains, feet_in_contact)
-        return self._out[: self.tree.n_links - 1]
+        return self._tau_out
 
 
 def _check_feet(tree: TreeModel) -> None:
