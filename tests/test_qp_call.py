@@ -114,12 +114,12 @@ def test_compiled_fallbacks_when_daqp_fails(wendlandt_path, wendlandt_mj):
     tiny = TorqueLimits("tiny", HUMAN.joint_names, -0.01 * np.ones(12), 0.01 * np.ones(12))
     fast, slow = _pair(wendlandt_path, tiny)
     d = next(_states(wendlandt_mj, 1, 6))
-    fn = fast._qi[H_FN]
-    fast._qi[H_FN] = _unused.address
+    fn = fast.qp._qi[H_FN]
+    fast.qp._qi[H_FN] = _unused.address
     out = fast.compute(d.qpos, d.qvel)
     assert fast.qp.status == ZEROED and fast.qp.fallbacks[ZEROED] == 1
     assert np.all(out.torques == 0) and np.all(out.foot_wrench_left == 0)
-    fast._qi[H_FN] = fn
+    fast.qp._qi[H_FN] = fn
     tau = fast.compute(d.qpos, d.qvel).torques
     assert fast.qp.status == RELAXED and fast.qp.fallbacks[RELAXED] == 1
     assert np.array_equal(tau, slow.compute(d.qpos, d.qvel).torques) and slow.qp.status == RELAXED

@@ -340,8 +340,24 @@ class ContactQP(QPState):
     ``solver``: "daqp" (default) or "quadprog" (the same problem; for the comparison).
     """
 
+    @staticmethod
+    def buffer_sizes(tree, limited: bool) -> tuple[int, int]:
+        """Lengths of the float and int buffers (:mod:`biped.control.qp_buffers`) of a ContactQP on
+        ``tree``, with torque limits or without."""
+        nj = tree.n_links - 1
+        n_lim = sum(1 for j in range(nj) if tree.leg[j + 1] >= 0 and not tree.beyond_foot[j + 1])
+        rows = 2 * ROWS_PER_FOOT + (2 * n_lim if limited else 0)
+        return float_size(nj, rows), int_size(rows)
+
     def __init__(
-        self, tree, soles, weights: QPWeights | None = None, lower=None, upper=None, solver: str = "daqp"
+        self,
+        tree,
+        soles,
+        weights: QPWeights | None = None,
+        lower=None,
+        upper=None,
+        solver: str = "daqp",
+        buffers: tuple[np.ndarray, np.ndarray] | None = None,
     ):
         if solver not in ("quadprog", "daqp"):
             raise ScenarioError(f"unknown QP solver {solver!r}; valid: 'quadprog', 'daqp'")
@@ -363,8 +379,13 @@ class ContactQP(QPState):
         n_lim = sum(1 for j in range(nj) if tree.leg[j + 1] >= 0 and not tree.beyond_foot[j + 1])
         rows = 2 * ROWS_PER_FOOT + (2 * n_lim if self.limited else 0)
         # every array a view of two flat buffers (biped.control.qp_buffers: one compiled call takes them)
-        self._qf = np.zeros(float_size(nj, rows))
-        self._qi = np.zeros(int_size(rows), dtype=np.int64)
+        if buffers is None:
+            self._qf = np.zeros(float_size(nj, rows))
+            self._qi = np.zeros(int_size(rows), dtype=np.int64)
+        else:  # the caller's (zeroed) buffers: the controller keeps them beside its own
+            self._qf, self._qi = buffers
+            if self._qf.shape != (float_size(nj, rows),) or self._qi.shape != (int_size(rows),):
+                raise ValueError("ContactQP buffers of the wrong size; use ContactQP.buffer_sizes")
         self._qi[H_LIMITED], self._qi[H_ROWS] = self.limited, rows
         (self._soles, self._dims, self._prm, self._lo, self._hi, self.A, self.T, self._F, self._tau, self._col,
          self.Gq, self.av, self.Ct, self.b, self.x, self.wg, self._upper, self._f, self._xs, self._lam) = qp_views(

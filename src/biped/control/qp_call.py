@@ -39,9 +39,14 @@ __all__ = ["qp_kernel"]
 
 
 @njit(cache=True)
-def qp_kernel(qpos, qvel, target, gains, contact, mi, mf, work, out, qf, qi):  # pragma: no cover
+def qp_kernel(qpos, qvel, target, gains, contact, ints, floats):  # pragma: no cover
     """One controller call with the QP distribution (the kernel's ``mode`` must be
-    STOP_AFTER_ALG4); the kernel's status (nonzero: the QP is not touched)."""
+    STOP_AFTER_ALG4); the kernel's status (nonzero: the QP is not touched). ``ints`` = the lengths
+    of (mi, mf, work, out), then the kernel's ``mi`` and the ContactQP's ``qi``; ``floats`` = the
+    kernel's ``mf``, ``work``, ``out`` and the ContactQP's ``qf`` (WorkspaceController's views)."""
+    a, b, c = ints[1], ints[1] + ints[2], ints[1] + ints[2] + ints[3]
+    mi, qi = ints[4 : 4 + ints[0]], ints[4 + ints[0] :]
+    mf, work, out, qf = floats[:a], floats[a:b], floats[b:c], floats[c:]
     status = compute_kernel(qpos, qvel, target, gains, contact, mi, mf, work, out)
     if status != 0:
         return status

@@ -181,8 +181,9 @@ class WorkspaceController:
                 for k in ("tau", "P1", "z1", "X", "Fd", "Fl_tilde", "Fr_tilde", "Fl", "Fr", "qe")
             )
         )
-        self.qp: ContactQP | None = None
-        self._qf: np.ndarray | None = None  # the ContactQP's flat buffers when qp_kernel solves it in C
+        self._qp: ContactQP | None = None
+        # all the buffers (the kernel's and the ContactQP's) when qp_kernel solves the QP in C
+        self._qf: np.ndarray | None = None
         self._qi: np.ndarray | None = None
         if distribution == "qp":
             self._init_qp(qp_weights, torque_limits, soles, qp_solver)
@@ -204,9 +205,25 @@ class WorkspaceController:
         if limits is not None and not limits.unlimited:
             lim = limits.reorder(tree.joint_names)
             lower, upper = lim.lower, lim.upper
-        self.qp = ContactQP(tree, soles, weights, lower, upper, solver)
-        if self.qp._c is not None:
-            self._qf, self._qi = self.qp._qf, self.qp._qi
+        # one int and one float buffer for the kernel's and the QP's arrays (biped.control.qp_call:
+        # a compiled call from Python pays for every array argument)
+        nf, ni = ContactQP.buffer_sizes(tree, lower is not None)
+        heads = (self._mi, self._mf, self._work, self._out)
+        sizes = [len(b) for b in heads]
+        ints = np.zeros(4 + sizes[0] + ni, dtype=np.int64)
+        floats = np.zeros(sum(sizes[1:]) + nf)
+        ints[:4] = sizes
+        self._mi = ints[4 : 4 + sizes[0]]
+        o = np.cumsum([0, *sizes[1:]])
+        self._mf, self._work, self._out = (floats[o[i] : o[i + 1]] for i in range(3))
+        for new, old in zip((self._mi, self._mf, self._work, self._out), heads, strict=True):
+            new[:] = old
+        self._tau_out = self._out[: tree.n_links - 1]
+        _, self._m, self._w, _ = unpack(self._mi, self._mf, self._work, self._out)
+        qp = ContactQP(tree, soles, weights, lower, upper, solver, (floats[o[3] :], ints[4 + sizes[0] :]))
+        self.qp = qp
+        if qp._c is not None:
+            self._qf, self._qi = floats, ints
         out, lay = self._out, self._layout
         v = {
             k: out[o : o + int(np.prod(sh))].reshape(sh) for k, (o, sh) in lay["out"].items() if k != "_size"
@@ -221,6 +238,16 @@ class WorkspaceController:
             v["Fl"],
             v["Fr"],
         )
+
+    @property
+    def qp(self) -> ContactQP | None:
+        """The QP distribution's :class:`~biped.control.distribution.ContactQP` (None unless "qp")."""
+        return self._qp
+
+    @qp.setter
+    def qp(self, value: ContactQP | None) -> None:
+        self._qp = value
+        self._qf = self._qi = None  # another ContactQP: build, solve and finish from Python
 
     @classmethod
     def from_mjcf(
@@ -295,9 +322,7 @@ class WorkspaceController:
         c = self._both if feet_in_contact is None else self._contact(feet_in_contact)
         try:
             if self._qf is not None:  # the QP in the same compiled call (biped.control.qp_call)
-                status = qp_kernel(
-                    qpos, qvel, t, k, c, self._mi, self._mf, self._work, self._out, self._qf, self._qi
-                )
+                status = qp_kernel(qpos, qvel, t, k, c, self._qi, self._qf)
             else:
                 status = compute_kernel(qpos, qvel, t, k, c, self._mi, self._mf, self._work, self._out)
         except ZeroDivisionError:  # numba's float division: a quaternion of overflowing norm
