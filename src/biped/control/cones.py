@@ -1,4 +1,5 @@
-"""The contact wrench cone of a rectangular sole, and the legs' weight that the ground carries too.
+"""The contact wrench cone of a rectangular sole, and the legs' weight that the ground carries too
+(also the sole frames' poses and maps the QP builds on: :func:`sole_to_body`).
 
 Rows ``Ct[r] . w >= b[r]`` on a foot's ground wrench ``w = [fx, fy, fz, tx, ty, tz]`` in its sole
 frame at the sole centre (Caron, Pham & Nakamura, ICRA 2015): normal force in [fmin, fmax], the
@@ -21,7 +22,7 @@ from __future__ import annotations
 
 from numba import njit
 
-__all__ = ["ROWS_PER_FOOT", "carry_leg_weight", "cone_rows", "leg_weight_wrench"]
+__all__ = ["ROWS_PER_FOOT", "carry_leg_weight", "cone_rows", "leg_weight_wrench", "sole_to_body"]
 
 ROWS_PER_FOOT = 18  # min and max normal force + 4 friction + 4 CoP + 8 yaw moment
 
@@ -136,3 +137,29 @@ def carry_leg_weight(Ct, b, m, o, wg):
         b[m + 5] -= c5
     else:
         b[m + 9] -= c9
+
+
+@njit(cache=True)
+def sole_to_body(gf, gfs, g1, A):
+    """A = Ad^T_{g_{sole,1}}: maps a wrench in the sole frame at the sole centre to the same
+    wrench in the central body's frame (gf = g_{0,foot}, gfs = g_{foot,sole}, g1 = g_{0,1})."""
+    Rs = (sole_rotation_row(gf, gfs, 0), sole_rotation_row(gf, gfs, 1), sole_rotation_row(gf, gfs, 2))
+    ps = (sole_position(gf, gfs, 0), sole_position(gf, gfs, 1), sole_position(gf, gfs, 2))
+    # g_{s,1} = (R, p), R = Rs^T R1, p = Rs^T (p1 - ps); A = [[R^T, 0], [-R^T p^, R^T]]
+    d0, d1, d2 = g1[0, 3] - ps[0], g1[1, 3] - ps[1], g1[2, 3] - ps[2]
+    p = (
+        Rs[0][0] * d0 + Rs[1][0] * d1 + Rs[2][0] * d2,
+        Rs[0][1] * d0 + Rs[1][1] * d1 + Rs[2][1] * d2,
+        Rs[0][2] * d0 + Rs[1][2] * d1 + Rs[2][2] * d2,
+    )
+    for i in range(3):
+        for j in range(3):
+            rt = g1[0, i] * Rs[0][j] + g1[1, i] * Rs[1][j] + g1[2, i] * Rs[2][j]  # (R^T)_{ij}
+            A[i, j] = rt
+            A[3 + i, 3 + j] = rt
+            A[i, 3 + j] = 0.0
+    for i in range(3):  # -(R^T p^)_{ij}, p^ = [[0,-p2,p1],[p2,0,-p0],[-p1,p0,0]]
+        r0, r1, r2 = A[i, 0], A[i, 1], A[i, 2]
+        A[3 + i, 0] = -(r1 * p[2] - r2 * p[1])
+        A[3 + i, 1] = -(r2 * p[0] - r0 * p[2])
+        A[3 + i, 2] = -(r0 * p[1] - r1 * p[0])
