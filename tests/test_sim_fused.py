@@ -200,7 +200,7 @@ def test_qp_solves_in_c_and_the_objmode_path_still_agrees(monkeypatch):
     another daqp version) it goes through objmode, with the same results."""
     import importlib.metadata
 
-    from biped.sim import daqp_c
+    from biped.control import daqp_c
 
     solves = []
     real = daqp_c.sync_status

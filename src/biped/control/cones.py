@@ -1,4 +1,5 @@
-"""The contact wrench cone of a rectangular sole, and the legs' weight that the ground carries too.
+"""The contact wrench cone of a rectangular sole, and the legs' weight that the ground carries too
+(also the sole frames' poses and maps the QP builds on: :func:`sole_to_body`).
 
 Rows ``Ct[r] . w >= b[r]`` on a foot's ground wrench ``w = [fx, fy, fz, tx, ty, tz]`` in its sole
 frame at the sole centre (Caron, Pham & Nakamura, ICRA 2015): normal force in [fmin, fmax], the
@@ -19,10 +20,9 @@ fell from 15 to 9 m/s) and the yaw rows.
 
 from __future__ import annotations
 
-import numpy as np
 from numba import njit
 
-__all__ = ["ROWS_PER_FOOT", "carry_leg_weight", "cone_rows", "leg_weight_wrench"]
+__all__ = ["ROWS_PER_FOOT", "carry_leg_weight", "cone_rows", "leg_weight_wrench", "sole_to_body"]
 
 ROWS_PER_FOOT = 18  # min and max normal force + 4 friction + 4 CoP + 8 yaw moment
 
@@ -72,34 +72,54 @@ def cone_rows(X, Y, mu, fmin, fmax, o, Ct, b, m):
     return r
 
 
+@njit(cache=True, inline="always")
+def sole_rotation_row(gf, gfs, i):
+    """Row i of the rotation of g_{0,foot} g_{foot,sole} (gf = g_{0,foot}, gfs = g_{foot,sole})."""
+    return (
+        gf[i, 0] * gfs[0, 0] + gf[i, 1] * gfs[1, 0] + gf[i, 2] * gfs[2, 0],
+        gf[i, 0] * gfs[0, 1] + gf[i, 1] * gfs[1, 1] + gf[i, 2] * gfs[2, 1],
+        gf[i, 0] * gfs[0, 2] + gf[i, 1] * gfs[1, 2] + gf[i, 2] * gfs[2, 2],
+    )
+
+
+@njit(cache=True, inline="always")
+def sole_position(gf, gfs, i):
+    """Entry i of the position of g_{0,foot} g_{foot,sole}."""
+    return gf[i, 3] + gf[i, 0] * gfs[0, 3] + gf[i, 1] * gfs[1, 3] + gf[i, 2] * gfs[2, 3]
+
+
 @njit(cache=True)
 def leg_weight_wrench(g, foot, gfs, leg, side, mass, grav, share, out):
     """out (6,) = ``share`` x the wrench [f; tau] with which the ground carries the weight of leg
     ``side``'s links (``leg[k] == side``, the foot included), in the sole frame at the sole centre
     (g: world poses of the link COM frames, gfs = g_{foot,sole}, grav: gravity in the world)."""
-    Rs = np.empty((3, 3))
-    ps = np.empty(3)
-    gf = g[foot]
-    for i in range(3):
-        for j in range(3):
-            Rs[i, j] = gf[i, 0] * gfs[0, j] + gf[i, 1] * gfs[1, j] + gf[i, 2] * gfs[2, j]
-        ps[i] = gf[i, 3] + gf[i, 0] * gfs[0, 3] + gf[i, 1] * gfs[1, 3] + gf[i, 2] * gfs[2, 3]
-    f = np.zeros(3)
-    t = np.zeros(3)
+    gf = g[foot]  # the sole's world pose g_{0,foot} g_{foot,sole}: (Rs, ps), as tuples (no allocation)
+    Rs = (sole_rotation_row(gf, gfs, 0), sole_rotation_row(gf, gfs, 1), sole_rotation_row(gf, gfs, 2))
+    ps = (sole_position(gf, gfs, 0), sole_position(gf, gfs, 1), sole_position(gf, gfs, 2))
+    f0 = f1 = f2 = t0 = t1 = t2 = 0.0
     for k in range(leg.shape[0]):
         if leg[k] != side:
             continue
         fk0, fk1, fk2 = -share * mass[k] * grav[0], -share * mass[k] * grav[1], -share * mass[k] * grav[2]
         d0, d1, d2 = g[k, 0, 3] - ps[0], g[k, 1, 3] - ps[1], g[k, 2, 3] - ps[2]
-        f[0] += fk0
-        f[1] += fk1
-        f[2] += fk2
-        t[0] += d1 * fk2 - d2 * fk1
-        t[1] += d2 * fk0 - d0 * fk2
-        t[2] += d0 * fk1 - d1 * fk0
+        f0 += fk0
+        f1 += fk1
+        f2 += fk2
+        t0 += d1 * fk2 - d2 * fk1
+        t1 += d2 * fk0 - d0 * fk2
+        t2 += d0 * fk1 - d1 * fk0
     for i in range(3):  # world -> sole frame
-        out[i] = Rs[0, i] * f[0] + Rs[1, i] * f[1] + Rs[2, i] * f[2]
-        out[3 + i] = Rs[0, i] * t[0] + Rs[1, i] * t[1] + Rs[2, i] * t[2]
+        out[i] = Rs[0][i] * f0 + Rs[1][i] * f1 + Rs[2][i] * f2
+        out[3 + i] = Rs[0][i] * t0 + Rs[1][i] * t1 + Rs[2][i] * t2
+
+
+@njit(cache=True, inline="always")
+def _row_times(Ct, r, o, w):
+    """Ct[r, o:o+6] . w (w (6,))."""
+    s = 0.0
+    for c in range(6):
+        s += Ct[r, o + c] * w[c]
+    return s
 
 
 @njit(cache=True)
@@ -108,15 +128,38 @@ def carry_leg_weight(Ct, b, m, o, wg):
     ground's wrench ``x_f + wg``: ``Ct (x_f + wg) >= b``, i.e. ``b -= Ct wg``, on the normal-force,
     friction and lateral CoP rows and on the CoP row of the sole edge nearer the leg's weight line
     (the smaller shift of the two); the far edge's CoP row and the yaw rows stay as they are."""
-    corr = np.empty(ROWS_PER_FOOT)
-    for r in range(ROWS_PER_FOOT):
-        s = 0.0
-        for c in range(6):
-            s += Ct[m + r, o + c] * wg[c]
-        corr[r] = s
     # row order of cone_rows: 0-1 normal force; for s = -1 then +1: friction x, friction y,
     # CoP y (|tx| <= Y fz), CoP x (|ty| <= X fz) at 2-5 and 6-9; yaw moment 10-17
     for r in (0, 1, 2, 3, 4, 6, 7, 8):
-        b[m + r] -= corr[r]
-    near = 5 if corr[5] < corr[9] else 9
-    b[m + near] -= corr[near]
+        b[m + r] -= _row_times(Ct, m + r, o, wg)
+    c5, c9 = _row_times(Ct, m + 5, o, wg), _row_times(Ct, m + 9, o, wg)
+    if c5 < c9:
+        b[m + 5] -= c5
+    else:
+        b[m + 9] -= c9
+
+
+@njit(cache=True)
+def sole_to_body(gf, gfs, g1, A):
+    """A = Ad^T_{g_{sole,1}}: maps a wrench in the sole frame at the sole centre to the same
+    wrench in the central body's frame (gf = g_{0,foot}, gfs = g_{foot,sole}, g1 = g_{0,1})."""
+    Rs = (sole_rotation_row(gf, gfs, 0), sole_rotation_row(gf, gfs, 1), sole_rotation_row(gf, gfs, 2))
+    ps = (sole_position(gf, gfs, 0), sole_position(gf, gfs, 1), sole_position(gf, gfs, 2))
+    # g_{s,1} = (R, p), R = Rs^T R1, p = Rs^T (p1 - ps); A = [[R^T, 0], [-R^T p^, R^T]]
+    d0, d1, d2 = g1[0, 3] - ps[0], g1[1, 3] - ps[1], g1[2, 3] - ps[2]
+    p = (
+        Rs[0][0] * d0 + Rs[1][0] * d1 + Rs[2][0] * d2,
+        Rs[0][1] * d0 + Rs[1][1] * d1 + Rs[2][1] * d2,
+        Rs[0][2] * d0 + Rs[1][2] * d1 + Rs[2][2] * d2,
+    )
+    for i in range(3):
+        for j in range(3):
+            rt = g1[0, i] * Rs[0][j] + g1[1, i] * Rs[1][j] + g1[2, i] * Rs[2][j]  # (R^T)_{ij}
+            A[i, j] = rt
+            A[3 + i, 3 + j] = rt
+            A[i, 3 + j] = 0.0
+    for i in range(3):  # -(R^T p^)_{ij}, p^ = [[0,-p2,p1],[p2,0,-p0],[-p1,p0,0]]
+        r0, r1, r2 = A[i, 0], A[i, 1], A[i, 2]
+        A[3 + i, 0] = -(r1 * p[2] - r2 * p[1])
+        A[3 + i, 1] = -(r2 * p[0] - r0 * p[2])
+        A[3 + i, 2] = -(r0 * p[1] - r1 * p[0])

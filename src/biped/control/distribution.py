@@ -43,7 +43,24 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
-from biped.control.cones import ROWS_PER_FOOT, carry_leg_weight, cone_rows, leg_weight_wrench
+from biped.control.cones import (
+    ROWS_PER_FOOT,
+    carry_leg_weight,
+    cone_rows,
+    leg_weight_wrench,
+    sole_to_body,
+)
+from biped.control.daqp_c import bind_c, unconstrained
+from biped.control.qp_buffers import (
+    H_LIMITED,
+    H_ROWS,
+    QPState,
+    float_size,
+    int_size,
+    qp_int_views,
+    qp_views,
+    solve_flat,
+)
 from biped.control.recursions import alg6_torques
 from biped.errors import ScenarioError
 
@@ -133,36 +150,6 @@ class QPWeights:
 
 
 @njit(cache=True)
-def _sole_to_body(gf, gfs, g1, A):
-    """A = Ad^T_{g_{sole,1}}: maps a wrench in the sole frame at the sole centre to the same
-    wrench in the central body's frame (gf = g_{0,foot}, gfs = g_{foot,sole}, g1 = g_{0,1})."""
-    Rs = np.empty((3, 3))
-    ps = np.empty(3)
-    for i in range(3):
-        for j in range(3):
-            Rs[i, j] = gf[i, 0] * gfs[0, j] + gf[i, 1] * gfs[1, j] + gf[i, 2] * gfs[2, j]
-        ps[i] = gf[i, 3] + gf[i, 0] * gfs[0, 3] + gf[i, 1] * gfs[1, 3] + gf[i, 2] * gfs[2, 3]
-    # g_{s,1} = (R, p), R = Rs^T R1, p = Rs^T (p1 - ps); A = [[R^T, 0], [-R^T p^, R^T]]
-    d = np.empty(3)
-    for i in range(3):
-        d[i] = g1[i, 3] - ps[i]
-    p = np.empty(3)
-    for i in range(3):
-        p[i] = Rs[0, i] * d[0] + Rs[1, i] * d[1] + Rs[2, i] * d[2]
-    for i in range(3):
-        for j in range(3):
-            rt = g1[0, i] * Rs[0, j] + g1[1, i] * Rs[1, j] + g1[2, i] * Rs[2, j]  # (R^T)_{ij}
-            A[i, j] = rt
-            A[3 + i, 3 + j] = rt
-            A[i, 3 + j] = 0.0
-    for i in range(3):  # -(R^T p^)_{ij}, p^ = [[0,-p2,p1],[p2,0,-p0],[-p1,p0,0]]
-        r0, r1, r2 = A[i, 0], A[i, 1], A[i, 2]
-        A[3 + i, 0] = -(r1 * p[2] - r2 * p[1])
-        A[3 + i, 1] = -(r2 * p[0] - r0 * p[2])
-        A[3 + i, 2] = -(r0 * p[1] - r1 * p[0])
-
-
-@njit(cache=True)
 def qp_build(
     g,
     gl,
@@ -198,7 +185,7 @@ def qp_build(
     map ``T`` (n_joints, 12): tau = T x. Returns (meq, rows used, first row of each foot's cone)."""
     nj = T.shape[0]
     for f in range(2):
-        _sole_to_body(g[feet[f]], soles[f], g[0], A[f])
+        sole_to_body(g[feet[f]], soles[f], g[0], A[f])
     # torque map, needed only for the torque-limit rows (qp_finish applies Alg. 6 once
     # otherwise): Alg. 6 is linear; both legs at once (they do not interact)
     for i in range(6 if nlim else 0):
@@ -242,10 +229,13 @@ def qp_build(
                 b[m] = 0.0
                 m += 1
     meq = m
-    first = np.full(2, -1)
+    first0 = first1 = -1
     for f in range(2):
         if contact[f] != 0:
-            first[f] = m
+            if f == 0:
+                first0 = m
+            else:
+                first1 = m
             m0 = m
             m = cone_rows(dims[f, 0], dims[f, 1], prm[6], prm[5], prm[7], 6 * f, Ct, b, m)
             if prm[8] != 0.0:  # the cone holds the ground's wrench: the QP's share plus the leg's weight
@@ -267,7 +257,7 @@ def qp_build(
         for i in range(12):
             Ct[r, i] = 0.0
         b[r] = -1.0
-    return meq, used, first[0], first[1]
+    return meq, used, first0, first1
 
 
 @njit(cache=True)
@@ -315,7 +305,7 @@ def qp_finish(x, contact, A, T, soles, tau, Fl_tilde, Fr_tilde, Fl, Fr, parent, 
 # ----------------------------------------------------------------------------- the object
 
 
-class ContactQP:
+class ContactQP(QPState):
     """Preallocated QP distribution for one :class:`~biped.control.WorkspaceController`.
 
     ``soles``: (left, right) :class:`~biped.model.SoleRectangle`; ``weights``: :class:`QPWeights`;
@@ -323,8 +313,24 @@ class ContactQP:
     ``solver``: "daqp" (default) or "quadprog" (the same problem; for the comparison).
     """
 
+    @staticmethod
+    def buffer_sizes(tree, limited: bool) -> tuple[int, int]:
+        """Lengths of the float and int buffers (:mod:`biped.control.qp_buffers`) of a ContactQP on
+        ``tree``, with torque limits or without."""
+        nj = tree.n_links - 1
+        n_lim = sum(1 for j in range(nj) if tree.leg[j + 1] >= 0 and not tree.beyond_foot[j + 1])
+        rows = 2 * ROWS_PER_FOOT + (2 * n_lim if limited else 0)
+        return float_size(nj, rows), int_size(rows)
+
     def __init__(
-        self, tree, soles, weights: QPWeights | None = None, lower=None, upper=None, solver: str = "daqp"
+        self,
+        tree,
+        soles,
+        weights: QPWeights | None = None,
+        lower=None,
+        upper=None,
+        solver: str = "daqp",
+        buffers: tuple[np.ndarray, np.ndarray] | None = None,
     ):
         if solver not in ("quadprog", "daqp"):
             raise ScenarioError(f"unknown QP solver {solver!r}; valid: 'quadprog', 'daqp'")
@@ -334,42 +340,43 @@ class ContactQP:
         self._tree = tree
         self._beyond = tree.beyond_foot.astype(np.int64)
         self.soles = soles
-        self._soles = np.ascontiguousarray(np.stack([s.g_foot_sole for s in soles]), dtype=float)
-        self._dims = self.weights.cop_scale * np.array(
-            [[s.half_length, s.half_width] for s in soles], dtype=float
-        )
         if (lower is None) != (upper is None):
             raise ScenarioError("torque limits for the QP need both lower and upper bounds, or neither")
         self.limited = lower is not None
-        self._lo = np.zeros(nj) if lower is None else np.asarray(lower, dtype=float).copy()
-        self._hi = np.zeros(nj) if upper is None else np.asarray(upper, dtype=float).copy()
-        if self._lo.shape != (nj,) or self._hi.shape != (nj,):
+        lo = np.zeros(nj) if lower is None else np.asarray(lower, dtype=float)
+        hi = np.zeros(nj) if upper is None else np.asarray(upper, dtype=float)
+        if lo.shape != (nj,) or hi.shape != (nj,):
             raise ScenarioError(
-                f"QP torque limits need {nj} lower and upper bounds; got {self._lo.shape}, {self._hi.shape}"
+                f"QP torque limits need {nj} lower and upper bounds; got {lo.shape}, {hi.shape}"
             )
         n_lim = sum(1 for j in range(nj) if tree.leg[j + 1] >= 0 and not tree.beyond_foot[j + 1])
         rows = 2 * ROWS_PER_FOOT + (2 * n_lim if self.limited else 0)
-        self.A = np.zeros((2, 6, 6))
-        self.T = np.zeros((nj, 12))
-        self._F = np.zeros((tree.n_links, 6))
-        self._tau = np.zeros(nj)
-        self._col = np.zeros((2, 6))
-        self.Gq = np.zeros((12, 12))
-        self.av = np.zeros(12)
-        self.Ct = np.zeros((rows, 12))
-        self.b = np.zeros(rows)
-        self.x = np.zeros(12)
-        self.wg = np.zeros((2, 6))
-        self.meq = 0
-        self.rows = 0
-        self.first = (-1, -1)
-        self.status = SOLVED
-        self.fallbacks = {RELAXED: 0, ZEROED: 0}
-        self._prm = self.weights.array
-        self._upper = np.full(rows, 1e30)  # daqp's upper bounds: none, b itself on equality rows
-        self._sense = np.zeros(rows, dtype=np.int32)
+        # every array a view of two flat buffers (biped.control.qp_buffers: one compiled call takes them)
+        if buffers is None:
+            self._qf = np.zeros(float_size(nj, rows))
+            self._qi = np.zeros(int_size(rows), dtype=np.int64)
+        else:  # the caller's (zeroed) buffers: the controller keeps them beside its own
+            self._qf, self._qi = buffers
+            if self._qf.shape != (float_size(nj, rows),) or self._qi.shape != (int_size(rows),):
+                raise ValueError("ContactQP buffers of the wrong size; use ContactQP.buffer_sizes")
+        self._qi[H_LIMITED], self._qi[H_ROWS] = self.limited, rows
+        (self._soles, self._dims, self._prm, self._lo, self._hi, self.A, self.T, self._F, self._tau, self._col,
+         self.Gq, self.av, self.Ct, self.b, self.x, self.wg, self._upper, self._f, self._xs, self._lam) = qp_views(
+            self._qf, nj, rows
+        )  # fmt: skip
+        self._qstat, self._res32, self._sense = qp_int_views(self._qi, rows)
+        self._soles[:] = np.stack([s.g_foot_sole for s in soles])
+        self._dims[:] = self.weights.cop_scale * np.array([[s.half_length, s.half_width] for s in soles])
+        self._lo[:], self._hi[:] = lo, hi
+        self._prm[:] = self.weights.array
+        self._meq = 0
+        self._rows = 0
+        self._first = (-1, -1)
+        self._status = SOLVED
+        self._fallbacks = {RELAXED: 0, ZEROED: 0}
+        self._upper[:] = 1e30  # daqp's upper bounds: none, b itself on equality rows
         self._meq_sense = 0
-        self._f = np.zeros(12)
+        self._c = None
         if solver == "quadprog":
             import quadprog
 
@@ -378,6 +385,7 @@ class ContactQP:
             import daqp
 
             self._daqp = daqp.solve
+            self._c = bind_c(self)  # daqp's C function for compiled calls, or None
 
     def build(self, g, gl, contact, Fd):
         """Fill the QP for one state (the kernel's work buffers ``g``, ``gl`` and ``F_1^bd``)."""
@@ -417,6 +425,8 @@ class ContactQP:
     def _solve_once(self):
         if self.solver == "quadprog":
             return self._quadprog(self.Gq, self.av, self.Ct.T, self.b, self.meq)[0]
+        if self.meq == 0 and unconstrained(self.Gq, self.av, self.Ct, self.b, self.rows, self._xs):
+            return self._xs[:12]  # daqp's solution to rounding, as the C path (biped.control.daqp_c)
         if self.meq != self._meq_sense:
             self._sense[:] = 0
             self._sense[: self.meq] = 5  # daqp: ACTIVE + IMMUTABLE, an equality row
@@ -432,6 +442,9 @@ class ContactQP:
     def solve(self) -> np.ndarray:
         """Solve the built QP into ``self.x`` (with the documented fallbacks); returns ``self.x``."""
         x = self.x
+        if self._c is not None:  # daqp's C function from compiled code: the same solve, no Python
+            solve_flat(self._qf, self._qi, len(self._tau), self.meq, self.rows, *self.first)
+            return x
         try:
             x[:] = self._solve_once()
             self.status = SOLVED

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from biped._numba_cache import say_if_cold
+from biped.control.qp_call import qp_kernel
 from biped.control.recursions import (
     NONFINITE_RESULT,
     NONFINITE_STATE,
@@ -167,6 +168,8 @@ class WorkspaceController:
         self._contact_buf = np.ones(2, dtype=np.int64)
         self._work = np.zeros(lay["work"]["_size"][0])
         self._out = np.zeros(lay["out"]["_size"][0])
+        self._tau_out = self._out[: n - 1]  # what torques() returns (tau is the out buffer's head)
+        self._shapes = ((tree.nq,), (tree.nv,))
         # named views of the buffers, the kernel's own unpack, for the debugging methods below
         # (not the hot path)
         _, self._m, self._w, _ = unpack(self._mi, self._mf, self._work, self._out)
@@ -178,7 +181,10 @@ class WorkspaceController:
                 for k in ("tau", "P1", "z1", "X", "Fd", "Fl_tilde", "Fr_tilde", "Fl", "Fr", "qe")
             )
         )
-        self.qp: ContactQP | None = None
+        self._qp: ContactQP | None = None
+        # all the buffers (the kernel's and the ContactQP's) when qp_kernel solves the QP in C
+        self._qf: np.ndarray | None = None
+        self._qi: np.ndarray | None = None
         if distribution == "qp":
             self._init_qp(qp_weights, torque_limits, soles, qp_solver)
 
@@ -199,7 +205,25 @@ class WorkspaceController:
         if limits is not None and not limits.unlimited:
             lim = limits.reorder(tree.joint_names)
             lower, upper = lim.lower, lim.upper
-        self.qp = ContactQP(tree, soles, weights, lower, upper, solver)
+        # one int and one float buffer for the kernel's and the QP's arrays (biped.control.qp_call:
+        # a compiled call from Python pays for every array argument)
+        nf, ni = ContactQP.buffer_sizes(tree, lower is not None)
+        heads = (self._mi, self._mf, self._work, self._out)
+        sizes = [len(b) for b in heads]
+        ints = np.zeros(4 + sizes[0] + ni, dtype=np.int64)
+        floats = np.zeros(sum(sizes[1:]) + nf)
+        ints[:4] = sizes
+        self._mi = ints[4 : 4 + sizes[0]]
+        o = np.cumsum([0, *sizes[1:]])
+        self._mf, self._work, self._out = (floats[o[i] : o[i + 1]] for i in range(3))
+        for new, old in zip((self._mi, self._mf, self._work, self._out), heads, strict=True):
+            new[:] = old
+        self._tau_out = self._out[: tree.n_links - 1]
+        _, self._m, self._w, _ = unpack(self._mi, self._mf, self._work, self._out)
+        qp = ContactQP(tree, soles, weights, lower, upper, solver, (floats[o[3] :], ints[4 + sizes[0] :]))
+        self.qp = qp
+        if qp._c is not None:
+            self._qf, self._qi = floats, ints
         out, lay = self._out, self._layout
         v = {
             k: out[o : o + int(np.prod(sh))].reshape(sh) for k, (o, sh) in lay["out"].items() if k != "_size"
@@ -214,6 +238,16 @@ class WorkspaceController:
             v["Fl"],
             v["Fr"],
         )
+
+    @property
+    def qp(self) -> ContactQP | None:
+        """The QP distribution's :class:`~biped.control.distribution.ContactQP` (None unless "qp")."""
+        return self._qp
+
+    @qp.setter
+    def qp(self, value: ContactQP | None) -> None:
+        self._qp = value
+        self._qf = self._qi = None  # another ContactQP: build, solve and finish from Python
 
     @classmethod
     def from_mjcf(
@@ -281,48 +315,53 @@ class WorkspaceController:
         return out
 
     def _run(self, qpos, qvel, target, gains, feet_in_contact=None):
-        if qpos.shape != (self.tree.nq,) or qvel.shape != (self.tree.nv,):
+        if qpos.shape != self._shapes[0] or qvel.shape != self._shapes[1]:
             self._check_state(qpos, qvel)
         t = (target or self.target).array
         k = (gains or self.gains).array
+        c = self._both if feet_in_contact is None else self._contact(feet_in_contact)
         try:
-            status = compute_kernel(
-                qpos, qvel, t, k, self._contact(feet_in_contact), self._mi, self._mf, self._work, self._out
-            )
+            if self._qf is not None:  # the QP in the same compiled call (biped.control.qp_call)
+                status = qp_kernel(qpos, qvel, t, k, c, self._qi, self._qf)
+            else:
+                status = compute_kernel(qpos, qvel, t, k, c, self._mi, self._mf, self._work, self._out)
         except ZeroDivisionError:  # numba's float division: a quaternion of overflowing norm
             status = NONFINITE_RESULT
-        if status in (ZERO_QUATERNION, NONFINITE_RESULT):
-            unit = self._unit_quaternion(qpos)  # a badly scaled quaternion: normalize safely
-            if unit is not None:
-                return self._run(unit, qvel, target, gains, feet_in_contact)
         if status:
-            if status in (NONFINITE_STATE, ZERO_QUATERNION):
-                self._check_state(qpos, qvel)
-                a = self.tree.qpos_adr[0] + 3
-                raise StateError(
-                    f"the root quaternion qpos[{a}:{a + 4}] = {qpos[a : a + 4].tolist()} "
-                    f"cannot be normalized in double precision"
-                )
-            if status == SINGULAR_DISTRIBUTION:
-                raise SingularityError(
-                    "wrench distribution: G G^T is singular to working precision (W Alg. 5); it is the "
-                    "sum of two positive-definite matrices, so this means feet absurdly far from the "
-                    "central body for double precision"
-                )
-            if status == NONFINITE_RESULT:
-                raise SingularityError(
-                    "the controller produced non-finite values at this state: velocities too large for "
-                    "double precision, or a joint axis with zero articulated inertia (W Alg. 3)"
-                )
-        if self.qp is not None:
+            self._failed(status, qpos, qvel, target, gains, feet_in_contact)
+            return
+        if self.qp is not None and self._qf is None:
             g, gl, Fd, tau, Flt, Frt, Fl, Fr = self._qp_views
-            c = self._contact(feet_in_contact)
             self.qp.build(g, gl, c, Fd)
             if c[0] == 0 and c[1] == 0:
                 self.qp.x[:] = 0.0
             else:
                 self.qp.solve()
             self.qp.finish(c, tau, Flt, Frt, Fl, Fr)
+
+    def _failed(self, status, qpos, qvel, target, gains, feet_in_contact):
+        """After a kernel status other than 0: run again on a safely normalized quaternion, or raise."""
+        if status in (ZERO_QUATERNION, NONFINITE_RESULT):
+            unit = self._unit_quaternion(qpos)  # a badly scaled quaternion: normalize safely
+            if unit is not None:
+                return self._run(unit, qvel, target, gains, feet_in_contact)
+        if status in (NONFINITE_STATE, ZERO_QUATERNION):
+            self._check_state(qpos, qvel)
+            a = self.tree.qpos_adr[0] + 3
+            raise StateError(
+                f"the root quaternion qpos[{a}:{a + 4}] = {qpos[a : a + 4].tolist()} "
+                f"cannot be normalized in double precision"
+            )
+        if status == SINGULAR_DISTRIBUTION:
+            raise SingularityError(
+                "wrench distribution: G G^T is singular to working precision (W Alg. 5); it is the "
+                "sum of two positive-definite matrices, so this means feet absurdly far from the "
+                "central body for double precision"
+            )
+        raise SingularityError(
+            "the controller produced non-finite values at this state: velocities too large for "
+            "double precision, or a joint axis with zero articulated inertia (W Alg. 3)"
+        )
 
     def compute(
         self,
@@ -419,7 +458,7 @@ class WorkspaceController:
         arrays; ``target``, ``gains`` and ``feet_in_contact`` as in :meth:`compute`, which
         returns fresh arrays instead."""
         self._run(qpos, qvel, target, gains, feet_in_contact)
-        return self._out[: self.tree.n_links - 1]
+        return self._tau_out
 
 
 def _check_feet(tree: TreeModel) -> None:

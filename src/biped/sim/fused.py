@@ -1,7 +1,7 @@
 """The push loop's hot path in one compiled call: contacts, W's controller, records and MuJoCo.
 
 :func:`biped.sim.push.run_closed_loop` runs W's workspace controller (min-norm, printed or QP
-distribution; the QP solved by daqp's C function, :mod:`biped.sim.daqp_c`, or through numba's
+distribution; the QP solved by daqp's C function, :mod:`biped.control.daqp_c`, or through numba's
 objmode, :mod:`biped.sim.fused_qp`) and the joint-PD
 baseline (without gravity compensation), clipped by torque limits or not (not stepping),
 through :class:`FusedRows`: one numba call runs up to one progress interval of control
@@ -39,6 +39,7 @@ import numpy as np
 from numba import njit, types
 
 from biped.control.buffers import unpack
+from biped.control.daqp_c import C_TYPES, c_arguments, c_solve, sync_status
 from biped.control.distribution import qp_build, qp_finish
 from biped.control.joint_pd import JointPDController
 from biped.control.neuromotor import neural_filter
@@ -47,7 +48,6 @@ from biped.control.workspace import WorkspaceController
 from biped.sim import contact as contact_mod
 from biped.sim import mjdata
 from biped.sim.contact import contact_code
-from biped.sim.daqp_c import C_TYPES, c_arguments, c_solve, sync_status
 from biped.sim.fused_qp import QP_TYPES, call_solve, qp_arguments, register_qp
 from biped.sim.loop_measures import record_row, row_spec
 from biped.sim.mjdata import FORCE_SIG, STEP_SIG, contact_frames, mj_function, mj_step_function, mjdata_layout
@@ -65,7 +65,7 @@ _STANDING = 0b1111  # biped.sim.neuro.STANDING
 # p (int params) entries
 P_SUB, P_NCTRL, P_CB, P_F0, P_F1, P_NCON, P_CPTR, P_CBASE, P_SENSED, P_BADQACC, P_NJ, P_CLIP, P_PD = range(13)
 P_QP, P_NLIM, P_SLOT = range(13, 16)  # the QP distribution: on, with torque-limit rows, its slot
-P_CSOLVE = 16  # the QP solved by daqp's C function (biped.sim.daqp_c), not through objmode
+P_CSOLVE = 16  # the QP solved by daqp's C function (biped.control.daqp_c), not through objmode
 P_DELAY, P_NEURO = 17, 18  # feedback delay [periods], the neural filter on (biped.sim.neuro)
 P_FLOOR = 19  # the floor geom (biped.sim.loop_measures)
 _NP = 20
@@ -132,7 +132,7 @@ _SIGNATURE = types.int64(
     types.float64,  # its lag step alpha
     types.float64[::1],  # its rate step per joint [N m]
     *QP_TYPES,  # the QP distribution (when p[P_QP]): biped.sim.fused_qp
-    *C_TYPES,  # its solve in C (when p[P_CSOLVE]): biped.sim.daqp_c
+    *C_TYPES,  # its solve in C (when p[P_CSOLVE]): biped.control.daqp_c
 )
 
 
@@ -247,7 +247,8 @@ def _key_cache_by_what_it_compiles_in() -> None:
     import biped.control.recursions
     import biped.control.statics
     import biped.spatial
-    from biped.sim import daqp_c, fused_qp, loop_measures
+    from biped.control import daqp_c
+    from biped.sim import fused_qp, loop_measures
 
     modules = (
         biped.control.recursions,

@@ -76,7 +76,13 @@ def _dispatcher(name: str):
         from biped.sim.contact import _contact_bits
 
         return _contact_bits
-    if name == "qp":
+    if name == "qp":  # the controller's QP call: one compiled call with daqp's C function, else the build
+        from biped.control.daqp_c import daqp_c
+
+        if daqp_c() is not None:
+            from biped.control.qp_call import qp_kernel
+
+            return qp_kernel
         from biped.control.distribution import qp_build
 
         return qp_build
