@@ -195,8 +195,6 @@ def build_spec(args):
     )
     overrides.pop("model", None)
     if model is not None and not isinstance(model, str):  # --set model=1e300: a number, no name
-        from biped.errors import ScenarioError
-
         raise ScenarioError(
             "model must be a shipped model's name ('wendlandt'), a robot's name or the path of an "
             f"MJCF or robot TOML file; got {model!r}"
