@@ -76,7 +76,7 @@ def test_is_cached_agrees_with_numbas_cache(tmp_path):
 _PUSH = """
 import sys
 from biped.cli import main
-assert main(["push", "--controller", "joint-pd", "--duration", "0.02", "--out", sys.argv[1],
+assert main(["push", "--stepping", "--duration", "0.02", "--out", sys.argv[1],
              "--quiet", "--no-video", "--no-replay", "--no-figures"]) == 0
 from biped.sim.contact import _contact_bits as k
 print(sum(k.stats.cache_hits.values()), sum(k.stats.cache_misses.values()))
@@ -85,19 +85,19 @@ print(sum(k.stats.cache_hits.values()), sum(k.stats.cache_misses.values()))
 
 @pytest.mark.slow
 def test_cold_cache_says_compiling_once_then_nothing(tmp_path):
-    """A fresh numba cache: ``biped sweep`` (the joint-PD, whose only kernel is the contact
-    monitor's: a short compile) says "compiling ..." once, in the parent before its two workers
-    start; a later ``biped push`` in a new process says nothing and numba loads the kernel from
-    the cache (its counters: a hit, no miss). The controller's kernel goes through the same
-    path (:func:`biped.sim.jit.warm_up`), ~15 s cold, so it is not compiled here."""
+    """A fresh numba cache: ``biped sweep --stepping`` (the Python loop: W's controller, the
+    contact monitor, the response) says "compiling ..." once, in the parent before its two
+    workers start, and the workers compile nothing (their trials are fast); a later stepping
+    ``biped push`` in a new process says nothing and numba loads the contact monitor's kernel
+    from the cache (its counters: a hit, no miss). ``kernels_for`` lists the compiled loop for
+    every other run (not compiled here: ~50 s more)."""
     import pyarrow.parquet as pq
 
     cache = tmp_path / "cache"
     out = tmp_path / "s.parquet"
     args = [
         "sweep",
-        "--controller",
-        "joint-pd",
+        "--stepping",  # the Python loop: its kernels without the compiled loop's (~50 s more)
         "--speed",
         "2",
         "--direction",
@@ -115,9 +115,13 @@ def test_cold_cache_says_compiling_once_then_nothing(tmp_path):
     )
     assert p.returncode == 0, p.stderr
     lines = [ln for ln in p.stderr.splitlines() if ln.startswith("compiling")]
-    assert len(lines) == 1 and "contact monitor" in lines[0] and "first run only" in lines[0], p.stderr
+    assert len(lines) == 1 and "first run only" in lines[0], p.stderr
+    assert "contact monitor" in lines[0] and "W's controller" in lines[0], p.stderr
     rows = pq.read_table(out).to_pylist()
     assert len(rows) == 2 and all(r["error"] is None for r in rows)
+    # the workers compiled nothing (a cold kernel costs them tens of seconds, silently): each
+    # 0.02 s trial takes well under the loop's compile time
+    assert all(r["wall_time_s"] < 10.0 for r in rows), [r["wall_time_s"] for r in rows]
     assert len({r["worker"] for r in rows}) == 2  # two worker processes ran
     p = _python(_PUSH, cache, tmp_path, str(tmp_path / "push"))
     assert p.returncode == 0, p.stderr
@@ -140,8 +144,10 @@ def test_warm_up_one_line_when_cold_nothing_when_warm(monkeypatch):
         if cold:
             assert lines[0].startswith("compiling ") and "first run only" in lines[0]
             assert all(jit.KERNELS[n][0] in lines[0] for n in cold)
-    assert jit.kernels_for("joint-pd", "qp") == ("contact",)
     assert "qp" not in jit.kernels_for("workspace")
+    # every run but a stepping one is the compiled loop's (the joint PD's and the QP's too)
+    assert "loop" in jit.kernels_for("joint-pd") and "loop" in jit.kernels_for("workspace", "qp")
+    assert "loop" not in jit.kernels_for("workspace", "qp", stepping=True)
 
 
 def test_compile_runs_each_kernel():

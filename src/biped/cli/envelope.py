@@ -223,7 +223,9 @@ def _run(args) -> int:
         from biped.sim.jit import kernels_for, warm_up
 
         warm_up(
-            kernels_for(spec.base.controller, spec.base.distribution, sweep=True),
+            kernels_for(
+                spec.base.controller, spec.base.distribution, sweep=True, stepping=spec.base.stepping
+            ),
             log=lambda s: print(s, file=sys.stderr),
         )
 

@@ -435,7 +435,9 @@ def _sweep(args, spec, out: Path, n: int, where: str, client) -> int:
         from biped.sim.jit import kernels_for, warm_up
 
         warm_up(
-            kernels_for(spec.base.controller, spec.base.distribution, sweep=True),
+            kernels_for(
+                spec.base.controller, spec.base.distribution, sweep=True, stepping=spec.base.stepping
+            ),
             log=lambda line: print(line, file=sys.stderr),
             tick=sys.stderr,
         )

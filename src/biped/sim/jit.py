@@ -40,31 +40,36 @@ __all__ = [
 ]
 
 #: Kernel names for :func:`cold_kernels` / :func:`warm_up`: what they are and about how long
-#: they take to compile [s] on an idle 2-core x86_64 machine (several times that under load;
-#: controller and loop measured on a fresh clone's scripts/push.sh, 2026-11-25: 25 s and 20 s,
-#: the loop having grown the perturbations' and the nervous system's rows).
+#: they take to compile [s] on an idle 2-core x86_64 machine (several times that under load),
+#: measured 2026-11-25 on a fresh cache: ``biped push`` (controller, loop, contact) 92-101 s,
+#: a stepping sweep (controller 49 s, contact 1 s, response 8 s); the loop is the rest. The
+#: loop has grown the perturbations', the nervous system's and the response's rows.
 KERNELS = {
-    "controller": ("W's controller", 25),
+    "controller": ("W's controller", 49),
     "qp": ("the contact QP", 5),
     "contact": ("the contact monitor", 1),
-    "loop": ("the compiled push loop", 20),
-    "response": ("the sweep's margin of stability", 10),
+    "loop": ("the compiled push loop", 47),
+    "response": ("the sweep's margin of stability", 8),
 }
 
 #: Kernels found compiled or cached in this process (no need to look again).
 _WARM: set[str] = set()
 
 
-def kernels_for(controller: str, distribution: str = "statics", *, sweep: bool = False) -> tuple[str, ...]:
+def kernels_for(
+    controller: str, distribution: str = "statics", *, sweep: bool = False, stepping: bool = False
+) -> tuple[str, ...]:
     """The kernels a push run with ``controller`` (``"workspace"`` or ``"joint-pd"``) and the
     workspace controller's ``distribution`` uses; ``sweep``: and a sweep row's response
-    (:mod:`biped.sim.mos`)."""
+    (:mod:`biped.sim.mos`). Every run but a stepping one goes through the compiled push loop
+    (:func:`biped.sim.push.run_closed_loop`), the joint PD's and the QP's too; a stepping run
+    goes through the Python loop, calling the controller's (and the QP's) kernels."""
     more = ("response",) if sweep else ()
     if controller != "workspace":
-        return ("contact", *more)
-    if distribution == "qp":
-        return ("controller", "qp", "contact", *more)
-    return ("controller", "loop", "contact", *more)  # the loop calls the controller's kernel
+        return ("loop", "contact", *more)  # the joint PD runs in the compiled loop
+    calls = ("controller", "qp") if distribution == "qp" else ("controller",)
+    loop = () if stepping else ("loop",)  # the loop calls the controller's kernel (and the QP's part)
+    return (*calls, *loop, "contact", *more)
 
 
 def _dispatcher(name: str):

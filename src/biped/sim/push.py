@@ -432,7 +432,8 @@ def simulate(
             f"simulate takes a biped.sim.Scenario (or None: W's); got {type(scenario).__name__}"
         )
     scene = scene or build_scene(scenario)
-    announce_and_warm(kernels_for(scenario.controller, scenario.distribution))  # says so when cold
+    # says so when cold
+    announce_and_warm(kernels_for(scenario.controller, scenario.distribution, stepping=scenario.stepping))
     return run_closed_loop(
         scenario, scene, controller_policy(scenario, scene), progress=progress, on_step=on_step
     )
