@@ -37,6 +37,7 @@ from biped.sim import perturbations
 from biped.sim.contact import SOLE_GEOMS, ContactMonitor
 from biped.sim.early_stop import AT_REST, EarlyStop
 from biped.sim.early_stop import applies as early_stop_applies
+from biped.sim.held_signals import HeldSignals
 from biped.sim.jit import announce_and_warm, kernels_for
 from biped.sim.loop_measures import NCOL, fill_rows, record_python, row_spec
 from biped.sim.neuro import neuro_loop
@@ -261,9 +262,11 @@ def run_closed_loop(
         chunk = stopper.every
     stopped = False
     t0 = time.perf_counter()
+    held = HeldSignals().__enter__()  # Ctrl-C / SIGTERM between two steps, never inside numba's call
     try:
         k = 0
         while k < n:
+            held.deliver()
             t = k * period
             while ev < len(events) and events[ev] <= k:  # the perturbation's inputs from this row on
                 if events[ev] == k:
@@ -336,8 +339,11 @@ def run_closed_loop(
             if stopper is not None and k < n_ctrl and k % stopper.every == 0 and stopper.check(k):
                 stopped = True
                 break
+        held.deliver()
     except KeyboardInterrupt:
         interrupted = True
+    finally:
+        held.__exit__(None, None, None)
     if fused is not None and synced < rows:
         fused_mod.sync_monitor(monitor, bits, com, period, synced, rows, d)
     contacts[:] = (bits[:, None] >> np.arange(len(SOLE_GEOMS))) & 1
