@@ -40,7 +40,6 @@ import numpy as np
 
 from biped.control import capture as cp
 from biped.control.stepping import SteppingConfig, SteppingController
-from biped.control.workspace import Target
 from biped.errors import ScenarioError
 
 __all__ = ["StepProgram", "StepProgramConfig", "predicted_capture_point"]
@@ -209,21 +208,7 @@ class StepProgram(SteppingController):
         ankle_land = np.array([land[0] - sole_off[0], land[1] - sole_off[1], -sole_off[2]])
         pd, vd, _ = self._plan(el - p.delay_s, ankle_land)  # what the delayed state is compared with
         _, self._v_ff, ad = self._plan(el + p.lead_s, ankle_land)  # the feed-forward, ahead of the lag
-        hip = self.data.xpos[self._hip[i]]
-        r = pd - hip
-        if np.linalg.norm(r) > s.reach_m:
-            pd = hip + r * (s.reach_m / np.linalg.norm(r))
-        flags = (i == 1, i == 0)
-        acc = omega**2 * (self.data.subtree_com[0][:2] - cop)
-        com = np.array(self.target.com)
-        com[2] -= s.swing_height_drop_m
-        target = Target.wendlandt(com=tuple(com), tilt_deg=s.swing_tilt_deg)
-        target = replace(target, com_acc=(float(acc[0]), float(acc[1]), 0.0))
-        tau = np.array(
-            self.ctrl.torques(qpos, qvel, target=target, gains=self._swing_gains, feet_in_contact=flags)
-        )
-        tau[self._leg_tau[i]] = self._swing_torques(i, pd, vd, ad)
-        return self._out(tau)
+        return self._single_support(i, qpos, qvel, omega, cop, pd, vd, ad)
 
     def _sole_low(self, i: int) -> float:
         """The height of the lowest corner of sole ``i`` above the floor [m] (a heel lifted about

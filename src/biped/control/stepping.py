@@ -364,6 +364,12 @@ class SteppingController:
         if sc >= 1.0:
             pd[2] = ankle_land[2] - s.descent_m_s * (el - T)
             vd[2] = -s.descent_m_s
+        return self._single_support(i, qpos, qvel, omega, cop, pd, vd, ad)
+
+    def _single_support(self, i, qpos, qvel, omega, cop, pd, vd, ad):
+        """The torques while foot ``i`` swings toward ``pd`` (velocity ``vd``, acceleration ``ad``;
+        a point out of the leg's reach is pulled back within it) and the other foot stands."""
+        s = self.stepping
         hip = self.data.xpos[self._hip[i]]
         r = pd - hip
         if np.linalg.norm(r) > s.reach_m:  # out of reach: the nearest point within it
