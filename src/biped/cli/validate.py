@@ -40,6 +40,16 @@ def register(subparsers) -> None:
 
 
 def run(args) -> int:
+    """The command; MuJoCo's warnings go to its folder's log while it runs (then back)."""
+    from biped.sim.mjlog import preserved
+
+    with preserved():
+        return _run(args)
+
+
+def _run(args) -> int:
+    import sys
+
     from biped.analysis.validate import EXPERIMENTS, run_experiment
     from biped.errors import ScenarioError, unknown_name
     from biped.outputs.validate import write_validation
@@ -50,6 +60,10 @@ def run(args) -> int:
             raise ScenarioError(unknown_name("experiment", n, EXPERIMENTS))
     presets = list(dict.fromkeys(args.neuromotor or ["ideal", "young"]))
     out = run_dir(args.out, "validate", overwrite=args.overwrite)
+    from biped.sim.mjlog import count_warnings, route_to, summary
+
+    route_to(out / "mujoco.log")  # MuJoCo's warnings (a diverging trial's), as biped push does
+    warned_before = count_warnings(out / "mujoco.log")
     iterations = QUICK_ITERATIONS if args.quick else FULL_ITERATIONS
     t0 = time.perf_counter()
     results: dict = {}
@@ -78,6 +92,9 @@ def run(args) -> int:
             "trials": n, "wall_time_s": wall, "note": note, "interrupted": interrupted}  # fmt: skip
     if results:
         write_validation(out, results, meta)
+    said = summary(out / "mujoco.log", warned_before)
+    if said:
+        print(said, file=sys.stderr)
     if interrupted:
         raise KeyboardInterrupt
     print(
