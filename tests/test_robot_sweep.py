@@ -64,6 +64,34 @@ def test_sweep_on_a_robot_throws_ws_block_scaled_and_matches_a_direct_run(tmp_pa
     assert 1.0 < side["impulse_horizontal_n_s"] < 2 * mass * 6.0  # it hit, and no more than elastic
 
 
+@pytest.mark.parametrize(("speed", "fell"), [(4.5, False), (12.0, False), (24.0, True)])
+def test_robot_early_stop_ends_at_rest_and_changes_no_outcome(speed, fell):
+    """``early_stop`` on a robot (:class:`biped.sim.robot.RobotRest`): against the full 3 s run of
+    the same block, the stopped run is the full run's first rows to the bit, it ends as "at_rest"
+    only when the full run ends recovered (the central-body COM back within 1 cm), at least
+    0.1 s (the hold) after the block stopped touching, and a fall ends both runs at the same row."""
+    desc = describe(BH)
+    ctrl = robot_controller(desc, "statics", "none")
+    c = ctrl.link_poses(standing_qpos(desc, ctrl))[0][:3, 3]
+    mass = 1.8 * desc.mass / total_mass_kg()
+    block = Block((c[0] - 0.5, c[1], 1.2 / 1.035 * c[2]), (speed, 0.0, 0.5 * 9.81 * 0.5 / speed), mass)
+    full = robot_push(desc, 3.0, block=block)
+    short = robot_push(desc, 3.0, block=block, early_stop=True)
+    n = len(short.t)
+    assert full.fell is fell and short.fell is fell
+    np.testing.assert_array_equal(short.central_com, full.central_com[:n])
+    np.testing.assert_array_equal(short.torques, full.torques[:n])
+    if fell:
+        assert short.stop_reason == full.stop_reason == "fell" and n == len(full.t)
+        return
+    assert full.stop_reason is None and full.final_offset_m < 0.01
+    assert short.stop_reason == "at_rest" and short.t[-1] < 2.0
+    assert full.block_velocity is not None
+    touched = np.flatnonzero(np.abs(np.diff(full.block_velocity[:, 0])) > 1e-6)
+    assert short.t[-1] >= full.t[touched[0]] + 0.1
+    assert np.max(np.linalg.norm(full.central_com[n:, :2] - full.target_com[:2], axis=1)) < 0.01
+
+
 def test_force_pulse_on_a_robot_applies_its_closed_form_impulse(tmp_path):
     """``--perturbation force`` on a robot: W's 0.15 s rectangular pulse applies F x 0.15 s; a
     half-sine pulse (direct run) 2 / pi of that, to the physics step's discretisation; and the

@@ -232,7 +232,7 @@ def build_spec(args):
 
         mass, height = robot_block_defaults(robot.spec, models.total_mass_kg())
         overrides["block_mass_kg"] = mass  # W's block scaled with the robot's mass
-    if robot is None and "early_stop" not in overrides and "early_stop" not in _grid_scenario_keys(args.grid):
+    if "early_stop" not in overrides and "early_stop" not in _grid_scenario_keys(args.grid):
         overrides["early_stop"] = True  # end each trial once its outcome is decided (docs/sweep.md)
     if overrides:
         base = base.with_overrides(**overrides)
@@ -428,7 +428,7 @@ def _sweep(args, spec, out: Path, n: int, where: str, client) -> int:
         f"biped sweep: {n} trials of {spec.base.duration_s:g} s, controller "
         f"{spec.base.controller}, torque limits {spec.torque_limits}, physics "
         f"{'the robot' + chr(39) + 's own' if spec.robot else spec.base.physics}, early stop "
-        f"{'on' if spec.base.early_stop and not spec.robot else 'off'}, on {where} -> {out}",
+        f"{'on' if spec.base.early_stop else 'off'}, on {where} -> {out}",
         file=sys.stderr,
     )
     if args.scheduler is None:  # compile before the local workers start: they load the cache

@@ -33,6 +33,17 @@ from biped.models.robot import (
     robot_soles,
     robot_tree,
 )
+from biped.sim.early_stop import (
+    AT_REST,
+    BLOCK_SPEED_M_S,
+    BLOCK_SPIN_RAD_S,
+    BODY_SPEED_M_S,
+    BODY_SPIN_RAD_S,
+    HOLD_S,
+    JOINT_SPEED_RAD_S,
+    MARGIN,
+    REACH_FACTOR,
+)
 from biped.spatial import rot_to_quat
 
 FLOOR = "robot_floor"
@@ -44,6 +55,9 @@ ROBOT_BIG_BASE = 1e6
 #: W's push moved onto a robot (:func:`block_for`): W's block (1.8 kg, 4.5 m/s, 0.2 m/s up,
 #: 1.2 m high against W's central-body COM at 1.035 m, 0.5 m from it), its mass scaled by the
 #: robot's mass over W's biped's (73.06 kg), its height by the central-body COM heights.
+#: Horizontal distance of the central-body COM from its set point at the end that counts as
+#: recovered [m] (docs/robots.md).
+RECOVERED_WITHIN_M = 0.01
 W_BLOCK = {"mass_kg": 1.8, "speed_m_s": 4.5, "vz_m_s": 0.2, "height_m": 1.2, "com_m": 1.035, "gap_m": 0.5}
 
 
@@ -66,6 +80,10 @@ class RobotRun:
     block_velocity: np.ndarray | None = None
     #: the force pulse's impulse as applied (3,) [N s] (zeros: no pulse)
     force_impulse_n_s: np.ndarray | None = None
+    #: why the run ended before ``seconds``: "fell", "at_rest" (``early_stop``), or None
+    stop_reason: str | None = None
+    #: the plant's qpos (n, nq) after each step (``record_qpos``; :func:`robot_plant`'s layout)
+    qpos: np.ndarray | None = None
 
     @property
     def max_torque_fraction(self) -> float:
@@ -143,6 +161,48 @@ def _pair_colliders(spec: mujoco.MjSpec, desc: RobotDescription, block: bool) ->
             spec.add_pair(geomname1=name, geomname2=BLOCK, condim=3)
 
 
+def robot_plant(desc: RobotDescription, block: Block | None = None, timestep_s: float | None = None):
+    """The compiled plant of :func:`robot_push`: the robot's model edited at load
+    (:func:`~biped.models.robot.plant_spec`), a floor plane, and ``block`` (a free cube) if any;
+    the robot's qpos first, then the block's. Kept per process (:data:`_PLANTS`): loading a
+    robot's file and meshes costs ~0.1 s, more than a second of its simulation; a plant is only
+    read (each run makes its own ``MjData``)."""
+    key = (
+        str(desc.path),
+        desc.path.stat().st_mtime_ns,
+        desc.root,
+        desc.feet,
+        desc.leg_joints,
+        desc.held_joints,
+        None if block is None else (block.mass_kg, block.size_m),
+        timestep_s,
+    )
+    m = _PLANTS.get(key)
+    if m is None:
+        if len(_PLANTS) >= 8:
+            _PLANTS.clear()
+        m = _PLANTS[key] = _compile_plant(desc, block, timestep_s)
+    return m
+
+
+#: Compiled plants by what they are made of (:func:`robot_plant`), a few per process.
+_PLANTS: dict[tuple, mujoco.MjModel] = {}
+
+
+def _compile_plant(desc: RobotDescription, block: Block | None, timestep_s: float | None) -> mujoco.MjModel:
+    spec = plant_spec(desc)
+    spec.worldbody.add_geom(name=FLOOR, type=mujoco.mjtGeom.mjGEOM_PLANE, size=[10, 10, 0.1])
+    if block is not None:
+        b = spec.worldbody.add_body(name=BLOCK, pos=list(block.position_m))
+        b.add_freejoint(name=BLOCK_JOINT)
+        b.add_geom(
+            name=BLOCK, type=mujoco.mjtGeom.mjGEOM_BOX, size=[block.size_m / 2] * 3, mass=block.mass_kg
+        )
+    _pair_colliders(spec, desc, block is not None)
+    spec.option.timestep = timestep_s or min(spec.option.timestep, MAX_TIMESTEP_S)
+    return spec.compile()
+
+
 def robot_controller(desc: RobotDescription, distribution: str = "qp", torque_limits: str = "model", **kw):
     """W's controller on the robot's folded tree; ``torque_limits`` "model" (the joints'
     ``actuatorfrcrange`` inside the QP) or "none"."""
@@ -193,25 +253,18 @@ def robot_push(
     big_base: float = ROBOT_BIG_BASE,
     block: Block | None = None,
     force: ForcePulse | None = None,
+    early_stop: bool = False,
+    record_qpos: bool = False,
 ) -> RobotRun:
     """Stand the robot for ``seconds`` under W's controller, kicked by ``push_m_s`` of COM
     velocity change at ``push_time_s`` (zero: no push) and/or hit by ``block`` (thrown at t = 0);
-    stops early when it falls."""
+    stops early when it falls, and with ``early_stop`` when it is at rest (:class:`RobotRest`);
+    ``record_qpos``: keep the plant's qpos after every step (:attr:`RobotRun.qpos`, for replays)."""
     ctrl = robot_controller(desc, distribution, torque_limits, big_base=big_base)
     q0 = standing_qpos(desc, ctrl)
     g = ctrl.link_poses(q0)[0]
     ctrl.target = Target(com=tuple(g[:3, 3]), quat=tuple(rot_to_quat(np.ascontiguousarray(g[:3, :3]))))
-    spec = plant_spec(desc)
-    spec.worldbody.add_geom(name=FLOOR, type=mujoco.mjtGeom.mjGEOM_PLANE, size=[10, 10, 0.1])
-    if block is not None:
-        b = spec.worldbody.add_body(name=BLOCK, pos=list(block.position_m))
-        b.add_freejoint(name=BLOCK_JOINT)
-        b.add_geom(
-            name=BLOCK, type=mujoco.mjtGeom.mjGEOM_BOX, size=[block.size_m / 2] * 3, mass=block.mass_kg
-        )
-    _pair_colliders(spec, desc, block is not None)
-    spec.option.timestep = timestep_s or min(spec.option.timestep, MAX_TIMESTEP_S)
-    m = spec.compile()
+    m = robot_plant(desc, block, timestep_s)
     d = mujoco.MjData(m)
     tree = ctrl.tree
     if m.nq != tree.nq + (7 if block is not None else 0):
@@ -227,6 +280,7 @@ def robot_push(
     lim = np.array([m.actuator_ctrlrange[a, 1] for a in legs])
     n = int(round(seconds / m.opt.timestep))
     t, cc, com, tau = np.zeros(n), np.zeros((n, 3)), np.zeros((n, 3)), np.zeros((n, 12))
+    qpos = np.zeros((n, m.nq)) if record_qpos else None
     bv = np.zeros((n, 3)) if block is not None else None
     bq = m.joint(BLOCK_JOINT).dofadr[0] if block is not None else 0
     root_v = tree.dof_adr[0]
@@ -239,6 +293,9 @@ def robot_push(
         f0 = int(round(force.start_s / m.opt.timestep))
         f1 = f0 + max(1, int(round(force.duration_s / m.opt.timestep)))
     fell_at = None
+    rest = RobotRest(m, desc, block is not None, g[:3, 3]) if early_stop else None
+    over = max(kick if np.any(push_m_s) else 0, f1 + 1)
+    stopped = None
     for i in range(n):
         if i == kick and np.any(push_m_s):
             # free joint linear velocity is in the world frame in MuJoCo: every body gets +dv
@@ -257,6 +314,8 @@ def robot_push(
         d.ctrl[legs] = u
         mujoco.mj_step(m, d)
         t[i] = d.time
+        if qpos is not None:
+            qpos[i] = d.qpos
         if bv is not None:
             bv[i] = d.qvel[bq : bq + 3]
         cc[i] = ctrl.link_poses(d.qpos[: tree.nq])[0][:3, 3] if i % 10 == 0 or i == n - 1 else cc[i - 1]
@@ -266,6 +325,94 @@ def robot_push(
             t, cc, com, tau = t[: i + 1], cc[: i + 1], com[: i + 1], tau[: i + 1]
             bv = bv[: i + 1] if bv is not None else None
             break
+        if rest is not None and rest.update(d, cc[i], i >= over):
+            stopped = AT_REST
+            t, cc, com, tau = t[: i + 1], cc[: i + 1], com[: i + 1], tau[: i + 1]
+            bv = bv[: i + 1] if bv is not None else None
+            break
+    reason = "fell" if fell_at is not None else stopped
+    if qpos is not None:
+        qpos = qpos[: len(t)]
     return RobotRun(
-        t, cc, com, tau, lim, fell_at is not None, fell_at, g[:3, 3].copy(), desc.mass, bv, impulse
+        t,
+        cc,
+        com,
+        tau,
+        lim,
+        fell_at is not None,
+        fell_at,
+        g[:3, 3].copy(),
+        desc.mass,
+        bv,
+        impulse,
+        reason,
+        qpos,
     )
+
+
+class RobotRest:
+    """:mod:`biped.sim.early_stop`'s "at rest" rule on a robot's run, checked every physics step:
+    a run may end as recovered once, for :data:`~biped.sim.early_stop.HOLD_S` of simulated time
+    after its perturbation is over (a kick's row, a force pulse's end), the block (if any) is
+    still or out of the robot's reach (:meth:`_block_done`), the floating body moves slower than
+    ``BODY_SPEED_M_S`` and spins slower than ``BODY_SPIN_RAD_S``, every leg joint is slower than
+    ``JOINT_SPEED_RAD_S``, and the central-body COM is within ``MARGIN`` x the robot's recovery
+    tolerance (:data:`RECOVERED_WITHIN_M`, horizontal) of its set point. The robot's controller
+    is state feedback on a fixed set point and the scene's inputs are then constant, so the rest
+    of the run cannot change the outcome; docs/robots.md lists the grids rerun with and without
+    the rule."""
+
+    def __init__(self, m: mujoco.MjModel, desc: RobotDescription, block: bool, target: np.ndarray):
+        self.dt = float(m.opt.timestep)
+        self.hold = max(1, round(HOLD_S / self.dt))
+        self.target = np.asarray(target[:2], float).copy()
+        root = m.body(desc.root)
+        self.root = int(root.id)
+        self.gravity = float(-m.opt.gravity[2])
+        j = int(root.jntadr[0])
+        self.lin = int(m.jnt_dofadr[j])
+        self.legs = np.array([m.jnt_dofadr[m.joint(n).id] for n in robot_tree(desc).joint_names])
+        self.block = block
+        if block:
+            bj = m.joint(BLOCK_JOINT)
+            self.bq, self.bv = int(bj.qposadr[0]), int(bj.dofadr[0])
+            g = [k for k in range(m.ngeom) if m.geom_bodyid[k] != 0 and m.geom_bodyid[k] != m.body(BLOCK).id]
+            self.geoms = np.array(g)
+            half = float(m.geom_size[m.geom(BLOCK).id, 0])  # the cube's half edge
+            self.block_half_diag, self.block_rest_z = float(np.sqrt(3.0)) * half, half
+            self.block_inertia_per_mass = (2.0 * half) ** 2 / 6.0  # a cube's I / m
+            self.friction = float(m.geom_friction[m.geom(FLOOR).id, 0])
+            self.reach: float | None = None
+        self.count = 0
+
+    def _block_done(self, d: mujoco.MjData) -> bool:
+        """The block cannot touch the robot again: it is still, or farther from the robot's COM
+        than the robot's reach plus its half diagonal plus twice the distance its energy could
+        carry it against floor friction (:mod:`biped.sim.early_stop`, condition 1)."""
+        v, w = d.qvel[self.bv : self.bv + 3], d.qvel[self.bv + 3 : self.bv + 6]
+        if float(v @ v) < BLOCK_SPEED_M_S**2 and float(w @ w) < BLOCK_SPIN_RAD_S**2:
+            return True
+        c = d.subtree_com[self.root, :2]
+        if self.reach is None:  # the robot's geoms' farthest bounding sphere from its COM
+            self.reach = float(np.max(np.linalg.norm(d.geom_xpos[self.geoms, :2] - c, axis=1)))
+        p = d.qpos[self.bq : self.bq + 3]
+        g = self.gravity
+        e = float(v @ v) + self.block_inertia_per_mass * float(w @ w)
+        e += 2.0 * g * max(float(p[2]) - self.block_rest_z, 0.0)
+        travel = REACH_FACTOR * e / (2.0 * self.friction * g)
+        return float(np.linalg.norm(p[:2] - c)) > self.reach + self.block_half_diag + travel
+
+    def update(self, d: mujoco.MjData, central_com: np.ndarray, over: bool) -> bool:
+        """Count this step toward the hold; True when the run may stop after it."""
+        v = d.qvel
+        lin, ang = v[self.lin : self.lin + 3], v[self.lin + 3 : self.lin + 6]
+        rest = (
+            over
+            and float(lin @ lin) < BODY_SPEED_M_S**2
+            and float(ang @ ang) < BODY_SPIN_RAD_S**2
+            and float(np.max(np.abs(v[self.legs]))) < JOINT_SPEED_RAD_S
+            and float(np.linalg.norm(central_com[:2] - self.target)) < MARGIN * RECOVERED_WITHIN_M
+            and (not self.block or self._block_done(d))
+        )
+        self.count = self.count + 1 if rest else 0
+        return self.count >= self.hold

@@ -15,7 +15,9 @@ biped) moved onto the robot (:func:`biped.sim.robot.robot_push`), measured into 
 
 The robot's controller is W's with the QP by default, the limits the sweep's ``torque_limits``
 (``"model"``: the joints' ``actuatorfrcrange``). Survived: the central-body COM never 0.15 m below
-its set point; recovered: survived and back within 1 cm of it horizontally at the end.
+its set point; recovered: survived and back within 1 cm of it horizontally at the end. With
+``early_stop`` (on in sweeps and envelopes, as on W's biped) a trial also ends as recovered once
+the robot is at rest near its set point after the perturbation (:class:`biped.sim.robot.RobotRest`).
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ import numpy as np
 from biped.errors import ScenarioError
 from biped.models.robot import RobotDescription, robot_for
 from biped.sim.robot import (
+    RECOVERED_WITHIN_M,
     Block,
     ForcePulse,
     RobotRun,
@@ -43,9 +46,6 @@ from biped.sim.sweep.trial import ballistic_impulse
 
 #: Perturbations a robot takes.
 ROBOT_PERTURBATIONS = ("block", "force")
-#: Horizontal distance of the central-body COM from its set point at the end that counts as
-#: recovered [m] (docs/robots.md).
-RECOVERED_WITHIN_M = 0.01
 
 
 def check_robot_scenario(scenario) -> None:
@@ -110,6 +110,7 @@ def run_robot(setup: TrialSetup) -> RobotRun:
         sc.duration_s,
         distribution=sc.distribution,
         torque_limits=setup.torque_limits,
+        early_stop=bool(sc.early_stop),
         **kw,
     )
 
@@ -150,6 +151,6 @@ def run_robot_trial(setup: TrialSetup) -> dict[str, Any]:
         push_direction_deg=float(tr.direction_deg),
         horizontal_impulse_n_s=jh,
         com_velocity_change_m_s=jh / desc.mass,
-        stop_reason="fell" if run.fell else None,
-        stopped_at_s=run.fall_time_s if run.fall_time_s is not None else math.nan,
+        stop_reason=run.stop_reason,
+        stopped_at_s=float(run.t[-1]) if run.stop_reason is not None and len(run.t) else math.nan,
     ).row()
