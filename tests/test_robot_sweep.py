@@ -200,7 +200,23 @@ def test_push_force_on_a_robot_is_ws_pulse_scaled_and_other_paradigms_refused(tm
     from behind) scaled with the robot's mass: its applied impulse is 60 x m / W's mass x 0.15 N s
     toward +x (the robots face +x); platform and release exit 2 with one line, no folder."""
     out = tmp_path / "f"
-    assert main(["push", "--model", BH, "--perturbation", "force", "--duration", "1", "--out", str(out)]) == 0
+    assert (
+        main(
+            [
+                "push",
+                "--model",
+                BH,
+                "--perturbation",
+                "force",
+                "--duration",
+                "1",
+                "--no-video",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
     s = json.loads((out / "summary.json").read_text())
     desc = describe(BH)
     assert s["force_impulse_n_s"][0] == pytest.approx(60.0 * desc.mass / total_mass_kg() * 0.15, rel=1e-9)

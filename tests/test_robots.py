@@ -119,7 +119,10 @@ def test_biped_push_model_robot_recovers_ws_block_scaled(tmp_path):
     from biped.models import total_mass_kg
 
     out = tmp_path / "run"
-    assert main(["push", "--model", "berkeley_humanoid", "--duration", "2", "--out", str(out)]) == 0
+    assert (
+        main(["push", "--model", "berkeley_humanoid", "--duration", "2", "--no-video", "--out", str(out)])
+        == 0
+    )
     s = json.loads((out / "summary.json").read_text())
     desc = describe("berkeley_humanoid")
     assert s["block"]["mass_kg"] == pytest.approx(1.8 * desc.mass / total_mass_kg(), rel=1e-12)
@@ -192,7 +195,22 @@ def test_biped_push_model_path_routes_a_robot_file_and_refuses_neither(tmp_path,
     runs = {}
     for name, model in (("path", str(copy)), ("name", "berkeley_humanoid")):
         out = tmp_path / name
-        assert main(["push", "--model", model, "--duration", "0.3", "--out", str(out)]) == 0
+        assert (
+            main(
+                [
+                    "push",
+                    "--model",
+                    model,
+                    "--duration",
+                    "0.3",
+                    "--no-video",
+                    "--no-replay",
+                    "--out",
+                    str(out),
+                ]
+            )
+            == 0
+        )
         runs[name] = out
     a, b = (json.loads((runs[k] / "summary.json").read_text()) for k in ("path", "name"))
     assert a["block"] == b["block"] and a["feet"] == b["feet"]

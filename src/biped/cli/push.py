@@ -420,7 +420,7 @@ def _run_robot(args, desc) -> int:
     block scaled to it, from behind."""
     from biped.errors import ScenarioError
     from biped.models import total_mass_kg
-    from biped.outputs.robot import write_robot_outputs
+    from biped.outputs.robot import write_robot_outputs, write_robot_replay, write_robot_video
     from biped.sim.robot import Block, ForcePulse, block_for, robot_controller, robot_push
     from biped.sim.scenario import Scenario
 
@@ -463,10 +463,23 @@ def _run_robot(args, desc) -> int:
             (-w.force_n[0] * scale, 0.0, 0.0), w.force_start_s, w.force_duration_s, w.force_shape
         )
         block = None
+    replay, video = not args.no_replay, not args.no_video
     run = robot_push(
-        desc, seconds, distribution=distribution, block=block, force=force, timestep_s=args.timestep
+        desc,
+        seconds,
+        distribution=distribution,
+        block=block,
+        force=force,
+        timestep_s=args.timestep,
+        record_qpos=replay or video,
     )
     summary = write_robot_outputs(out, desc, run, block, distribution, force)
+    if replay:
+        write_robot_replay(out, desc, run, block, summary)
+    if video:
+        res = write_robot_video(out, desc, run, block, lambda s: print(s, flush=True))
+        if res.path is None:
+            print(f"video.mp4 not written: {res.reason}")
     status = "recovered" if summary["recovered"] else "fell" if run.fell else "not recovered"
     what = (
         f"block {block.mass_kg:.3f} kg at {block.velocity_m_s[0]:g} m/s"

@@ -29,7 +29,8 @@ from biped.sim.scene import Scene, build_scene, tilt_quat
 from biped.viz.footprints import with_footprints
 from biped.viz.push_figures import plot_push
 from biped.viz.push_video import render_push_video
-from biped.viz.replay import replay_from_mujoco, write_replay
+from biped.viz.replay import write_replay
+from biped.viz.replay_mujoco import replay_from_mujoco
 
 __all__ = [
     "column_dictionary",

@@ -1,6 +1,8 @@
 """The files of a robot's push run (``biped push --model g1|t1|berkeley_humanoid|apollo``):
-``summary.json`` (the robot, the block, the result) and ``trajectory.csv`` (time, central-body
-COM, whole-body COM, leg torques as commanded)."""
+``summary.json`` (the robot, the block, the result), ``trajectory.csv`` (time, central-body
+COM, whole-body COM, leg torques as commanded), ``replay.html`` (the 3D replay, the robot's
+meshes drawn: :mod:`biped.viz.replay_mesh`) and ``video.mp4`` (MuJoCo's offscreen renderer, the
+camera on the robot's floating body)."""
 
 from __future__ import annotations
 
@@ -12,7 +14,10 @@ import numpy as np
 from biped.files import write_text
 from biped.models.robot import RobotDescription
 from biped.outputs._json import write_json
-from biped.sim.robot import Block, ForcePulse, RobotRun
+from biped.sim.robot import Block, ForcePulse, RobotRun, robot_plant
+from biped.viz.replay import write_replay
+from biped.viz.replay_mujoco import replay_from_mujoco
+from biped.viz.video import VideoResult, render_video
 
 
 def robot_summary(
@@ -71,3 +76,46 @@ def write_robot_outputs(
     body = "\n".join(",".join(f"{x:.9g}" for x in r) for r in rows)
     write_text(out / "trajectory.csv", head + "\n" + body + "\n")
     return summary
+
+
+def write_robot_replay(
+    out: Path, desc: RobotDescription, run: RobotRun, block: Block | None, summary: dict
+) -> Path:
+    """``replay.html``: the run (:attr:`RobotRun.qpos`, recorded with ``record_qpos``) on the plant
+    it ran on, its meshes drawn, the camera on the robot's root body."""
+    if run.qpos is None:
+        raise ValueError("the run has no qpos record: run robot_push with record_qpos=True")
+    m = robot_plant(desc, block)
+    info = {
+        "robot": desc.path.stem,
+        "mass [kg]": desc.mass,
+        "recovered": summary["recovered"],
+        "final COM offset [m]": summary["final_com_offset_m"],
+    }
+    markers = [{"time_s": run.fall_time_s, "label": "fell"}] if run.fall_time_s is not None else []
+    replay = replay_from_mujoco(
+        m, run.t, run.qpos, title=f"{desc.path.stem}: push", info=info, markers=markers
+    )
+    return write_replay(replay, out / "replay.html")
+
+
+def write_robot_video(
+    out: Path, desc: RobotDescription, run: RobotRun, block: Block | None, log
+) -> VideoResult:
+    """``video.mp4`` of the run (:attr:`RobotRun.qpos`), the tracking camera on the floating body,
+    ``log`` told the frames rendered every 10 % (a robot's meshes take ~0.4 s of CPU a frame)."""
+    from biped.outputs.push import _frame_log
+
+    if run.qpos is None:
+        raise ValueError("the run has no qpos record: run robot_push with record_qpos=True")
+    m = robot_plant(desc, block)
+    title = f"{desc.path.stem}: " + ("W's block" if block is not None else "force pulse")
+    return render_video(
+        m,
+        run.t,
+        run.qpos,
+        out / "video.mp4",
+        track_body=desc.root,
+        title=title,
+        progress=_frame_log(log, 0.1),
+    )

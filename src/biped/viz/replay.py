@@ -1,6 +1,6 @@
 """A self-contained 3D replay of a motion, to open in any browser.
 
-A replay is a function of (model, trajectory): :func:`replay_from_mujoco` runs MuJoCo's forward
+A replay is a function of (model, trajectory): :func:`~biped.viz.replay_mujoco.replay_from_mujoco` runs MuJoCo's forward
 kinematics over the recorded ``qpos`` and keeps the world pose of every visible geom; then
 :func:`write_replay` writes one HTML file that plays it in 3D with three.js (vendored next to this
 module, MIT licence, inlined into the page: the page loads nothing from the network).
@@ -27,23 +27,19 @@ import json
 import math
 import pathlib
 import re
-from collections.abc import Iterable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from biped import files
 from biped.errors import BipedError, ModelError, StateError, unknown_name
-from biped.viz.replay_arrow import ARROW_RGBA, arrow_edges, arrow_payload, check_arrow, viewer_text
+from biped.viz.replay_arrow import ARROW_RGBA, arrow_payload, check_arrow, viewer_text
 
-if TYPE_CHECKING:  # pragma: no cover
-    import mujoco
-
-__all__ = ["ARROW_RGBA", "GEOM_KINDS", "Replay", "ReplayGeom", "replay_from_mujoco", "write_replay"]
+__all__ = ["ARROW_RGBA", "GEOM_KINDS", "Replay", "ReplayGeom", "write_replay"]
 
 #: Valid :attr:`ReplayGeom.kind` values and the number of entries of their ``size``.
-GEOM_KINDS = {"box": 3, "sphere": 1, "capsule": 2, "cylinder": 2, "ellipsoid": 3, "plane": 2}
+GEOM_KINDS = {"box": 3, "sphere": 1, "capsule": 2, "cylinder": 2, "ellipsoid": 3, "plane": 2, "mesh": 3}
 
 _HERE = pathlib.Path(__file__).resolve().parent
 #: Vendored three.js files (release 0.185.0 from the npm registry, MIT licence in LICENSE.three).
@@ -57,13 +53,16 @@ class ReplayGeom:
     ``size`` in m: box and ellipsoid half-sizes ``(hx, hy, hz)``; sphere ``(r,)``; capsule and
     cylinder ``(r, half_length)`` along the local z axis (a capsule's half length excludes its
     caps); plane ``(half_x, half_y)`` in the local xy plane, ``0`` meaning "large" (MuJoCo's
-    infinite plane, drawn 20 m wide). ``rgba`` in [0, 1], read as sRGB.
+    infinite plane, drawn 20 m wide); mesh ``(hx, hy, hz)``, its bounding box's half sizes, and
+    ``mesh`` the index of its vertices and faces in :attr:`Replay.meshes`. ``rgba`` in [0, 1],
+    read as sRGB.
     """
 
     name: str
     kind: str
     size: tuple
     rgba: tuple = (0.7, 0.7, 0.7, 1.0)
+    mesh: int = -1
 
     def __post_init__(self):
         if not isinstance(self.name, str):
@@ -83,6 +82,10 @@ class ReplayGeom:
         rgba = tuple(float(c) for c in np.ravel(self.rgba))
         if len(rgba) != 4 or not all(0.0 <= c <= 1.0 for c in rgba):
             raise ModelError(f"ReplayGeom {self.name!r}: rgba needs 4 entries in [0, 1], got {self.rgba!r}")
+        if (self.kind == "mesh") != (isinstance(self.mesh, (int, np.integer)) and self.mesh >= 0):
+            raise ModelError(
+                f"ReplayGeom {self.name!r}: a mesh, and only a mesh, needs mesh >= 0; got {self.mesh!r}"
+            )
         object.__setattr__(self, "size", size)
         object.__setattr__(self, "rgba", rgba)
 
@@ -106,6 +109,7 @@ class Replay:
             while it acts, a tether while it holds (:meth:`biped.sim.perturbations.base.
             Perturbation.arrows`). The page draws frame k's arrow from ``times[k]`` until the
             next frame, moving with the body between two frames that both have one.
+        meshes: the mesh geoms' shapes, (vertices (V, 3) [m, geom frame], faces (F, 3)) each.
     """
 
     geoms: tuple
@@ -117,6 +121,7 @@ class Replay:
     markers: tuple = ()
     follow: str | None = None
     arrow: np.ndarray | None = None
+    meshes: tuple = ()
 
     def __post_init__(self):
         geoms = tuple(self.geoms)
@@ -160,6 +165,7 @@ class Replay:
         object.__setattr__(self, "info", dict(self.info))
         object.__setattr__(self, "markers", _check_markers(self.markers))
         object.__setattr__(self, "arrow", check_arrow(self.arrow, T))
+        object.__setattr__(self, "meshes", _check_meshes(self.meshes, geoms))
         names = [g.name for g in geoms]
         if self.follow is not None and self.follow not in names:
             raise ModelError(unknown_name("follow geom", self.follow, names))
@@ -176,7 +182,7 @@ class Replay:
 def _volume(g: ReplayGeom) -> float:
     """Volume of a geom, m^3 (used to choose the geom the camera follows)."""
     s = g.size
-    if g.kind in ("box", "ellipsoid"):
+    if g.kind in ("box", "ellipsoid", "mesh"):  # a mesh: its bounding box
         return 8 * s[0] * s[1] * s[2] * (math.pi / 6 if g.kind == "ellipsoid" else 1.0)
     if g.kind == "sphere":
         return 4 / 3 * math.pi * s[0] ** 3
@@ -185,6 +191,22 @@ def _volume(g: ReplayGeom) -> float:
     if g.kind == "cylinder":
         return math.pi * s[0] ** 2 * 2 * s[1]
     return 0.0
+
+
+def _check_meshes(meshes, geoms) -> tuple:
+    """The meshes as (float32 (V, 3), uint32 (F, 3)) pairs, every face's and geom's index valid."""
+    out = []
+    for k, (v, f) in enumerate(meshes):
+        v, f = np.asarray(v, dtype=np.float32), np.asarray(f)
+        if v.ndim != 2 or v.shape[1] != 3 or not np.all(np.isfinite(v)):
+            raise ModelError(f"mesh {k}: vertices must be a finite (V, 3) array, got shape {v.shape}")
+        if f.ndim != 2 or f.shape[1] != 3 or (f.size and (f.min() < 0 or f.max() >= len(v))):
+            raise ModelError(f"mesh {k}: faces must be (F, 3) indices into its {len(v)} vertices")
+        out.append((v, f.astype(np.uint32)))
+    for g in geoms:
+        if g.kind == "mesh" and g.mesh >= len(out):
+            raise ModelError(f"ReplayGeom {g.name!r}: mesh {g.mesh} not in the replay's {len(out)} meshes")
+    return tuple(out)
 
 
 def _check_markers(markers) -> tuple:
@@ -215,189 +237,6 @@ def _check_markers(markers) -> tuple:
             label = " ".join(str(v) for key, v in mk.items() if key != "time_s")
         out.append({"time_s": t, "label": label})
     return tuple(sorted(out, key=lambda m: m["time_s"]))  # stable: equal times keep their order
-
-
-# --------------------------------------------------------------------------------------------
-# From MuJoCo
-# --------------------------------------------------------------------------------------------
-
-# mjtGeom numbers (stable across MuJoCo versions): plane 0, hfield 1, sphere 2, capsule 3,
-# ellipsoid 4, cylinder 5, box 6, mesh 7, sdf 8.
-_MJ_KIND = {0: "plane", 2: "sphere", 3: "capsule", 4: "ellipsoid", 5: "cylinder", 6: "box"}
-_MJ_DEFAULT_RGBA = (0.5, 0.5, 0.5, 1.0)
-
-
-def _material_rgba(model, matid: int) -> tuple:
-    """Colour of a material: its rgba times the mean colour of its first texture, if any (the
-    page draws no textures; a checkered floor shows as its average grey)."""
-    rgba = np.array(model.mat_rgba[matid], dtype=float)
-    texids = np.atleast_1d(model.mat_texid[matid])
-    texids = texids[texids >= 0]
-    if texids.size:
-        t = int(texids[0])
-        n, adr = int(model.tex_nchannel[t]), int(model.tex_adr[t])
-        size = int(model.tex_width[t]) * int(model.tex_height[t]) * n
-        if n >= 3 and size > 0:
-            pix = np.asarray(model.tex_data[adr : adr + size], dtype=float).reshape(-1, n)
-            rgba[:3] *= pix[:, :3].mean(axis=0) / 255.0
-    return tuple(float(c) for c in rgba)
-
-
-def replay_from_mujoco(
-    model: mujoco.MjModel,
-    times,
-    qpos,
-    *,
-    geom_groups=None,
-    title: str = "biped replay",
-    info: Mapping[str, Any] | None = None,
-    markers: Iterable[Mapping] = (),
-    follow: str | None = None,
-    max_rate_hz: float | None = 100.0,
-    arrow=None,
-) -> Replay:
-    """Record the world pose of each visible geom of ``model`` along a trajectory.
-
-    Runs ``mujoco.mj_kinematics`` on a fresh ``MjData`` for each row of ``qpos`` (the model is not
-    modified) and reads ``geom_xpos`` / ``geom_xmat``.
-
-    Args:
-        model: a compiled ``mujoco.MjModel``.
-        times: (T,) s, strictly increasing.
-        qpos: (T, nq) generalized positions, MuJoCo's layout (free joints: position, then the
-            quaternion (w, x, y, z)).
-        geom_groups: the geom groups to draw (MuJoCo's ``group`` attribute); ``None`` draws groups
-            0, 1 and 2, what MuJoCo's viewer shows by default. Fully transparent geoms
-            (alpha 0) and height fields are always left out. Mesh geoms are drawn as their
-            bounding box.
-        title, info, markers, follow: see :class:`Replay`.
-        arrow: None, or (T, 2, 3) one arrow a sample of ``times`` (see :class:`Replay`); thinned
-            with the frames, keeping too the samples on both sides of each moment an arrow appears
-            or goes, so even a push shorter than a frame shows, and shows when it acts.
-        max_rate_hz: keep samples at least ``1 / max_rate_hz`` s apart (plus the last one), so
-            a 500 Hz control-rate trajectory makes a 100 frames/s replay (the page interpolates
-            between frames); ``None`` keeps every sample. File size is about
-            37 bytes x geoms x frames + 0.8 MB for three.js.
-
-    Returns:
-        a :class:`Replay` with one :class:`ReplayGeom` per drawn geom, named after the MJCF
-        (``geom<i>`` for unnamed geoms).
-
-    Raises:
-        StateError: ``times`` / ``qpos`` of the wrong shape or with non-finite entries.
-        ModelError: ``model`` is not an ``MjModel`` or no geom is left to draw.
-    """
-    import mujoco
-
-    if not isinstance(model, mujoco.MjModel):
-        raise ModelError(f"model must be a mujoco.MjModel, got {type(model).__name__}")
-    times = np.asarray(times, dtype=float)
-    qpos = np.asarray(qpos, dtype=float)
-    if times.ndim != 1:
-        raise StateError(f"times must have shape (T,), got {times.shape}")
-    if qpos.shape != (times.size, model.nq):
-        raise StateError(
-            f"qpos must have shape (T, nq) = ({times.size}, {model.nq}) to match times and the "
-            f"model, got {qpos.shape}"
-        )
-    if not np.all(np.isfinite(qpos)):
-        bad = np.argwhere(~np.isfinite(qpos))[0]
-        raise StateError(f"qpos contains a non-finite entry at frame {bad[0]}, coordinate {bad[1]}")
-
-    if arrow is not None:
-        arrow = check_arrow(arrow, times.size)
-    if max_rate_hz is not None:
-        if not (isinstance(max_rate_hz, (int, float)) and max_rate_hz > 0):
-            raise BipedError(
-                f"max_rate_hz must be a positive number of frames per second or None, got {max_rate_hz!r}"
-            )
-        keep = _thin(times, 1.0 / float(max_rate_hz))
-        if arrow is not None:  # the samples where an arrow appears or goes, kept too
-            keep = np.union1d(keep, arrow_edges(arrow))
-            arrow = arrow[keep]
-        times, qpos = times[keep], qpos[keep]
-
-    groups = {0, 1, 2} if geom_groups is None else {int(g) for g in geom_groups}
-    ids, geoms, offsets = [], [], []
-    for i in range(model.ngeom):
-        gtype = int(model.geom_type[i])
-        if int(model.geom_group[i]) not in groups:
-            continue
-        rgba = tuple(float(c) for c in model.geom_rgba[i])
-        matid = int(model.geom_matid[i])
-        if matid >= 0 and np.allclose(rgba, _MJ_DEFAULT_RGBA):
-            rgba = _material_rgba(model, matid)
-        if rgba[3] <= 0.0:
-            continue
-        name = model.geom(i).name or f"geom{i}"
-        size = model.geom_size[i]
-        offset = np.zeros(3)
-        if gtype in _MJ_KIND:
-            kind = _MJ_KIND[gtype]
-            size = {"sphere": size[:1], "capsule": size[:2], "cylinder": size[:2], "plane": size[:2]}.get(
-                kind, size[:3]
-            )
-        elif gtype == 7:  # mesh: its bounding box in the geom frame (centre, half sizes)
-            kind = "box"
-            offset = np.array(model.geom_aabb[i, :3], dtype=float)
-            size = model.geom_aabb[i, 3:6]
-        else:
-            continue
-        ids.append(i)
-        offsets.append(offset)
-        geoms.append(
-            ReplayGeom(
-                name=name,
-                kind=kind,
-                size=tuple(np.abs(size)),
-                rgba=tuple(min(max(c, 0.0), 1.0) for c in rgba),
-            )
-        )
-    if not ids:
-        raise ModelError(
-            f"no geom to draw: the model's geoms are in groups "
-            f"{sorted(set(map(int, model.geom_group)))}, geom_groups asked for {sorted(groups)}"
-        )
-
-    data = mujoco.MjData(model)
-    T, G = times.size, len(ids)
-    pos = np.empty((T, G, 3))
-    quat = np.empty((T, G, 4))
-    ids_arr = np.asarray(ids)
-    offsets_arr = np.asarray(offsets)
-    has_offset = bool(np.any(offsets_arr))
-    for t in range(T):
-        data.qpos[:] = qpos[t]
-        mujoco.mj_kinematics(model, data)
-        xmat = data.geom_xmat[ids_arr].reshape(G, 3, 3)
-        pos[t] = data.geom_xpos[ids_arr]
-        if has_offset:
-            pos[t] += np.einsum("gij,gj->gi", xmat, offsets_arr)
-        for g in range(G):
-            mujoco.mju_mat2Quat(quat[t, g], data.geom_xmat[ids_arr[g]])
-    return Replay(
-        geoms=tuple(geoms),
-        times=times,
-        pos=pos,
-        quat=quat,
-        title=title,
-        info=dict(info or {}),
-        markers=tuple(markers),
-        follow=follow,
-        arrow=arrow,
-    )
-
-
-def _thin(times: np.ndarray, dt: float) -> np.ndarray:
-    """Indices of the samples of ``times`` (T,) at least ``dt`` s apart, first and last kept."""
-    keep, last = [0], times[0] if times.size else 0.0
-    for k in range(1, times.size):
-        if times[k] - last >= dt * (1 - 1e-6):
-            keep.append(k)
-            last = times[k]
-    if times.size > 1 and keep[-1] != times.size - 1:
-        keep.append(times.size - 1)
-    return np.asarray(keep, dtype=int)
 
 
 # --------------------------------------------------------------------------------------------
@@ -449,7 +288,8 @@ def replay_payload(replay: Replay) -> dict:
         "info": [[str(k), _info_value(v)] for k, v in replay.info.items()],
         "markers": [{"t": m["time_s"], "label": m["label"]} for m in replay.markers],
         "geoms": [
-            {"name": g.name, "kind": g.kind, "size": list(g.size), "rgba": list(g.rgba)} for g in replay.geoms
+            {"name": g.name, "kind": g.kind, "size": list(g.size), "rgba": list(g.rgba), "mesh": g.mesh}
+            for g in replay.geoms
         ],
         "T": int(replay.times.size),
         "G": len(replay.geoms),
@@ -460,6 +300,14 @@ def replay_payload(replay: Replay) -> dict:
         "pos": _b64_f32(replay.pos),
         "quat": _b64_f32(replay.quat),
     }
+    if replay.meshes:
+        payload["meshes"] = [
+            {
+                "verts": _b64_f32(v),
+                "faces": base64.b64encode(np.ascontiguousarray(f, "<u4").tobytes()).decode(),
+            }
+            for v, f in replay.meshes
+        ]
     if replay.arrow is not None:  # NaN (no arrow) survives float32 and base64
         payload["arrow"] = arrow_payload(replay.arrow, _b64_f32)
     return payload

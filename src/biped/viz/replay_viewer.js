@@ -37,6 +37,13 @@ function f32(b64) {
   return new Float32Array(u8.buffer);
 }
 
+function u32(b64) {
+  const bin = atob(b64);
+  const u8 = new Uint8Array(bin.length);
+  for (let i = 0; i < bin.length; i++) u8[i] = bin.charCodeAt(i);
+  return new Uint32Array(u8.buffer);
+}
+
 function hashParams() {
   const out = {};
   for (const kv of location.hash.replace(/^#/, "").split("&")) {
@@ -106,6 +113,13 @@ async function main() {
   // ---- geoms ----
   const meshes = [];
   let hasPlane = false;
+  const shapes = (D.meshes || []).map((m) => {  // a robot's meshes: vertices in the geom's frame
+    const geo = new THREE.BufferGeometry();
+    geo.setAttribute("position", new THREE.BufferAttribute(f32(m.verts), 3));
+    geo.setIndex(new THREE.BufferAttribute(u32(m.faces), 1));
+    geo.computeVertexNormals();
+    return geo;
+  });
   for (const g of D.geoms) {
     const s = g.size;
     let geo;
@@ -116,6 +130,7 @@ async function main() {
       case "capsule": geo = new THREE.CapsuleGeometry(s[0], 2 * s[1], 8, 24); geo.rotateX(Math.PI / 2); break;
       case "cylinder": geo = new THREE.CylinderGeometry(s[0], s[0], 2 * s[1], 24); geo.rotateX(Math.PI / 2); break;
       case "plane": geo = new THREE.PlaneGeometry(2 * (s[0] || 10), 2 * (s[1] || 10)); hasPlane = true; break;
+      case "mesh": geo = shapes[g.mesh]; break;
       default: geo = new THREE.BoxGeometry(0.02, 0.02, 0.02);
     }
     const [r, gg, b, a] = g.rgba;
