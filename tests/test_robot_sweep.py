@@ -227,3 +227,22 @@ def test_push_force_on_a_robot_is_ws_pulse_scaled_and_other_paradigms_refused(tm
         err = capsys.readouterr().err.strip()
         assert len(err.splitlines()) == 1 and f"--perturbation {p}" in err
         assert not (tmp_path / p).exists()
+
+
+def test_a_robot_files_sweep_identity_holds_the_mjcf_it_names(tmp_path):
+    """A sweep on a robot file (TOML) is another sweep once the MJCF the file names changes, not
+    only the TOML (a resumed file must not mix trials of two robots)."""
+    from biped.sim.sweep.spec import SweepSpec
+
+    src = robot_path(BH)
+    xml = tmp_path / "bh.xml"
+    xml.write_text(src.read_text())
+    (tmp_path / "assets").symlink_to(src.parent / "assets")
+    auto = describe(BH)
+    toml = _robot_file(tmp_path, f'mjcf = "bh.xml"\nfeet = ["{auto.feet[0]}", "{auto.feet[1]}"]\n')
+    spec = SweepSpec(
+        axes={"speed_m_s": (4.0,), "direction_deg": (0.0,)}, robot=str(toml), torque_limits="model"
+    )
+    before = spec.identity
+    xml.write_text(src.read_text().replace("<mujoco", "<!-- edited -->\n<mujoco", 1))
+    assert spec.identity != before

@@ -432,6 +432,11 @@ class SweepSpec:
         if self.robot:  # the robot's file and its bytes (W's sweeps: their identity as before)
             ident["robot"] = self.robot
             ident["robot_sha256"] = hashlib.sha256(Path(self.robot).read_bytes()).hexdigest()
+            if Path(self.robot).suffix == ".toml":  # a robot file: the MJCF it names too
+                from biped.models.robot_file import read_robot_file
+
+                xml = read_robot_file(self.robot).path
+                ident["robot_mjcf_sha256"] = hashlib.sha256(Path(xml).read_bytes()).hexdigest()
         return hashlib.sha256(json.dumps(ident, sort_keys=True).encode()).hexdigest()[:16]
 
     @property
