@@ -25,7 +25,8 @@ HI_M_S = 1.6
 
 
 def recovers(desc, speed: float, direction_deg: float) -> bool:
-    from biped.sim.robot import RECOVERED_WITHIN_M, robot_push
+    from biped.sim.robot import robot_push
+    from biped.sim.robot_rest import RECOVERED_WITHIN_M
 
     a = np.radians(direction_deg)
     run = robot_push(desc, 3.0, push_m_s=(speed * np.cos(a), speed * np.sin(a), 0.0), push_time_s=0.5)

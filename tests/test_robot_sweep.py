@@ -114,7 +114,6 @@ def test_force_pulse_on_a_robot_applies_its_closed_form_impulse(tmp_path):
 @pytest.mark.parametrize(
     "extra, message",
     [
-        (["--perturbation", "platform"], "perturbation 'platform' is not available on robots"),
         (["--perturbation", "release"], "perturbation 'release' is not available on robots"),
         (["--torque-limits", "human"], "torque_limits on a robot must be one of 'model', 'none'"),
         (["--stepping"], "stepping is not available on robots"),
@@ -198,7 +197,7 @@ def test_robot_file_names_feet_legs_keyframe_and_is_checked(tmp_path):
 def test_push_force_on_a_robot_is_ws_pulse_scaled_and_other_paradigms_refused(tmp_path, capsys):
     """``biped push --model berkeley_humanoid --perturbation force``: W's pulse (60 N for 0.15 s,
     from behind) scaled with the robot's mass: its applied impulse is 60 x m / W's mass x 0.15 N s
-    toward +x (the robots face +x); platform and release exit 2 with one line, no folder."""
+    toward +x (the robots face +x); release exits 2 with one line, no folder."""
     out = tmp_path / "f"
     assert (
         main(
@@ -221,7 +220,7 @@ def test_push_force_on_a_robot_is_ws_pulse_scaled_and_other_paradigms_refused(tm
     desc = describe(BH)
     assert s["force_impulse_n_s"][0] == pytest.approx(60.0 * desc.mass / total_mass_kg() * 0.15, rel=1e-9)
     assert s["block"] is None and not s["fell"]
-    for p in ("platform", "release"):
+    for p in ("release",):
         capsys.readouterr()
         assert main(["push", "--model", BH, "--perturbation", p, "--out", str(tmp_path / p)]) == 2
         err = capsys.readouterr().err.strip()
@@ -246,3 +245,35 @@ def test_a_robot_files_sweep_identity_holds_the_mjcf_it_names(tmp_path):
     before = spec.identity
     xml.write_text(src.read_text().replace("<mujoco", "<!-- edited -->\n<mujoco", 1))
     assert spec.identity != before
+
+
+def test_platform_under_a_robot_carries_its_feet_and_its_set_point():
+    """W's platform (a 5 cm backward move, 0.3 s ramp) under Berkeley Humanoid: MuJoCo's slide
+    joint ends at the commanded displacement (the servo, 1 mm), both feet end displaced by it
+    (MuJoCo's body positions: friction carried them, < 5 mm of slip), the robot recovers over
+    the moved set point; early stop ends the same run at rest with the same rows; a 40 cm move
+    in the same 0.3 s is a fall."""
+    import mujoco
+
+    from biped.sim.perturbations.platform import PLATFORM_JOINT
+    from biped.sim.robot import PlatformMove, robot_plant
+
+    desc = describe(BH)
+    move = PlatformMove((-0.05, 0.0), 0.1, 0.3)
+    run = robot_push(desc, 2.0, platform=move, record_qpos=True)
+    short = robot_push(desc, 2.0, platform=move, early_stop=True)
+    assert not run.fell and run.final_offset_m < 0.01
+    assert short.stop_reason == "at_rest" and short.t[-1] < 2.0
+    np.testing.assert_array_equal(short.central_com, run.central_com[: len(short.t)])
+    m = robot_plant(desc, None, None, move.axis)
+    assert run.qpos is not None
+    # the slide's coordinate runs along the move's axis (-x): +0.05 m along it
+    assert run.qpos[-1, m.jnt_qposadr[m.joint(PLATFORM_JOINT).id]] == pytest.approx(0.05, abs=1e-3)
+    d = mujoco.MjData(m)
+    feet = []
+    for q in (run.qpos[0], run.qpos[-1]):
+        d.qpos[:] = q
+        mujoco.mj_kinematics(m, d)
+        feet.append(np.array([d.xpos[m.body(f).id, :2] for f in desc.feet]))
+    np.testing.assert_allclose(feet[1] - feet[0], [[-0.05, 0.0], [-0.05, 0.0]], atol=5e-3)
+    assert robot_push(desc, 2.0, platform=PlatformMove((-0.4, 0.0), 0.1, 0.3)).fell

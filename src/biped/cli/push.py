@@ -421,7 +421,7 @@ def _run_robot(args, desc) -> int:
     from biped.errors import ScenarioError
     from biped.models import total_mass_kg
     from biped.outputs.robot import write_robot_outputs, write_robot_replay, write_robot_video
-    from biped.sim.robot import Block, ForcePulse, block_for, robot_controller, robot_push
+    from biped.sim.robot import Block, ForcePulse, PlatformMove, block_for, robot_controller, robot_push
     from biped.sim.scenario import Scenario
 
     unsupported = {
@@ -433,7 +433,7 @@ def _run_robot(args, desc) -> int:
         "--seed": args.seed,
     }
     pert = getattr(args, "perturbation", None) or "block"
-    if pert not in ("block", "force"):
+    if pert not in ("block", "force", "platform"):
         unsupported[f"--perturbation {pert}"] = True  # W's scene only (docs/robots.md)
     given = [k for k, v in unsupported.items() if v]
     if given:
@@ -453,10 +453,15 @@ def _run_robot(args, desc) -> int:
         tuple(args.block_velocity) if args.block_velocity else b.velocity_m_s,
         args.block_mass if args.block_mass is not None else b.mass_kg,
     )
-    force = None
+    force = platform = None
+    if pert != "block" and (args.block_position or args.block_velocity or args.block_mass is not None):
+        raise ScenarioError(f"--perturbation {pert} takes no --block-* options")
+    if pert == "platform":  # W's backward translation (5 cm in 0.3 s from 0.1 s); robots face +x
+        w = Scenario()
+        dx, dy = w.platform_displacement_m
+        platform = PlatformMove((-dx, dy), w.platform_start_s, w.platform_duration_s)
+        block = None
     if pert == "force":  # W's pulse (60 N from behind for 0.15 s) scaled with the robot's mass
-        if args.block_position or args.block_velocity or args.block_mass is not None:
-            raise ScenarioError("--perturbation force takes no --block-* options")
         w = Scenario()
         scale = desc.mass / total_mass_kg()
         force = ForcePulse(
@@ -470,14 +475,15 @@ def _run_robot(args, desc) -> int:
         distribution=distribution,
         block=block,
         force=force,
+        platform=platform,
         timestep_s=args.timestep,
         record_qpos=replay or video,
     )
-    summary = write_robot_outputs(out, desc, run, block, distribution, force)
+    summary = write_robot_outputs(out, desc, run, block, distribution, force, platform)
     if replay:
-        write_robot_replay(out, desc, run, block, summary)
+        write_robot_replay(out, desc, run, block, summary, platform)
     if video:
-        res = write_robot_video(out, desc, run, block, lambda s: print(s, flush=True))
+        res = write_robot_video(out, desc, run, block, lambda s: print(s, flush=True), platform)
         if res.path is None:
             print(f"video.mp4 not written: {res.reason}")
     status = "recovered" if summary["recovered"] else "fell" if run.fell else "not recovered"
@@ -486,6 +492,8 @@ def _run_robot(args, desc) -> int:
         if block is not None
         else f"force {force.force_n[0]:.1f} N for {force.duration_s:g} s"
         if force is not None
+        else f"platform {platform.distance_m:g} m in {platform.duration_s:g} s"
+        if platform is not None
         else ""
     )
     print(

@@ -14,7 +14,7 @@ import numpy as np
 from biped.files import write_text
 from biped.models.robot import RobotDescription
 from biped.outputs._json import write_json
-from biped.sim.robot import Block, ForcePulse, RobotRun, robot_plant
+from biped.sim.robot import Block, ForcePulse, PlatformMove, RobotRun, robot_plant
 from biped.viz.replay import write_replay
 from biped.viz.replay_mujoco import replay_from_mujoco
 from biped.viz.video import VideoResult, render_video
@@ -26,6 +26,7 @@ def robot_summary(
     block: Block | None,
     distribution: str,
     force: ForcePulse | None = None,
+    platform: PlatformMove | None = None,
 ) -> dict:
     """The run's numbers (SI units); ``recovered``: did not fall and its central-body COM ended
     within 1 cm of the set point horizontally."""
@@ -41,6 +42,7 @@ def robot_summary(
         "torque_limits": "model (the joints' actuatorfrcrange)",
         "block": dataclasses.asdict(block) if block is not None else None,
         "force": dataclasses.asdict(force) if force is not None else None,
+        "platform": dataclasses.asdict(platform) if platform is not None else None,
         "force_impulse_n_s": (
             run.force_impulse_n_s.tolist()
             if force is not None and run.force_impulse_n_s is not None
@@ -66,8 +68,9 @@ def write_robot_outputs(
     block,
     distribution: str,
     force: ForcePulse | None = None,
+    platform: PlatformMove | None = None,
 ) -> dict:
-    summary = robot_summary(desc, run, block, distribution, force)
+    summary = robot_summary(desc, run, block, distribution, force, platform)
     write_json(out / "summary.json", summary)
     head = "t_s,central_com_x_m,central_com_y_m,central_com_z_m,com_x_m,com_y_m,com_z_m," + ",".join(
         f"tau_{j}_n_m" for j in desc.leg_joints
@@ -79,13 +82,18 @@ def write_robot_outputs(
 
 
 def write_robot_replay(
-    out: Path, desc: RobotDescription, run: RobotRun, block: Block | None, summary: dict
+    out: Path,
+    desc: RobotDescription,
+    run: RobotRun,
+    block: Block | None,
+    summary: dict,
+    platform: PlatformMove | None = None,
 ) -> Path:
     """``replay.html``: the run (:attr:`RobotRun.qpos`, recorded with ``record_qpos``) on the plant
     it ran on, its meshes drawn, the camera on the robot's root body."""
     if run.qpos is None:
         raise ValueError("the run has no qpos record: run robot_push with record_qpos=True")
-    m = robot_plant(desc, block)
+    m = robot_plant(desc, block, None, None if platform is None else platform.axis)
     info = {
         "robot": desc.path.stem,
         "mass [kg]": desc.mass,
@@ -100,7 +108,12 @@ def write_robot_replay(
 
 
 def write_robot_video(
-    out: Path, desc: RobotDescription, run: RobotRun, block: Block | None, log
+    out: Path,
+    desc: RobotDescription,
+    run: RobotRun,
+    block: Block | None,
+    log,
+    platform: PlatformMove | None = None,
 ) -> VideoResult:
     """``video.mp4`` of the run (:attr:`RobotRun.qpos`), the tracking camera on the floating body,
     ``log`` told the frames rendered every 10 % (a robot's meshes take ~0.4 s of CPU a frame)."""
@@ -108,8 +121,9 @@ def write_robot_video(
 
     if run.qpos is None:
         raise ValueError("the run has no qpos record: run robot_push with record_qpos=True")
-    m = robot_plant(desc, block)
-    title = f"{desc.path.stem}: " + ("W's block" if block is not None else "force pulse")
+    m = robot_plant(desc, block, None, None if platform is None else platform.axis)
+    what = "W's block" if block is not None else "platform" if platform is not None else "force pulse"
+    title = f"{desc.path.stem}: {what}"
     return render_video(
         m,
         run.t,

@@ -33,21 +33,11 @@ from biped.models.robot import (
     robot_soles,
     robot_tree,
 )
-from biped.sim.early_stop import (
-    AT_REST,
-    BLOCK_SPEED_M_S,
-    BLOCK_SPIN_RAD_S,
-    BODY_SPEED_M_S,
-    BODY_SPIN_RAD_S,
-    HOLD_S,
-    JOINT_SPEED_RAD_S,
-    MARGIN,
-    REACH_FACTOR,
-)
+from biped.sim.early_stop import AT_REST
+from biped.sim.perturbations.platform import PLATFORM, PLATFORM_JOINT, PLATFORM_MASS_KG, add_platform, profile
+from biped.sim.robot_rest import BLOCK, BLOCK_JOINT, FLOOR, RobotRest
 from biped.spatial import rot_to_quat
 
-FLOOR = "robot_floor"
-BLOCK, BLOCK_JOINT = "robot_block", "robot_block_root"
 #: W Alg. 3's big-base factor on the robots: W's own. (It was 1e2 while robots stood on their
 #: keyframes' straight knees, where the legs' Jacobians are singular and 1e6 threw them at once;
 #: :mod:`biped.models.robot_pose` now crouches such legs; docs/robots.md.)
@@ -55,9 +45,6 @@ ROBOT_BIG_BASE = 1e6
 #: W's push moved onto a robot (:func:`block_for`): W's block (1.8 kg, 4.5 m/s, 0.2 m/s up,
 #: 1.2 m high against W's central-body COM at 1.035 m, 0.5 m from it), its mass scaled by the
 #: robot's mass over W's biped's (73.06 kg), its height by the central-body COM heights.
-#: Horizontal distance of the central-body COM from its set point at the end that counts as
-#: recovered [m] (docs/robots.md).
-RECOVERED_WITHIN_M = 0.01
 W_BLOCK = {"mass_kg": 1.8, "speed_m_s": 4.5, "vz_m_s": 0.2, "height_m": 1.2, "com_m": 1.035, "gap_m": 0.5}
 
 
@@ -135,13 +122,36 @@ class ForcePulse:
     shape: str = "rectangular"
 
 
+@dataclass(frozen=True)
+class PlatformMove:
+    """The floor under the robot moves by ``displacement_m`` (x, y) [m] along the trapezoidal
+    ramp-and-hold of :func:`biped.sim.perturbations.platform.profile`, from ``start_s`` for
+    ``duration_s``: W's platform (:mod:`biped.sim.perturbations.platform`, the same slab, servo
+    and feed-forward) under the robot's feet, the controller's set point riding with it."""
+
+    displacement_m: tuple
+    start_s: float
+    duration_s: float
+
+    @property
+    def distance_m(self) -> float:
+        return float(np.hypot(*self.displacement_m))
+
+    @property
+    def axis(self) -> tuple:
+        d = np.array([*self.displacement_m, 0.0])
+        n = float(np.linalg.norm(d))
+        return tuple(d / n) if n > 0 else (1.0, 0.0, 0.0)
+
+
 #: The plant's physics step: the file's, at most this [s] (the controller runs every step).
 MAX_TIMESTEP_S = 0.002
 
 
-def _pair_colliders(spec: mujoco.MjSpec, desc: RobotDescription, block: bool) -> None:
+def _pair_colliders(spec: mujoco.MjSpec, desc: RobotDescription, block: bool, floor: str = FLOOR) -> None:
     """Geoms that collide only through explicit pairs (:data:`~biped.models.robot.COLLISION_GROUP`,
-    contype and conaffinity 0) get pairs with the floor (the feet's) and the block (all)."""
+    contype and conaffinity 0) get pairs with the floor (the feet's; ``floor``, the platform's slab
+    when it is the floor) and the block (all)."""
     m = plant_model(desc)  # the file's geoms (the floor and block are added by name)
     pair_only = [
         g
@@ -156,15 +166,21 @@ def _pair_colliders(spec: mujoco.MjSpec, desc: RobotDescription, block: bool) ->
         if not name:  # a pair needs names; unnamed pair-only geoms stay inert
             continue
         if m.geom_bodyid[g] in feet:
-            spec.add_pair(geomname1=name, geomname2=FLOOR, condim=3)
+            spec.add_pair(geomname1=name, geomname2=floor, condim=3)
         if block:
             spec.add_pair(geomname1=name, geomname2=BLOCK, condim=3)
 
 
-def robot_plant(desc: RobotDescription, block: Block | None = None, timestep_s: float | None = None):
+def robot_plant(
+    desc: RobotDescription,
+    block: Block | None = None,
+    timestep_s: float | None = None,
+    platform_axis: tuple | None = None,
+):
     """The compiled plant of :func:`robot_push`: the robot's model edited at load
-    (:func:`~biped.models.robot.plant_spec`), a floor plane, and ``block`` (a free cube) if any;
-    the robot's qpos first, then the block's. Kept per process (:data:`_PLANTS`): loading a
+    (:func:`~biped.models.robot.plant_spec`), a floor plane, ``block`` (a free cube) if any, and
+    W's platform sliding along ``platform_axis`` (3,) if given; the robot's qpos first, then the
+    block's, then the platform's. Kept per process (:data:`_PLANTS`): loading a
     robot's file and meshes costs ~0.1 s, more than a second of its simulation; a plant is only
     read (each run makes its own ``MjData``)."""
     key = (
@@ -176,12 +192,13 @@ def robot_plant(desc: RobotDescription, block: Block | None = None, timestep_s: 
         desc.held_joints,
         None if block is None else (block.mass_kg, block.size_m),
         timestep_s,
+        platform_axis,
     )
     m = _PLANTS.get(key)
     if m is None:
         if len(_PLANTS) >= 8:
             _PLANTS.clear()
-        m = _PLANTS[key] = _compile_plant(desc, block, timestep_s)
+        m = _PLANTS[key] = _compile_plant(desc, block, timestep_s, platform_axis)
     return m
 
 
@@ -189,16 +206,20 @@ def robot_plant(desc: RobotDescription, block: Block | None = None, timestep_s: 
 _PLANTS: dict[tuple, mujoco.MjModel] = {}
 
 
-def _compile_plant(desc: RobotDescription, block: Block | None, timestep_s: float | None) -> mujoco.MjModel:
+def _compile_plant(
+    desc: RobotDescription, block: Block | None, timestep_s: float | None, platform_axis: tuple | None
+) -> mujoco.MjModel:
     spec = plant_spec(desc)
-    spec.worldbody.add_geom(name=FLOOR, type=mujoco.mjtGeom.mjGEOM_PLANE, size=[10, 10, 0.1])
+    floor = spec.worldbody.add_geom(name=FLOOR, type=mujoco.mjtGeom.mjGEOM_PLANE, size=[10, 10, 0.1])
     if block is not None:
         b = spec.worldbody.add_body(name=BLOCK, pos=list(block.position_m))
         b.add_freejoint(name=BLOCK_JOINT)
         b.add_geom(
             name=BLOCK, type=mujoco.mjtGeom.mjGEOM_BOX, size=[block.size_m / 2] * 3, mass=block.mass_kg
         )
-    _pair_colliders(spec, desc, block is not None)
+    if platform_axis is not None:
+        add_platform(spec, floor, platform_axis)
+    _pair_colliders(spec, desc, block is not None, FLOOR if platform_axis is None else PLATFORM)
     spec.option.timestep = timestep_s or min(spec.option.timestep, MAX_TIMESTEP_S)
     return spec.compile()
 
@@ -255,19 +276,21 @@ def robot_push(
     force: ForcePulse | None = None,
     early_stop: bool = False,
     record_qpos: bool = False,
+    platform: PlatformMove | None = None,
 ) -> RobotRun:
     """Stand the robot for ``seconds`` under W's controller, kicked by ``push_m_s`` of COM
-    velocity change at ``push_time_s`` (zero: no push) and/or hit by ``block`` (thrown at t = 0);
+    velocity change at ``push_time_s`` (zero: no push) and/or hit by ``block`` (thrown at t = 0)
+    and/or carried by the floor's ``platform`` move;
     stops early when it falls, and with ``early_stop`` when it is at rest (:class:`RobotRest`);
     ``record_qpos``: keep the plant's qpos after every step (:attr:`RobotRun.qpos`, for replays)."""
     ctrl = robot_controller(desc, distribution, torque_limits, big_base=big_base)
     q0 = standing_qpos(desc, ctrl)
     g = ctrl.link_poses(q0)[0]
     ctrl.target = Target(com=tuple(g[:3, 3]), quat=tuple(rot_to_quat(np.ascontiguousarray(g[:3, :3]))))
-    m = robot_plant(desc, block, timestep_s)
+    m = robot_plant(desc, block, timestep_s, None if platform is None else platform.axis)
     d = mujoco.MjData(m)
     tree = ctrl.tree
-    if m.nq != tree.nq + (7 if block is not None else 0):
+    if m.nq != tree.nq + (7 if block is not None else 0) + (1 if platform is not None else 0):
         raise ScenarioError("internal: the plant's qpos layout differs from the file's")
     d.qpos[: tree.nq] = q0
     if block is not None:
@@ -292,9 +315,20 @@ def robot_push(
     if force is not None:
         f0 = int(round(force.start_s / m.opt.timestep))
         f1 = f0 + max(1, int(round(force.duration_s / m.opt.timestep)))
+    target = g[:3, 3].copy()  # where the run is judged: the set point, moved with the platform
+    p0 = p1 = -1
+    if platform is not None:
+        dt = m.opt.timestep
+        p0 = int(round(platform.start_s / dt))
+        p1 = p0 + max(1, int(round(platform.duration_s / dt)))
+        pact = [m.actuator(f"{PLATFORM}_{k}").id for k in ("position", "velocity", "force")]
+        pq = int(m.jnt_qposadr[m.joint(PLATFORM_JOINT).id])
+        paxis = np.asarray(platform.axis)
+        target[:2] += platform.distance_m * paxis[:2]
     fell_at = None
-    rest = RobotRest(m, desc, block is not None, g[:3, 3]) if early_stop else None
-    over = max(kick if np.any(push_m_s) else 0, f1 + 1)
+    others = [int(m.jnt_dofadr[m.joint(PLATFORM_JOINT).id])] if platform is not None else []
+    rest = RobotRest(m, desc, block is not None, target, others) if early_stop else None
+    over = max(kick if np.any(push_m_s) else 0, f1 + 1, p1 + 1)
     stopped = None
     for i in range(n):
         if i == kick and np.any(push_m_s):
@@ -309,6 +343,13 @@ def robot_push(
                 d.xfrc_applied[rb, :3] = f
                 d.xfrc_applied[rb, 3:] = np.cross(p - d.xipos[rb], f)
                 impulse += f * m.opt.timestep
+        if p0 <= i <= p1:  # the platform's references (biped.sim.perturbations.platform), mid-step
+            assert platform is not None
+            tm = (i - p0 + 0.5) * dt if i < p1 else (p1 - p0) * dt
+            x, v, a = profile(tm, platform.distance_m, (p1 - p0) * dt)
+            d.ctrl[pact] = (float(x), float(v), PLATFORM_MASS_KG * float(a))
+            moved = d.qpos[pq] if i < p1 else platform.distance_m  # the set point rides with it
+            ctrl.target.array[:2] = g[:2, 3] + moved * paxis[:2]
         u = ctrl.torques(d.qpos[: tree.nq], d.qvel[: tree.nv])  # the robot's own layout comes first
         tau[i] = u
         d.ctrl[legs] = u
@@ -341,78 +382,10 @@ def robot_push(
         lim,
         fell_at is not None,
         fell_at,
-        g[:3, 3].copy(),
+        target,
         desc.mass,
         bv,
         impulse,
         reason,
         qpos,
     )
-
-
-class RobotRest:
-    """:mod:`biped.sim.early_stop`'s "at rest" rule on a robot's run, checked every physics step:
-    a run may end as recovered once, for :data:`~biped.sim.early_stop.HOLD_S` of simulated time
-    after its perturbation is over (a kick's row, a force pulse's end), the block (if any) is
-    still or out of the robot's reach (:meth:`_block_done`), the floating body moves slower than
-    ``BODY_SPEED_M_S`` and spins slower than ``BODY_SPIN_RAD_S``, every leg joint is slower than
-    ``JOINT_SPEED_RAD_S``, and the central-body COM is within ``MARGIN`` x the robot's recovery
-    tolerance (:data:`RECOVERED_WITHIN_M`, horizontal) of its set point. The robot's controller
-    is state feedback on a fixed set point and the scene's inputs are then constant, so the rest
-    of the run cannot change the outcome; docs/robots.md lists the grids rerun with and without
-    the rule."""
-
-    def __init__(self, m: mujoco.MjModel, desc: RobotDescription, block: bool, target: np.ndarray):
-        self.dt = float(m.opt.timestep)
-        self.hold = max(1, round(HOLD_S / self.dt))
-        self.target = np.asarray(target[:2], float).copy()
-        root = m.body(desc.root)
-        self.root = int(root.id)
-        self.gravity = float(-m.opt.gravity[2])
-        j = int(root.jntadr[0])
-        self.lin = int(m.jnt_dofadr[j])
-        self.legs = np.array([m.jnt_dofadr[m.joint(n).id] for n in robot_tree(desc).joint_names])
-        self.block = block
-        if block:
-            bj = m.joint(BLOCK_JOINT)
-            self.bq, self.bv = int(bj.qposadr[0]), int(bj.dofadr[0])
-            g = [k for k in range(m.ngeom) if m.geom_bodyid[k] != 0 and m.geom_bodyid[k] != m.body(BLOCK).id]
-            self.geoms = np.array(g)
-            half = float(m.geom_size[m.geom(BLOCK).id, 0])  # the cube's half edge
-            self.block_half_diag, self.block_rest_z = float(np.sqrt(3.0)) * half, half
-            self.block_inertia_per_mass = (2.0 * half) ** 2 / 6.0  # a cube's I / m
-            self.friction = float(m.geom_friction[m.geom(FLOOR).id, 0])
-            self.reach: float | None = None
-        self.count = 0
-
-    def _block_done(self, d: mujoco.MjData) -> bool:
-        """The block cannot touch the robot again: it is still, or farther from the robot's COM
-        than the robot's reach plus its half diagonal plus twice the distance its energy could
-        carry it against floor friction (:mod:`biped.sim.early_stop`, condition 1)."""
-        v, w = d.qvel[self.bv : self.bv + 3], d.qvel[self.bv + 3 : self.bv + 6]
-        if float(v @ v) < BLOCK_SPEED_M_S**2 and float(w @ w) < BLOCK_SPIN_RAD_S**2:
-            return True
-        c = d.subtree_com[self.root, :2]
-        if self.reach is None:  # the robot's geoms' farthest bounding sphere from its COM
-            self.reach = float(np.max(np.linalg.norm(d.geom_xpos[self.geoms, :2] - c, axis=1)))
-        p = d.qpos[self.bq : self.bq + 3]
-        g = self.gravity
-        e = float(v @ v) + self.block_inertia_per_mass * float(w @ w)
-        e += 2.0 * g * max(float(p[2]) - self.block_rest_z, 0.0)
-        travel = REACH_FACTOR * e / (2.0 * self.friction * g)
-        return float(np.linalg.norm(p[:2] - c)) > self.reach + self.block_half_diag + travel
-
-    def update(self, d: mujoco.MjData, central_com: np.ndarray, over: bool) -> bool:
-        """Count this step toward the hold; True when the run may stop after it."""
-        v = d.qvel
-        lin, ang = v[self.lin : self.lin + 3], v[self.lin + 3 : self.lin + 6]
-        rest = (
-            over
-            and float(lin @ lin) < BODY_SPEED_M_S**2
-            and float(ang @ ang) < BODY_SPIN_RAD_S**2
-            and float(np.max(np.abs(v[self.legs]))) < JOINT_SPEED_RAD_S
-            and float(np.linalg.norm(central_com[:2] - self.target)) < MARGIN * RECOVERED_WITHIN_M
-            and (not self.block or self._block_done(d))
-        )
-        self.count = self.count + 1 if rest else 0
-        return self.count >= self.hold

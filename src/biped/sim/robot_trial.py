@@ -11,7 +11,9 @@ biped) moved onto the robot (:func:`biped.sim.robot.robot_push`), measured into 
 - **Force**: the scenario's pulse (``force_n``, ``force_start_s``, ``force_duration_s``,
   ``force_shape``) at the midpoint of the robot's hip joints on its floating body
   (:class:`~biped.sim.robot.ForcePulse`; W's ``force_point_m = "pelvis"``).
-- Platform translations and lean-and-release are refused (:func:`check_robot_scenario`).
+- **Platform**: W's support-surface translation under the robot's feet
+  (:class:`~biped.sim.robot.PlatformMove`), its size W's (displacement, peak velocity).
+- Lean-and-release and the waist pull are refused (:func:`check_robot_scenario`).
 
 The robot's controller is W's with the QP by default, the limits the sweep's ``torque_limits``
 (``"model"``: the joints' ``actuatorfrcrange``). Survived: the central-body COM never 0.15 m below
@@ -31,21 +33,22 @@ import numpy as np
 from biped.errors import ScenarioError
 from biped.models.robot import RobotDescription, robot_for
 from biped.sim.robot import (
-    RECOVERED_WITHIN_M,
     Block,
     ForcePulse,
+    PlatformMove,
     RobotRun,
     block_for,
     robot_controller,
     robot_push,
     standing_qpos,
 )
+from biped.sim.robot_rest import RECOVERED_WITHIN_M
 from biped.sim.sweep.record import Measured
 from biped.sim.sweep.spec import TrialSetup
 from biped.sim.sweep.trial import ballistic_impulse
 
 #: Perturbations a robot takes.
-ROBOT_PERTURBATIONS = ("block", "force")
+ROBOT_PERTURBATIONS = ("block", "force", "platform")
 
 
 def check_robot_scenario(scenario) -> None:
@@ -53,8 +56,8 @@ def check_robot_scenario(scenario) -> None:
     s = scenario
     if s.perturbation not in ROBOT_PERTURBATIONS:
         raise ScenarioError(
-            f"perturbation {s.perturbation!r} is not available on robots (it needs W's scene: a "
-            f"platform body, a lean pose solver); valid on robots: {', '.join(ROBOT_PERTURBATIONS)}"
+            f"perturbation {s.perturbation!r} is not available on robots (it needs W's scene: "
+            f"a lean pose solver, the pelvis cable); valid on robots: {', '.join(ROBOT_PERTURBATIONS)}"
         )
     if s.controller != "workspace":
         raise ScenarioError(f"controller {s.controller!r} is not available on robots; valid: 'workspace'")
@@ -103,6 +106,10 @@ def run_robot(setup: TrialSetup) -> RobotRun:
             float(sc.block_mass_kg),
             float(sc.block_size_m[0]),
         )
+    elif sc.perturbation == "platform":
+        kw["platform"] = PlatformMove(
+            tuple(sc.platform_displacement_m), sc.platform_start_s, sc.platform_duration_s
+        )
     else:
         kw["force"] = ForcePulse(tuple(sc.force_n), sc.force_start_s, sc.force_duration_s, sc.force_shape)
     return robot_push(
@@ -120,10 +127,17 @@ def run_robot_trial(setup: TrialSetup) -> dict[str, Any]:
     sc, tr = setup.scenario, setup.trial
     run = run_robot(setup)
     desc, c = _robot(setup.robot)
+    size = None
     if sc.perturbation == "block":
         assert run.block_velocity is not None
         J, t_hit = ballistic_impulse(run.t, run.block_velocity, sc.block_mass_kg)
         magnitude, unit = tr.speed_m_s, "m/s"
+    elif sc.perturbation == "platform":  # W's platform's size (peak velocity; no impulse applied)
+        from biped.sim.perturbations import of
+
+        size = of(sc).size(desc.mass)
+        J, t_hit = np.full(3, math.nan), sc.platform_start_s
+        magnitude, unit = size.magnitude, size.unit
     else:
         J, t_hit = np.asarray(run.force_impulse_n_s, float), sc.force_start_s
         magnitude, unit = float(np.hypot(sc.force_n[0], sc.force_n[1])), "N"
@@ -150,7 +164,7 @@ def run_robot_trial(setup: TrialSetup) -> dict[str, Any]:
         paradigm_unit=unit,
         push_direction_deg=float(tr.direction_deg),
         horizontal_impulse_n_s=jh,
-        com_velocity_change_m_s=jh / desc.mass,
+        com_velocity_change_m_s=jh / desc.mass if size is None else size.com_velocity_change_m_s,
         stop_reason=run.stop_reason,
         stopped_at_s=float(run.t[-1]) if run.stop_reason is not None and len(run.t) else math.nan,
     ).row()

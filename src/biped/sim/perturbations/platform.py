@@ -78,6 +78,45 @@ def profile(t: np.ndarray | float, distance: float, duration: float) -> tuple:
     return x, vel, acc
 
 
+def add_platform(spec: mujoco.MjSpec, floor, axis) -> None:
+    """The platform (module docstring) added to ``spec``: the slab on its slide joint along
+    ``axis`` (3,) and its three actuators; the scene's ``floor`` geom stops colliding and is drawn
+    under the slab."""
+    floor.contype, floor.conaffinity = 0, 0  # the platform is the floor
+    floor.pos = [0.0, 0.0, -0.101]  # drawn under the slab, not through its top
+    body = spec.worldbody.add_body(name=PLATFORM, pos=[0.0, 0.0, 0.0])
+    body.add_joint(name=PLATFORM_JOINT, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=[float(a) for a in axis])
+    h = PLATFORM_HALF_M
+    body.add_geom(
+        name=PLATFORM,
+        type=mujoco.mjtGeom.mjGEOM_BOX,
+        size=[h, h, 0.05],
+        pos=[0.0, 0.0, -0.05],
+        mass=PLATFORM_MASS_KG,
+        rgba=[0.45, 0.55, 0.7, 1.0],
+        contype=1,
+        conaffinity=1,
+    )
+    w = 2 * math.pi * _SERVO_HZ
+    kp, kv = PLATFORM_MASS_KG * w**2, 2 * PLATFORM_MASS_KG * w
+    t = mujoco.mjtTrn.mjTRN_JOINT
+    for name, gain, bias in (
+        ("position", [kp], [0.0, -kp, 0.0]),
+        ("velocity", [kv], [0.0, 0.0, -kv]),
+        ("force", [1.0], [0.0, 0.0, 0.0]),
+    ):
+        spec.add_actuator(
+            name=f"{PLATFORM}_{name}",
+            target=PLATFORM_JOINT,
+            trntype=t,
+            gaintype=mujoco.mjtGain.mjGAIN_FIXED,
+            biastype=mujoco.mjtBias.mjBIAS_AFFINE if name != "force" else mujoco.mjtBias.mjBIAS_NONE,
+            gainprm=gain + [0.0] * 9,
+            biasprm=bias + [0.0] * 7,
+            ctrllimited=0,
+        )
+
+
 def ramp_rows(scenario) -> tuple[int, int]:
     """(first row, the row of the ramp's end) of the platform's move on control periods."""
     k0 = round(scenario.platform_start_s * scenario.control_rate_hz)
@@ -136,40 +175,7 @@ class Platform(Perturbation):
         super().edit_spec(spec)
         from biped.sim.scene import FLOOR
 
-        floor = spec.geom(FLOOR)
-        floor.contype, floor.conaffinity = 0, 0  # the platform is the floor
-        floor.pos = [0.0, 0.0, -0.101]  # drawn under the slab, not through its top
-        body = spec.worldbody.add_body(name=PLATFORM, pos=[0.0, 0.0, 0.0])
-        body.add_joint(name=PLATFORM_JOINT, type=mujoco.mjtJoint.mjJNT_SLIDE, axis=list(self.axis()))
-        h = PLATFORM_HALF_M
-        body.add_geom(
-            name=PLATFORM,
-            type=mujoco.mjtGeom.mjGEOM_BOX,
-            size=[h, h, 0.05],
-            pos=[0.0, 0.0, -0.05],
-            mass=PLATFORM_MASS_KG,
-            rgba=[0.45, 0.55, 0.7, 1.0],
-            contype=1,
-            conaffinity=1,
-        )
-        w = 2 * math.pi * _SERVO_HZ
-        kp, kv = PLATFORM_MASS_KG * w**2, 2 * PLATFORM_MASS_KG * w
-        t = mujoco.mjtTrn.mjTRN_JOINT
-        for name, gain, bias in (
-            ("position", [kp], [0.0, -kp, 0.0]),
-            ("velocity", [kv], [0.0, 0.0, -kv]),
-            ("force", [1.0], [0.0, 0.0, 0.0]),
-        ):
-            spec.add_actuator(
-                name=f"{PLATFORM}_{name}",
-                target=PLATFORM_JOINT,
-                trntype=t,
-                gaintype=mujoco.mjtGain.mjGAIN_FIXED,
-                biastype=mujoco.mjtBias.mjBIAS_AFFINE if name != "force" else mujoco.mjtBias.mjBIAS_NONE,
-                gainprm=gain + [0.0] * 9,
-                biasprm=bias + [0.0] * 7,
-                ctrllimited=0,
-            )
+        add_platform(spec, spec.geom(FLOOR), self.axis())
 
     def over_row(self) -> int:
         """The ramp's end: the servo's references (and the controller's set point) hold from
