@@ -82,3 +82,70 @@ def test_step_measures_agree_with_the_feet_and_the_controller():
     assert n == 1 and not r.fell and 0.25 < length < 0.5
     assert abs(length - moved) < 0.01
     assert abs(contact - 1000 * (st["touch_down_s"] - 0.1)) <= 4.0
+
+
+def _standing_geometry(**keys):
+    """(whole-body COM, hips' midpoint) ahead of the ankles' midpoint [m] at the initial state of a
+    platform scenario with ``keys``, and the COM's height above the ankles, by MuJoCo's kinematics
+    (subtree COM of the biped's root), not the project's own COM code."""
+    import mujoco
+    import numpy as np
+
+    from biped.sim import Scenario, build_scene
+    from biped.sim.scene import initial_state
+
+    s = Scenario(perturbation="platform", platform_displacement_m=(0.01, 0.0), **keys)
+    scene = build_scene(s)
+    m = scene.model
+    d = mujoco.MjData(m)
+    d.qpos[:], _ = initial_state(scene, s)
+    mujoco.mj_forward(m, d)
+    com = d.subtree_com[m.body_rootid[scene.central_body]]
+    ankles = np.mean([d.xpos[m.body(f"{s}_ankle_1").id] for s in ("left", "right")], axis=0)
+    hips = np.mean([d.xpos[m.body(f"{s}_hip_1").id] for s in ("left", "right")], axis=0)
+    return ankles[0] - com[0], ankles[0] - hips[0], com[2] - ankles[2]  # the biped faces -x
+
+
+def test_human_stance_stands_as_people_do_and_w_crouch_does_not():
+    """HUMAN_STANCE against the cited alignment of quiet stance: the line of gravity 47-58 mm
+    (+/- 4-5) ahead of the ankle, the hip on it (-5 +/- 5 mm), the hip 6.2 +/- 1.3 cm ahead of the
+    ankle (Woodhull et al. 1985); W's crouch puts the COM twice as far forward."""
+    from biped.analysis.validate import EXPERIMENTS, HUMAN_STANCE
+
+    com, hips, height = _standing_geometry(**HUMAN_STANCE)
+    assert 0.043 <= com <= 0.063 and abs(hips - com) <= 0.01 and 0.049 <= hips <= 0.075
+    assert 0.85 < height < 0.95
+    w_com, _, _ = _standing_geometry()
+    assert w_com > 0.09  # W's initial pose: 10.3 cm
+    for key in ("platform_backward", "waist_pull"):
+        base = EXPERIMENTS[key].base
+        assert all(base[k] == v for k, v in HUMAN_STANCE.items())
+
+
+def test_waist_pull_measure_is_the_waist_carried_the_displacement():
+    """Mille's % BoS is the waist's position ahead of the ankles: the pelvis's starting offset
+    (MuJoCo kinematics of the initial state) plus the motor's travel, less the cable's stretch and
+    the pelvis's lag (under 1 cm, tests/test_pull.py), over the ankle-to-toe length."""
+    import mujoco
+    import numpy as np
+
+    from biped.analysis.validate import EXPERIMENTS, ankle_to_toe_m, run_trial
+    from biped.sim import Scenario, build_scene
+    from biped.sim.perturbations.base import pelvis_point
+    from biped.sim.scene import initial_state
+
+    exp = EXPERIMENTS["waist_pull"]
+    t = run_trial(exp, "young", 0.03)
+    assert t.survived
+    s = Scenario(neuromotor="young", **exp.base, **exp.magnitude(0.03))
+    scene = build_scene(s)
+    m = scene.model
+    d = mujoco.MjData(m)
+    d.qpos[:], _ = initial_state(scene, s)
+    mujoco.mj_kinematics(m, d)
+    cb = scene.central_body
+    waist = d.xpos[cb] + d.xmat[cb].reshape(3, 3) @ pelvis_point(m, cb)
+    ankles = np.mean([d.xpos[m.body(f"{side}_ankle_1").id] for side in ("left", "right")], axis=0)
+    expected = (ankles[0] - waist[0]) + 0.03  # the pull goes -x, the way the biped faces
+    measured = t.percent_bos / 100.0 * ankle_to_toe_m(s.model)
+    assert expected - 0.01 < measured <= expected + 0.002

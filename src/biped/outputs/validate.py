@@ -116,7 +116,11 @@ def write_validation(out: Path, results: dict[str, dict[str, Threshold]], meta: 
     figs.mkdir(exist_ok=True)
     for key, per in results.items():
         exp = EXPERIMENTS[key]
-        human = HUMAN.get(exp.human[0]) if exp.human else None
-        written.append(threshold_figure(figs / f"{key}.png", exp.title, exp.unit,
-                                        {p: (th.value, th.bound) for p, th in per.items()}, human))  # fmt: skip
+        # the first quantity with a human number (the waist pull's % BoS, not its metres), else the threshold
+        q = next((q for q in exp.human if q in HUMAN), None)
+        human = HUMAN[q] if q else None
+        field = q.split(".", 1)[1] if q else "threshold"
+        values = {p: _value(th, field) for p, th in per.items()}
+        written.append(threshold_figure(figs / f"{key}.png", exp.title, human.unit if human else exp.unit,
+                                        values, human))  # fmt: skip
     return written
