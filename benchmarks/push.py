@@ -21,7 +21,7 @@ W's 3 s run took 2066 s on a 100 MHz SGI R4000 (0.0015x real time).
 
 ``--paradigms``: instead, the compiled closed loop of each perturbation paradigm
 (docs/perturbations.md; block = W's run, force 60 N x 0.15 s, platform 5 cm in 0.3 s, release
-4 deg) on the same preset, interleaved, medians, and each one's cost over the block's
+4 deg, pull 5 cm at 0.4 m/s) on the same preset, interleaved, medians, and each one's cost over the block's
 (goal <= 1.2x).
 """
 
@@ -203,6 +203,7 @@ PARADIGM_RUNS = {
     "force": {"perturbation": "force"},
     "platform": {"perturbation": "platform", "platform_displacement_m": (0.05, 0.0)},
     "release": {"perturbation": "release", "release_lean_deg": 4.0},
+    "pull": {"perturbation": "pull", "pull_displacement_m": (-0.05, 0.0)},
 }
 
 

@@ -128,14 +128,21 @@ def test_platform_profile_is_a_ramp_and_hold():
             "duration_s": 0.3,
         },
         {"perturbation": "platform", "duration_s": 0.5},
+        {"perturbation": "platform", "duration_s": 0.25, "platform_start_s": 0.0},  # ends in the ramp
         {"perturbation": "release", "duration_s": 0.3},
     ],
 )
 def test_compiled_loop_is_the_python_loop(keys):
-    """Every paradigm runs in the compiled loop, bit for bit the Python loop's run."""
+    """Every paradigm runs in the compiled loop, bit for bit the Python loop's run, with the same
+    record of the perturbation's inputs (the platform's: applied by the compiled loop itself, its
+    driver's schedule, and rebuilt)."""
     a, _ = _run(compiled=True, **keys)
     b, _ = _run(compiled=False, **keys)
     assert np.array_equal(a.qpos, b.qpos) and np.array_equal(a.torques, b.torques)
+    ia, ib = a.extra.get("inputs"), b.extra.get("inputs")
+    assert (ia is None) == (ib is None)
+    for key in ("rows", "ctrl", "xfrc") if ia is not None else ():
+        assert ia[key].shape == ib[key].shape and np.array_equal(ia[key], ib[key]), key
 
 
 @pytest.mark.parametrize(
