@@ -51,7 +51,7 @@ from biped.sim.contact import contact_code
 from biped.sim.fused_qp import QP_TYPES, call_solve, qp_arguments, register_qp
 from biped.sim.loop_measures import record_row, row_spec
 from biped.sim.mjdata import FORCE_SIG, STEP_SIG, contact_frames, mj_function, mj_step_function, mjdata_layout
-from biped.sim.schedule import Schedule, apply_row
+from biped.sim.schedule import SCHEDULE_TYPES, Schedule, apply_row, kernel_arguments
 
 # why run_rows returned (low 3 bits of its result; the row is result >> 3)
 DONE, FELL, LAST, DIVERGED, PYTHON = 0, 1, 2, 3, 4
@@ -135,12 +135,7 @@ _SIGNATURE = types.int64(
     types.float64[::1],  # its rate step per joint [N m]
     *QP_TYPES,  # the QP distribution (when p[P_QP]): biped.sim.fused_qp
     *C_TYPES,  # its solve in C (when p[P_CSOLVE]): biped.control.daqp_c
-    types.int64[::1],  # the driver's schedule (rows p[P_SK0] to p[P_SK1]): its actuators,
-    types.float64[:, ::1],  # their values a row,
-    types.float64[::1],  # the set point's offsets a row,
-    types.float64[::1],  # its axis,
-    types.float64[::1],  # its base,
-    types.float64[::1],  # the controller's target array it writes
+    *SCHEDULE_TYPES,  # the driver's schedule (rows p[P_SK0] to p[P_SK1]): biped.sim.schedule
 )
 
 
@@ -467,20 +462,16 @@ class FusedRows:
         # run); later calls go straight to the compiled entry point, without numba's typing of
         # the arguments (~10 us a call instead of ~27 us)
         p[P_SK0], p[P_SK1], p[P_SFQ] = 1, 0, -1  # no schedule (set_schedule)
-        self._sched = (np.zeros(0, dtype=np.int64), np.zeros((1, 0)), *(np.zeros(3) for _ in range(4)))
+        self._sched = kernel_arguments(None)
         a = self._args
         _run_rows(a[0], a[1], a[2], 0, 0, *a[3:], *self._records, *self._sched)
         self._call = _run_rows.overloads[_run_rows.signatures[0]].entry_point  # type: ignore[attr-defined]
 
     def set_schedule(self, s: Schedule) -> None:
         """Apply the driver's schedule at the top of each of its rows (:mod:`biped.sim.schedule`)."""
-        arrays = (s.actuators, s.values, s.follow, s.axis, s.base, s.target)  # read live, not copied
-        for x, dtype in zip(arrays, (np.int64,) + (np.float64,) * 5, strict=True):
-            if x.dtype != dtype or not x.flags.c_contiguous:
-                raise LookupError(f"a schedule's array is not a contiguous {dtype.__name__} array")
+        self._sched = kernel_arguments(s)
         p = self._args[3]
         p[P_SK0], p[P_SK1], p[P_SFQ] = s.first, s.last, s.follow_qpos
-        self._sched = arrays
 
     def run(self, k0: int, k1: int) -> tuple[int, int]:
         a = self._args

@@ -258,7 +258,11 @@ def run_closed_loop(
         raise ScenarioError(fused_mod.refusal())
     sched = getattr(driver, "schedule", None) if fused is not None else None
     if sched is not None:  # the compiled loop applies the driver's data itself: fewer stops
-        fused.set_schedule(sched)  # type: ignore[union-attr]
+        try:
+            fused.set_schedule(sched)  # type: ignore[union-attr]
+        except LookupError:  # not of the kernel's types: the driver's Python apply at each row
+            sched = None
+    if sched is not None:
         rows_sched = events[(events >= sched.first) & (events <= sched.last)]
         events = np.union1d(events[(events < sched.first) | (events > sched.last)], sched.python_rows)
         events = events[events <= n_ctrl]

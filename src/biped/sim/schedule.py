@@ -15,7 +15,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from numba import njit
+from numba import njit, types
+
+#: The compiled loop's arguments of a schedule (:func:`biped.sim.fused._run_rows`, after its rows
+#: p[P_SK0] to p[P_SK1] and follow_qpos p[P_SFQ]): the actuators, their values a row, the set
+#: point's offsets a row, its axis, its base, the controller's target array it writes.
+SCHEDULE_TYPES = (types.int64[::1], types.float64[:, ::1], *(types.float64[::1],) * 4)
 
 
 @njit(cache=True)
@@ -64,6 +69,19 @@ class Schedule:
                   self.base, self.follow, qpos, ctrl, self.target)  # fmt: skip
 
 
+def kernel_arguments(s: Schedule | None) -> tuple:
+    """The arrays of :data:`SCHEDULE_TYPES` for ``s`` (the live arrays, not copies: the driver
+    fills ``base`` at row 0), or placeholders for no schedule; LookupError if an array is not of
+    its type."""
+    if s is None:
+        return (np.zeros(0, dtype=np.int64), np.zeros((1, 0)), *(np.zeros(3) for _ in range(4)))
+    arrays = (s.actuators, s.values, s.follow, s.axis, s.base, s.target)
+    for x, dtype in zip(arrays, (np.int64,) + (np.float64,) * 5, strict=True):
+        if x.dtype != dtype or not x.flags.c_contiguous:
+            raise LookupError(f"a schedule's array is not a contiguous {dtype.__name__} array")
+    return arrays
+
+
 def merged_inputs(inputs: list, schedule: Schedule, rows, ctrl0, xfrc0, torques, act) -> list:
     """``inputs`` (row, ctrl, xfrc_applied), recorded by the Python ``apply`` calls of a compiled
     run, with the schedule's ``rows`` (those the run reached, sorted) added as the Python loop
@@ -90,4 +108,4 @@ def merged_inputs(inputs: list, schedule: Schedule, rows, ctrl0, xfrc0, torques,
     return out
 
 
-__all__ = ["Schedule", "apply_row", "merged_inputs"]
+__all__ = ["SCHEDULE_TYPES", "Schedule", "apply_row", "kernel_arguments", "merged_inputs"]
