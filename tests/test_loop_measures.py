@@ -127,16 +127,22 @@ def test_a_block_sweep_row_carries_the_response():
 
 
 def test_sweep_row_columns_are_the_responses():
-    """sim/sweep/record.Measured repeats sim/response.Response's fields (but its onset_s) in the
-    file's column order: the same names, types and defaults, in the same order."""
+    """sim/sweep/record.Measured takes the response's columns from sim/response.ResponseMeasures
+    (one list, not a copy): Response's fields but its onset_s, with their types and defaults, in
+    order, between the trial's columns and stop_reason; the sweep file's schema has them there."""
     import dataclasses
 
-    from biped.sim.response import Response
-    from biped.sim.sweep.record import Measured
+    from biped.sim.response import Response, ResponseMeasures
+    from biped.sim.sweep.record import Measured, schema
 
+    assert issubclass(Measured, ResponseMeasures)
     want = [(f.name, f.type, f.default) for f in dataclasses.fields(Response) if f.name != "onset_s"]
+    assert [f.name for f in dataclasses.fields(Response)][0] == "onset_s"
     names = [f.name for f in dataclasses.fields(Measured)]
     i = names.index(want[0][0])
     got = [(f.name, f.type, f.default) for f in dataclasses.fields(Measured)[i : i + len(want)]]
     assert [g[:2] for g in got] == [w[:2] for w in want]
     assert all(g[2] == w[2] or (g[2] != g[2] and w[2] != w[2]) for g, w in zip(got, want, strict=True))
+    assert names[i - 1] == "com_velocity_change_m_s" and names[i + len(want)] == "stop_reason"
+    cols = schema().names
+    assert cols[cols.index("strategy") : cols.index("strategy") + len(want)] == [w[0] for w in want]

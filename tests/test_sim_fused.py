@@ -56,7 +56,7 @@ def test_cache_key_covers_the_controller_sources():
     own, extra = stamp
     # recursions, statics, buffers, spatial, distribution, fused_qp, cones, daqp_c, contact, neuromotor,
     # loop_measures
-    assert len(extra) == 11
+    assert len(extra) == 12
     assert extra[0][1] == __import__("os").stat(biped.control.recursions.__file__).st_size
 
 

@@ -42,7 +42,8 @@ def register(subparsers) -> None:
         choices=("block", "force", "platform", "release", "pull"),
         default="block",
         help="the experiment (as biped sweep): W's block (default; size: speed m/s), a force pulse "
-        "(peak N), a platform move (m) or a lean-and-release (deg); docs/perturbations.md",
+        "(peak N), a platform move (m), a lean-and-release (deg) or a waist pull (the motor's travel, m); "
+        "docs/perturbations.md",
     )
     p.add_argument(
         "--directions",
@@ -55,7 +56,7 @@ def register(subparsers) -> None:
         type=float,
         default=None,
         metavar="V",
-        help="step of the search (block 0.25 m/s, force 10 N, platform 0.01 m, release 0.5 deg)",
+        help="step of the search (block 0.25 m/s, force 10 N, platform 0.01 m, release 0.5 deg, pull 0.005 m)",
     )
     p.add_argument(
         "--min", type=float, default=None, metavar="V", help="smallest size tried (= --resolution)"
@@ -65,7 +66,7 @@ def register(subparsers) -> None:
         type=float,
         default=None,
         metavar="V",
-        help="largest size tried (block 24 m/s, force 1000 N, platform 1 m, release 14.5 deg)",
+        help="largest size tried (block 24 m/s, force 1000 N, platform 1 m, release 14.5 deg, pull 0.5 m)",
     )
     p.add_argument("--start", type=float, default=None, metavar="V", help="first size tried (the middle)")
     p.add_argument(

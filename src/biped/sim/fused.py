@@ -51,6 +51,7 @@ from biped.sim.contact import contact_code
 from biped.sim.fused_qp import QP_TYPES, call_solve, qp_arguments, register_qp
 from biped.sim.loop_measures import record_row, row_spec
 from biped.sim.mjdata import FORCE_SIG, STEP_SIG, contact_frames, mj_function, mj_step_function, mjdata_layout
+from biped.sim.schedule import SCHEDULE_TYPES, Schedule, apply_row, kernel_arguments
 
 # why run_rows returned (low 3 bits of its result; the row is result >> 3)
 DONE, FELL, LAST, DIVERGED, PYTHON = 0, 1, 2, 3, 4
@@ -68,7 +69,8 @@ P_QP, P_NLIM, P_SLOT = range(13, 16)  # the QP distribution: on, with torque-lim
 P_CSOLVE = 16  # the QP solved by daqp's C function (biped.control.daqp_c), not through objmode
 P_DELAY, P_NEURO = 17, 18  # feedback delay [periods], the neural filter on (biped.sim.neuro)
 P_FLOOR = 19  # the floor geom (biped.sim.loop_measures)
-_NP = 20
+P_SK0, P_SK1, P_SFQ = 20, 21, 22  # the driver's schedule (biped.sim.schedule): first, last row, follow_qpos
+_NP = 23
 
 _SIGNATURE = types.int64(
     types.FunctionType(STEP_SIG),  # mj_step
@@ -133,6 +135,7 @@ _SIGNATURE = types.int64(
     types.float64[::1],  # its rate step per joint [N m]
     *QP_TYPES,  # the QP distribution (when p[P_QP]): biped.sim.fused_qp
     *C_TYPES,  # its solve in C (when p[P_CSOLVE]): biped.control.daqp_c
+    *SCHEDULE_TYPES,  # the driver's schedule (rows p[P_SK0] to p[P_SK1]): biped.sim.schedule
 )
 
 
@@ -144,13 +147,15 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
     rq, rv, rcom, rtau, rbits, rfpos, rfquat, rmeas, subv, cforce, cframe, f6s, footg, limbs, xmat, scom, slin,
     nrq, nrv, nrb, nact, nalpha, nrate, soles, dims, prm, qlo, qhi,
     qa, qt, qf, qtau, qcol, qg, qav, qct, qb, qx, qwg, dqfn, dqaddr, dqres, dqsense, dqupper, dqf, dqx, dqstat,
+    sact, sval, sfol, saxis, sbase, starget,
 ):  # the arguments of _SIGNATURE, in its order
     # fmt: on
     sub, n_ctrl, cb, f0, f1 = p[P_SUB], p[P_NCTRL], p[P_CB], p[P_F0], p[P_F1]
     nj = p[P_NJ]
     nd = p[P_DELAY]
     nring = nrb.shape[0]
-    for k in range(k0, k1):
+    for k in range(k0, k1):  # the driver's inputs of row k first, as its Python apply does
+        apply_row(k, p[P_SK0], p[P_SK1], sact, sval, p[P_SFQ], saxis, sbase, sfol, dq, ctrl, starget)
         ncon = s32[p[P_NCON]]
         if ncon and s64[p[P_CPTR]] != np.uint64(p[P_CBASE]):
             return k * 8 + PYTHON  # the contacts moved: the Python loop takes over
@@ -248,7 +253,7 @@ def _key_cache_by_what_it_compiles_in() -> None:
     import biped.control.statics
     import biped.spatial
     from biped.control import daqp_c
-    from biped.sim import fused_qp, loop_measures
+    from biped.sim import fused_qp, loop_measures, schedule
 
     modules = (
         biped.control.recursions,
@@ -262,6 +267,7 @@ def _key_cache_by_what_it_compiles_in() -> None:
         contact_mod,
         biped.control.neuromotor,
         loop_measures,
+        schedule,
     )
     try:
         cache_file = _run_rows._cache._cache_file  # type: ignore[attr-defined]
@@ -455,13 +461,21 @@ class FusedRows:
         # one call through the dispatcher checks every argument against the signature (no rows
         # run); later calls go straight to the compiled entry point, without numba's typing of
         # the arguments (~10 us a call instead of ~27 us)
+        p[P_SK0], p[P_SK1], p[P_SFQ] = 1, 0, -1  # no schedule (set_schedule)
+        self._sched = kernel_arguments(None)
         a = self._args
-        _run_rows(a[0], a[1], a[2], 0, 0, *a[3:], *self._records)
+        _run_rows(a[0], a[1], a[2], 0, 0, *a[3:], *self._records, *self._sched)
         self._call = _run_rows.overloads[_run_rows.signatures[0]].entry_point  # type: ignore[attr-defined]
+
+    def set_schedule(self, s: Schedule) -> None:
+        """Apply the driver's schedule at the top of each of its rows (:mod:`biped.sim.schedule`)."""
+        self._sched = kernel_arguments(s)
+        p = self._args[3]
+        p[P_SK0], p[P_SK1], p[P_SFQ] = s.first, s.last, s.follow_qpos
 
     def run(self, k0: int, k1: int) -> tuple[int, int]:
         a = self._args
-        code = self._call(a[0], a[1], a[2], k0, k1, *a[3:], *self._records)
+        code = self._call(a[0], a[1], a[2], k0, k1, *a[3:], *self._records, *self._sched)
         if self._qp is not None:  # the C solve's status and fallback counts onto the ContactQP
             sync_status(self._qp, self._qstat)
         return code >> 3, code & 7

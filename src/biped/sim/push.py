@@ -50,6 +50,7 @@ from biped.sim.policies import (  # noqa: F401 - offered here too, as before the
 )
 from biped.sim.scenario import Scenario
 from biped.sim.scene import Scene, build_scene, initial_state, tilt_quat
+from biped.sim.schedule import merged_inputs
 
 _BADQACC = int(mujoco.mjtWarning.mjWARN_BADQACC)
 
@@ -255,6 +256,17 @@ def run_closed_loop(
         fused = fused_mod.fused_rows(scene, scenario, policy, m, d, monitor, records)
     if compiled and fused is None:
         raise ScenarioError(fused_mod.refusal())
+    sched = getattr(driver, "schedule", None) if fused is not None else None
+    if sched is not None:  # the compiled loop applies the driver's data itself: fewer stops
+        try:
+            fused.set_schedule(sched)  # type: ignore[union-attr]
+        except LookupError:  # not of the kernel's types: the driver's Python apply at each row
+            sched = None
+    if sched is not None:
+        rows_sched = events[(events >= sched.first) & (events <= sched.last)]
+        events = np.union1d(events[(events < sched.first) | (events > sched.last)], sched.python_rows)
+        events = events[events <= n_ctrl]
+        ctrl0, xfrc0 = d.ctrl.copy(), d.xfrc_applied.copy()
     synced = 0  # rows [0, synced) went through the monitor
     chunk = progress_every if progress is not None else 10 * progress_every  # rows a call
     stopper = EarlyStop(scenario, scene, records, policy, driver) if early_stop_applies(scenario) else None
@@ -347,6 +359,10 @@ def run_closed_loop(
     if fused is not None and synced < rows:
         fused_mod.sync_monitor(monitor, bits, com, period, synced, rows, d)
     contacts[:] = (bits[:, None] >> np.arange(len(SOLE_GEOMS))) & 1
+    if sched is not None:  # the inputs of the rows the compiled loop applied, as Python records them
+        inputs = merged_inputs(
+            inputs, sched, rows_sched[rows_sched < rows].tolist(), ctrl0, xfrc0, torques, act
+        )
     wall = time.perf_counter() - t0
     if progress is not None:
         progress(max(rows - 1, 0) * period)

@@ -57,10 +57,15 @@ _PLANES = {
 
 
 @dataclass(frozen=True)
-class Response:
-    """The response measures of one run (SI units, world frame, times from the run's start)."""
-
+class _Onset:
     onset_s: float = math.nan
+
+
+@dataclass(frozen=True)
+class ResponseMeasures:
+    """The response measures of one run but its onset: the columns a sweep row takes from it
+    (:class:`biped.sim.sweep.record.Measured` derives from this class, so they are one list)."""
+
     strategy: str = ""
     strategy_torque: str = ""
     strategy_agree: bool = False
@@ -84,6 +89,12 @@ class Response:
     step_needed: bool = False
     step_length_m: float = math.nan
     time_to_foot_contact_s: float = math.nan
+
+
+@dataclass(frozen=True)
+class Response(ResponseMeasures, _Onset):
+    """The response measures of one run (SI units, world frame, times from the run's start): the
+    onset (its first field, from :class:`_Onset`), then :class:`ResponseMeasures`'s."""
 
     def to_dict(self) -> dict:
         return asdict(self)

@@ -15,6 +15,9 @@ at four places, and nowhere else:
    paradigm's own actuators, the controller's target) that hold until the next such row. Both the
    Python loop and the compiled loop of :func:`biped.sim.push.run_closed_loop` call it at the same
    rows (the compiled loop stops before each), so the two loops stay bit for bit the same.
+   A driver whose inputs are data (:class:`biped.sim.schedule.Schedule`, :attr:`Driver.schedule`:
+   fixed ctrl values a row, the set point riding with a joint) has the compiled loop apply them
+   itself; it then stops only at the schedule's ``python_rows``.
 
 Every paradigm but the block starts from quiet stance: the soles on the floor (W's pose starts
 them 5 mm up) and, with W's workspace controller, its set point moved to the starting pose at row
@@ -36,6 +39,7 @@ import numpy as np
 if TYPE_CHECKING:
     from biped.sim.scenario import Scenario
     from biped.sim.scene import Scene
+    from biped.sim.schedule import Schedule
 
 #: Where the block waits when another paradigm runs: off the floor's far corner, not colliding,
 #: its weight compensated (gravcomp), so it costs no contacts and never moves; not drawn.
@@ -47,6 +51,8 @@ class Driver:
     indices), :meth:`apply` is called before that row's physics steps."""
 
     rows: np.ndarray = np.zeros(0, dtype=np.int64)
+    #: its inputs on a span of rows as data, which the compiled loop applies itself (None: none)
+    schedule: Schedule | None = None
     #: the set point the run ends at, (COM (3,), quaternion (4,)), when the paradigm moves it
     #: (the recovery is judged against it); None: the scenario's
     final_target: tuple | None = None

@@ -22,8 +22,9 @@ pose; :mod:`biped.sim.perturbations.base`).
 Drive: a stiff servo, not a teleported pose. Three actuators on the slide joint: a position
 servo (kp = M w^2, w = 2 pi 15 Hz) and a velocity servo (kv = 2 M w) that MuJoCo evaluates at
 every physics step, and a motor carrying the feed-forward force ``M a(t)``. The references are
-set each control period during the ramp (:meth:`PlatformDriver.apply`); after it they hold the
-end position with no Python in the loop.
+set each control period during the ramp, from a table computed once (the driver's
+:class:`~biped.sim.schedule.Schedule`, which the compiled loop applies without returning to
+Python); after it they hold the end position.
 """
 
 from __future__ import annotations
@@ -42,6 +43,7 @@ from biped.sim.perturbations.base import (
     workspace_controller,
     world_direction_deg,
 )
+from biped.sim.schedule import Schedule
 
 PLATFORM = "platform"
 PLATFORM_JOINT = "platform_slide"
@@ -126,8 +128,10 @@ def ramp_rows(scenario) -> tuple[int, int]:
 class PlatformDriver(Driver):
     """Sets the servo's references each control period of the ramp. With W's workspace
     controller, it also moves the controller's COM set point with the platform (by the platform's
-    own measured displacement, each period of the ramp): the set point is where the biped wants
-    its COM over its feet, and the feet have moved."""
+    own measured displacement, each period of the ramp; by the whole move at its end): the set
+    point is where the biped wants its COM over its feet, and the feet have moved. Both are data,
+    its :attr:`schedule` (computed once), which the compiled loop applies itself; row 0 (the
+    quiet stance's set point) is Python's."""
 
     def __init__(self, scenario, model: mujoco.MjModel, controller=None, central: int = 0):
         s = scenario
@@ -136,28 +140,38 @@ class PlatformDriver(Driver):
         self.rows = np.unique(np.r_[0, np.arange(self.k0, self.k1 + 1)]).astype(np.int64)
         self.distance = math.hypot(*s.platform_displacement_m)
         self.duration = (self.k1 - self.k0) * self.period
-        self.act = [model.actuator(f"{PLATFORM}_{n}").id for n in ("position", "velocity", "force")]
+        act = [model.actuator(f"{PLATFORM}_{n}").id for n in ("position", "velocity", "force")]
         self.qadr = int(model.jnt_qposadr[model.joint(PLATFORM_JOINT).id])
         self.axis = np.array(model.jnt_axis[model.joint(PLATFORM_JOINT).id])
         self.controller = controller
         self.target0 = np.zeros(3)
         self.central = central
+        # the servo's references of each row of the ramp, at the middle of the period they hold
+        # over (the end at the last row)
+        k = np.arange(self.k1 - self.k0 + 1)
+        tm = np.where(k < self.k1 - self.k0, (k + 0.5) * self.period, self.duration)
+        x, v, a = profile(tm, self.distance, self.duration)
+        follow = np.full(len(k), np.nan)  # the set point: the platform's measured position ...
+        follow[-1] = self.distance  # ... and the whole move at the ramp's end
+        self.schedule = Schedule(
+            first=self.k0,
+            actuators=np.array(act, dtype=np.int64),
+            values=np.ascontiguousarray(np.column_stack([x, v, PLATFORM_MASS_KG * a])),
+            python_rows=np.zeros(1, dtype=np.int64),
+            follow_qpos=self.qadr if controller is not None else -1,
+            axis=self.axis.astype(float),
+            follow=follow,
+            target=controller.target.array if controller is not None else np.zeros(3),
+        )
 
     def apply(self, k: int, t: float, data: mujoco.MjData) -> None:
+        sched = self.schedule
+        assert sched is not None
         if k == 0 and self.controller is not None:  # quiet stance: hold the starting pose
             self.target0, quat = hold_here(self.controller, data, self.central)
+            sched.base[:] = self.target0
             self.final_target = (self.target0 + self.distance * self.axis, quat)
-        if not self.k0 <= k <= self.k1:
-            return
-        # the references at the middle of the period they hold over
-        tm = (k - self.k0 + 0.5) * self.period if k < self.k1 else self.duration
-        x, v, a = profile(tm, self.distance, self.duration)
-        data.ctrl[self.act[0]] = float(x)
-        data.ctrl[self.act[1]] = float(v)
-        data.ctrl[self.act[2]] = PLATFORM_MASS_KG * float(a)
-        if self.controller is not None:  # the set point rides with the feet
-            moved = data.qpos[self.qadr] if k < self.k1 else self.distance
-            self.controller.target.array[:2] = self.target0[:2] + moved * self.axis[:2]
+        sched.apply(k, data.qpos, data.ctrl)
 
 
 class Platform(Perturbation):

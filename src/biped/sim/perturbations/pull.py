@@ -76,6 +76,9 @@ class PullDriver(Driver):
         self.peak_tension = 0.0
         self.impulse = np.zeros(3)
         self.pelvis_travel = 0.0
+        # the motor end's travel and speed at each row of the pull, computed once
+        travel, speed, _ = profile(np.arange(self.k1 - self.k0 + 1) * self.period, self.length, self.duration)
+        self.motor = list(zip(travel.tolist(), speed.tolist(), strict=True))
 
     def _pelvis(self, data) -> np.ndarray:
         b = self.body
@@ -96,13 +99,14 @@ class PullDriver(Driver):
             data.xfrc_applied[b] = 0.0
             self.pelvis_travel = float((p - self.p0) @ self.u)
             return
-        travel, speed, _ = profile((k - self.k0) * self.period, self.length, self.duration)
-        e = float(travel) - float((p - self.p0) @ self.u)
-        e_dot = float(speed) - float((p - self.p_prev) @ self.u) / self.period
+        travel, speed = self.motor[k - self.k0]
+        e = travel - float((p - self.p0) @ self.u)
+        e_dot = speed - float((p - self.p_prev) @ self.u) / self.period
         tension = max(0.0, CABLE_STIFFNESS_N_M * e + CABLE_DAMPING_N_S_M * e_dot) if k > self.k0 else 0.0
         f = tension * self.u
         data.xfrc_applied[b, :3] = f
-        data.xfrc_applied[b, 3:] = np.cross(p - data.xipos[b], f)
+        (r0, r1, r2), (f0, f1, f2) = (p - data.xipos[b]).tolist(), f.tolist()
+        data.xfrc_applied[b, 3:] = (r1 * f2 - r2 * f1, r2 * f0 - r0 * f2, r0 * f1 - r1 * f0)  # np.cross's
         self.p_prev = p.copy()
         self.peak_tension = max(self.peak_tension, tension)
         self.impulse += f * self.period

@@ -12,17 +12,15 @@ from typing import Any
 
 import pyarrow as pa
 
+from biped.sim.response import ResponseMeasures
+
 # annotation (as written, ``from __future__ import annotations``) -> Arrow type name
 _ARROW = {"bool": "bool_", "float": "float64", "int": "int64", "str": "string", "str | None": "string"}
 
 
 @dataclass(frozen=True)
-class Measured:
-    """What one push trial measures (see :func:`biped.sim.sweep.trial.measure` for how).
-
-    Units in the names: ``_m``, ``_s``, ``_n_s`` (N s), ``_deg``, ``_n_m`` (N m). NaN where a
-    quantity does not apply (no block contact, not recovered, a foot never planted).
-    """
+class _Trial:
+    """The columns of :class:`Measured` before the response's: the run and the perturbation."""
 
     recovered: bool = False
     fell: bool = False
@@ -51,36 +49,25 @@ class Measured:
     step_count: int = 0  # stepping runs (scenario key stepping): steps taken
     first_step_xcom_offset_m: float = math.nan  # first step: landing beyond the XCoM at touchdown
     max_stance_slip_m: float = math.nan  # stepping: the stance sole's largest slide during a swing
-    # the perturbation (biped.sim.perturbations) and the response (biped.sim.response)
+    # the perturbation (biped.sim.perturbations); the response follows (Measured)
     paradigm: str = ""
     paradigm_magnitude: float = math.nan  # in paradigm_unit: block m/s, force N, platform m, release deg
     paradigm_unit: str = ""
     push_direction_deg: float = math.nan  # the way it pushes the body, from +x toward +y
     horizontal_impulse_n_s: float = math.nan  # block: measured; force: applied; else NaN
     com_velocity_change_m_s: float = math.nan  # the impulse / body mass; platform: its peak velocity
-    strategy: str = ""  # ankle | hip | step | fall (biped.sim.response)
-    strategy_torque: str = ""  # the second reading (hip/ankle torque ratio)
-    strategy_agree: bool = False
-    trunk_leg_correlation: float = math.nan
-    peak_trunk_change_deg: float = math.nan
-    peak_leg_change_deg: float = math.nan
-    hip_ankle_torque_ratio: float = math.nan
-    peak_com_excursion_m: float = math.nan
-    peak_com_excursion_time_s: float = math.nan
-    peak_cop_excursion_m: float = math.nan
-    peak_cop_excursion_time_s: float = math.nan
-    mos_min_m: float = math.nan
-    mos_min_time_s: float = math.nan
-    peak_hip_sagittal_n_m: float = math.nan
-    peak_knee_sagittal_n_m: float = math.nan
-    peak_ankle_sagittal_n_m: float = math.nan
-    peak_hip_frontal_n_m: float = math.nan
-    peak_ankle_frontal_n_m: float = math.nan
-    peak_hip_transverse_n_m: float = math.nan
-    time_to_rest_s: float = math.nan
-    step_needed: bool = False
-    step_length_m: float = math.nan
-    time_to_foot_contact_s: float = math.nan
+
+
+@dataclass(frozen=True)
+class Measured(ResponseMeasures, _Trial):
+    """What one push trial measures (see :func:`biped.sim.sweep.trial.measure` for how): the
+    columns of :class:`_Trial`, then the response's (:class:`biped.sim.response.ResponseMeasures`,
+    its fields and their order: one list, not a copy), then why the run ended.
+
+    Units in the names: ``_m``, ``_s``, ``_n_s`` (N s), ``_deg``, ``_n_m`` (N m). NaN where a
+    quantity does not apply (no block contact, not recovered, a foot never planted).
+    """
+
     # why the run ended before its duration ("at_rest": the early_stop rule, biped.sim.early_stop;
     # "fell", "diverged", "controller_error"), and when [s]; None / NaN: it ran to its duration
     stop_reason: str | None = None

@@ -236,7 +236,7 @@ def _perturbation_columns(result: PushResult, scene: Scene | None, block_impulse
 
     from biped.sim.loop_measures import loop_rows
     from biped.sim.perturbations import of
-    from biped.sim.response import measure_response
+    from biped.sim.response import ResponseMeasures, measure_response
 
     sc = result.scenario
     scene = scene if scene is not None else _scene_for(sc)
@@ -255,8 +255,7 @@ def _perturbation_columns(result: PushResult, scene: Scene | None, block_impulse
     # from the loop's own forward passes (biped.sim.loop_measures): a second pass over the rows
     # (measure_rows) cost ~4x an early-stopped block trial
     resp = measure_response(scene, result, loop_rows(scene, result))
-    keep = {f.name for f in fields(Measured)}
-    out.update({k: v for k, v in resp.to_dict().items() if k in keep})
+    out.update({f.name: getattr(resp, f.name) for f in fields(ResponseMeasures)})  # Measured's own
     return out
 
 
