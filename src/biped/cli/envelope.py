@@ -225,7 +225,11 @@ def _run(args) -> int:
 
         warm_up(
             kernels_for(
-                spec.base.controller, spec.base.distribution, sweep=True, stepping=spec.base.stepping
+                spec.base.controller,
+                spec.base.distribution,
+                sweep=True,
+                stepping=spec.base.stepping,
+                robot=bool(spec.robot),
             ),
             log=lambda s: print(s, file=sys.stderr),
         )

@@ -436,7 +436,11 @@ def _sweep(args, spec, out: Path, n: int, where: str, client) -> int:
 
         warm_up(
             kernels_for(
-                spec.base.controller, spec.base.distribution, sweep=True, stepping=spec.base.stepping
+                spec.base.controller,
+                spec.base.distribution,
+                sweep=True,
+                stepping=spec.base.stepping,
+                robot=bool(spec.robot),
             ),
             log=lambda line: print(line, file=sys.stderr),
             tick=sys.stderr,

@@ -57,17 +57,25 @@ _WARM: set[str] = set()
 
 
 def kernels_for(
-    controller: str, distribution: str = "statics", *, sweep: bool = False, stepping: bool = False
+    controller: str,
+    distribution: str = "statics",
+    *,
+    sweep: bool = False,
+    stepping: bool = False,
+    robot: bool = False,
 ) -> tuple[str, ...]:
     """The kernels a push run with ``controller`` (``"workspace"`` or ``"joint-pd"``) and the
     workspace controller's ``distribution`` uses; ``sweep``: and a sweep row's response
     (:mod:`biped.sim.mos`). Every run but a stepping one goes through the compiled push loop
     (:func:`biped.sim.push.run_closed_loop`), the joint PD's and the QP's too; a stepping run
-    goes through the Python loop, calling the controller's (and the QP's) kernels."""
+    goes through the Python loop, calling the controller's (and the QP's) kernels; so does a
+    ``robot`` trial (:func:`biped.sim.robot.robot_push`), which measures no response."""
+    calls = ("controller", "qp") if distribution == "qp" else ("controller",)
+    if robot:
+        return calls
     more = ("response",) if sweep else ()
     if controller != "workspace":
         return ("loop", "contact", *more)  # the joint PD runs in the compiled loop
-    calls = ("controller", "qp") if distribution == "qp" else ("controller",)
     loop = () if stepping else ("loop",)  # the loop calls the controller's kernel (and the QP's part)
     return (*calls, *loop, "contact", *more)
 
