@@ -40,6 +40,7 @@ import numpy as np
 
 from biped.control import capture as cp
 from biped.control.stepping import SteppingConfig, SteppingController
+from biped.control.workspace import Target
 from biped.errors import ScenarioError
 
 __all__ = ["StepProgram", "StepProgramConfig", "predicted_capture_point"]
@@ -67,13 +68,15 @@ class StepProgramConfig:
     delay_s: float = 0.0
     lead_s: float = 0.0
     swing_time_s: float = 0.45
-    transfer_s: float = 0.3
+    transfer_s: float = 0.1
     transfer_acc_m_s2: float = 3.0
-    kp_pos: float = 10.0
-    kv_pos: float = 4.2021
+    kp_pos: float = 60.0
+    kv_pos: float = 12.0
     give_up_s: float = 0.3
     toe_lift_deg: float = 10.0
     damping_n_m_s: float = 0.0
+    rot_gain_scale: float = 2.0
+    reaction_ff: float = 1.0
 
     def __post_init__(self):
         for f in fields(self):
@@ -104,9 +107,10 @@ class StepProgram(SteppingController):
         # single support (x4: margin 0.084 s) and COM gains after the step (margin 0.117 s)
         g = config.gains
         base = replace(base, kp_pos=pg.kp_pos, kv_pos=pg.kv_pos, swing_time_s=pg.swing_time_s,
-                       swing_rot_gain_scale=1.0, lateral_rot_gain_scale=1.0,
+                       swing_rot_gain_scale=pg.rot_gain_scale, lateral_rot_gain_scale=pg.rot_gain_scale,
                        post_step_kp_xy=g.kp_com[0], post_step_kv_xy=g.kv_com[0])  # fmt: skip
         super().__init__(config, base, joint_order, tree=tree)
+        self._central = self.model.body("central_body").id
 
     def reset(self) -> None:
         super().reset()
@@ -209,6 +213,41 @@ class StepProgram(SteppingController):
         pd, vd, _ = self._plan(el - p.delay_s, ankle_land)  # what the delayed state is compared with
         _, self._v_ff, ad = self._plan(el + p.lead_s, ankle_land)  # the feed-forward, ahead of the lag
         return self._single_support(i, qpos, qvel, omega, cop, pd, vd, ad)
+
+    def _single_support(self, i, qpos, qvel, omega, cop, pd, vd, ad):
+        """The stepping controller's single support, with the swing leg's hip torques' reaction
+        on the central body fed forward to the stance (``reaction_ff``): W's controller models the
+        free leg as a passive branch, so without it the swing's hip flexion pitches the trunk."""
+        if self.program.reaction_ff <= 0:
+            return super()._single_support(i, qpos, qvel, omega, cop, pd, vd, ad)
+        s = self.stepping
+        m, d = self.model, self.data
+        hip = d.xpos[self._hip[i]]
+        r = pd - hip
+        if np.linalg.norm(r) > s.reach_m:
+            pd = hip + r * (s.reach_m / np.linalg.norm(r))
+        tau_sw = np.array(self._swing_torques(i, pd, vd, ad))
+        moment = np.zeros(3)
+        for k in range(3):  # hip abduction, flexion, rotation: their reaction on the central body
+            j = m.dof_jntid[self._leg_dofs[i][k]]
+            moment -= tau_sw[k] * d.xaxis[j]
+        moment *= self.program.reaction_ff
+        flags = (i == 1, i == 0)
+        R = d.ximat[self._central].reshape(3, 3)
+        out = self.ctrl.compute(qpos, qvel, gains=self._swing_gains, feet_in_contact=flags)
+        X = -np.linalg.solve(out.P1, np.concatenate([np.zeros(3), R.T @ moment]))
+        acc = omega**2 * (d.subtree_com[0][:2] - cop)
+        com = np.array(self.target.com)
+        com[2] -= s.swing_height_drop_m
+        target = Target.wendlandt(com=tuple(com), tilt_deg=s.swing_tilt_deg)
+        ca = R @ X[:3]
+        target = replace(target, com_acc=(float(acc[0] + ca[0]), float(acc[1] + ca[1]), float(ca[2])),
+                         ang_acc=tuple(map(float, R @ X[3:])))  # fmt: skip
+        tau = np.array(
+            self.ctrl.torques(qpos, qvel, target=target, gains=self._swing_gains, feet_in_contact=flags)
+        )
+        tau[self._leg_tau[i]] = tau_sw
+        return self._out(tau)
 
     def _sole_low(self, i: int) -> float:
         """The height of the lowest corner of sole ``i`` above the floor [m] (a heel lifted about
