@@ -18,10 +18,16 @@ swing-foot choice, landing rule, stance control and touchdown, and changes how a
    a plan in time from the swing's start. The feed-forward acceleration is the plan's
    ``lead_s`` ahead (the activation lag: a first-order lag delays a smooth command by about its
    time constant); the feedback compares the delayed state with the plan ``delay_s`` ago (the
-   state the controller sees is that old), with gains a delayed loop tolerates
-   (:func:`biped.planar.delay.delay_margin` rules, the presets' yaw and vertical gains). The
-   landing point is the stepping controller's, from the capture point predicted ``delay_s``
-   forward by the linear inverted pendulum (``xi(t + d) = cop + (xi(t) - cop) e^(omega d)``).
+   state the controller sees is that old), with gains ``kp_pos``, ``kv_pos``. The landing point is
+   the stepping controller's, from the capture point predicted ``delay_s`` forward by the linear
+   inverted pendulum (``xi(t + d) = cop + (xi(t) - cop) e^(omega d)``). The stance: W's recursions
+   with the swing leg a passive branch, so the reaction of the swing leg's hip torques on the
+   central body is not in W's model; the program feeds it forward (``reaction_ff``): the moment
+   ``-sum(tau_k a_k)`` of the three hip joints (axes a_k) as a desired acceleration ``X =
+   -P_1^{-1} W`` (W Alg. 4's ``pddot_d``, ``wdot_d``, as the lean release holds its tether), so
+   the stance leg cancels it (an internal model of the limb, as people anticipate a limb's
+   reaction); without it the swing's hip flexion pitched the trunk 24 deg forward and the foot
+   rose instead of travelling (docs/validate.md).
 3. **touchdown**: the swing foot's contact once its sole has been seen 1 cm above the floor (a
    sliding foot's contact flicker is not a landing), or the planned swing time plus
    ``give_up_s`` after the swing's start if it never rose.
@@ -61,8 +67,15 @@ class StepProgramConfig:
     lead_s: the feed-forward's lead over the plan (the activation lag's time constant).
     transfer_s: the weight transfer's duration. transfer_acc_m_s2: its lateral feed-forward
     acceleration of the COM toward the stance foot. kp_pos, kv_pos: the swing foot's feedback
-    gains on the delayed error [1/s^2, 1/s]. give_up_s: after the planned swing time, how long a
-    foot that never rose keeps trying before double support returns.
+    gains on the delayed error [1/s^2, 1/s] (60, 12: a loop of delay margin 0.051 s with the 60 ms
+    lag, half the young delay: tolerated for a swing of 0.45 s, where (10, 4.2), margin 0.18 s,
+    left the foot 0.1-0.2 m behind its plan; docs/validate.md). give_up_s: after the planned
+    swing time, how long a foot that never rose keeps trying before double support returns.
+    toe_lift_deg: dorsiflexion added in the swing's first half. damping_n_m_s: the plant's
+    intrinsic joint damping, fed forward on the plan's joint rates. rot_gain_scale: the trunk's
+    orientation gains in single support times this (kv by its square root; 2: delay margin
+    0.127 s with the young lag, 1.27 x the young delay). reaction_ff: the share of the swing
+    leg's hip torques' reaction fed forward to the stance (1: all, 0: none, the program before).
     """
 
     delay_s: float = 0.0
@@ -103,8 +116,9 @@ class StepProgram(SteppingController):
         base = stepping or SteppingConfig()
         pg = self.program
         # the stance gains a delayed loop tolerates: the scenario's own (the presets' have a delay
-        # margin of 1.8-2.2 x the young delay), not the feedback stepper's stiffer trunk gains in
-        # single support (x4: margin 0.084 s) and COM gains after the step (margin 0.117 s)
+        # margin of 1.8-2.2 x the young delay), the trunk's x rot_gain_scale in single support
+        # (2: margin 0.127 s), not the feedback stepper's x4 (margin 0.084 s) nor its COM gains
+        # after the step (margin 0.117 s)
         g = config.gains
         base = replace(base, kp_pos=pg.kp_pos, kv_pos=pg.kv_pos, swing_time_s=pg.swing_time_s,
                        swing_rot_gain_scale=pg.rot_gain_scale, lateral_rot_gain_scale=pg.rot_gain_scale,
