@@ -73,8 +73,9 @@ class StepProgramConfig:
     swing time, how long a foot that never rose keeps trying before double support returns.
     toe_lift_deg: dorsiflexion added in the swing's first half. damping_n_m_s: the plant's
     intrinsic joint damping, fed forward on the plan's joint rates. rot_gain_scale: the trunk's
-    orientation gains in single support times this (kv by its square root; 2: delay margin
-    0.127 s with the young lag, 1.27 x the young delay). reaction_ff: the share of the swing
+    orientation gains in single support times this (kv by its square root; 1: the preset's, delay
+    margin 0.176 s with the young lag; 2 (margin 0.127 s) moved the young threshold by 0.04 deg,
+    the feedback stepper's 4 has 0.084 s, below the delay). reaction_ff: the share of the swing
     leg's hip torques' reaction fed forward to the stance (1: all, 0: none, the program before).
     """
 
@@ -88,7 +89,7 @@ class StepProgramConfig:
     give_up_s: float = 0.3
     toe_lift_deg: float = 10.0
     damping_n_m_s: float = 0.0
-    rot_gain_scale: float = 2.0
+    rot_gain_scale: float = 1.0
     reaction_ff: float = 1.0
 
     def __post_init__(self):
@@ -116,9 +117,9 @@ class StepProgram(SteppingController):
         base = stepping or SteppingConfig()
         pg = self.program
         # the stance gains a delayed loop tolerates: the scenario's own (the presets' have a delay
-        # margin of 1.8-2.2 x the young delay), the trunk's x rot_gain_scale in single support
-        # (2: margin 0.127 s), not the feedback stepper's x4 (margin 0.084 s) nor its COM gains
-        # after the step (margin 0.117 s)
+        # margin of 1.8-2.2 x the young delay; the trunk's x rot_gain_scale in single support), not
+        # the feedback stepper's trunk x4 (margin 0.084 s) nor its COM gains after the step
+        # (margin 0.117 s)
         g = config.gains
         base = replace(base, kp_pos=pg.kp_pos, kv_pos=pg.kv_pos, swing_time_s=pg.swing_time_s,
                        swing_rot_gain_scale=pg.rot_gain_scale, lateral_rot_gain_scale=pg.rot_gain_scale,
