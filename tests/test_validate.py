@@ -149,3 +149,34 @@ def test_waist_pull_measure_is_the_waist_carried_the_displacement():
     expected = (ankles[0] - waist[0]) + 0.03  # the pull goes -x, the way the biped faces
     measured = t.percent_bos / 100.0 * ankle_to_toe_m(s.model)
     assert expected - 0.01 < measured <= expected + 0.002
+
+
+def test_step_measures_skip_a_contact_flicker_and_a_mid_swing_scuff():
+    """A made-up stepping foot (500 Hz rows): released at 0.1 s, it loses the floor for 10 ms at
+    0.30 s (1 cm up: a flicker), is off the floor from 0.36 s, scuffs it for 10 ms at 0.50 s and
+    lands at 0.70 s, moving 1 m/s forward from 0.36 s: the landing is the 0.70 s contact, 600 ms
+    after the release, 0.34 m from where the foot stood (the closed form of the made-up path)."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from biped.analysis.validate import _step_measures
+
+    t = np.arange(0.0, 1.2, 0.002)
+    on = np.ones(len(t), dtype=bool)
+    z = np.zeros(len(t))
+    flick = (t >= 0.30 - 1e-9) & (t < 0.31 - 1e-9)
+    on[flick], z[flick] = False, 0.02
+    air = (t >= 0.36 - 1e-9) & (t < 0.70 - 1e-9)
+    on[air], z[air] = False, 0.05
+    on[(t >= 0.50 - 1e-9) & (t < 0.51 - 1e-9)] = True  # the scuff
+    x = np.clip(t - 0.36, 0.0, 0.34)  # forward, m
+    feet = np.zeros((len(t), 2, 3))
+    feet[:, 1, 0], feet[:, 1, 2] = -x, z  # the right foot steps; the biped faces -x
+    r = SimpleNamespace(times=t, feet_pos=feet, left_contact=np.ones(len(t), dtype=bool), right_contact=on,
+                        extra={"steps": [{"foot": "right", "start_s": 0.2}]})  # fmt: skip
+    s = SimpleNamespace(control_rate_hz=500.0, perturbation="release", release_time_s=0.1)
+    n, length, contact = _step_measures(r, s)
+    assert n == 1
+    assert abs(contact - 600.0) < 1e-6, contact
+    assert abs(length - 0.34) < 1e-9, length

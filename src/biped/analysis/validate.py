@@ -159,6 +159,7 @@ class Experiment:
     lo: float
     hi: float
     human: tuple = ()
+    preset_keys: dict = field(default_factory=dict)  # preset -> extra scenario keys of its protocol
 
 
 def _ankle_release(lean: float) -> dict:
@@ -238,8 +239,9 @@ EXPERIMENTS = {
         "forward lean and release, one step (Wojcik et al. 1999)",
         "leaning forward straight about the ankles, held by a horizontal tether at the pelvis, "
         "released without warning at 0.1 s, with capture-point stepping (stepping = true, at most one "
-        "step, the QP distribution) on a floor of friction 1.0 (a shod foot on a dry floor; the tether "
-        "needs about tan(lean) of the weight in friction); the largest lean recovered with at most one step",
+        "step, the QP distribution; the young and older presets with the step program) on a floor of "
+        "friction 1.0 (a shod foot on a dry floor; the tether needs about tan(lean) of the weight in "
+        "friction); the largest lean recovered with at most one step",
         {
             "friction": 1.0,
             "duration_s": 2.5,
@@ -254,6 +256,9 @@ EXPERIMENTS = {
         2.0,
         40.0,
         ("step_release.lean_deg", "step_release.step_length_m", "step_release.contact_ms"),
+        # the presets with a nervous system step with the step program (planned for a delayed,
+        # lagged plant); W's ideal controller with the feedback stepper (docs/validate.md)
+        {p: {"step_program": "program"} for p in ("young", "older")},
     ),
     "waist_pull": Experiment(
         "waist_pull",
@@ -339,7 +344,9 @@ def _ankle_measures(r, scenario: Scenario) -> tuple[float, float, float]:
 
 def run_trial(exp: Experiment, neuromotor: str, magnitude: float) -> Trial:
     """One trial of ``exp`` at ``magnitude`` with the ``neuromotor`` preset."""
-    s = Scenario(neuromotor=neuromotor, **exp.base, **exp.magnitude(magnitude))
+    s = Scenario(
+        neuromotor=neuromotor, **exp.base, **exp.preset_keys.get(neuromotor, {}), **exp.magnitude(magnitude)
+    )
     scene = build_scene(s)
     t = time.perf_counter()
     r = simulate(s, scene=scene)
@@ -358,9 +365,14 @@ def run_trial(exp: Experiment, neuromotor: str, magnitude: float) -> Trial:
                  motion, wall, bos, n_steps, length, contact)  # fmt: skip
 
 
+#: A landing is a contact of the stepping foot that lasts this long [s].
+LANDING_S = 0.03
+
+
 def _step_measures(r, scenario: Scenario) -> tuple[int, float, float]:
-    """(steps taken, the first step's foot horizontal displacement from the start to its first
-    contact after it rose 1 cm [m], the time from the release to that contact [ms]) from MuJoCo's
+    """(steps taken, the first step's foot horizontal displacement from the start to its landing
+    (its first contact lasting :data:`LANDING_S` after the sole rose 1 cm off the floor) [m], the
+    time from the release to that contact [ms]) from MuJoCo's
     recorded foot poses and sole contacts (not the controller's delayed view); NaN when the foot
     never rose 1 cm or never came down."""
     steps = r.extra.get("steps") or []
@@ -371,13 +383,26 @@ def _step_measures(r, scenario: Scenario) -> tuple[int, float, float]:
     n = len(r.times)
     k_up = int(np.searchsorted(r.times, steps[0]["start_s"]))
     m = min(n, len(r.feet_pos))
-    up = np.flatnonzero(r.feet_pos[k_up:m, i, 2] > r.feet_pos[0, i, 2] + 0.01)  # lifted 1 cm
-    if not len(up):  # a heel or toe flicker is not a step
+    hold = max(1, round(LANDING_S * scenario.control_rate_hz))
+
+    def lasting(flags) -> np.ndarray:  # the rows that start a run of `hold` True rows
+        f = np.asarray(flags, dtype=np.int64)
+        if len(f) < hold:
+            return np.zeros(0, dtype=np.int64)
+        return np.flatnonzero(np.convolve(f, np.ones(hold, dtype=np.int64), mode="valid") == hold)
+
+    # the lift: the sole off the floor and 1 cm up for LANDING_S (a heel raised about the toe or
+    # a contact flicker is not a step); the landing: the first contact after it lasting LANDING_S
+    # (a toe scuffing the floor mid-swing is not one)
+    on_k = on[k_up:m].astype(bool)
+    up = lasting((r.feet_pos[k_up:m, i, 2] > r.feet_pos[0, i, 2] + 0.01) & ~on_k)
+    if not len(up):
         return len(steps), math.nan, math.nan
-    back = np.flatnonzero(on[k_up + up[0] : m])
+    k0 = k_up + int(up[0])
+    back = lasting(on[k0:m].astype(bool))
     if not len(back):
         return len(steps), math.nan, math.nan
-    k = k_up + int(up[0]) + int(back[0])
+    k = k0 + int(back[0])
     length = float(np.linalg.norm(r.feet_pos[k, i, :2] - r.feet_pos[0, i, :2]))
     t0 = getattr(scenario, "release_time_s", 0.0) if scenario.perturbation == "release" else 0.0
     return len(steps), length, 1000.0 * (float(r.times[k]) - t0)

@@ -18,10 +18,16 @@ swing-foot choice, landing rule, stance control and touchdown, and changes how a
    a plan in time from the swing's start. The feed-forward acceleration is the plan's
    ``lead_s`` ahead (the activation lag: a first-order lag delays a smooth command by about its
    time constant); the feedback compares the delayed state with the plan ``delay_s`` ago (the
-   state the controller sees is that old), with gains a delayed loop tolerates
-   (:func:`biped.planar.delay.delay_margin` rules, the presets' yaw and vertical gains). The
-   landing point is the stepping controller's, from the capture point predicted ``delay_s``
-   forward by the linear inverted pendulum (``xi(t + d) = cop + (xi(t) - cop) e^(omega d)``).
+   state the controller sees is that old), with gains ``kp_pos``, ``kv_pos``. The landing point is
+   the stepping controller's, from the capture point predicted ``delay_s`` forward by the linear
+   inverted pendulum (``xi(t + d) = cop + (xi(t) - cop) e^(omega d)``). The stance: W's recursions
+   with the swing leg a passive branch, so the reaction of the swing leg's hip torques on the
+   central body is not in W's model; the program feeds it forward (``reaction_ff``): the moment
+   ``-sum(tau_k a_k)`` of the three hip joints (axes a_k) as a desired acceleration ``X =
+   -P_1^{-1} W`` (W Alg. 4's ``pddot_d``, ``wdot_d``, as the lean release holds its tether), so
+   the stance leg cancels it (an internal model of the limb, as people anticipate a limb's
+   reaction); without it the swing's hip flexion pitched the trunk 24 deg forward and the foot
+   rose instead of travelling (docs/validate.md).
 3. **touchdown**: the swing foot's contact once its sole has been seen 1 cm above the floor (a
    sliding foot's contact flicker is not a landing), or the planned swing time plus
    ``give_up_s`` after the swing's start if it never rose.
@@ -40,6 +46,7 @@ import numpy as np
 
 from biped.control import capture as cp
 from biped.control.stepping import SteppingConfig, SteppingController
+from biped.control.workspace import Target
 from biped.errors import ScenarioError
 
 __all__ = ["StepProgram", "StepProgramConfig", "predicted_capture_point"]
@@ -60,20 +67,30 @@ class StepProgramConfig:
     lead_s: the feed-forward's lead over the plan (the activation lag's time constant).
     transfer_s: the weight transfer's duration. transfer_acc_m_s2: its lateral feed-forward
     acceleration of the COM toward the stance foot. kp_pos, kv_pos: the swing foot's feedback
-    gains on the delayed error [1/s^2, 1/s]. give_up_s: after the planned swing time, how long a
-    foot that never rose keeps trying before double support returns.
+    gains on the delayed error [1/s^2, 1/s] (60, 12: a loop of delay margin 0.051 s with the 60 ms
+    lag, half the young delay: tolerated for a swing of 0.45 s, where (10, 4.2), margin 0.18 s,
+    left the foot 0.1-0.2 m behind its plan; docs/validate.md). give_up_s: after the planned
+    swing time, how long a foot that never rose keeps trying before double support returns.
+    toe_lift_deg: dorsiflexion added in the swing's first half. damping_n_m_s: the plant's
+    intrinsic joint damping, fed forward on the plan's joint rates. rot_gain_scale: the trunk's
+    orientation gains in single support times this (kv by its square root; 1: the preset's, delay
+    margin 0.176 s with the young lag; 2 (margin 0.127 s) moved the young threshold by 0.04 deg,
+    the feedback stepper's 4 has 0.084 s, below the delay). reaction_ff: the share of the swing
+    leg's hip torques' reaction fed forward to the stance (1: all, 0: none, the program before).
     """
 
     delay_s: float = 0.0
     lead_s: float = 0.0
     swing_time_s: float = 0.45
-    transfer_s: float = 0.3
+    transfer_s: float = 0.1
     transfer_acc_m_s2: float = 3.0
-    kp_pos: float = 10.0
-    kv_pos: float = 4.2021
+    kp_pos: float = 60.0
+    kv_pos: float = 12.0
     give_up_s: float = 0.3
     toe_lift_deg: float = 10.0
     damping_n_m_s: float = 0.0
+    rot_gain_scale: float = 1.0
+    reaction_ff: float = 1.0
 
     def __post_init__(self):
         for f in fields(self):
@@ -100,13 +117,15 @@ class StepProgram(SteppingController):
         base = stepping or SteppingConfig()
         pg = self.program
         # the stance gains a delayed loop tolerates: the scenario's own (the presets' have a delay
-        # margin of 1.8-2.2 x the young delay), not the feedback stepper's stiffer trunk gains in
-        # single support (x4: margin 0.084 s) and COM gains after the step (margin 0.117 s)
+        # margin of 1.8-2.2 x the young delay; the trunk's x rot_gain_scale in single support), not
+        # the feedback stepper's trunk x4 (margin 0.084 s) nor its COM gains after the step
+        # (margin 0.117 s)
         g = config.gains
         base = replace(base, kp_pos=pg.kp_pos, kv_pos=pg.kv_pos, swing_time_s=pg.swing_time_s,
-                       swing_rot_gain_scale=1.0, lateral_rot_gain_scale=1.0,
+                       swing_rot_gain_scale=pg.rot_gain_scale, lateral_rot_gain_scale=pg.rot_gain_scale,
                        post_step_kp_xy=g.kp_com[0], post_step_kv_xy=g.kv_com[0])  # fmt: skip
         super().__init__(config, base, joint_order, tree=tree)
+        self._central = self.model.body("central_body").id
 
     def reset(self) -> None:
         super().reset()
@@ -209,6 +228,41 @@ class StepProgram(SteppingController):
         pd, vd, _ = self._plan(el - p.delay_s, ankle_land)  # what the delayed state is compared with
         _, self._v_ff, ad = self._plan(el + p.lead_s, ankle_land)  # the feed-forward, ahead of the lag
         return self._single_support(i, qpos, qvel, omega, cop, pd, vd, ad)
+
+    def _single_support(self, i, qpos, qvel, omega, cop, pd, vd, ad):
+        """The stepping controller's single support, with the swing leg's hip torques' reaction
+        on the central body fed forward to the stance (``reaction_ff``): W's controller models the
+        free leg as a passive branch, so without it the swing's hip flexion pitches the trunk."""
+        if self.program.reaction_ff <= 0:
+            return super()._single_support(i, qpos, qvel, omega, cop, pd, vd, ad)
+        s = self.stepping
+        m, d = self.model, self.data
+        hip = d.xpos[self._hip[i]]
+        r = pd - hip
+        if np.linalg.norm(r) > s.reach_m:
+            pd = hip + r * (s.reach_m / np.linalg.norm(r))
+        tau_sw = np.array(self._swing_torques(i, pd, vd, ad))
+        moment = np.zeros(3)
+        for k in range(3):  # hip abduction, flexion, rotation: their reaction on the central body
+            j = m.dof_jntid[self._leg_dofs[i][k]]
+            moment -= tau_sw[k] * d.xaxis[j]
+        moment *= self.program.reaction_ff
+        flags = (i == 1, i == 0)
+        R = d.ximat[self._central].reshape(3, 3)
+        out = self.ctrl.compute(qpos, qvel, gains=self._swing_gains, feet_in_contact=flags)
+        X = -np.linalg.solve(out.P1, np.concatenate([np.zeros(3), R.T @ moment]))
+        acc = omega**2 * (d.subtree_com[0][:2] - cop)
+        com = np.array(self.target.com)
+        com[2] -= s.swing_height_drop_m
+        target = Target.wendlandt(com=tuple(com), tilt_deg=s.swing_tilt_deg)
+        ca = R @ X[:3]
+        target = replace(target, com_acc=(float(acc[0] + ca[0]), float(acc[1] + ca[1]), float(ca[2])),
+                         ang_acc=tuple(map(float, R @ X[3:])))  # fmt: skip
+        tau = np.array(
+            self.ctrl.torques(qpos, qvel, target=target, gains=self._swing_gains, feet_in_contact=flags)
+        )
+        tau[self._leg_tau[i]] = tau_sw
+        return self._out(tau)
 
     def _sole_low(self, i: int) -> float:
         """The height of the lowest corner of sole ``i`` above the floor [m] (a heel lifted about
