@@ -51,7 +51,7 @@ from biped.control import capture as cp
 from biped.control.limits import clip_torques
 from biped.control.policy import PolicyConfig, _model_path, make_policy
 from biped.control.stepping_config import SteppingConfig
-from biped.control.swing import swing_leg_torques
+from biped.control.swing import swing_leg_torques, swing_reaction_wrench
 from biped.control.workspace import Gains, Target
 from biped.errors import ScenarioError
 from biped.model import TreeModel, sole_rectangles
@@ -104,6 +104,7 @@ class SteppingController:
                     config.qp_weights or QPWeights(),
                     moment=self.stepping.qp_moment_weight,
                     leg_weight=self.stepping.qp_leg_weight,
+                    floor_friction=self.stepping.floor_friction,
                 ),
             )
         self._inner = make_policy(inner, tree=tree)
@@ -117,6 +118,11 @@ class SteppingController:
         if self.stepping.settle_after_s is not None and inner.qp_weights is not None and config.qp_weights:
             w = replace(inner.qp_weights, moment=config.qp_weights.moment)
             self._ctrl_settle = make_policy(replace(inner, qp_weights=w), tree=tree).controller
+        # single support: the stepping QP, its friction pyramid scaled by swing_friction_scale
+        self._ctrl_swing = self.ctrl
+        if self.stepping.swing_friction_scale is not None and inner.qp_weights is not None:
+            w = replace(inner.qp_weights, friction_scale=self.stepping.swing_friction_scale)
+            self._ctrl_swing = make_policy(replace(inner, qp_weights=w), tree=tree).controller
         names = tuple(self.ctrl.joint_names)
         self.joint_names = tuple(joint_order) if joint_order is not None else names
         if sorted(self.joint_names) != sorted(names):
@@ -131,6 +137,7 @@ class SteppingController:
         self._foot = [m.body(b).id for b in FOOT_BODIES]
         self._hip = [m.body(f"{side}_thigh").id for side in FEET]
         self._shank = [m.body(f"{side}_shank").id for side in FEET]
+        self._root = int(m.jnt_bodyid[0])  # the central body (the free joint's)
         self._inv_sign = [
             float(np.sign(m.jnt_axis[m.joint(f"{side}_ankle_inversion").id][0])) for side in FEET
         ]
@@ -382,11 +389,33 @@ class SteppingController:
         com[2] -= s.swing_height_drop_m
         target = Target.wendlandt(com=tuple(com), tilt_deg=s.swing_tilt_deg)
         target = replace(target, com_acc=(float(acc[0]), float(acc[1]), 0.0))
+        tau_swing = self._swing_torques(i, pd, vd, ad)
+        if s.swing_reaction:
+            target = self._with_swing_reaction(i, tau_swing, qpos, qvel, target, flags)
         tau = np.array(
-            self.ctrl.torques(qpos, qvel, target=target, gains=self._swing_gains, feet_in_contact=flags)
+            self._ctrl_swing.torques(
+                qpos, qvel, target=target, gains=self._swing_gains, feet_in_contact=flags
+            )
         )
-        tau[self._leg_tau[i]] = self._swing_torques(i, pd, vd, ad)
+        tau[self._leg_tau[i]] = tau_swing
         return self._out(tau)
+
+    def _with_swing_reaction(self, i, tau_swing, qpos, qvel, target, flags):
+        """``target`` with the feed-forward acceleration that adds the driven swing leg's reaction
+        to the stance leg's desired wrench (:func:`biped.control.swing.swing_reaction_wrench`):
+        ``F_1^bd = P_1 (X^b + P_1^-1 dF) + z_1 = P_1 X^b + z_1 + dF``."""
+        dF = swing_reaction_wrench(self, i, tau_swing)
+        P1 = self._ctrl_swing.compute(
+            qpos, qvel, target=target, gains=self._swing_gains, feet_in_contact=flags
+        ).P1
+        dX = np.linalg.solve(P1, dF)
+        R = self.data.ximat[self._root].reshape(3, 3)  # the central body's COM principal frame
+        # X^b = R^T (com_acc - ...) and R^T R_e ang_acc, R_e = R R_d^T (W Alg. 4)
+        Rd = np.zeros(9)
+        mujoco.mju_quat2Mat(Rd, np.asarray(target.quat, dtype=float))
+        acc = np.asarray(target.com_acc) + R @ dX[:3]
+        ang = np.asarray(target.ang_acc) + Rd.reshape(3, 3) @ dX[3:]
+        return replace(target, com_acc=tuple(acc), ang_acc=tuple(ang))
 
     def _swing_torques(self, i, pd, vd, ad):
         """The swing leg's torques (:func:`biped.control.swing.swing_leg_torques`)."""
