@@ -193,6 +193,7 @@ class SteppingController:
         self._xi_rate = np.zeros(2)  # low-passed rate of the capture point [m/s]
         self._settled = False  # after a step, at rest: the settling controller
         self.arm_time_s = -math.inf  # no step before [s] (the lean release arms it when sensed)
+        self._dwell_since: float | None = None  # since when xi is near the edge (the slow trigger)
 
     def _new_trigger(self) -> cp.CaptureTrigger:
         s = self.stepping
@@ -251,9 +252,10 @@ class SteppingController:
             and len(self.steps) < s.max_steps
             and t - self._last_td >= s.refractory_s
             and t >= self.arm_time_s
-            and self.trigger.update(self._polygon((left, right)), xi, self._xi_rate)
         ):
-            self._start_step(t, xi, (left, right))
+            poly = self._polygon((left, right))
+            if self.trigger.update(poly, xi, self._xi_rate) or self._dwelt(t, poly, xi):
+                self._start_step(t, xi, (left, right))
         if self.phase == "swing":
             return self._swing_call(t, qpos, qvel, xi, omega, (left, right))
         ctrl = self.ctrl if self.steps else self._ctrl_before
@@ -272,6 +274,24 @@ class SteppingController:
             flags = self._flags(left, right)
         tau = ctrl.torques(qpos, qvel, target=self.target, gains=self.gains, feet_in_contact=flags)
         return self._out(tau)
+
+    def _dwelt(self, t, poly, xi) -> bool:
+        """The slow trigger (``dwell_margin_m``, ``dwell_s``): True once the capture point has
+        stayed within ``dwell_margin_m`` of the support polygon's edge (or outside it) for
+        ``dwell_s``: the feet hold it there only by a CoP at the edge, and the body creeps over."""
+        s = self.stepping
+        if s.dwell_s is None:
+            return False
+        ex, ey = cp.excess(poly, xi)
+        if max(ex, ey) <= -s.dwell_margin_m:
+            self._dwell_since = None
+            return False
+        if self._dwell_since is None:
+            self._dwell_since = t
+        if t - self._dwell_since >= s.dwell_s:
+            self._dwell_since = None
+            return True
+        return False
 
     def _flags(self, left, right):
         # "sensed" support: the sensed feet. Otherwise (W's fixed support, also with "qp", where
@@ -311,6 +331,7 @@ class SteppingController:
             swing = 0 if dy[0] < dy[1] else 1
         self.swing = swing
         self.phase = "swing"
+        self._dwell_since = None
         self._t_start = t
         self._p0 = self.data.xpos[self._foot[swing]].copy()
         self._stance0 = self._sole_pose(1 - swing)[0][:2].copy()

@@ -62,8 +62,11 @@ class SteppingConfig:
     ``friction * swing_friction_scale`` (a margin for what the massless-leg cone does not see).
     swing_reaction: add the driven swing leg's reaction (:func:`biped.control.swing.swing_reaction_wrench`)
     to the stance leg's desired wrench (off: it made the stance foot slide further, measured).
+    dwell_margin_m, dwell_s: if dwell_s is set, a step also starts once the capture point has
+    stayed within dwell_margin_m of the support polygon's edge for dwell_s (the feet hold it
+    there only with the CoP at the edge while the body creeps over it).
     The ``"qp"`` set turns on floor_friction, sets swing_friction_scale 0.55 and
-    lateral_rot_gain_scale 1 (docs/controller.md, "Stance-foot slip").
+    lateral_rot_gain_scale 1 (docs/controller.md, "Stance-foot slip") and dwell_s 0.5 s.
     """
 
     max_steps: int = 3
@@ -99,6 +102,8 @@ class SteppingConfig:
     swing_reaction: bool = False
     floor_friction: bool = False
     swing_friction_scale: float | None = None
+    dwell_margin_m: float = 0.02
+    dwell_s: float | None = None
     limits: cp.StepLimits = field(default_factory=cp.StepLimits)
     lateral_margin_m: float = 0.03
     lateral_offset_m: float = 0.15
@@ -120,6 +125,7 @@ class SteppingConfig:
                 "floor_friction": True,
                 "swing_friction_scale": 0.55,
                 "lateral_rot_gain_scale": 1.0,
+                "dwell_s": 0.5,
                 **kw,
             }
         elif trigger != "capture":
