@@ -11,14 +11,16 @@ Phases (one :class:`SteppingController` call per control period, ``(t, qpos, qve
   sqrt(g / h)``, h the COM height above the floor. The feet cannot hold once xi has left the
   support polygon of the soles in contact (the QP's CoP limits: no CoP outside it brings xi
   back, ``xi' = omega_0 (xi - p)``) for ``hold`` periods
-  (:class:`~biped.control.capture.CaptureTrigger`): then, if fewer than ``max_steps`` steps
-  were taken, a step starts.
+  (:class:`~biped.control.capture.CaptureTrigger`), or (``dwell_s`` set) once xi has stayed
+  within ``dwell_margin_m`` of the polygon's edge for ``dwell_s``: then, if fewer than
+  ``max_steps`` steps were taken, a step starts.
 - **swing**: swing foot rule: for the first step, the foot off the floor if only one is on it,
   else the foot whose sole centre lies nearer to xi across the body (the push side: a push to
   the biped's right steps with the right foot; no crossover); later steps alternate feet. The stance
   leg carries the body through W's
   recursions with the contact flags (stance, not swing): Alg. 3 with one big base, the QP's
-  single-sole cone (or the min-norm split with one foot); the stance controller keeps the
+  single-sole cone (friction rows on the floor's axes and scaled by ``swing_friction_scale``
+  if set; or the min-norm split with one foot); the stance controller keeps the
   height and orientation set points and lets the COM run horizontally (kp, kv of x, y zero),
   as the LIPM prediction assumes. The landing point of the swing sole's centre is
   :func:`~biped.control.capture.step_target` (xi when the foot lands, from the stance sole
