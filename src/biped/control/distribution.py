@@ -47,6 +47,7 @@ from biped.control.cones import (
     ROWS_PER_FOOT,
     carry_leg_weight,
     cone_rows,
+    floor_friction_rows,
     leg_weight_wrench,
     sole_to_body,
 )
@@ -89,6 +90,8 @@ class QPWeights:
         by this factor (1: the whole sole; < 1 keeps it off the edges the foot would tip about).
     leg_weight: share in [0, 1] of each leg's weight that the cone rows add to the leg's share
         (:func:`biped.control.cones.carry_leg_weight`; 0: the legs taken as massless).
+    floor_friction: the friction pyramid on the floor's axes, not the sole's (a sole tilted on
+        an edge; :func:`biped.control.cones.floor_friction_rows`; the stepping QP sets it).
     """
 
     force: float = 1.0
@@ -102,6 +105,7 @@ class QPWeights:
     friction_scale: float = 1.0 / math.sqrt(2.0)
     cop_scale: float = 1.0
     leg_weight: float = 1.0
+    floor_friction: bool = False
     array: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
@@ -136,6 +140,7 @@ class QPWeights:
                 self.friction * self.friction_scale,
                 self.max_normal_n,
                 self.leg_weight,
+                1.0 if self.floor_friction else 0.0,
             ],
             dtype=float,
         )
@@ -238,6 +243,8 @@ def qp_build(
                 first1 = m
             m0 = m
             m = cone_rows(dims[f, 0], dims[f, 1], prm[6], prm[5], prm[7], 6 * f, Ct, b, m)
+            if prm[9] != 0.0:  # the friction rows on the floor's axes
+                floor_friction_rows(g[feet[f]], soles[f], prm[6], 6 * f, Ct, m0)
             if prm[8] != 0.0:  # the cone holds the ground's wrench: the QP's share plus the leg's weight
                 leg_weight_wrench(g, feet[f], soles[f], leg, f, mass, grav, prm[8], wg[f])
                 carry_leg_weight(Ct, b, m0, 6 * f, wg[f])

@@ -29,7 +29,7 @@ __all__ = [
     "solve_flat",
 ]
 
-PRM = 9  # entries of QPWeights.array
+PRM = 10  # entries of QPWeights.array
 #: qf's fields (name, shape with nj = joints, rows = constraint rows)
 FLOAT_FIELDS = (
     ("soles", (2, 4, 4)),

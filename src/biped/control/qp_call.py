@@ -10,6 +10,11 @@ each unboxing its arrays, and daqp's Python entry alone costs several microsecon
 (:mod:`biped.control.qp_buffers`), allocates nothing and gives the same numbers: the same
 compiled build and finish, and daqp's own C function on the same arrays
 (``tests/test_qp_call.py``).
+
+numba caches this function with the compiled :func:`~biped.control.qp_buffers.qp_views` inside it
+and checks only this file's stamp: a change of the buffers' layout there (e.g. ``PRM``, the
+entries of ``QPWeights.array``, 10 since ``floor_friction``) needs an edit here too, or the
+cached copy reads the old layout.
 """
 
 from __future__ import annotations

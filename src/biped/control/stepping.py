@@ -11,14 +11,16 @@ Phases (one :class:`SteppingController` call per control period, ``(t, qpos, qve
   sqrt(g / h)``, h the COM height above the floor. The feet cannot hold once xi has left the
   support polygon of the soles in contact (the QP's CoP limits: no CoP outside it brings xi
   back, ``xi' = omega_0 (xi - p)``) for ``hold`` periods
-  (:class:`~biped.control.capture.CaptureTrigger`): then, if fewer than ``max_steps`` steps
-  were taken, a step starts.
+  (:class:`~biped.control.capture.CaptureTrigger`), or (``dwell_s`` set) once xi has stayed
+  within ``dwell_margin_m`` of the polygon's edge for ``dwell_s``: then, if fewer than
+  ``max_steps`` steps were taken, a step starts.
 - **swing**: swing foot rule: for the first step, the foot off the floor if only one is on it,
   else the foot whose sole centre lies nearer to xi across the body (the push side: a push to
   the biped's right steps with the right foot; no crossover); later steps alternate feet. The stance
   leg carries the body through W's
   recursions with the contact flags (stance, not swing): Alg. 3 with one big base, the QP's
-  single-sole cone (or the min-norm split with one foot); the stance controller keeps the
+  single-sole cone (friction rows on the floor's axes and scaled by ``swing_friction_scale``
+  if set; or the min-norm split with one foot); the stance controller keeps the
   height and orientation set points and lets the COM run horizontally (kp, kv of x, y zero),
   as the LIPM prediction assumes. The landing point of the swing sole's centre is
   :func:`~biped.control.capture.step_target` (xi when the foot lands, from the stance sole
@@ -51,7 +53,7 @@ from biped.control import capture as cp
 from biped.control.limits import clip_torques
 from biped.control.policy import PolicyConfig, _model_path, make_policy
 from biped.control.stepping_config import SteppingConfig
-from biped.control.swing import swing_leg_torques
+from biped.control.swing import swing_leg_torques, swing_reaction_wrench
 from biped.control.workspace import Gains, Target
 from biped.errors import ScenarioError
 from biped.model import TreeModel, sole_rectangles
@@ -104,6 +106,7 @@ class SteppingController:
                     config.qp_weights or QPWeights(),
                     moment=self.stepping.qp_moment_weight,
                     leg_weight=self.stepping.qp_leg_weight,
+                    floor_friction=self.stepping.floor_friction,
                 ),
             )
         self._inner = make_policy(inner, tree=tree)
@@ -117,6 +120,11 @@ class SteppingController:
         if self.stepping.settle_after_s is not None and inner.qp_weights is not None and config.qp_weights:
             w = replace(inner.qp_weights, moment=config.qp_weights.moment)
             self._ctrl_settle = make_policy(replace(inner, qp_weights=w), tree=tree).controller
+        # single support: the stepping QP, its friction pyramid scaled by swing_friction_scale
+        self._ctrl_swing = self.ctrl
+        if self.stepping.swing_friction_scale is not None and inner.qp_weights is not None:
+            w = replace(inner.qp_weights, friction_scale=self.stepping.swing_friction_scale)
+            self._ctrl_swing = make_policy(replace(inner, qp_weights=w), tree=tree).controller
         names = tuple(self.ctrl.joint_names)
         self.joint_names = tuple(joint_order) if joint_order is not None else names
         if sorted(self.joint_names) != sorted(names):
@@ -131,6 +139,7 @@ class SteppingController:
         self._foot = [m.body(b).id for b in FOOT_BODIES]
         self._hip = [m.body(f"{side}_thigh").id for side in FEET]
         self._shank = [m.body(f"{side}_shank").id for side in FEET]
+        self._root = int(m.jnt_bodyid[0])  # the central body (the free joint's)
         self._inv_sign = [
             float(np.sign(m.jnt_axis[m.joint(f"{side}_ankle_inversion").id][0])) for side in FEET
         ]
@@ -186,6 +195,7 @@ class SteppingController:
         self._xi_rate = np.zeros(2)  # low-passed rate of the capture point [m/s]
         self._settled = False  # after a step, at rest: the settling controller
         self.arm_time_s = -math.inf  # no step before [s] (the lean release arms it when sensed)
+        self._dwell_since: float | None = None  # since when xi is near the edge (the slow trigger)
 
     def _new_trigger(self) -> cp.CaptureTrigger:
         s = self.stepping
@@ -244,9 +254,10 @@ class SteppingController:
             and len(self.steps) < s.max_steps
             and t - self._last_td >= s.refractory_s
             and t >= self.arm_time_s
-            and self.trigger.update(self._polygon((left, right)), xi, self._xi_rate)
         ):
-            self._start_step(t, xi, (left, right))
+            poly = self._polygon((left, right))
+            if self.trigger.update(poly, xi, self._xi_rate) or self._dwelt(t, poly, xi):
+                self._start_step(t, xi, (left, right))
         if self.phase == "swing":
             return self._swing_call(t, qpos, qvel, xi, omega, (left, right))
         ctrl = self.ctrl if self.steps else self._ctrl_before
@@ -265,6 +276,24 @@ class SteppingController:
             flags = self._flags(left, right)
         tau = ctrl.torques(qpos, qvel, target=self.target, gains=self.gains, feet_in_contact=flags)
         return self._out(tau)
+
+    def _dwelt(self, t, poly, xi) -> bool:
+        """The slow trigger (``dwell_margin_m``, ``dwell_s``): True once the capture point has
+        stayed within ``dwell_margin_m`` of the support polygon's edge (or outside it) for
+        ``dwell_s``: the feet hold it there only by a CoP at the edge, and the body creeps over."""
+        s = self.stepping
+        if s.dwell_s is None:
+            return False
+        ex, ey = cp.excess(poly, xi)
+        if max(ex, ey) <= -s.dwell_margin_m:
+            self._dwell_since = None
+            return False
+        if self._dwell_since is None:
+            self._dwell_since = t
+        if t - self._dwell_since >= s.dwell_s:
+            self._dwell_since = None
+            return True
+        return False
 
     def _flags(self, left, right):
         # "sensed" support: the sensed feet. Otherwise (W's fixed support, also with "qp", where
@@ -304,6 +333,7 @@ class SteppingController:
             swing = 0 if dy[0] < dy[1] else 1
         self.swing = swing
         self.phase = "swing"
+        self._dwell_since = None
         self._t_start = t
         self._p0 = self.data.xpos[self._foot[swing]].copy()
         self._stance0 = self._sole_pose(1 - swing)[0][:2].copy()
@@ -382,11 +412,33 @@ class SteppingController:
         com[2] -= s.swing_height_drop_m
         target = Target.wendlandt(com=tuple(com), tilt_deg=s.swing_tilt_deg)
         target = replace(target, com_acc=(float(acc[0]), float(acc[1]), 0.0))
+        tau_swing = self._swing_torques(i, pd, vd, ad)
+        if s.swing_reaction:
+            target = self._with_swing_reaction(i, tau_swing, qpos, qvel, target, flags)
         tau = np.array(
-            self.ctrl.torques(qpos, qvel, target=target, gains=self._swing_gains, feet_in_contact=flags)
+            self._ctrl_swing.torques(
+                qpos, qvel, target=target, gains=self._swing_gains, feet_in_contact=flags
+            )
         )
-        tau[self._leg_tau[i]] = self._swing_torques(i, pd, vd, ad)
+        tau[self._leg_tau[i]] = tau_swing
         return self._out(tau)
+
+    def _with_swing_reaction(self, i, tau_swing, qpos, qvel, target, flags):
+        """``target`` with the feed-forward acceleration that adds the driven swing leg's reaction
+        to the stance leg's desired wrench (:func:`biped.control.swing.swing_reaction_wrench`):
+        ``F_1^bd = P_1 (X^b + P_1^-1 dF) + z_1 = P_1 X^b + z_1 + dF``."""
+        dF = swing_reaction_wrench(self, i, tau_swing)
+        P1 = self._ctrl_swing.compute(
+            qpos, qvel, target=target, gains=self._swing_gains, feet_in_contact=flags
+        ).P1
+        dX = np.linalg.solve(P1, dF)
+        R = self.data.ximat[self._root].reshape(3, 3)  # the central body's COM principal frame
+        # X^b = R^T (com_acc - ...) and R^T R_e ang_acc, R_e = R R_d^T (W Alg. 4)
+        Rd = np.zeros(9)
+        mujoco.mju_quat2Mat(Rd, np.asarray(target.quat, dtype=float))
+        acc = np.asarray(target.com_acc) + R @ dX[:3]
+        ang = np.asarray(target.ang_acc) + Rd.reshape(3, 3) @ dX[3:]
+        return replace(target, com_acc=tuple(acc), ang_acc=tuple(ang))
 
     def _swing_torques(self, i, pd, vd, ad):
         """The swing leg's torques (:func:`biped.control.swing.swing_leg_torques`)."""

@@ -56,6 +56,17 @@ class SteppingConfig:
     0.22 m width limit left the foot short and the biped fell over it). Sideways the swing foot is
     always the push-side one (the other, unloaded as the body rolls, could only step inward: no
     crossover).
+    floor_friction: the stepping QP's friction pyramid on the floor's axes, not the sole's
+    (``QPWeights.floor_friction``; before the first step the scenario's QP as it is).
+    swing_friction_scale: if set, single support uses a stepping QP whose pyramid is
+    ``friction * swing_friction_scale`` (a margin for what the massless-leg cone does not see).
+    swing_reaction: add the driven swing leg's reaction (:func:`biped.control.swing.swing_reaction_wrench`)
+    to the stance leg's desired wrench (off: it made the stance foot slide further, measured).
+    dwell_margin_m, dwell_s: if dwell_s is set, a step also starts once the capture point has
+    stayed within dwell_margin_m of the support polygon's edge for dwell_s (the feet hold it
+    there only with the CoP at the edge while the body creeps over it).
+    The ``"qp"`` set turns on floor_friction, sets swing_friction_scale 0.55 and
+    lateral_rot_gain_scale 1 (docs/controller.md, "Stance-foot slip") and dwell_s 0.5 s.
     """
 
     max_steps: int = 3
@@ -88,6 +99,11 @@ class SteppingConfig:
     swing_height_drop_m: float = 0.08
     post_step_height_drop_m: float = 0.08
     swing_tilt_deg: float = 0.0
+    swing_reaction: bool = False
+    floor_friction: bool = False
+    swing_friction_scale: float | None = None
+    dwell_margin_m: float = 0.02
+    dwell_s: float | None = None
     limits: cp.StepLimits = field(default_factory=cp.StepLimits)
     lateral_margin_m: float = 0.03
     lateral_offset_m: float = 0.15
@@ -106,6 +122,10 @@ class SteppingConfig:
                 "lateral_margin_m": 0.0,
                 "limits": cp.StepLimits(max_back=0.4),
                 "settle_after_s": 0.3,
+                "floor_friction": True,
+                "swing_friction_scale": 0.55,
+                "lateral_rot_gain_scale": 1.0,
+                "dwell_s": 0.5,
                 **kw,
             }
         elif trigger != "capture":

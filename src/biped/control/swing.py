@@ -8,7 +8,7 @@ import math
 import mujoco
 import numpy as np
 
-__all__ = ["swing_leg_torques"]
+__all__ = ["swing_leg_torques", "swing_reaction_wrench"]
 
 
 def swing_leg_torques(ctl, i, pd, vd, ad):
@@ -52,3 +52,32 @@ def swing_leg_torques(ctl, i, pd, vd, ad):
     for k, qk, wk in ((4, inv, ctl._inv_sign[i] * w[0]), (5, dors, w[1])):
         tau[k] = s.ankle_kp * (qk - q[k]) - s.ankle_kv * wk + d.qfrc_bias[dofs[k]]
     return np.clip(tau, -s.swing_torque_max_n_m, s.swing_torque_max_n_m)
+
+
+def swing_reaction_wrench(ctl, i, tau_swing):
+    """The driven swing leg's reaction that W's stance model misses [N, N m] (6,), a wrench on the
+    central body in its COM principal frame (W's frame of ``F_1^bd``), for foot ``i`` swinging
+    with joint torques ``tau_swing`` (its 6 joints, controller order = the leg's dof order).
+
+    With a foot off the floor W Alg. 3 folds its leg into ``P_1``, ``z_1`` as a *passive*
+    articulated branch (zero joint torques). Eliminating the leg's joint accelerations from
+    MuJoCo's equations of motion (root rows b, leg rows s: ``M_bb a_b + M_bs qdd_s + h_b = Q_b``,
+    ``M_sb a_b + M_ss qdd_s + h_s = tau_s``) gives the leg's generalized force on the root
+    ``(M_bb - M_bs M_ss^-1 M_sb) a_b + h_b - M_bs M_ss^-1 h_s + M_bs M_ss^-1 tau_s``: the first
+    terms are the passive branch W already has, the last one, ``M_bs M_ss^-1 tau_s``, is what the
+    joint torques add (``tau_s`` the torques acting on the leg's joints: the swing torques plus
+    the joints' passive damping). It is moved from the free joint's coordinates to the central
+    body's COM frame by ``Q_b = J^T F`` (J: MuJoCo's COM Jacobian of the root dofs, rotated into
+    the COM principal frame)."""
+    m, d = ctl.model, ctl.data
+    dofs = ctl._leg_dofs[i]
+    M = np.zeros((m.nv, m.nv))
+    mujoco.mj_fullM(m, d, M)
+    tau = np.asarray(tau_swing, dtype=float) + d.qfrc_passive[dofs]
+    q_root = M[:6, dofs] @ np.linalg.solve(M[np.ix_(dofs, dofs)], tau)
+    root = ctl._root
+    jp, jr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
+    mujoco.mj_jacBodyCom(m, d, jp, jr, root)
+    R = d.ximat[root].reshape(3, 3)
+    J = np.vstack([R.T @ jp[:, :6], R.T @ jr[:, :6]])
+    return np.linalg.solve(J.T, q_root)

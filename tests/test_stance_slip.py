@@ -1,0 +1,196 @@
+"""The stance foot does not slide during a step (issue #23, goal "stance slip <= 2 cm per step at
+friction 0.3"): the floor-frame friction rows of the stepping QP against the floor's cone in
+closed form, the driven swing leg's reaction against MuJoCo's forward dynamics, and a sideways
+step's slip measured in MuJoCo (contacts and foot poses of the recorded run)."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from biped.control.cones import ROWS_PER_FOOT, cone_rows, floor_friction_rows
+
+
+def _rot(axis, angle):
+    R = np.zeros(9)
+    q = np.zeros(4)
+    a = np.asarray(axis, dtype=float)
+    mujoco.mju_axisAngle2Quat(q, a / np.linalg.norm(a), angle)
+    mujoco.mju_quat2Mat(R, q)
+    return R.reshape(3, 3)
+
+
+def test_floor_friction_rows_are_the_floor_pyramid():
+    """For a sole yawed and tilted on an edge, each rewritten row times the sole-frame wrench is
+    ``mu f_n +- f_t`` of the world force (normal world z, tangents the sole's x axis on the
+    floor and z cross it), computed here with numpy; the other 14 rows are untouched; a flat
+    sole gives the sole-frame rows."""
+    rng = np.random.default_rng(3)
+    mu = 0.3 / np.sqrt(2.0)
+    for tilt, yaw in ((0.0, 0.4), (0.12, -1.1), (-0.2, 2.5)):
+        Rs = _rot((0, 0, 1), yaw) @ _rot((1, 0.3, 0), tilt)  # the sole's world rotation
+        gf = np.eye(4)
+        gf[:3, :3] = _rot((0.2, 1, 0), 0.7)  # the foot's COM frame, any rotation
+        gf[:3, 3] = (0.1, -0.2, 0.05)
+        gfs = np.eye(4)
+        gfs[:3, :3] = gf[:3, :3].T @ Rs  # so that g_{0,foot} g_{foot,sole} has rotation Rs
+        gfs[:3, 3] = (0.03, 0.0, -0.06)
+        Ct = np.zeros((ROWS_PER_FOOT + 4, 12))
+        b = np.zeros(ROWS_PER_FOOT + 4)
+        cone_rows(0.11, 0.045, mu, 10.0, 2000.0, 6, Ct, b, 2)
+        before = Ct.copy()
+        floor_friction_rows(gf, gfs, mu, 6, Ct, 2)
+        changed = {2 + 2, 2 + 3, 2 + 6, 2 + 7}
+        for r in range(Ct.shape[0]):
+            if r not in changed:
+                np.testing.assert_array_equal(Ct[r], before[r])
+        tx = Rs[:, 0].copy()
+        tx[2] = 0.0
+        tx /= np.linalg.norm(tx)
+        ty = np.cross((0.0, 0.0, 1.0), tx)
+        for _ in range(5):
+            w = rng.normal(size=6)
+            f = Rs @ w[:3]
+            x = np.zeros(12)
+            x[6:] = w
+            expect = {
+                4: mu * f[2] - tx @ f,
+                5: mu * f[2] - ty @ f,
+                8: mu * f[2] + tx @ f,
+                9: mu * f[2] + ty @ f,
+            }
+            for r, v in expect.items():
+                assert Ct[r] @ x == pytest.approx(v, abs=1e-12)
+        if tilt == 0.0:
+            np.testing.assert_allclose(Ct, before, atol=1e-15)
+
+
+def test_swing_reaction_wrench_is_what_the_driven_leg_adds():
+    """The wrench of :func:`biped.control.swing.swing_reaction_wrench`, applied to the central body
+    (MuJoCo ``xfrc_applied`` at its COM) together with the swing torques on the leg, leaves the
+    central body's acceleration (MuJoCo's forward dynamics, biped in the air) what it is with a
+    passive leg and no wrench; without the wrench it differs."""
+    from biped.control.policy import PolicyConfig
+    from biped.control.stepping import SteppingController
+    from biped.control.swing import swing_reaction_wrench
+
+    ctl = SteppingController(PolicyConfig(distribution="qp"))
+    m, d = ctl.model, ctl.data
+    rng = np.random.default_rng(1)
+    q = m.qpos0.copy()
+    q[2] += 1.0
+    q[7:] += rng.normal(0.0, 0.2, m.nq - 7)
+    v = rng.normal(0.0, 0.5, m.nv)
+    for i in (0, 1):
+        d.qpos[:], d.qvel[:] = q, v
+        d.qfrc_applied[:] = 0.0
+        d.xfrc_applied[:] = 0.0
+        mujoco.mj_forward(m, d)
+        passive = d.qacc[:6].copy()
+        dofs = ctl._leg_dofs[i]
+        tau = rng.normal(0.0, 30.0, 6)
+        # the function counts the joints' damping as a torque on the leg (W's model has none);
+        # here the damping acts in both runs, so only tau is the difference
+        dF = swing_reaction_wrench(ctl, i, tau - d.qfrc_passive[dofs])
+        R = d.ximat[ctl._root].reshape(3, 3)
+        d.qfrc_applied[dofs] = tau
+        mujoco.mj_forward(m, d)
+        assert np.abs(d.qacc[:6] - passive).max() > 1.0  # the torques do move the body
+        d.xfrc_applied[ctl._root, :3] = R @ dF[:3]
+        d.xfrc_applied[ctl._root, 3:] = R @ dF[3:]
+        mujoco.mj_forward(m, d)
+        np.testing.assert_allclose(d.qacc[:6], passive, atol=1e-9)
+
+
+def _sole_centres(m, d, qpos, foot):
+    """(n, 2) horizontal centre of the bottom face of the foot's heel and toe boxes [m], MuJoCo
+    kinematics of each row of ``qpos``."""
+    geoms = [m.geom(f"{foot}_{p}").id for p in ("heel", "toe")]
+    body = m.geom_bodyid[geoms[0]]
+    signs = np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)])
+    out = np.empty((len(qpos), 2))
+    for k, q in enumerate(qpos):
+        d.qpos[:] = q
+        mujoco.mj_kinematics(m, d)
+        R, p = d.xmat[body].reshape(3, 3), d.xpos[body]
+        local = np.vstack(
+            [
+                (d.geom_xpos[g] + (signs * m.geom_size[g]) @ d.geom_xmat[g].reshape(3, 3).T - p) @ R
+                for g in geoms
+            ]
+        )
+        lo, hi = local.min(axis=0), local.max(axis=0)
+        out[k] = (p + R @ np.array([(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, lo[2]]))[:2]
+    return out
+
+
+def _stance_slips(sc, r):
+    """Per step: the stance sole centre's largest horizontal displacement [m] over the rows from
+    lift-off to touchdown in which MuJoCo has the stance foot (heel or toe) on the floor."""
+    from biped.sim.scene import build_scene
+
+    m = build_scene(sc).model
+    d = mujoco.MjData(m)
+    slips = []
+    for st in r.extra["steps"]:
+        stance = 1 - ("left", "right").index(st["foot"])
+        on = r.contacts[:, 2 * stance] | r.contacts[:, 2 * stance + 1]
+        k0, k1 = (int(np.searchsorted(r.times, t - 1e-9)) for t in (st["lift_off_s"], st["touch_down_s"]))
+        rows = [k for k in range(k0, k1 + 1) if on[k]]
+        assert len(rows) > 0.9 * (k1 - k0 + 1), "the stance foot left the floor"
+        c = _sole_centres(m, d, r.qpos[rows], ("left", "right")[stance])
+        slips.append(float(np.linalg.norm(c - c[0], axis=1).max()))
+    return slips
+
+
+def _sweep_scenario(speed, direction):
+    """One `biped sweep --distribution qp --stepping` trial with ``step_trigger = "qp"``, 4 s (the
+    grid of docs/sweep.md, "Results: stepping that ends standing")."""
+    from biped.cli import build_parser
+    from biped.cli.sweep import build_spec
+
+    args = [
+        "sweep",
+        "--speed",
+        str(speed),
+        "--direction",
+        str(direction),
+        "--distribution",
+        "qp",
+        "--stepping",
+    ]
+    args += ["--set", "duration_s=4", "--set", 'step_trigger="qp"']
+    spec = build_spec(build_parser().parse_args(args))
+    return spec.scenario(spec.trials()[0])
+
+
+@pytest.mark.slow
+def test_sideways_step_stance_foot_slides_at_most_2_cm():
+    """Sweep grid, 14 m/s at 90 deg (beyond the QP's 13 m/s), ``step_trigger = "qp"``, friction 0.3:
+    one sideways step, and the stance sole slides <= 2 cm while the other foot swings (MuJoCo's
+    contacts and foot poses of the recorded run; measured 1.4 cm). The measure sees a slide: the
+    same push with the stepping QP's friction pyramid on the sole's axes and W's orientation gains
+    x4 during the sideways swing (the parameters before) slides > 5 cm (measured 11.6 cm)."""
+    from biped.control.stepping import SteppingController
+    from biped.control.stepping_config import SteppingConfig
+    from biped.sim.policies import policy_config
+    from biped.sim.push import run_closed_loop, simulate
+    from biped.sim.scene import build_scene
+
+    sc = _sweep_scenario(14, 90)
+    assert sc.friction == 0.3
+    r = simulate(sc)
+    steps = r.extra["steps"]
+    assert len(steps) == 1 and steps[0]["sideways"], steps
+    (slip,) = _stance_slips(sc, r)
+    assert slip <= 0.02, slip
+    assert r.recovered
+
+    old = SteppingConfig.for_trigger(
+        "qp", floor_friction=False, swing_friction_scale=None, lateral_rot_gain_scale=4.0
+    )
+    scene = build_scene(sc)
+    before = run_closed_loop(sc, scene, SteppingController(policy_config(sc), old, scene.joint_names))
+    assert before.extra["steps"]
+    assert max(_stance_slips(sc, before)) > 0.05
