@@ -204,3 +204,31 @@ def test_compile_estimate_is_measured_once_compiled_here(tmp_path, monkeypatch):
     lines.clear()
     jit.warm_up(["contact"], log=lines.append)
     assert "measured on this machine" in lines[0]
+
+
+def test_the_kernel_cache_folder_changes_with_any_source(tmp_path):
+    """numba keys a kernel's cache on its own file; a constant changed in another module left a
+    cached kernel stale (the QP call kept an old buffer layout). ``import biped`` puts numba's
+    cache in a folder named by a hash of every source: a copy of the package, one constant of one
+    module edited, gets another folder, under its own ``__pycache__``; the user's
+    ``NUMBA_CACHE_DIR`` still wins."""
+    import shutil
+
+    pkg = tmp_path / "src" / "biped"
+    shutil.copytree(Path(SRC) / "biped", pkg, ignore=shutil.ignore_patterns("__pycache__"))
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["PYTHONPATH"] = str(tmp_path / "src")
+    code = "import os, biped; print(os.environ['NUMBA_CACHE_DIR'])"
+
+    def folder(extra=None):
+        out = subprocess.run([sys.executable, "-c", code], env={**env, **(extra or {})}, capture_output=True,
+                             text=True, check=True)  # fmt: skip
+        return out.stdout.strip()
+
+    first = folder()
+    assert first.startswith(str(pkg / "__pycache__" / "numba")) and folder() == first
+    buffers = pkg / "control" / "qp_buffers.py"
+    buffers.write_text(buffers.read_text() + "\n_EDITED = 1\n")
+    second = folder()
+    assert second != first and Path(second).parent == Path(first).parent
+    assert folder({"NUMBA_CACHE_DIR": str(tmp_path / "mine")}) == str(tmp_path / "mine")

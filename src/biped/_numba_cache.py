@@ -1,12 +1,20 @@
-"""Where numba keeps the package's compiled kernels: somewhere this user can write.
+"""Where numba keeps the package's compiled kernels: somewhere this user can write, and never a
+kernel compiled from other sources than these.
 
-numba caches a ``cache=True`` function next to its source (``__pycache__``) and, when that folder
-is not writable (a system-wide or read-only install), in a per-user folder; when neither is
-writable it raises at import. :func:`configure` runs from ``biped/__init__.py``, before any module
-that defines a kernel is imported (numba picks the folder when a function is decorated): if the
-package folder is not writable and ``NUMBA_CACHE_DIR`` is unset, it points numba at
-``$XDG_CACHE_HOME/biped/numba`` (default ``~/.cache/biped/numba``), or a per-user folder under the
-temporary directory when that cannot be created. It imports nothing from biped.
+numba caches a ``cache=True`` function under a key of *its own* source file's time stamp; a
+kernel that reads another module's constant or calls another module's kernel keeps its cached
+machine code when only that other module changes (a ``git pull`` into an editable install, a
+branch switched): it then runs with the old constant, silently (it happened here: a buffer layout
+constant changed in ``control/qp_buffers.py`` and the QP call, cached, kept the old layout).
+:func:`configure` runs from ``biped/__init__.py``, before any module that defines a kernel is
+imported (numba picks the folder when a function is decorated), and, unless ``NUMBA_CACHE_DIR`` is
+set (the user's choice stands), points numba at a folder named by :func:`source_stamp`, the hash
+of every Python source of the package: any change to any of them compiles every kernel afresh
+(the first run after it takes the first-run compile time again). The folder is
+``biped/__pycache__/numba/<stamp>`` when the package folder is writable, else
+``$XDG_CACHE_HOME/biped/numba/<stamp>`` (default ``~/.cache/...``), or a per-user folder under the
+temporary directory when that cannot be created; the stamps' folders of older sources there are
+removed, the newest :data:`KEEP_STAMPS` kept. It imports nothing from biped.
 
 It also tells whether a kernel's machine code is cached (:func:`is_cached`), says once through
 Python's ``logging`` (logger ``"biped"``) that a kernel compiles on first use
@@ -52,15 +60,57 @@ def user_cache_dir() -> Path:
     return Path(tempfile.gettempdir()) / f"biped-numba-{user}"
 
 
+#: The folder :func:`configure` chose (None: the user's NUMBA_CACHE_DIR, or numba's own).
+_CONFIGURED: str | None = None
+#: How many stamps' cache folders (the newest) :func:`configure` keeps beside the current one's.
+KEEP_STAMPS = 2
+
+
+def source_stamp(package: Path = PACKAGE_DIR) -> str:
+    """A hash of the package's Python sources (their paths and bytes), 16 hex digits."""
+    h = hashlib.sha256()
+    for path in sorted(package.rglob("*.py")):
+        h.update(path.relative_to(package).as_posix().encode())
+        h.update(path.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def _prune(base: Path, keep: str) -> None:
+    """Remove the stamps' folders under ``base`` but ``keep`` and the newest :data:`KEEP_STAMPS`."""
+    import shutil
+
+    try:
+        old = sorted(
+            (p for p in base.iterdir() if p.is_dir() and p.name != keep and len(p.name) == 16),
+            key=lambda p: p.stat().st_mtime,
+            reverse=True,
+        )
+        for p in old[KEEP_STAMPS:]:
+            shutil.rmtree(p, ignore_errors=True)
+    except OSError:
+        pass
+
+
 def configure() -> str | None:
-    """Set numba's cache folder when the package folder is not writable; returns the folder set,
-    or None when numba's own choice (next to the sources, or ``NUMBA_CACHE_DIR``) stands."""
+    """Point numba's cache at the folder of this source stamp (module docstring); returns the
+    folder set, or None when ``NUMBA_CACHE_DIR`` was set by the user."""
     if os.environ.get("NUMBA_CACHE_DIR"):
         return None
+    stamp = source_stamp()
     pycache = PACKAGE_DIR / "__pycache__"
     if os.access(pycache if pycache.exists() else PACKAGE_DIR, os.W_OK):
-        return None
-    folder = str(user_cache_dir())
+        base = pycache / "numba"
+    else:
+        base = user_cache_dir()
+    folder_path = base / stamp
+    try:
+        folder_path.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return None  # numba's own choice, and its own error if it cannot write either
+    _prune(base, stamp)
+    folder = str(folder_path)
+    global _CONFIGURED
+    _CONFIGURED = folder
     os.environ["NUMBA_CACHE_DIR"] = folder
     config = sys.modules.get("numba.core.config")
     if config is not None:  # numba already imported: it read the environment then
@@ -88,9 +138,10 @@ def is_cached(dispatcher) -> bool | None:
 
 
 def _timings_file() -> Path:
+    """Beside the stamps' folders (the compile times outlive a change of the sources)."""
     folder = os.environ.get("NUMBA_CACHE_DIR")
-    if folder:
-        return Path(folder) / "biped-compile-times.json"
+    if folder:  # beside the stamps' folders when configure chose it, else in the user's folder
+        return (Path(folder).parent if folder == _CONFIGURED else Path(folder)) / "biped-compile-times.json"
     pycache = PACKAGE_DIR / "__pycache__"
     if os.access(pycache if pycache.exists() else PACKAGE_DIR, os.W_OK):
         return pycache / "biped-compile-times.json"
