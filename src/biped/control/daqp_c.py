@@ -27,6 +27,7 @@ from llvmlite import ir  # type: ignore[import-untyped]
 from numba import carray, cfunc, njit, types
 from numba.extending import intrinsic, overload
 
+from biped.control.buffers import _take2
 from biped.control.cones import cone_rows
 
 __all__ = [
@@ -246,7 +247,7 @@ def unconstrained(Gq, av, Ct, b, used, xs):  # pragma: no cover - compiled
     that it is the QP's solution (the QP is strictly convex). False, and the solver must run, if a
     row is violated or Gq is not numerically positive definite. Standing, this is every call: daqp
     then ends after its first iteration with no active row, on the same point to rounding."""
-    L = xs[12:156].reshape((12, 12))
+    L = _take2(xs, 12, 12, 12)[0]  # xs[12:156] as (12, 12), without reshape's C helper
     y = xs[156:168]
     for j in range(12):
         d = Gq[j, j]

@@ -63,6 +63,7 @@ from biped.control.qp_buffers import (
     solve_flat,
 )
 from biped.control.recursions import alg6_torques
+from biped.control.statics import sole_torque_map
 from biped.errors import ScenarioError
 
 __all__ = ["RELAXED", "SOLVED", "ZEROED", "ContactQP", "QPWeights", "cone_rows"]
@@ -192,16 +193,9 @@ def qp_build(
     for f in range(2):
         sole_to_body(g[feet[f]], soles[f], g[0], A[f])
     # torque map, needed only for the torque-limit rows (qp_finish applies Alg. 6 once
-    # otherwise): Alg. 6 is linear; both legs at once (they do not interact)
-    for i in range(6 if nlim else 0):
-        for r in range(6):
-            col[0, r] = A[0, r, i]
-            col[1, r] = A[1, r, i]
-        alg6_torques(parent, H, leg, beyond, gl, col[0], col[1], F, tau_tmp)
-        for j in range(nj):
-            side = leg[j + 1] if beyond[j + 1] == 0 else -1
-            T[j, i] = tau_tmp[j] if side == 0 else 0.0
-            T[j, 6 + i] = tau_tmp[j] if side == 1 else 0.0
+    # otherwise): Alg. 6 in closed form, the legs' Jacobians in the sole frames
+    if nlim:
+        sole_torque_map(g, H, leg, beyond, feet, soles, T)
     # cost: sum_r W_r (A_r x - Fd_r)^2 + reg + split
     for i in range(12):
         av[i] = 0.0

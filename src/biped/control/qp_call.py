@@ -21,7 +21,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from biped.control.buffers import unpack
+from biped.control.buffers import borrowed, unpack
 from biped.control.daqp_c import c_solve
 from biped.control.distribution import qp_build, qp_finish
 from biped.control.qp_buffers import (
@@ -49,6 +49,8 @@ def qp_kernel(qpos, qvel, target, gains, contact, ints, floats):  # pragma: no c
     STOP_AFTER_ALG4); the kernel's status (nonzero: the QP is not touched). ``ints`` = the lengths
     of (mi, mf, work, out), then the kernel's ``mi`` and the ContactQP's ``qi``; ``floats`` = the
     kernel's ``mf``, ``work``, ``out`` and the ContactQP's ``qf`` (WorkspaceController's views)."""
+    # the ~100 views below without reference counting (biped.control.buffers.borrowed)
+    ints, floats = borrowed(ints), borrowed(floats)  # type: ignore[call-arg]
     a, b, c = ints[1], ints[1] + ints[2], ints[1] + ints[2] + ints[3]
     mi, qi = ints[4 : 4 + ints[0]], ints[4 + ints[0] :]
     mf, work, out, qf = floats[:a], floats[a:b], floats[b:c], floats[c:]

@@ -30,7 +30,7 @@ import numpy as np
 from numba import njit
 
 # the buffers (fields, layout, views) live in biped.control.buffers; re-exported here
-from biped.control.buffers import _FIELDS, Ints, Model, Out, Work, layout, unpack  # noqa: F401
+from biped.control.buffers import _FIELDS, Ints, Model, Out, Work, borrowed, layout, unpack  # noqa: F401
 from biped.control.statics import alg5_wrench_distribution, alg6_torques  # noqa: F401  (re-exported)
 from biped.spatial import (
     adjoint_inv_congruence_add,
@@ -439,6 +439,8 @@ def compute_kernel(
     for i in range(qvel.shape[0]):
         if not np.isfinite(qvel[i]):
             return NONFINITE_STATE
+    # the views below without reference counting (biped.control.buffers.borrowed)
+    mi, mf, work, out = borrowed(mi), borrowed(mf), borrowed(work), borrowed(out)  # type: ignore[call-arg]
     t, m, w, o = unpack(mi, mf, work, out)
     r = t.qadr[0]  # qpos address of the root's free joint
     if qpos[r + 3] ** 2 + qpos[r + 4] ** 2 + qpos[r + 5] ** 2 + qpos[r + 6] ** 2 < 1e-20:

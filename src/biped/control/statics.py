@@ -151,3 +151,54 @@ def alg6_torques(
             F[k, i] *= -sign
             s += H[k, i] * F[k, i]
         tau[k - 1] = s
+
+
+@njit(cache=True)
+def sole_torque_map(g, H, leg, beyond, feet, soles, T):
+    """The torque map ``T`` (n_joints, 12) of the QP's torque-limit rows, ``tau = T x`` for the
+    feet's wrenches ``x = [w_l; w_r]`` (each in its sole frame at the sole centre): W Alg. 6 of the
+    legs' shares ``F~_f = Ad^T_{g_{sole_f,1}} w_f`` in closed form. Alg. 6 gives
+    ``tau_k = -H_k^T Ad^T_{g_{1,k}} F~`` (the chain of its ``F_k = -Ad^T_{g_{k.i,k.o}} F~_k``), so
+    ``tau_k = -(Ad_{g_{sole,k}} H_k)^T w_f``: minus the joint's twist in the sole frame, the column
+    of the sole's body Jacobian relative to the central body (one 6-vector per joint from the
+    kernel's world poses ``g`` instead of six Alg. 6 passes). ``soles[f] = g_{foot,sole}``; joints
+    off the legs or beyond a foot get zero rows."""
+    nj = T.shape[0]
+    for j in range(nj):
+        for i in range(12):
+            T[j, i] = 0.0
+    for f in range(2):
+        gf, gfs = g[feet[f]], soles[f]
+        # the sole's world pose (Rs, ps) = g_{0,foot} g_{foot,sole}
+        r00 = gf[0, 0] * gfs[0, 0] + gf[0, 1] * gfs[1, 0] + gf[0, 2] * gfs[2, 0]
+        r01 = gf[0, 0] * gfs[0, 1] + gf[0, 1] * gfs[1, 1] + gf[0, 2] * gfs[2, 1]
+        r02 = gf[0, 0] * gfs[0, 2] + gf[0, 1] * gfs[1, 2] + gf[0, 2] * gfs[2, 2]
+        r10 = gf[1, 0] * gfs[0, 0] + gf[1, 1] * gfs[1, 0] + gf[1, 2] * gfs[2, 0]
+        r11 = gf[1, 0] * gfs[0, 1] + gf[1, 1] * gfs[1, 1] + gf[1, 2] * gfs[2, 1]
+        r12 = gf[1, 0] * gfs[0, 2] + gf[1, 1] * gfs[1, 2] + gf[1, 2] * gfs[2, 2]
+        r20 = gf[2, 0] * gfs[0, 0] + gf[2, 1] * gfs[1, 0] + gf[2, 2] * gfs[2, 0]
+        r21 = gf[2, 0] * gfs[0, 1] + gf[2, 1] * gfs[1, 1] + gf[2, 2] * gfs[2, 1]
+        r22 = gf[2, 0] * gfs[0, 2] + gf[2, 1] * gfs[1, 2] + gf[2, 2] * gfs[2, 2]
+        p0 = gf[0, 3] + gf[0, 0] * gfs[0, 3] + gf[0, 1] * gfs[1, 3] + gf[0, 2] * gfs[2, 3]
+        p1 = gf[1, 3] + gf[1, 0] * gfs[0, 3] + gf[1, 1] * gfs[1, 3] + gf[1, 2] * gfs[2, 3]
+        p2 = gf[2, 3] + gf[2, 0] * gfs[0, 3] + gf[2, 1] * gfs[1, 3] + gf[2, 2] * gfs[2, 3]
+        o = 6 * f
+        for k in range(1, leg.shape[0]):
+            if leg[k] != f or beyond[k]:
+                continue
+            R, h = g[k], H[k]
+            # the joint's twist in the world at the sole's origin: w = R h_w, v = R h_v + (p_k - ps) x w
+            w0 = R[0, 0] * h[3] + R[0, 1] * h[4] + R[0, 2] * h[5]
+            w1 = R[1, 0] * h[3] + R[1, 1] * h[4] + R[1, 2] * h[5]
+            w2 = R[2, 0] * h[3] + R[2, 1] * h[4] + R[2, 2] * h[5]
+            d0, d1, d2 = R[0, 3] - p0, R[1, 3] - p1, R[2, 3] - p2
+            v0 = R[0, 0] * h[0] + R[0, 1] * h[1] + R[0, 2] * h[2] + d1 * w2 - d2 * w1
+            v1 = R[1, 0] * h[0] + R[1, 1] * h[1] + R[1, 2] * h[2] + d2 * w0 - d0 * w2
+            v2 = R[2, 0] * h[0] + R[2, 1] * h[1] + R[2, 2] * h[2] + d0 * w1 - d1 * w0
+            row = T[k - 1]  # minus the twist in the sole frame: Rs^T v, Rs^T w
+            row[o + 0] = -(r00 * v0 + r10 * v1 + r20 * v2)
+            row[o + 1] = -(r01 * v0 + r11 * v1 + r21 * v2)
+            row[o + 2] = -(r02 * v0 + r12 * v1 + r22 * v2)
+            row[o + 3] = -(r00 * w0 + r10 * w1 + r20 * w2)
+            row[o + 4] = -(r01 * w0 + r11 * w1 + r21 * w2)
+            row[o + 5] = -(r02 * w0 + r12 * w1 + r22 * w2)
