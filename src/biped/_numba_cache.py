@@ -178,9 +178,11 @@ def say_if_cold(dispatcher, what: str, name: str, default_s: float) -> None:
     """Once per process: when ``dispatcher`` has no cached machine code, log (warning, logger
     ``"biped"``) that ``what`` compiles on its first use and about how long it takes (measured on
     this machine when it was compiled here before, else ``default_s``)."""
-    if what in _SAID or is_cached(dispatcher):
+    if what in _SAID:
         return
-    _SAID.add(what)
+    _SAID.add(what)  # said or found cached: not looked up again (it read the cache index, a trial)
+    if is_cached(dispatcher):
+        return
     measured = measured_compile_s(name)
     est = f"~{measured:.0f} s, measured here" if measured is not None else f"~{default_s:.0f} s"
     LOG.warning(

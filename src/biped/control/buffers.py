@@ -6,6 +6,7 @@ the compiled :func:`unpack` that cuts them into named views for the kernel
 from __future__ import annotations
 
 from collections import namedtuple
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -91,9 +92,11 @@ Work = _record("Work", "work")
 Out = _record("Out", "out")
 
 
+@lru_cache(maxsize=8)
 def layout(n: int) -> dict[str, dict[str, tuple[int, tuple[int, ...]]]]:
     """Offsets and shapes ``{buffer: {field: (offset, shape)}}`` of the ints, model, work and out
-    buffers for ``n`` links; ``{buffer: {"_size": (size, ())}}`` is each buffer's length."""
+    buffers for ``n`` links; ``{buffer: {"_size": (size, ())}}`` is each buffer's length. Computed
+    once per ``n`` (a controller a sweep trial asked for it again, ~1 ms): do not modify it."""
     dims = {"n": n, "n-1": n - 1}
     result = {}
     for buf, fields in _FIELDS.items():

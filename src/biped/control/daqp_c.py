@@ -24,7 +24,7 @@ import math
 
 import numpy as np
 from llvmlite import ir  # type: ignore[import-untyped]
-from numba import carray, cfunc, njit, types
+from numba import carray, njit, types
 from numba.extending import intrinsic, overload
 
 from biped.control.buffers import _take2
@@ -92,9 +92,20 @@ class _DaqpQuadprog(types.WrapperAddressProtocol):
         return DAQP_SIG
 
 
-@cfunc(DAQP_SIG, cache=True)
-def _unused(res, prob, settings):  # pragma: no cover - the placeholder when the C solve is off
-    return -1
+def __getattr__(name: str):
+    """``_unused``: the placeholder C function (:mod:`biped.control.daqp_stub`), compiled or
+    loaded from numba's cache on first use only."""
+    if name == "_unused":
+        from biped.control.daqp_stub import unused
+
+        return unused
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def _placeholder_address() -> int:
+    from biped.control.daqp_stub import unused
+
+    return unused.address or 0
 
 
 def _result(x: np.ndarray, lam: np.ndarray) -> np.ndarray:
@@ -160,7 +171,7 @@ def c_arguments(qp, keep: list) -> tuple[bool, tuple]:
     c = daqp_c()
     if qp is None or c is None or getattr(qp, "solver", None) != "daqp":
         z = np.zeros(1)
-        fn = c[0] if c is not None else _DaqpQuadprog(_unused.address or 0)
+        fn = c[0] if c is not None else _DaqpQuadprog(_placeholder_address())
         empty = (np.zeros(4, dtype=np.uint64), np.zeros(16, dtype=np.int32), np.zeros(1, dtype=np.int32))
         return False, (fn, *empty, z, z, z, np.zeros(8, dtype=np.int64))
     fn, settings = c

@@ -181,6 +181,7 @@ def _compile(name: str) -> None:
         compile_kernel()
         return
     if name == "loop":
+        import biped.control.daqp_stub  # noqa: F401 - the loop's placeholder C function (compiles on import)
         from biped.sim.fused import compile_kernel as compile_loop
 
         compile_loop()
