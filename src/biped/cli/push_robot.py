@@ -1,0 +1,100 @@
+"""``biped push --model <robot>``: W's push moved onto a robot's own MJCF (docs/robots.md). Thin:
+the options checked, the run (:func:`biped.sim.robot.robot_push`) and its files
+(:mod:`biped.outputs.robot`)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+
+def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
+    """``--model <robot>`` (a name or an MJCF path, ``desc`` its mapping): W's push moved onto a
+    robot's own MJCF (docs/robots.md): its keyframe stance, the QP with its actuator limits, W's
+    block scaled to it, from behind; ``out_dir(args)`` makes the run folder, after every check."""
+    from biped.errors import ScenarioError
+    from biped.models import total_mass_kg
+    from biped.outputs.robot import write_robot_outputs, write_robot_replay, write_robot_video
+    from biped.sim.robot import Block, ForcePulse, PlatformMove, block_for, robot_controller, robot_push
+    from biped.sim.scenario import Scenario
+
+    unsupported = {
+        "--scenario": args.scenario,
+        "--set": args.set or None,
+        "--controller": args.controller,
+        "--physics": args.physics,
+        "--stepping": getattr(args, "stepping", None),
+        "--seed": args.seed,
+    }
+    pert = getattr(args, "perturbation", None) or "block"
+    if pert not in ("block", "force", "platform"):
+        unsupported[f"--perturbation {pert}"] = True  # W's scene only (docs/robots.md)
+    given = [k for k, v in unsupported.items() if v]
+    if given:
+        raise ScenarioError(
+            f"--model {args.model}: {', '.join(given)} not supported on robots yet; valid: --duration, "
+            f"--distribution, --timestep, --block-position, --block-velocity, --block-mass"
+        )
+    distribution = args.distribution or "qp"
+    seconds = args.duration if args.duration is not None else 3.0
+    if not (0 < seconds <= 60):
+        raise ScenarioError(f"--duration must be in (0, 60] s, got {seconds}")
+    ctrl = robot_controller(desc, distribution)  # checks the feet, soles and limits first
+    out = out_dir(args)  # after every check: a refused run makes no folder
+    b = block_for(desc, total_mass_kg(), ctrl)
+    block: Block | None = Block(
+        tuple(args.block_position) if args.block_position else b.position_m,
+        tuple(args.block_velocity) if args.block_velocity else b.velocity_m_s,
+        args.block_mass if args.block_mass is not None else b.mass_kg,
+    )
+    force = platform = None
+    if pert != "block" and (args.block_position or args.block_velocity or args.block_mass is not None):
+        raise ScenarioError(f"--perturbation {pert} takes no --block-* options")
+    if pert == "platform":  # W's backward translation (5 cm in 0.3 s from 0.1 s); robots face +x
+        w = Scenario()
+        dx, dy = w.platform_displacement_m
+        platform = PlatformMove((-dx, dy), w.platform_start_s, w.platform_duration_s)
+        block = None
+    if pert == "force":  # W's pulse (60 N from behind for 0.15 s) scaled with the robot's mass
+        w = Scenario()
+        scale = desc.mass / total_mass_kg()
+        force = ForcePulse(
+            (-w.force_n[0] * scale, 0.0, 0.0), w.force_start_s, w.force_duration_s, w.force_shape
+        )
+        block = None
+    replay, video = not args.no_replay, not args.no_video
+    run = robot_push(
+        desc,
+        seconds,
+        distribution=distribution,
+        block=block,
+        force=force,
+        platform=platform,
+        timestep_s=args.timestep,
+        record_qpos=replay or video,
+    )
+    summary = write_robot_outputs(out, desc, run, block, distribution, force, platform)
+    if replay:
+        write_robot_replay(out, desc, run, block, summary, platform)
+    if video:
+        res = write_robot_video(out, desc, run, block, lambda s: print(s, flush=True), platform)
+        if res.path is None:
+            print(f"video.mp4 not written: {res.reason}")
+    status = "recovered" if summary["recovered"] else "fell" if run.fell else "not recovered"
+    what = (
+        f"block {block.mass_kg:.3f} kg at {block.velocity_m_s[0]:g} m/s"
+        if block is not None
+        else f"force {force.force_n[0]:.1f} N for {force.duration_s:g} s"
+        if force is not None
+        else f"platform {platform.distance_m:g} m in {platform.duration_s:g} s"
+        if platform is not None
+        else ""
+    )
+    print(
+        f"{args.model} ({desc.mass:.1f} kg): {status}; {what}, peak COM velocity "
+        f"{summary['peak_com_velocity_x_m_s']:.3f} m/s, "
+        f"final COM offset {summary['final_com_offset_m'] * 1e3:.2f} mm, peak torque "
+        f"{summary['peak_torque_fraction_of_limit'] * 100:.0f}% of the limits -> {out}"
+    )
+    return 0
