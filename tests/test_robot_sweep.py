@@ -277,3 +277,53 @@ def test_platform_under_a_robot_carries_its_feet_and_its_set_point():
         feet.append(np.array([d.xpos[m.body(f).id, :2] for f in desc.feet]))
     np.testing.assert_allclose(feet[1] - feet[0], [[-0.05, 0.0], [-0.05, 0.0]], atol=5e-3)
     assert robot_push(desc, 2.0, platform=PlatformMove((-0.4, 0.0), 0.1, 0.3)).fell
+
+
+def test_waist_pull_on_a_robot_carries_its_hips_the_displacement():
+    """W's waist pull on Berkeley Humanoid (2 cm forward at 0.4 m/s; 5 cm falls): while the cable pulls, the
+    hips' midpoint (MuJoCo's joint anchors) is carried the motor's travel to 5 mm (the cable's
+    stretch, and the body coasting on while the motor slows); the cable's impulse points along
+    the pull; the robot recovers, early stop ending the same rows at rest; a sweep row carries the
+    displacement as its size."""
+    import mujoco
+
+    from biped.sim.robot import PullMove, robot_plant
+
+    desc = describe(BH)
+    pull = PullMove((0.02, 0.0), 0.4, 0.1)
+    run = robot_push(desc, 2.5, pull=pull, record_qpos=True)
+    short = robot_push(desc, 2.5, pull=pull, early_stop=True)
+    assert not run.fell and run.final_offset_m < 0.01 and short.stop_reason == "at_rest"
+    np.testing.assert_array_equal(short.central_com, run.central_com[: len(short.t)])
+    m = robot_plant(desc)
+    d = mujoco.MjData(m)
+    ctrl = robot_controller(desc, "statics", "none")
+    hips = [m.joint(ctrl.tree.joint_names[k]).id for k in range(12) if ctrl.tree.parent[k + 1] == 0]
+
+    def hip_mid(q):
+        d.qpos[:] = q
+        mujoco.mj_kinematics(m, d)
+        return d.xanchor[hips].mean(axis=0)
+
+    assert run.qpos is not None
+    dt = m.opt.timestep
+    k1 = int(round(0.1 / dt)) + int(round(0.02 / (0.75 * 0.4) / dt))  # the let-go step
+    start = hip_mid(run.qpos[int(round(0.1 / dt)) - 1])
+    carried = hip_mid(run.qpos[k1 - 1])[0] - start[0]
+    assert abs(carried - 0.02) < 0.005
+    assert robot_push(desc, 2.5, pull=PullMove((0.05, 0.0), 0.4, 0.1)).fell
+    assert run.force_impulse_n_s is not None and run.force_impulse_n_s[0] > 0
+    assert abs(run.force_impulse_n_s[1]) < 1e-9
+
+
+def test_waist_pull_sweep_on_a_robot_rows_carry_the_displacement(tmp_path):
+    """``biped sweep --model berkeley_humanoid --perturbation pull``: each row's size is the pull's
+    displacement in m, toward the pushed direction (0 deg: +x, the robot's forward), its impulse
+    the cable's, and 2 cm is survived where 5 cm falls (the direct runs above)."""
+    out = tmp_path / "p.parquet"
+    args = ["sweep", "--model", BH, "--perturbation", "pull", "--magnitude", "0.02,0.05", "--direction", "0"]
+    assert main([*args, "--workers", "1", "--quiet", "--out", str(out)]) == 0
+    rows = sorted(pq.read_table(out).to_pylist(), key=lambda r: r["paradigm_magnitude"])
+    assert [r["paradigm_magnitude"] for r in rows] == [0.02, 0.05] and rows[0]["paradigm_unit"] == "m"
+    assert [r["fell"] for r in rows] == [False, True] and rows[0]["stop_reason"] == "at_rest"
+    assert rows[0]["impulse_x_n_s"] > 0 and rows[0]["com_velocity_change_m_s"] > 0

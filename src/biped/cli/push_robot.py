@@ -4,6 +4,7 @@ the options checked, the run (:func:`biped.sim.robot.robot_push`) and its files
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -16,7 +17,15 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
     from biped.errors import ScenarioError
     from biped.models import total_mass_kg
     from biped.outputs.robot import write_robot_outputs, write_robot_replay, write_robot_video
-    from biped.sim.robot import Block, ForcePulse, PlatformMove, block_for, robot_controller, robot_push
+    from biped.sim.robot import (
+        Block,
+        ForcePulse,
+        PlatformMove,
+        PullMove,
+        block_for,
+        robot_controller,
+        robot_push,
+    )
     from biped.sim.scenario import Scenario
 
     unsupported = {
@@ -28,7 +37,7 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
         "--seed": args.seed,
     }
     pert = getattr(args, "perturbation", None) or "block"
-    if pert not in ("block", "force", "platform"):
+    if pert not in ("block", "force", "platform", "pull"):
         unsupported[f"--perturbation {pert}"] = True  # W's scene only (docs/robots.md)
     given = [k for k, v in unsupported.items() if v]
     if given:
@@ -48,13 +57,18 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
         tuple(args.block_velocity) if args.block_velocity else b.velocity_m_s,
         args.block_mass if args.block_mass is not None else b.mass_kg,
     )
-    force = platform = None
+    force = platform = pull = None
     if pert != "block" and (args.block_position or args.block_velocity or args.block_mass is not None):
         raise ScenarioError(f"--perturbation {pert} takes no --block-* options")
     if pert == "platform":  # W's backward translation (5 cm in 0.3 s from 0.1 s); robots face +x
         w = Scenario()
         dx, dy = w.platform_displacement_m
         platform = PlatformMove((-dx, dy), w.platform_start_s, w.platform_duration_s)
+        block = None
+    if pert == "pull":  # W's waist pull (10 cm at 0.4 m/s from 0.1 s) forward: the robots face +x
+        w = Scenario()
+        dx, dy = w.pull_displacement_m
+        pull = PullMove((-dx, dy), w.pull_velocity_m_s, w.pull_start_s)
         block = None
     if pert == "force":  # W's pulse (60 N from behind for 0.15 s) scaled with the robot's mass
         w = Scenario()
@@ -71,10 +85,11 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
         block=block,
         force=force,
         platform=platform,
+        pull=pull,
         timestep_s=args.timestep,
         record_qpos=replay or video,
     )
-    summary = write_robot_outputs(out, desc, run, block, distribution, force, platform)
+    summary = write_robot_outputs(out, desc, run, block, distribution, force, platform, pull)
     if replay:
         write_robot_replay(out, desc, run, block, summary, platform)
     if video:
@@ -89,6 +104,8 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
         if force is not None
         else f"platform {platform.distance_m:g} m in {platform.duration_s:g} s"
         if platform is not None
+        else f"waist pull {math.hypot(*pull.displacement_m):g} m at {pull.velocity_m_s:g} m/s"
+        if pull is not None
         else ""
     )
     print(

@@ -14,7 +14,7 @@ import numpy as np
 from biped.files import write_text
 from biped.models.robot import RobotDescription
 from biped.outputs._json import write_json
-from biped.sim.robot import Block, ForcePulse, PlatformMove, RobotRun, robot_plant
+from biped.sim.robot import Block, ForcePulse, PlatformMove, PullMove, RobotRun, robot_plant
 from biped.viz.replay import write_replay
 from biped.viz.replay_mujoco import replay_from_mujoco
 from biped.viz.video import VideoResult, render_video
@@ -27,6 +27,7 @@ def robot_summary(
     distribution: str,
     force: ForcePulse | None = None,
     platform: PlatformMove | None = None,
+    pull: PullMove | None = None,
 ) -> dict:
     """The run's numbers (SI units); ``recovered``: did not fall and its central-body COM ended
     within 1 cm of the set point horizontally."""
@@ -43,6 +44,10 @@ def robot_summary(
         "block": dataclasses.asdict(block) if block is not None else None,
         "force": dataclasses.asdict(force) if force is not None else None,
         "platform": dataclasses.asdict(platform) if platform is not None else None,
+        "pull": dataclasses.asdict(pull) if pull is not None else None,
+        "pull_impulse_n_s": (
+            run.force_impulse_n_s.tolist() if pull is not None and run.force_impulse_n_s is not None else None
+        ),
         "force_impulse_n_s": (
             run.force_impulse_n_s.tolist()
             if force is not None and run.force_impulse_n_s is not None
@@ -69,8 +74,9 @@ def write_robot_outputs(
     distribution: str,
     force: ForcePulse | None = None,
     platform: PlatformMove | None = None,
+    pull: PullMove | None = None,
 ) -> dict:
-    summary = robot_summary(desc, run, block, distribution, force, platform)
+    summary = robot_summary(desc, run, block, distribution, force, platform, pull)
     write_json(out / "summary.json", summary)
     head = "t_s,central_com_x_m,central_com_y_m,central_com_z_m,com_x_m,com_y_m,com_z_m," + ",".join(
         f"tau_{j}_n_m" for j in desc.leg_joints

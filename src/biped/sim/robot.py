@@ -144,6 +144,17 @@ class PlatformMove:
         return tuple(d / n) if n > 0 else (1.0, 0.0, 0.0)
 
 
+@dataclass(frozen=True)
+class PullMove:
+    """W's waist pull (:mod:`biped.sim.perturbations.pull`: a stiff, pull-only cable from a motor
+    travelling ``displacement_m`` (x, y) [m] at a peak ``velocity_m_s`` from ``start_s``, then let
+    go) fixed at the midpoint of the robot's hip joints on its floating body."""
+
+    displacement_m: tuple
+    velocity_m_s: float
+    start_s: float
+
+
 #: The plant's physics step: the file's, at most this [s] (the controller runs every step).
 MAX_TIMESTEP_S = 0.002
 
@@ -277,6 +288,7 @@ def robot_push(
     early_stop: bool = False,
     record_qpos: bool = False,
     platform: PlatformMove | None = None,
+    pull: PullMove | None = None,
 ) -> RobotRun:
     """Stand the robot for ``seconds`` under W's controller, kicked by ``push_m_s`` of COM
     velocity change at ``push_time_s`` (zero: no push) and/or hit by ``block`` (thrown at t = 0)
@@ -328,7 +340,8 @@ def robot_push(
     fell_at = None
     others = [int(m.jnt_dofadr[m.joint(PLATFORM_JOINT).id])] if platform is not None else []
     rest = RobotRest(m, desc, block is not None, target, others) if early_stop else None
-    over = max(kick if np.any(push_m_s) else 0, f1 + 1, p1 + 1)
+    cable = _cable(m, d, rb, hips, pull) if pull is not None else None
+    over = max(kick if np.any(push_m_s) else 0, f1 + 1, p1 + 1, cable.k1 + 1 if cable is not None else 0)
     stopped = None
     for i in range(n):
         if i == kick and np.any(push_m_s):
@@ -343,6 +356,8 @@ def robot_push(
                 d.xfrc_applied[rb, :3] = f
                 d.xfrc_applied[rb, 3:] = np.cross(p - d.xipos[rb], f)
                 impulse += f * m.opt.timestep
+        if cable is not None:  # the cable's tension at the hips' midpoint (held over the step)
+            cable.apply(i, float(d.time), d)
         if p0 <= i <= p1:  # the platform's references (biped.sim.perturbations.platform), mid-step
             assert platform is not None
             tm = (i - p0 + 0.5) * dt if i < p1 else (p1 - p0) * dt
@@ -385,7 +400,27 @@ def robot_push(
         target,
         desc.mass,
         bv,
-        impulse,
+        impulse if cable is None else cable.impulse.copy(),
         reason,
         qpos,
     )
+
+
+def _cable(m: mujoco.MjModel, d: mujoco.MjData, body: int, hips: list, pull: PullMove):
+    """W's pull driver (:class:`~biped.sim.perturbations.pull.PullDriver`) on the robot: its
+    control period the physics step, its pelvis point the hips' midpoint in the floating body's
+    frame at the start."""
+    from types import SimpleNamespace
+
+    from biped.sim.perturbations.pull import PullDriver
+
+    mujoco.mj_kinematics(m, d)
+    mid = d.xanchor[hips].mean(axis=0)
+    point = d.xmat[body].reshape(3, 3).T @ (mid - d.xpos[body])
+    scenario = SimpleNamespace(
+        pull_displacement_m=tuple(pull.displacement_m),
+        pull_velocity_m_s=float(pull.velocity_m_s),
+        pull_start_s=float(pull.start_s),
+        control_rate_hz=1.0 / float(m.opt.timestep),
+    )
+    return PullDriver(scenario, m, body, point, None)

@@ -13,7 +13,9 @@ biped) moved onto the robot (:func:`biped.sim.robot.robot_push`), measured into 
   (:class:`~biped.sim.robot.ForcePulse`; W's ``force_point_m = "pelvis"``).
 - **Platform**: W's support-surface translation under the robot's feet
   (:class:`~biped.sim.robot.PlatformMove`), its size W's (displacement, peak velocity).
-- Lean-and-release and the waist pull are refused (:func:`check_robot_scenario`).
+- **Pull**: W's waist pull (:class:`~biped.sim.robot.PullMove`) from the hip joints' midpoint;
+  its impulse the cable's, as applied.
+- Lean-and-release is refused (:func:`check_robot_scenario`).
 
 The robot's controller is W's with the QP by default, the limits the sweep's ``torque_limits``
 (``"model"``: the joints' ``actuatorfrcrange``). Survived: the central-body COM never 0.15 m below
@@ -36,6 +38,7 @@ from biped.sim.robot import (
     Block,
     ForcePulse,
     PlatformMove,
+    PullMove,
     RobotRun,
     block_for,
     robot_controller,
@@ -48,7 +51,7 @@ from biped.sim.sweep.spec import TrialSetup
 from biped.sim.sweep.trial import ballistic_impulse
 
 #: Perturbations a robot takes.
-ROBOT_PERTURBATIONS = ("block", "force", "platform")
+ROBOT_PERTURBATIONS = ("block", "force", "platform", "pull")
 
 
 def check_robot_scenario(scenario) -> None:
@@ -57,7 +60,7 @@ def check_robot_scenario(scenario) -> None:
     if s.perturbation not in ROBOT_PERTURBATIONS:
         raise ScenarioError(
             f"perturbation {s.perturbation!r} is not available on robots (it needs W's scene: "
-            f"a lean pose solver, the pelvis cable); valid on robots: {', '.join(ROBOT_PERTURBATIONS)}"
+            f"a lean pose solver); valid on robots: {', '.join(ROBOT_PERTURBATIONS)}"
         )
     if s.controller != "workspace":
         raise ScenarioError(f"controller {s.controller!r} is not available on robots; valid: 'workspace'")
@@ -106,6 +109,8 @@ def run_robot(setup: TrialSetup) -> RobotRun:
             float(sc.block_mass_kg),
             float(sc.block_size_m[0]),
         )
+    elif sc.perturbation == "pull":
+        kw["pull"] = PullMove(tuple(sc.pull_displacement_m), sc.pull_velocity_m_s, sc.pull_start_s)
     elif sc.perturbation == "platform":
         kw["platform"] = PlatformMove(
             tuple(sc.platform_displacement_m), sc.platform_start_s, sc.platform_duration_s
@@ -138,6 +143,9 @@ def run_robot_trial(setup: TrialSetup) -> dict[str, Any]:
         size = of(sc).size(desc.mass)
         J, t_hit = np.full(3, math.nan), sc.platform_start_s
         magnitude, unit = size.magnitude, size.unit
+    elif sc.perturbation == "pull":  # the cable's applied impulse; the size is the displacement
+        J, t_hit = np.asarray(run.force_impulse_n_s, float), sc.pull_start_s
+        magnitude, unit = float(np.hypot(*sc.pull_displacement_m)), "m"
     else:
         J, t_hit = np.asarray(run.force_impulse_n_s, float), sc.force_start_s
         magnitude, unit = float(np.hypot(sc.force_n[0], sc.force_n[1])), "N"
