@@ -5,6 +5,7 @@ the options checked, the run (:func:`biped.sim.robot.robot_push`) and its files
 from __future__ import annotations
 
 import math
+import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -17,6 +18,7 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
     from biped.errors import ScenarioError
     from biped.models import total_mass_kg
     from biped.outputs.robot import write_robot_outputs, write_robot_replay, write_robot_video
+    from biped.sim.jit import kernels_for, warm_up
     from biped.sim.robot import (
         Block,
         ForcePulse,
@@ -49,7 +51,15 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
     seconds = args.duration if args.duration is not None else 3.0
     if not (0 < seconds <= 60):
         raise ScenarioError(f"--duration must be in (0, 60] s, got {seconds}")
+    # the controller's and the QP's kernels, with a ticker (a cold cache: ~75 s, silent before)
+    warm_up(
+        kernels_for("workspace", distribution, robot=True),
+        log=lambda s: print(s, file=sys.stderr),
+        tick=sys.stderr,
+    )
     ctrl = robot_controller(desc, distribution)  # checks the feet, soles and limits first
+    say = f"biped push: {pert} on {args.model} ({desc.mass:.1f} kg), {seconds:g} s, {distribution} ..."
+    print(say, file=sys.stderr, flush=True)  # after every check: a refusal stays one line
     out = out_dir(args)  # after every check: a refused run makes no folder
     b = block_for(desc, total_mass_kg(), ctrl)
     block: Block | None = Block(
@@ -88,6 +98,11 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
         pull=pull,
         timestep_s=args.timestep,
         record_qpos=replay or video,
+    )
+    print(
+        f"biped push: simulated {run.t[-1] if len(run.t) else 0.0:.2f} s; writing {out} ...",
+        file=sys.stderr,
+        flush=True,
     )
     summary = write_robot_outputs(out, desc, run, block, distribution, force, platform, pull)
     if replay:
