@@ -34,7 +34,7 @@ from biped.models.robot import (
     robot_tree,
 )
 from biped.sim.early_stop import AT_REST
-from biped.sim.perturbations.platform import PLATFORM, PLATFORM_JOINT, PLATFORM_MASS_KG, add_platform, profile
+from biped.sim.perturbations.platform import PLATFORM, PLATFORM_JOINT, add_platform
 from biped.sim.robot_rest import BLOCK, BLOCK_JOINT, FLOOR, RobotRest
 from biped.spatial import rot_to_quat
 
@@ -328,20 +328,15 @@ def robot_push(
         f0 = int(round(force.start_s / m.opt.timestep))
         f1 = f0 + max(1, int(round(force.duration_s / m.opt.timestep)))
     target = g[:3, 3].copy()  # where the run is judged: the set point, moved with the platform
-    p0 = p1 = -1
+    drive = _platform_drive(m, ctrl, platform) if platform is not None else None
     if platform is not None:
-        dt = m.opt.timestep
-        p0 = int(round(platform.start_s / dt))
-        p1 = p0 + max(1, int(round(platform.duration_s / dt)))
-        pact = [m.actuator(f"{PLATFORM}_{k}").id for k in ("position", "velocity", "force")]
-        pq = int(m.jnt_qposadr[m.joint(PLATFORM_JOINT).id])
-        paxis = np.asarray(platform.axis)
-        target[:2] += platform.distance_m * paxis[:2]
+        target[:2] += platform.distance_m * np.asarray(platform.axis)[:2]
     fell_at = None
     others = [int(m.jnt_dofadr[m.joint(PLATFORM_JOINT).id])] if platform is not None else []
     rest = RobotRest(m, desc, block is not None, target, others) if early_stop else None
     cable = _cable(m, d, rb, hips, pull) if pull is not None else None
-    over = max(kick if np.any(push_m_s) else 0, f1 + 1, p1 + 1, cable.k1 + 1 if cable is not None else 0)
+    ends = (kick if np.any(push_m_s) else 0, f1 + 1, drive.last + 1 if drive is not None else 0)
+    over = max(*ends, cable.k1 + 1 if cable is not None else 0)
     stopped = None
     for i in range(n):
         if i == kick and np.any(push_m_s):
@@ -358,13 +353,8 @@ def robot_push(
                 impulse += f * m.opt.timestep
         if cable is not None:  # the cable's tension at the hips' midpoint (held over the step)
             cable.apply(i, float(d.time), d)
-        if p0 <= i <= p1:  # the platform's references (biped.sim.perturbations.platform), mid-step
-            assert platform is not None
-            tm = (i - p0 + 0.5) * dt if i < p1 else (p1 - p0) * dt
-            x, v, a = profile(tm, platform.distance_m, (p1 - p0) * dt)
-            d.ctrl[pact] = (float(x), float(v), PLATFORM_MASS_KG * float(a))
-            moved = d.qpos[pq] if i < p1 else platform.distance_m  # the set point rides with it
-            ctrl.target.array[:2] = g[:2, 3] + moved * paxis[:2]
+        if drive is not None:  # the platform's servo references; the set point rides with it
+            drive.apply(i, d.qpos, d.ctrl)
         u = ctrl.torques(d.qpos[: tree.nq], d.qvel[: tree.nv])  # the robot's own layout comes first
         tau[i] = u
         d.ctrl[legs] = u
@@ -378,11 +368,9 @@ def robot_push(
         com[i] = d.subtree_com[m.body(desc.root).id]
         if cc[i, 2] < g[2, 3] - fall_drop_m:
             fell_at = float(d.time)
-            t, cc, com, tau = t[: i + 1], cc[: i + 1], com[: i + 1], tau[: i + 1]
-            bv = bv[: i + 1] if bv is not None else None
-            break
-        if rest is not None and rest.update(d, cc[i], i >= over):
+        elif rest is not None and rest.update(d, cc[i], i >= over):
             stopped = AT_REST
+        if fell_at is not None or stopped is not None:
             t, cc, com, tau = t[: i + 1], cc[: i + 1], com[: i + 1], tau[: i + 1]
             bv = bv[: i + 1] if bv is not None else None
             break
@@ -406,21 +394,44 @@ def robot_push(
     )
 
 
-def _cable(m: mujoco.MjModel, d: mujoco.MjData, body: int, hips: list, pull: PullMove):
-    """W's pull driver (:class:`~biped.sim.perturbations.pull.PullDriver`) on the robot: its
-    control period the physics step, its pelvis point the hips' midpoint in the floating body's
-    frame at the start."""
+def _keys(m: mujoco.MjModel, **keys):
+    """The scenario keys a W perturbation driver reads, its control period the plant's physics
+    step (the robot's controller runs every step)."""
     from types import SimpleNamespace
 
+    return SimpleNamespace(control_rate_hz=1.0 / float(m.opt.timestep), **keys)
+
+
+def _platform_drive(m: mujoco.MjModel, ctrl: WorkspaceController, platform: PlatformMove):
+    """W's platform schedule (:class:`~biped.sim.perturbations.platform.PlatformDriver`): the
+    servo's references each step of the ramp, the controller's set point (``ctrl.target``, the
+    standing one at offset 0) riding with the slab."""
+    from biped.sim.perturbations.platform import PlatformDriver
+
+    keys = _keys(
+        m,
+        platform_displacement_m=tuple(platform.displacement_m),
+        platform_start_s=float(platform.start_s),
+        platform_duration_s=float(platform.duration_s),
+    )
+    schedule = PlatformDriver(keys, m, ctrl).schedule
+    assert schedule is not None
+    schedule.base[:] = ctrl.target.array[:3]
+    return schedule
+
+
+def _cable(m: mujoco.MjModel, d: mujoco.MjData, body: int, hips: list, pull: PullMove):
+    """W's pull driver (:class:`~biped.sim.perturbations.pull.PullDriver`) on the robot, its pelvis
+    point the hips' midpoint in the floating body's frame at the start."""
     from biped.sim.perturbations.pull import PullDriver
 
     mujoco.mj_kinematics(m, d)
     mid = d.xanchor[hips].mean(axis=0)
     point = d.xmat[body].reshape(3, 3).T @ (mid - d.xpos[body])
-    scenario = SimpleNamespace(
+    keys = _keys(
+        m,
         pull_displacement_m=tuple(pull.displacement_m),
         pull_velocity_m_s=float(pull.velocity_m_s),
         pull_start_s=float(pull.start_s),
-        control_rate_hz=1.0 / float(m.opt.timestep),
     )
-    return PullDriver(scenario, m, body, point, None)
+    return PullDriver(keys, m, body, point, None)

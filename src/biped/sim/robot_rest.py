@@ -52,8 +52,9 @@ class RobotRest:
         if block:
             bj = m.joint(BLOCK_JOINT)
             self.bq, self.bv = int(bj.qposadr[0]), int(bj.dofadr[0])
-            g = [k for k in range(m.ngeom) if m.geom_bodyid[k] != 0 and m.geom_bodyid[k] != m.body(BLOCK).id]
-            self.geoms = np.array(g)
+            # the robot's own geoms (not the floor's, the block's or the platform's)
+            self.geoms = np.flatnonzero(m.body_rootid[m.geom_bodyid] == self.root)
+            self.rbound = m.geom_rbound[self.geoms]
             half = float(m.geom_size[m.geom(BLOCK).id, 0])  # the cube's half edge
             self.block_half_diag, self.block_rest_z = float(np.sqrt(3.0)) * half, half
             self.block_inertia_per_mass = (2.0 * half) ** 2 / 6.0  # a cube's I / m
@@ -70,7 +71,7 @@ class RobotRest:
             return True
         c = d.subtree_com[self.root, :2]
         if self.reach is None:  # the robot's geoms' farthest bounding sphere from its COM
-            self.reach = float(np.max(np.linalg.norm(d.geom_xpos[self.geoms, :2] - c, axis=1)))
+            self.reach = float(np.max(np.linalg.norm(d.geom_xpos[self.geoms, :2] - c, axis=1) + self.rbound))
         p = d.qpos[self.bq : self.bq + 3]
         g = self.gravity
         e = float(v @ v) + self.block_inertia_per_mass * float(w @ w)
