@@ -44,13 +44,21 @@ def quick_trial(setup) -> dict:
 
 
 def _child(out: Path, grid: str, overwrite: bool, crash: Path) -> int:
-    """Fork: the child runs the sweep and exits with its status (never returns into pytest)."""
+    """Fork: the child runs the sweep and exits with its status (never returns into pytest).
+
+    SIGINT and SIGTERM are blocked across the fork: a signal the test sends at once would
+    otherwise reach the child before its ``try`` and raise KeyboardInterrupt in a copy of the
+    pytest worker, which then reports an interrupt to xdist as if it were the worker."""
+    stop = {signal.SIGINT, signal.SIGTERM}
+    signal.pthread_sigmask(signal.SIG_BLOCK, stop)
     pid = os.fork()
     if pid:
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, stop)
         return pid
     code = 99
     try:
         signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, stop)
         s = run_sweep(
             SweepSpec(axes=GRIDS[grid]),
             out,
