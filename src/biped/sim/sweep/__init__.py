@@ -20,8 +20,8 @@ One concept per module:
   its axes and their values, :mod:`.aim` how each trial's block is aimed (its scenario);
 - :mod:`.record` the row of one trial (:class:`Measured`) and the file's Arrow schema;
 - :mod:`.store` the lock, the part files and the one consolidated Parquet file;
-- :mod:`.runner` and :mod:`.pool` running ``trial_fn(setup) -> row`` here, on local worker
-  processes or on Dask (no MuJoCo in either);
+- :mod:`.runner`, :mod:`.pool` and :mod:`.cluster` running ``trial_fn(setup) -> row`` here, on
+  local worker processes or on Dask (no MuJoCo in any);
 - :mod:`.trial` the push trial itself (MuJoCo) and its measurements.
 
 Envelopes and Hof's feet-in-place bound are analysis of the results: :mod:`biped.analysis`.
