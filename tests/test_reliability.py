@@ -355,9 +355,9 @@ def _peer(mode: str):
 
 @pytest.mark.parametrize("mode", ["silent", "garbage"])
 def test_a_scheduler_that_is_not_dask_is_refused_in_time_leaving_nothing(tmp_path, capsys, monkeypatch, mode):
-    import biped.sim.sweep.runner as runner
+    import biped.sim.sweep.cluster as cluster  # the Dask side of the runner
 
-    monkeypatch.setattr(runner, "SCHEDULER_TIMEOUT_S", 0.5)
+    monkeypatch.setattr(cluster, "SCHEDULER_TIMEOUT_S", 0.5)
     port, close = _peer(mode)
     try:
         t0 = time.monotonic()

@@ -182,3 +182,19 @@ def test_simulate_refuses_what_is_not_a_scenario(bad):
 
     with pytest.raises(ScenarioError, match=r"^simulate takes a biped\.sim\.Scenario"):
         simulate(bad)
+
+
+def test_qp_floor_friction_reaches_the_qp_and_leaves_old_files_as_they_were():
+    """Off by default and then absent from to_dict (summary.json, scenario.toml, a sweep's identity
+    as before the key existed); on, the QP's pyramid lies on the floor's axes (QPWeights)."""
+    from biped.sim.policies import policy_config
+    from biped.sim.sweep import SweepSpec
+
+    off = Scenario(distribution="qp")
+    on = off.with_overrides(qp_floor_friction=True)
+    assert "qp_floor_friction" not in off.to_dict() and on.to_dict()["qp_floor_friction"] is True
+    assert not policy_config(off).qp_weights.floor_friction
+    assert policy_config(on).qp_weights.floor_friction
+    assert SweepSpec(base=off).identity != SweepSpec(base=on).identity
+    with pytest.raises(ScenarioError, match="qp_floor_friction must be true or false"):
+        off.with_overrides(qp_floor_friction="yes")

@@ -15,6 +15,7 @@ import sys
 from pathlib import Path
 
 from biped.cli._common import check_file_writable, stopped_trials
+from biped.cli._sweep_args import add_by_option, draw_envelope, warm_up_kernels
 from biped.errors import ScenarioError
 
 #: the plot's radii a paradigm's rows hold (docs/perturbations.md: the block's impulse is measured
@@ -95,13 +96,7 @@ def register(subparsers) -> None:
     p.add_argument("--out", metavar="FILE.parquet", help="trials (default runs/envelope-<controller>...)")
     p.add_argument("--json", metavar="FILE.json", help="also write the envelope table as JSON")
     p.add_argument("--plot", metavar="FILE.png", help="draw the polar envelope")
-    p.add_argument(
-        "--by",
-        choices=("speed_m_s", "impulse_n_s", "magnitude", "horizontal_impulse_n_s"),
-        default=None,
-        help="radius of the polar plot (default: speed_m_s for the block, else magnitude, the "
-        "paradigm's own unit)",
-    )
+    add_by_option(p)
     p.add_argument("--overwrite", action="store_true", help="replace an --out that holds a different sweep")
     p.add_argument("--quiet", action="store_true", help="no progress line")
     p.add_argument("--dry-run", action="store_true", help="check everything, run nothing")
@@ -133,7 +128,7 @@ def directions(text: str) -> tuple[float, ...]:
 
 def build(args):
     """(SweepSpec of the lattice x directions, out path)."""
-    from biped.cli.sweep import _variant_suffix, build_spec, robot_suffix
+    from biped.cli._sweep_args import _variant_suffix, build_spec, robot_suffix
     from biped.sim.sweep.envelope import lattice, paradigm_lattice
 
     dirs = directions(args.directions)
@@ -182,7 +177,7 @@ def run(args) -> int:
 
 
 def _run(args) -> int:
-    from biped.cli.sweep import _check_plot
+    from biped.cli._sweep_args import _check_plot
     from biped.sim.early_stop import applies as early_stop_applies
     from biped.sim.sweep import check_run_args
     from biped.sim.sweep.envelope import paradigm_lattice, run_envelope
@@ -221,18 +216,7 @@ def _run(args) -> int:
     route_to(out.with_suffix(".mujoco.log"))
     print(f"biped envelope: {what}", file=sys.stderr)
     if args.scheduler is None:
-        from biped.sim.jit import kernels_for, warm_up
-
-        warm_up(
-            kernels_for(
-                spec.base.controller,
-                spec.base.distribution,
-                sweep=True,
-                stepping=spec.base.stepping,
-                robot=bool(spec.robot),
-            ),
-            log=lambda s: print(s, file=sys.stderr),
-        )
+        warm_up_kernels(spec)
 
     def progress(done: int, running: int) -> None:
         print(f"\rbiped envelope: {done} trials done, {running} running   ", end="", file=sys.stderr)
@@ -282,11 +266,7 @@ def _run(args) -> int:
         Path(args.json).write_text(json.dumps(data, indent=1) + "\n")
         print(f"envelope table: {args.json}")
     if args.plot:
-        from biped.viz.envelope import plot_comparison
-
-        by = args.by or ("speed_m_s" if args.perturbation == "block" else "magnitude")
-        plot_comparison([out], by=by, out=args.plot)
-        print(f"envelope plot: {args.plot}")
+        draw_envelope([out], args.by, args.perturbation, args.plot)
     if not result.complete:
         print(
             "biped envelope: some directions are unfinished (a trial was lost twice to a dead "

@@ -65,6 +65,7 @@ def policy_config(
             friction=scenario.friction,
             min_normal_n=scenario.qp_min_normal_n,
             cop_scale=scenario.qp_cop_scale,
+            floor_friction=scenario.qp_floor_friction,  # docs/envelope.md, "Limits against the grid"
             # stepping: trigger "capture" was tuned with massless-leg cones; "qp": the feet-in-place
             # QP until the first step (SteppingConfig.qp_leg_weight for the stepping QP after it)
             leg_weight=0.0

@@ -117,6 +117,8 @@ class Scenario:
     qp_min_normal_n: float = 10.0  # "qp": minimum normal force of a foot in contact [N]
     qp_cop_scale: float = 1.0  # "qp": the CoP stays in the sole shrunk by this factor
     qp_leg_weight: float = 1.0  # "qp": share of the legs' weight in the cones (0 with stepping = true)
+    # "qp": the friction pyramid on the floor's axes, not the sole's (a sole rolled onto its edge)
+    qp_floor_friction: bool = False
     torque_limits: Any = None  # None: the neuromotor preset's ("none" for "ideal", W)
     friction: float = 0.3
     restitution: float = 0.2
@@ -372,6 +374,7 @@ _STRINGS = {
 #: them writes the same summary.json / sweep identity as before they existed.
 _OMITTED_AT_DEFAULT = frozenset(
     {"early_stop", "step_program", "step_trigger", "pull_displacement_m", "pull_velocity_m_s", "pull_start_s"}
+    | {"qp_floor_friction"}
 )
 
 
@@ -401,7 +404,7 @@ def _coerce(key: str, v):
             return tuple(float(x) if is_number(x) else x for x in v)
         return float(v) if is_number(v) else v
     if (
-        key in _STRINGS or key in INTS or key in ("stepping", "ankle_only", "early_stop")
+        key in _STRINGS or key in INTS or key in ("stepping", "ankle_only", "early_stop", "qp_floor_friction")
     ):  # a bool is checked, not converted
         return v
     if key in ("model", "force_body"):

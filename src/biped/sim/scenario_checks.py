@@ -223,6 +223,8 @@ def validate(s: Scenario, choices: Mapping[str, tuple[str, ...]]) -> None:
         raise ScenarioError(f"seed must be an integer >= 0 and < 2^63; got {s.seed!r}")
     if not isinstance(s.early_stop, bool):
         raise ScenarioError(f"early_stop must be true or false; got {s.early_stop!r}")
+    if not isinstance(s.qp_floor_friction, bool):
+        raise ScenarioError(f"qp_floor_friction must be true or false; got {s.qp_floor_friction!r}")
     if not isinstance(s.stepping, bool):
         raise ScenarioError(f"stepping must be true or false; got {s.stepping!r}")
     if not isinstance(s.max_steps, int) or isinstance(s.max_steps, bool) or not 0 <= s.max_steps <= 20:

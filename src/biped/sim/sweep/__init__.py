@@ -16,11 +16,12 @@ then (minutes of simulation, so not a doctest)::
 
 One concept per module:
 
-- :mod:`.spec` the sweep's definition (axes, grid or sample, TOML, how each block is aimed);
+- :mod:`.spec` the sweep's definition (grid or sample, TOML, identity, trial keys), :mod:`.axes`
+  its axes and their values, :mod:`.aim` how each trial's block is aimed (its scenario);
 - :mod:`.record` the row of one trial (:class:`Measured`) and the file's Arrow schema;
 - :mod:`.store` the lock, the part files and the one consolidated Parquet file;
-- :mod:`.runner` and :mod:`.pool` running ``trial_fn(setup) -> row`` here, on local worker
-  processes or on Dask (no MuJoCo in either);
+- :mod:`.runner`, :mod:`.pool` and :mod:`.cluster` running ``trial_fn(setup) -> row`` here, on
+  local worker processes or on Dask (no MuJoCo in any);
 - :mod:`.trial` the push trial itself (MuJoCo) and its measurements.
 
 Envelopes and Hof's feet-in-place bound are analysis of the results: :mod:`biped.analysis`.

@@ -31,14 +31,15 @@ import numpy as np
 
 from biped.errors import ScenarioError
 from biped.sim.sweep import store
+from biped.sim.sweep.cluster import stream as stream_dask
 from biped.sim.sweep.pool import LocalPool
 from biped.sim.sweep.record import row_survived
 from biped.sim.sweep.runner import (
-    _sigterm_raises,
     check_run_args,
     default_trial_fn,
     default_workers,
     execute_trial,
+    sigterm_raises,
 )
 from biped.sim.sweep.search import SearchResult, search
 from biped.sim.sweep.spec import AXES, SweepSpec, Trial
@@ -255,7 +256,7 @@ def run_envelope(
     trials = spec.trials()
     by_point: dict[tuple[float, float], Trial] = {(t.direction_deg, getattr(t, axis)): t for t in trials}
     out.parent.mkdir(parents=True, exist_ok=True)
-    with store.SweepLock(out), _sigterm_raises() as state:
+    with store.SweepLock(out), sigterm_raises():
         if overwrite:
             store.remove_sweep(out)
         else:
@@ -322,7 +323,7 @@ def run_envelope(
                 backend = "none"
             elif scheduler is not None:
                 backend = "dask"
-                _stream_dask(scheduler, trial_fn, next_setup, record, lost)
+                stream_dask(scheduler, trial_fn, next_setup, record, lost)
             elif n_workers == 1:
                 backend = "serial"
                 while (setup := next_setup()) is not None:
@@ -331,12 +332,6 @@ def run_envelope(
                 n = min(n_workers, len(dirs))
                 backend = f"processes:{n}"
                 LocalPool(n, trial_fn).stream(next_setup, record, lost)
-        except KeyboardInterrupt:
-            if state["terminated"]:
-                from biped.sim.sweep.runner import Terminated
-
-                raise Terminated from None
-            raise
         finally:
             writer.close()
         store.consolidate(spec, out, trials)
@@ -379,48 +374,3 @@ def _direction_result(s: _Direction, sizes: tuple) -> DirectionResult:
         complete=True,
         search=r,
     )
-
-
-def _stream_dask(scheduler: Any, trial_fn: Callable, next_setup, record, lost) -> None:
-    """Dask: one task per trial, a new one submitted as each finishes (the next trial of that
-    direction); a task whose workers keep dying is lost (``lost``)."""
-    from dask.distributed import Client, as_completed
-
-    from biped.sim.sweep.runner import SCHEDULER_TIMEOUT_S, _execute_many
-
-    if isinstance(scheduler, Client):
-        client, own = scheduler, False
-    else:
-        try:
-            client = Client(scheduler, timeout=f"{SCHEDULER_TIMEOUT_S}s")
-        except OSError as exc:
-            raise ScenarioError(f"cannot connect to the Dask scheduler at {scheduler!r}: {exc}") from None
-        own = True
-    futures: dict = {}
-
-    def submit_all(ac=None) -> None:
-        while (setup := next_setup()) is not None:
-            fut = client.submit(_execute_many, trial_fn, [setup], pure=False)
-            futures[fut] = setup
-            if ac is not None:
-                ac.add(fut)
-
-    try:
-        submit_all()
-        ac = as_completed(list(futures))
-        try:
-            for fut in ac:
-                setup = futures.pop(fut)
-                try:
-                    rows = fut.result()
-                except Exception:  # noqa: BLE001 - the worker died (trial errors are rows)
-                    lost([setup])
-                else:
-                    record(rows)
-                submit_all(ac)
-        except BaseException:
-            client.cancel(list(futures))
-            raise
-    finally:
-        if own:
-            client.close()

@@ -25,7 +25,7 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any, BinaryIO
 
 _LEN = struct.Struct("<Q")
@@ -175,44 +175,30 @@ class LocalPool:
         self.prepare = prepare
         todo = list(reversed(chunks))
         lost = 0
-        sel = selectors.DefaultSelector()
-        try:
+        with self._session(record) as sel:
             for _ in range(min(self.n, len(todo))):
-                self._start(sel, todo)
+                self._assign(self._spawn(sel), todo.pop())
             while sel.get_map():
                 for key, _ in sel.select():
                     w: _Worker = key.data
-                    data = os.read(w.fd, 1 << 16)
-                    if data:
-                        rows = w.rows(data)
+                    rows = self._read(sel, w)
+                    if rows is not None:
                         w.remaining -= len(rows)
                         if w.remaining == 0 and todo:  # its next work first, then the bookkeeping
                             self._assign(w, todo.pop())
                         if rows:
                             record(rows)
                         if w.remaining == 0:
-                            sel.unregister(w.fd)
-                            self.workers.remove(w)
-                            w.close()
+                            self._retire(sel, w)
                         continue
-                    # end of file: the worker died
-                    lost += w.remaining
-                    sel.unregister(w.fd)
-                    self.workers.remove(w)
-                    w.close()
+                    lost += w.remaining  # the worker died
                     if todo and (self.respawns > 0 or not self.workers):
                         if self.respawns > 0:
                             self.respawns -= 1
-                            self._start(sel, todo)
+                            self._assign(self._spawn(sel), todo.pop())
                         else:
                             lost += sum(len(c) for c in todo)
                             todo.clear()
-        finally:
-            # interrupted (Ctrl-C, SIGTERM) or done: stop every worker, keep what they finished
-            for w in self.workers:
-                record(w.kill())
-            self.workers.clear()
-            sel.close()
         return lost
 
     def stream(
@@ -226,10 +212,9 @@ class LocalPool:
         running). Rows go to ``record(rows)`` as they arrive; the setups of a worker that died go to
         ``lost(setups)`` (a fresh worker takes the work that follows, up to ``4 * workers`` times).
         Returns when no trial runs and ``next_setup()`` has nothing."""
-        sel = selectors.DefaultSelector()
         idle: list[_Worker] = []
         running: dict[_Worker, list] = {}
-        try:
+        with self._session(record) as sel:
             while True:
                 while idle or len(self.workers) < self.n:
                     setup = next_setup()
@@ -238,9 +223,7 @@ class LocalPool:
                     if idle:
                         w = idle.pop()
                     elif self.respawns >= 0:
-                        w = _Worker(self.trial_fn)
-                        self.workers.append(w)
-                        sel.register(w.fd, selectors.EVENT_READ, w)
+                        w = self._spawn(sel)
                     else:
                         lost([setup])
                         continue
@@ -250,9 +233,8 @@ class LocalPool:
                     return
                 for key, _ in sel.select():
                     w = key.data
-                    data = os.read(w.fd, 1 << 16)
-                    if data:
-                        rows = w.rows(data)
+                    rows = self._read(sel, w)
+                    if rows is not None:
                         if rows:
                             w.remaining -= len(rows)
                             record(rows)
@@ -260,24 +242,42 @@ class LocalPool:
                             running.pop(w, None)
                             idle.append(w)
                         continue
-                    sel.unregister(w.fd)  # end of file: the worker died
-                    self.workers.remove(w)
-                    w.close()
-                    self.respawns -= 1
+                    self.respawns -= 1  # the worker died
                     gone = running.pop(w, [])
                     if gone:
                         lost(gone)
+
+    @contextlib.contextmanager
+    def _session(self, record: Callable[[list[dict]], None]) -> Iterator[selectors.BaseSelector]:
+        """The selector of one :meth:`run` or :meth:`stream`; at its end (done, or interrupted:
+        Ctrl-C, SIGTERM) every worker is stopped and what it finished is recorded."""
+        sel = selectors.DefaultSelector()
+        try:
+            yield sel
         finally:
             for w in self.workers:
                 record(w.kill())
             self.workers.clear()
             sel.close()
 
-    def _start(self, sel: selectors.BaseSelector, todo: list) -> None:
+    def _spawn(self, sel: selectors.BaseSelector) -> _Worker:
         w = _Worker(self.trial_fn)
         self.workers.append(w)
         sel.register(w.fd, selectors.EVENT_READ, w)
-        self._assign(w, todo.pop())
+        return w
+
+    def _read(self, sel: selectors.BaseSelector, w: _Worker) -> list[dict] | None:
+        """The rows complete in what ``w`` sent; None when it died (then it is retired)."""
+        data = os.read(w.fd, 1 << 16)
+        if data:
+            return w.rows(data)
+        self._retire(sel, w)  # end of file: the worker died
+        return None
+
+    def _retire(self, sel: selectors.BaseSelector, w: _Worker) -> None:
+        sel.unregister(w.fd)
+        self.workers.remove(w)
+        w.close()
 
     def _assign(self, w: _Worker, chunk: Sequence[Any]) -> None:
         w.remaining = len(chunk)

@@ -12,7 +12,6 @@ to finish: done trials are skipped.
 
 from __future__ import annotations
 
-import asyncio
 import contextlib
 import os
 import signal
@@ -23,17 +22,14 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
-from urllib.parse import urlsplit
 
 from biped import files
 from biped.errors import ScenarioError
 from biped.sim.sweep import store
+from biped.sim.sweep.cluster import SCHEDULER_TIMEOUT_S, check_scheduler, connect_scheduler, run_chunks
 from biped.sim.sweep.pool import LocalPool
 from biped.sim.sweep.record import MEASURED, Measured
 from biped.sim.sweep.spec import SweepSpec, TrialSetup
-
-#: Seconds to wait for a Dask scheduler before giving up.
-SCHEDULER_TIMEOUT_S = 5.0
 
 
 class Terminated(KeyboardInterrupt):
@@ -114,92 +110,6 @@ def default_workers() -> int:
         return max(1, os.cpu_count() or 1)
 
 
-def check_scheduler(address: str, timeout_s: float = SCHEDULER_TIMEOUT_S) -> None:
-    """Fail fast (:class:`ScenarioError`) if nothing listens at a Dask scheduler's address."""
-    parts = urlsplit(address if "://" in address else f"tcp://{address}")
-    try:
-        host, port = parts.hostname, parts.port
-    except ValueError:
-        host = port = None
-    if parts.scheme not in ("tcp", "tls") or not host or not port:
-        raise ScenarioError(
-            f"--scheduler must be a Dask address such as tcp://10.0.0.5:8786; got {address!r}"
-        )
-    try:
-        socket.create_connection((host, port), timeout=timeout_s).close()
-    except OSError as exc:
-        raise ScenarioError(
-            f"cannot reach the Dask scheduler at {address!r} "
-            f"({exc.strerror or exc}); is `dask scheduler` running there?"
-        ) from None
-
-
-async def _dask_identity(address: str, timeout_s: float) -> Any:
-    """What the peer at ``address`` says to Dask's ``identity`` request."""
-    from distributed.comm import connect
-
-    comm = await connect(address, timeout=timeout_s)
-    try:
-        await comm.write({"op": "identity", "reply": True})
-        return await asyncio.wait_for(comm.read(), timeout_s)
-    finally:
-        comm.abort()
-
-
-def _in_own_loop(coro: Any, timeout_s: float) -> Any:
-    """Run ``coro`` to its end in a new event loop on a thread of its own (a caller inside a
-    running loop, e.g. Jupyter, cannot ``asyncio.run``), with a hard limit of ``timeout_s``."""
-    box: dict[str, Any] = {}
-
-    def run() -> None:
-        try:
-            box["value"] = asyncio.run(asyncio.wait_for(coro, timeout_s))
-        except BaseException as exc:  # noqa: BLE001 - handed to the caller
-            box["error"] = exc
-
-    thread = threading.Thread(target=run, name="biped-dask-probe", daemon=True)
-    thread.start()
-    thread.join(timeout_s + 1.0)
-    if thread.is_alive():
-        raise TimeoutError
-    if "error" in box:
-        raise box["error"]
-    return box["value"]
-
-
-def connect_scheduler(address: str, timeout_s: float | None = None) -> Any:
-    """A ``dask.distributed.Client`` of the scheduler at ``address``, or a one-line
-    :class:`ScenarioError` within ``2 * timeout_s`` seconds when nothing listens there or the
-    peer is not a Dask scheduler (it says nothing, or something else). The client's own timeout
-    is not honoured by a peer that accepts and stays silent, so the peer is first asked Dask's
-    ``identity`` under a hard limit, and only a scheduler gets a client. ``timeout_s``: default
-    :data:`SCHEDULER_TIMEOUT_S`."""
-    timeout_s = SCHEDULER_TIMEOUT_S if timeout_s is None else timeout_s
-    check_scheduler(address, timeout_s)
-    try:
-        reply = _in_own_loop(_dask_identity(address, timeout_s), 2 * timeout_s)
-    except TimeoutError:
-        raise ScenarioError(
-            f"--scheduler {address!r}: something listens there but no Dask scheduler answered "
-            f"within {2 * timeout_s:g} s; give the address of a running `dask scheduler`"
-        ) from None
-    except Exception as exc:  # noqa: BLE001 - a peer speaking garbage can raise anything
-        first = (str(exc).strip().splitlines() or [""])[0][:200]
-        raise ScenarioError(
-            f"--scheduler {address!r} is not a Dask scheduler ({type(exc).__name__}"
-            f"{': ' + first if first else ''}); give the address of a running `dask scheduler`"
-        ) from None
-    if not isinstance(reply, dict) or reply.get("type") != "Scheduler":
-        what = reply.get("type") if isinstance(reply, dict) else type(reply).__name__
-        raise ScenarioError(
-            f"--scheduler {address!r} is not a Dask scheduler (it says it is {what!r}); give the "
-            f"address of a running `dask scheduler`"
-        )
-    from dask.distributed import Client
-
-    return Client(address, timeout=f"{timeout_s}s")
-
-
 def check_setups(spec: SweepSpec) -> None:
     """Build the scenario of every extreme trial of ``spec`` (each axis's smallest and largest
     value, every direction of a grid, the quarter turns within a sampled direction range), so that
@@ -271,11 +181,13 @@ def check_run_args(
 
 
 @contextlib.contextmanager
-def _sigterm_raises() -> Iterator[dict]:
-    """Within: SIGTERM raises :class:`Terminated` in the main thread (so ``finally`` blocks run)."""
+def sigterm_raises() -> Iterator[None]:
+    """Within: SIGTERM raises :class:`Terminated` in the main thread (so ``finally`` blocks run),
+    and a KeyboardInterrupt that ends the block after a SIGTERM (a trial that turned the first
+    into its own) leaves it as :class:`Terminated` too."""
     state = {"terminated": False}
     if threading.current_thread() is not threading.main_thread():
-        yield state
+        yield
         return
 
     def handler(signum: int, frame: Any) -> None:
@@ -284,7 +196,11 @@ def _sigterm_raises() -> Iterator[dict]:
 
     old = signal.signal(signal.SIGTERM, handler)
     try:
-        yield state
+        yield
+    except KeyboardInterrupt:
+        if state["terminated"]:
+            raise Terminated from None
+        raise
     finally:
         signal.signal(signal.SIGTERM, old)
 
@@ -329,55 +245,36 @@ def run_sweep(
     if isinstance(scheduler, str):  # connected before anything exists on disk
         scheduler = own_client = connect_scheduler(scheduler)
     try:
-        return _run_unlocked(
-            spec, out, trials, trial_fn, workers, scheduler, progress, retry_failed, overwrite, batch, t_start
-        )
+        made_parent = not out.parent.exists()
+        try:
+            out.parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise ScenarioError(
+                f"cannot create the folder of --out {str(out)!r}: {exc.strerror or exc}"
+            ) from None
+        try:
+            with store.SweepLock(out), sigterm_raises():
+                return _run_locked(
+                    spec,
+                    out,
+                    trials,
+                    trial_fn,
+                    workers,
+                    scheduler,
+                    progress,
+                    retry_failed,
+                    overwrite,
+                    batch,
+                    t_start,
+                )
+        except ScenarioError:
+            if made_parent:
+                with contextlib.suppress(OSError):
+                    out.parent.rmdir()  # a rejected sweep leaves no empty folder behind
+            raise
     finally:
         if own_client is not None:
             own_client.close()
-
-
-def _run_unlocked(
-    spec: SweepSpec,
-    out: Path,
-    trials: tuple,
-    trial_fn: Callable,
-    workers: int | None,
-    scheduler: Any,
-    progress: bool,
-    retry_failed: bool,
-    overwrite: bool,
-    batch: int,
-    t_start: float,
-) -> SweepSummary:
-    made_parent = not out.parent.exists()
-    try:
-        out.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise ScenarioError(
-            f"cannot create the folder of --out {str(out)!r}: {exc.strerror or exc}"
-        ) from None
-    try:
-        with store.SweepLock(out), _sigterm_raises() as state:
-            return _run_locked(
-                spec,
-                out,
-                trials,
-                trial_fn,
-                workers,
-                scheduler,
-                progress,
-                retry_failed,
-                overwrite,
-                batch,
-                state,
-                t_start,
-            )
-    except ScenarioError:
-        if made_parent:
-            with contextlib.suppress(OSError):
-                out.parent.rmdir()  # a rejected sweep leaves no empty folder behind
-        raise
 
 
 def _run_locked(
@@ -391,7 +288,6 @@ def _run_locked(
     retry_failed: bool,
     overwrite: bool,
     batch: int,
-    state: dict,
     t_start: float,
 ) -> SweepSummary:
     store.remove_stale_temps(out)
@@ -434,7 +330,7 @@ def _run_locked(
             backend = "none"
         elif scheduler is not None:
             backend = "dask"
-            lost = _run_dask(scheduler, trial_fn, spec, chunks, record)
+            lost = run_chunks(scheduler, trial_fn, spec, chunks, record)
         elif n_workers == 1 or len(todo) == 1:
             backend = "serial"
             for t in todo:
@@ -443,10 +339,6 @@ def _run_locked(
             n = min(n_workers, len(chunks))
             backend = f"processes:{n}"
             lost = LocalPool(n, trial_fn).run(chunks, record, prepare=spec.setup)
-    except KeyboardInterrupt:
-        if state["terminated"]:
-            raise Terminated from None
-        raise
     finally:
         writer.close()
         if bar is not None:
@@ -471,45 +363,8 @@ def _run_locked(
     )
 
 
-def _execute_many(trial_fn: Callable, setups: list) -> list[dict]:
-    return [execute_trial(trial_fn, s) for s in setups]
-
-
-def _run_dask(
-    scheduler: Any, trial_fn: Callable, spec: SweepSpec, chunks: list, record: Callable[[list[dict]], None]
-) -> int:
-    """Dask: one task per chunk. A task whose workers keep dying (dask's KilledWorker) is lost,
-    not recorded; the others go on."""
-    from dask.distributed import Client, as_completed
-
-    if isinstance(scheduler, Client):
-        client, own = scheduler, False
-    else:
-        client, own = connect_scheduler(str(scheduler)), True
-    lost = 0
-    try:
-        futures = {
-            client.submit(_execute_many, trial_fn, [spec.setup(t) for t in c], pure=False): len(c)
-            for c in chunks
-        }
-        try:
-            for fut in as_completed(list(futures)):
-                try:
-                    rows = fut.result()
-                except Exception:  # noqa: BLE001 - the worker died (trial errors are rows)
-                    lost += futures[fut]
-                    continue
-                record(rows)
-        except BaseException:
-            client.cancel(list(futures))
-            raise
-    finally:
-        if own:
-            client.close()
-    return lost
-
-
 __all__ = [
+    "SCHEDULER_TIMEOUT_S",
     "SweepSummary",
     "Terminated",
     "check_run_args",
@@ -519,4 +374,5 @@ __all__ = [
     "default_workers",
     "execute_trial",
     "run_sweep",
+    "sigterm_raises",
 ]

@@ -1,10 +1,8 @@
-"""The definition of a sweep: its axes, its base scenario, its trials, and how each trial's block is
-aimed. Pure Python (no MuJoCo): a sweep is checked and its trials listed before any work starts.
+"""The definition of a sweep: its axes, its base scenario, its trials and their keys. Pure Python
+(no MuJoCo): a sweep is checked and its trials listed before any work starts.
 
-Conventions: ``direction_deg`` is the direction the block *travels* in the horizontal plane,
-measured from +x toward +y (W's throw travels at 180 deg, along -x: the biped faces -x, so that
-block hits its back and pushes it forward). The block is aimed at the vertical line through the
-central body's initial COM (see :func:`aim_block`).
+The axes' values and defaults are :mod:`.axes`'s; how each trial's block is aimed (and its
+scenario made) is :mod:`.aim`'s, whose names this module still offers.
 """
 
 from __future__ import annotations
@@ -26,44 +24,23 @@ from biped import models
 from biped.control.limits import KINDS as TORQUE_LIMIT_KINDS
 from biped.errors import ScenarioError
 from biped.sim.scenario import Scenario, read_toml
+from biped.sim.sweep.aim import GRAVITY, aim_block, hold_scenario, trial_scenario
+from biped.sim.sweep.axes import (
+    AXES,
+    AXIS_DIGITS,
+    BLOCK_AXES,
+    GRID_RTOL,
+    MAX_TRIALS,
+    W_THROW,
+    _axis_values,
+    _check_int,
+    _is_number,
+    linspace_spec,
+    parse_axis,
+)
 
-#: The swept quantities: name -> (unit, what it means).
-AXES: dict[str, str] = {
-    "speed_m_s": "horizontal block speed [m/s]",
-    "direction_deg": "direction the block travels, from +x toward +y [deg]",
-    "block_mass_kg": "block mass [kg]",
-    "height_m": "height of the block's aim point above the floor [m]",
-    "gain_scale": "factor s on the stiffness gains (kp * s) and sqrt(s) on the damping gains "
-    "(kv * sqrt(s)), which keeps every damping ratio",
-    "magnitude": "the perturbation's size in its own unit: force N (peak), platform m, release deg "
-    "(the block's is speed_m_s; scenario key perturbation, docs/perturbations.md)",
-}
-
-#: W's throw (section 4) in sweep coordinates: 1.8 kg at 4.5 m/s along -x, 1.2 m high.
-W_THROW = {
-    "speed_m_s": 4.5,
-    "direction_deg": 180.0,
-    "block_mass_kg": 1.8,
-    "height_m": 1.2,
-    "gain_scale": 1.0,
-    "magnitude": 0.0,  # unused by the block; another paradigm's default: its base scenario's size
-}
-#: The axes a block sweep's trial keys hash (those before the paradigms existed: its keys stay).
 #: torque limits of a robot sweep: its joints' ``actuatorfrcrange`` inside the QP, or none.
 ROBOT_TORQUE_LIMITS = ("model", "none")
-BLOCK_AXES = ("speed_m_s", "direction_deg", "block_mass_kg", "height_m", "gain_scale")
-
-#: Axis values are kept to this many significant digits, so that ``1:2:11`` and the same values
-#: typed as a list (1.7, not 1.7000000000000002) are the same trials; two sweeps' values are the
-#: same when they agree to :data:`GRID_RTOL` (relative).
-AXIS_DIGITS = 12
-GRID_RTOL = 1e-9
-
-#: The most trials one sweep may hold (a grid's product or ``samples``): a bound on the work and
-#: the memory asked for by a typo such as ``num = 100000000``. Split larger studies into sweeps.
-MAX_TRIALS = 1_000_000
-
-GRAVITY = float(-models.gravity("wendlandt")[2])  # [m/s^2], the biped model's, which the scene keeps
 SCHEMA_VERSION = 1
 
 
@@ -101,91 +78,6 @@ class TrialSetup:
     #: a robot's MJCF (:mod:`biped.models.robot`) the trial runs on instead of the scenario's
     #: biped ("" for W's structure); its trials run :func:`biped.sim.robot_trial.run_robot_trial`
     robot: str = ""
-
-
-def _is_number(v: Any) -> bool:
-    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
-
-
-def _axis_values(name: str, value: Any) -> tuple[float, ...]:
-    if name not in AXES:
-        raise ScenarioError(f"unknown sweep axis {name!r}; valid axes: {', '.join(AXES)}")
-    if isinstance(value, Mapping):
-        value = linspace_spec(name, value)
-    if _is_number(value):
-        value = (value,)
-    if isinstance(value, (str, bytes)) or not isinstance(value, Iterable):
-        raise ScenarioError(
-            f"sweep axis {name} ({AXES[name]}) must be a number, a list of numbers "
-            f"or {{start, stop, num}}; got {value!r}"
-        )
-    out = []
-    for v in value:
-        if not _is_number(v) or not math.isfinite(float(v)):
-            raise ScenarioError(f"sweep axis {name} ({AXES[name]}) must hold finite numbers; got {v!r}")
-        out.append(float(f"{float(v):.{AXIS_DIGITS}g}"))
-        if len(out) > MAX_TRIALS:
-            raise ScenarioError(
-                f"sweep axis {name} has more than {MAX_TRIALS} values (the most a sweep may hold)"
-            )
-    if not out:
-        raise ScenarioError(f"sweep axis {name} ({AXES[name]}) is empty; give at least one value")
-    lo = min(out)
-    if name == "direction_deg" and max(abs(lo), abs(max(out))) > 360:
-        bad = lo if abs(lo) > 360 else max(out)
-        raise ScenarioError(f"sweep axis {name} ({AXES[name]}) must be in [-360, 360] deg; got {bad:g}")
-    if name in ("speed_m_s", "block_mass_kg", "height_m", "gain_scale") and lo <= 0:
-        raise ScenarioError(f"sweep axis {name} ({AXES[name]}) must be > 0; got {lo:g}")
-    if name == "magnitude" and lo < 0:
-        raise ScenarioError(f"sweep axis {name} ({AXES[name]}) must be >= 0; got {lo:g}")
-    return tuple(out)
-
-
-def linspace_spec(name: str, value: Mapping) -> tuple[float, ...]:
-    """``{start, stop, num}`` -> ``num`` evenly spaced values from start to stop, both included."""
-    keys = {"start", "stop", "num"}
-    if set(value) != keys:
-        raise ScenarioError(
-            f"sweep axis {name}: a range needs exactly the keys start, stop, num; "
-            f"got {sorted(map(str, value))}"
-        )
-    num = value["num"]
-    if not isinstance(num, (int, np.integer)) or isinstance(num, bool) or num < 1:
-        raise ScenarioError(f"sweep axis {name}: num must be an integer >= 1; got {num!r}")
-    if num > MAX_TRIALS:
-        raise ScenarioError(
-            f"sweep axis {name}: num = {num} is more than {MAX_TRIALS} (the most trials a sweep may hold)"
-        )
-    for k in ("start", "stop"):
-        if not _is_number(value[k]) or not math.isfinite(float(value[k])):
-            raise ScenarioError(f"sweep axis {name}: {k} must be a finite number; got {value[k]!r}")
-    return tuple(float(x) for x in np.linspace(float(value["start"]), float(value["stop"]), int(num)))
-
-
-def parse_axis(name: str, text: str) -> tuple[float, ...]:
-    """Command-line axis syntax: ``4.5``, ``1,2,4`` or ``START:STOP:NUM`` (both ends included)."""
-    text = text.strip()
-    try:
-        if ":" in text:
-            parts = text.split(":")
-            if len(parts) != 3:
-                raise ValueError
-            return _axis_values(
-                name, {"start": float(parts[0]), "stop": float(parts[1]), "num": int(parts[2])}
-            )
-        return _axis_values(name, [float(p) for p in text.split(",") if p.strip()])
-    except ScenarioError:  # a number that is out of range: say so (it is also a ValueError)
-        raise
-    except ValueError:
-        raise ScenarioError(
-            f"sweep axis {name} ({AXES[name]}): expected a number, a comma list "
-            f"such as 1,2,4 or START:STOP:NUM such as 0:315:8; got {text!r}"
-        ) from None
-
-
-def _check_int(name: str, value: Any, lo: int) -> None:
-    if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < lo:
-        raise ScenarioError(f"{name} must be an integer >= {lo}; got {value!r}")
 
 
 @dataclass(frozen=True)
@@ -479,79 +371,9 @@ class SweepSpec:
         return TrialSetup(self.scenario(trial), trial, self.torque_limits, self.robot)
 
 
-def hold_scenario(base: Scenario | None = None) -> Scenario:
-    """``base`` (W's scenario by default) with the set point moved to the initial state: COM at
-    ``initial_com_m``, ``initial_tilt_deg`` about -y. The task of ``biped sweep``'s default
-    ``--task hold``: the same job for W's controller and for the joint-space PD baseline (which
-    holds the initial joint angles), so their envelopes compare like with like."""
-    base = base or Scenario()
-    return base.with_overrides(
-        target_com_m=base.initial_com_m, target_tilt_deg=base.initial_tilt_deg, target_axis="-y"
-    )
-
-
-def aim_block(
-    target_xy: Any,
-    speed_m_s: float,
-    direction_deg: float,
-    height_m: float,
-    launch_distance_m: float = 0.5,
-    gravity: float = GRAVITY,
-) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-    """Start position [m] and velocity [m/s] (world frame) of a block aimed at a vertical line.
-
-    The block travels in direction ``u = (cos a, sin a, 0)`` (a = direction_deg) at horizontal
-    speed v. It starts ``L = launch_distance_m`` before the aim line, ``p0 = (target_xy - L u,
-    height_m)``, with the vertical velocity ``v_z = g T / 2``, ``T = L / v``, that brings it back
-    to ``height_m`` on the aim line at ``T`` under gravity (a flat ballistic arc; the body's
-    surface is reached a little earlier and a little higher).
-    """
-    a = math.radians(direction_deg)
-    ux, uy = math.cos(a), math.sin(a)
-    T = launch_distance_m / speed_m_s
-    p0 = (
-        float(target_xy[0] - launch_distance_m * ux),
-        float(target_xy[1] - launch_distance_m * uy),
-        float(height_m),
-    )
-    v0 = (float(speed_m_s * ux), float(speed_m_s * uy), float(0.5 * gravity * T))
-    return p0, v0
-
-
-def trial_scenario(base: Scenario, trial: Trial, *, launch_distance_m: float = 0.5) -> Scenario:
-    """``base`` with the block of ``trial`` aimed at the initial COM line and the gains scaled;
-    for another paradigm (``base.perturbation``), its keys set to the trial's magnitude and
-    direction (:meth:`biped.sim.perturbations.Perturbation.sized`; the direction is the way the
-    perturbation pushes the body, as the block's travel) and the gains scaled."""
-    s, r = trial.gain_scale, math.sqrt(trial.gain_scale)
-    gains = {
-        "kp_com": tuple(k * s for k in base.kp_com),
-        "kv_com": tuple(k * r for k in base.kv_com),
-        "kp_rot": tuple(k * s for k in base.kp_rot),
-        "kv_rot": tuple(k * r for k in base.kv_rot),
-    }
-    if base.perturbation != "block":
-        from biped.sim.perturbations import PARADIGMS
-
-        keys = PARADIGMS[base.perturbation].sized(base, trial.magnitude, trial.direction_deg)
-        return base.with_overrides(**keys, **gains)
-    p0, v0 = aim_block(
-        base.initial_com_m[:2], trial.speed_m_s, trial.direction_deg, trial.height_m, launch_distance_m
-    )
-    s, r = trial.gain_scale, math.sqrt(trial.gain_scale)
-    return base.with_overrides(
-        block_mass_kg=trial.block_mass_kg,
-        block_position_m=p0,
-        block_velocity_m_s=v0,
-        kp_com=tuple(k * s for k in base.kp_com),
-        kv_com=tuple(k * r for k in base.kv_com),
-        kp_rot=tuple(k * s for k in base.kp_rot),
-        kv_rot=tuple(k * r for k in base.kv_rot),
-    )
-
-
 __all__ = [
     "AXES",
+    "GRAVITY",
     "AXIS_DIGITS",
     "GRID_RTOL",
     "MAX_TRIALS",

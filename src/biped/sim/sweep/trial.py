@@ -17,8 +17,9 @@ from biped.models import subject
 from biped.sim.push import PushResult, controller_policy, run_closed_loop
 from biped.sim.scenario import Scenario
 from biped.sim.scene import Scene, build_scene
+from biped.sim.sweep.aim import GRAVITY
 from biped.sim.sweep.record import Measured
-from biped.sim.sweep.spec import GRAVITY, TrialSetup
+from biped.sim.sweep.spec import TrialSetup
 
 _SCENES: dict[tuple, Scene] = {}
 _TREES: dict[str, TreeModel] = {}
