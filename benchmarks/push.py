@@ -304,6 +304,7 @@ def stepping(args) -> None:
             sc.with_overrides(duration_s=0.1), scene, controller_policy(sc, scene), compiled=compiled
         )
     cpu: dict = {k: [] for k in cases}
+    phys: dict = {k: [] for k in cases}  # the bare mj_step loop driven by the trial's torques
     results = {}
     for _ in range(args.repeat):
         for name, (sc, compiled) in cases.items():
@@ -311,6 +312,8 @@ def stepping(args) -> None:
             policy = controller_policy(sc, scene)  # built outside the timer
             results[name], _, c = _timed(lambda: run_closed_loop(sc, scene, policy, compiled=compiled))  # noqa: B023
             cpu[name].append(c)
+            tq, steps = results[name].torques, len(results[name].times) - 1
+            phys[name].append(_timed(lambda: physics_loop(sc, scene, tq, steps))[2])  # noqa: B023
     load = os.getloadavg() if hasattr(os, "getloadavg") else (float("nan"),) * 3
     sc0 = cases["feet in place, hold push"][0]
     print(
@@ -320,13 +323,17 @@ def stepping(args) -> None:
         f"step_trigger {args.trigger!r}, {args.duration:g} s trials, median of {args.repeat}"
     )
     ref = statistics.median(cpu["feet in place, hold push"])
-    print("  trial                                CPU [ms]  / feet in place  simulated [s]  steps  recovered")
+    ref_p = statistics.median(phys["feet in place, hold push"])
+    print(
+        "  trial                                CPU [ms]  / feet in place   physics only [ms]  / feet in place's"
+        "  trial / its physics  simulated [s]  steps  recovered"
+    )
     for name in cases:
         r = results[name]
-        mc = statistics.median(cpu[name])
+        mc, mp = statistics.median(cpu[name]), statistics.median(phys[name])
         print(
-            f"  {name:36s} {mc * 1e3:8.1f} {mc / ref:12.3f}   {r.times[-1]:12.3f}  "
-            f"{len(r.extra.get('steps', ())):5d}  {r.recovered}"
+            f"  {name:36s} {mc * 1e3:8.1f} {mc / ref:12.3f}   {mp * 1e3:14.1f} {mp / ref_p:14.3f}   {mc / mp:18.3f}"
+            f"   {r.times[-1]:12.3f}  {len(r.extra.get('steps', ())):5d}  {r.recovered}"
         )
     a, b = results["stepping, step push"], results["stepping, step push, Python loop"]
     same = np.array_equal(a.qpos, b.qpos) and a.extra["steps"] == b.extra["steps"]

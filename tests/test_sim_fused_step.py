@@ -90,3 +90,44 @@ def test_min_norm_stepping_and_a_push_without_a_step(monkeypatch):
     a, b, n = both(Scenario(stepping=True, physics="fast", duration_s=1.0), monkeypatch)
     assert_same(a, b)
     assert a.extra["steps"] == [] and n == 1  # the warm-up call alone
+
+
+def test_step_program_with_a_nervous_system(monkeypatch):
+    """The lean release of validate's ``step_release`` with the young nervous system (feedback
+    delay, activation lag, rate limits) and the step program (weight transfer, planned swing):
+    the release arms the trigger and moves the set point from Python rows, the controller sees
+    the delayed state; the run is the same bit for bit."""
+    from biped.control.step_program import StepProgram
+
+    keys = {"friction": 1.0, "duration_s": 1.5, "perturbation": "release", "release_time_s": 0.1}
+    keys |= {"stepping": True, "max_steps": 1, "distribution": "qp", "step_program": "program"}
+    sc = Scenario(**keys, release_lean_deg=9.0, neuromotor="young")
+    scene = build_scene(sc)
+    assert isinstance(controller_policy(sc, scene), StepProgram)
+    a, b, n = both(sc, monkeypatch)
+    _check(a, b, n)
+
+
+def test_stepping_sweep_rows_unchanged(monkeypatch):
+    """A stepping sweep trial (15 m/s from the side; ``run_trial``: its measurements, the steps' columns) gives the same
+    row with the compiled loop as with the Python loop."""
+    from biped.cli import build_parser
+    from biped.cli.sweep import build_spec
+    from biped.sim.sweep.trial import run_trial
+
+    args = ["sweep", "--speed", "15", "--direction", "270", "--distribution", "qp", "--stepping"]
+    args += ["--physics", "fast", "--set", 'step_trigger="qp"', "--set", "duration_s=2.0"]
+    spec = build_spec(build_parser().parse_args(args))
+    (setup,) = [spec.setup(t) for t in spec.trials()]
+    made = []
+    real = fused.fused_rows
+    monkeypatch.setattr(fused, "fused_rows", lambda *a, **k: made.append(real(*a, **k)) or made[-1])
+    compiled = run_trial(setup)
+    assert len(made) == 1 and made[0] is not None
+    monkeypatch.setattr(fused, "fused_rows", lambda *a, **k: None)
+    python = run_trial(setup)
+    assert compiled["step_count"] >= 1
+    assert compiled.keys() == python.keys()
+    for key in compiled:
+        same = compiled[key] == python[key] or (compiled[key] != compiled[key] and python[key] != python[key])
+        assert same, (key, compiled[key], python[key])
