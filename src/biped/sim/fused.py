@@ -3,9 +3,11 @@
 :func:`biped.sim.push.run_closed_loop` runs W's workspace controller (min-norm, printed or QP
 distribution; the QP solved by daqp's C function, :mod:`biped.control.daqp_c`, or through numba's
 objmode, :mod:`biped.sim.fused_qp`) and the joint-PD
-baseline (without gravity compensation), clipped by torque limits or not (not stepping),
-through :class:`FusedRows`: one numba call runs up to one progress interval of control
-periods, each doing exactly what the Python loop does, in the same order: classify MuJoCo's contacts (the OR of
+baseline (without gravity compensation), clipped by torque limits or not, and a stepping
+policy's double support (:mod:`biped.sim.fused_step`: the swings go back to Python), through
+:class:`FusedRows` (the kernel: :mod:`biped.sim.fused_kernel`): one numba call runs up to one
+progress interval of control periods, each doing exactly what the Python loop does, in the same
+order: classify MuJoCo's contacts (the OR of
 :func:`~biped.sim.contact.contact_code` over ``data.contact``), call
 :func:`biped.control.recursions.compute_kernel` (or the joint PD's law) on the live qpos/qvel
 views, record the row, write ``ctrl`` and call MuJoCo's C ``mj_step`` through its function pointer (``libmujoco``'s own
