@@ -23,6 +23,14 @@ W's 3 s run took 2066 s on a 100 MHz SGI R4000 (0.0015x real time).
 (docs/perturbations.md; block = W's run, force 60 N x 0.15 s, platform 5 cm in 0.3 s, release
 4 deg, pull 5 cm at 0.4 m/s) on the same preset, interleaved, medians, and each one's cost over the block's
 (goal <= 1.2x); also the ratio of the fastest runs (less moved by other work on a shared machine).
+
+``--stepping``: instead, sweep trials with capture-point stepping (``biped sweep --distribution qp
+--stepping``, 1.8 kg block at 1.2 m, early stop off, ``--duration`` s, ``--trigger``): a push that
+steps (``--step-push``, default 14 m/s from the side) and one that does not (``--hold-push``,
+8 m/s from the side), each with stepping in the compiled loop (the default) and in the Python
+loop, against the feet-in-place trial of the hold push (the same length: it holds): interleaved,
+medians of thread CPU time, each one's ratio to the feet-in-place trial (issue #23: a stepping
+trial <= 1.3x).
 """
 
 from __future__ import annotations
@@ -91,9 +99,19 @@ def main() -> None:
     )
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     ap.add_argument("--paradigms", action="store_true", help="time every perturbation paradigm instead")
+    ap.add_argument(
+        "--stepping", action="store_true", help="time stepping trials against feet in place instead"
+    )
+    ap.add_argument("--trigger", choices=("qp", "capture"), default="qp", help="--stepping: step_trigger")
+    ap.add_argument("--step-push", default="14,90", help="--stepping: speed [m/s],direction [deg] that steps")
+    ap.add_argument("--hold-push", default="8,90", help="--stepping: speed,direction held feet in place")
+    ap.add_argument("--duration", type=float, default=4.0, help="--stepping: trial length [s]")
     args = ap.parse_args()
     if args.paradigms:
         paradigms(args)
+        return
+    if args.stepping:
+        stepping(args)
         return
     scenario = Scenario(physics=args.physics, distribution=args.distribution)
     scenario = scenario.with_overrides(**dict(parse_assignment(a) for a in args.set))
@@ -243,6 +261,84 @@ def paradigms(args) -> None:
             f"   {min(cpu[name]) / ref_min:16.3f}   {r.times[-1]:12.3f}  {r.recovered}"
         )
     print("goal: every paradigm <= 1.2x the block's run (issue #20)")
+
+
+def _sweep_trial(push: str, args, stepping: bool):
+    """One ``biped sweep --distribution qp`` trial of ``push`` ("speed,direction"), early stop off."""
+    from biped.cli import build_parser
+    from biped.cli.sweep import build_spec
+
+    speed, direction = push.split(",")
+    argv = [
+        "sweep",
+        "--speed",
+        speed,
+        "--direction",
+        direction,
+        "--distribution",
+        "qp",
+        "--physics",
+        args.physics,
+    ]
+    argv += ["--set", f"duration_s={args.duration}", "--set", "early_stop=false"]
+    argv += ["--set", f'step_trigger="{args.trigger}"'] + (["--stepping"] if stepping else [])
+    argv += [x for a in args.set for x in ("--set", a)]
+    spec = build_spec(build_parser().parse_args(argv))
+    return spec.scenario(spec.trials()[0])
+
+
+def stepping(args) -> None:
+    """Thread-CPU medians of stepping trials (compiled loop and Python loop) and their ratio to the
+    feet-in-place trial of the same length (see the module docstring)."""
+    cases = {
+        "feet in place, hold push": (_sweep_trial(args.hold_push, args, False), None),
+        "stepping, hold push": (_sweep_trial(args.hold_push, args, True), None),
+        "stepping, step push": (_sweep_trial(args.step_push, args, True), None),
+        "stepping, hold push, Python loop": (_sweep_trial(args.hold_push, args, True), False),
+        "stepping, step push, Python loop": (_sweep_trial(args.step_push, args, True), False),
+    }
+    scenes = {}
+    for name, (sc, compiled) in cases.items():
+        scene = scenes[name] = build_scene(sc)
+        run_closed_loop(
+            sc.with_overrides(duration_s=0.1), scene, controller_policy(sc, scene), compiled=compiled
+        )
+    cpu: dict = {k: [] for k in cases}
+    phys: dict = {k: [] for k in cases}  # the bare mj_step loop driven by the trial's torques
+    results = {}
+    for _ in range(args.repeat):
+        for name, (sc, compiled) in cases.items():
+            scene = scenes[name]
+            policy = controller_policy(sc, scene)  # built outside the timer
+            results[name], _, c = _timed(lambda: run_closed_loop(sc, scene, policy, compiled=compiled))  # noqa: B023
+            cpu[name].append(c)
+            tq, steps = results[name].torques, len(results[name].times) - 1
+            phys[name].append(_timed(lambda: physics_loop(sc, scene, tq, steps))[2])  # noqa: B023
+    load = os.getloadavg() if hasattr(os, "getloadavg") else (float("nan"),) * 3
+    sc0 = cases["feet in place, hold push"][0]
+    print(
+        f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; load average "
+        f"{load[0]:.1f} / {load[1]:.1f} / {load[2]:.1f} at the end (shared machine); physics {sc0.physics!r} "
+        f"(sole boxes: feet in place {sc0.sole_box}, stepping {cases['stepping, step push'][0].sole_box}), "
+        f"step_trigger {args.trigger!r}, {args.duration:g} s trials, median of {args.repeat}"
+    )
+    ref = statistics.median(cpu["feet in place, hold push"])
+    ref_p = statistics.median(phys["feet in place, hold push"])
+    print(
+        "  trial                                CPU [ms]  / feet in place   physics only [ms]  / feet in place's"
+        "  trial / its physics  simulated [s]  steps  recovered"
+    )
+    for name in cases:
+        r = results[name]
+        mc, mp = statistics.median(cpu[name]), statistics.median(phys[name])
+        print(
+            f"  {name:36s} {mc * 1e3:8.1f} {mc / ref:12.3f}   {mp * 1e3:14.1f} {mp / ref_p:14.3f}   {mc / mp:18.3f}"
+            f"   {r.times[-1]:12.3f}  {len(r.extra.get('steps', ())):5d}  {r.recovered}"
+        )
+    a, b = results["stepping, step push"], results["stepping, step push, Python loop"]
+    same = np.array_equal(a.qpos, b.qpos) and a.extra["steps"] == b.extra["steps"]
+    print(f"the step push's compiled run is the Python loop's bit for bit: {same}")
+    print("goal: a stepping trial <= 1.3x a feet-in-place trial of the same length (issue #23)")
 
 
 if __name__ == "__main__":

@@ -55,8 +55,8 @@ def test_cache_key_covers_the_controller_sources():
     stamp = fused._run_rows._cache._cache_file._source_stamp
     own, extra = stamp
     # recursions, statics, buffers, spatial, distribution, fused_qp, cones, daqp_c, contact, neuromotor,
-    # loop_measures
-    assert len(extra) == 12
+    # loop_measures, schedule, step_trigger, fused_step
+    assert len(extra) == 14
     assert extra[0][1] == __import__("os").stat(biped.control.recursions.__file__).st_size
 
 
@@ -151,8 +151,8 @@ def test_other_policies_keep_the_python_loop():
 
     with pytest.raises(ScenarioError, match="compiled loop"):
         run_closed_loop(sc, scene, RecordedTorques(np.zeros((11, 12)), 500.0), compiled=True)
-    stepping = sc.with_overrides(stepping=True)
-    assert fused.fused_controller(controller_policy(stepping, build_scene(stepping))) is None
+    stepping = sc.with_overrides(stepping=True)  # (stepping runs compiled: tests/test_sim_fused_step.py)
+    assert fused.fused_controller(controller_policy(stepping, build_scene(stepping))) is not None
 
 
 def both_qp(scenario: Scenario, **policy_kw):

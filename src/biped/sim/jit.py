@@ -66,18 +66,18 @@ def kernels_for(
 ) -> tuple[str, ...]:
     """The kernels a push run with ``controller`` (``"workspace"`` or ``"joint-pd"``) and the
     workspace controller's ``distribution`` uses; ``sweep``: and a sweep row's response
-    (:mod:`biped.sim.mos`). Every run but a stepping one goes through the compiled push loop
-    (:func:`biped.sim.push.run_closed_loop`), the joint PD's and the QP's too; a stepping run
-    goes through the Python loop, calling the controller's (and the QP's) kernels; so does a
-    ``robot`` trial (:func:`biped.sim.robot.robot_push`), which measures no response."""
+    (:mod:`biped.sim.mos`). Every run goes through the compiled push loop
+    (:func:`biped.sim.push.run_closed_loop`), the joint PD's, the QP's and a stepping one's too
+    (whose swings call the controller's and the QP's kernels from Python; ``stepping`` changes
+    nothing); a ``robot`` trial (:func:`biped.sim.robot.robot_push`), which measures no response,
+    goes through its own Python loop."""
     calls = ("controller", "qp") if distribution == "qp" else ("controller",)
     if robot:
         return calls
     more = ("response",) if sweep else ()
     if controller != "workspace":
         return ("loop", "contact", *more)  # the joint PD runs in the compiled loop
-    loop = () if stepping else ("loop",)  # the loop calls the controller's kernel (and the QP's part)
-    return (*calls, *loop, "contact", *more)
+    return (*calls, "loop", "contact", *more)  # the loop calls the controller's kernel (and the QP's part)
 
 
 def _dispatcher(name: str):

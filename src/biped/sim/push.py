@@ -190,7 +190,8 @@ def run_closed_loop(
     (:func:`controller_policy` applies them).
 
     ``compiled``: run the policy (:func:`controller_policy` of W's controller, any distribution,
-    or the joint PD; not stepping) in :mod:`biped.sim.fused`'s compiled loop, bit for bit the same
+    or the joint PD; a stepping policy's double support, its swings a period at a time in Python:
+    :mod:`biped.sim.fused_step`) in :mod:`biped.sim.fused`'s compiled loop, bit for bit the same
     result at a fraction of the Python loop's overhead. None (default): when it can (no
     ``on_step``); False: never; True: or raise ScenarioError.
     """
