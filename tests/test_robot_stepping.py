@@ -118,12 +118,17 @@ def test_g1_push_from_behind_past_its_feet_in_place_limit_is_recovered_with_a_st
     from behind (13.7 N s)."""
     from biped.analysis.robot import robot_hof_bound
     from biped.models.robot import describe
-    from biped.sim.robot import Block, block_for, robot_push
+    from biped.sim.robot import Block, robot_controller, robot_push, standing_qpos
+    from biped.sim.robot_trial import robot_block_defaults
+    from biped.sim.sweep.spec import aim_block
     from biped.sim.sweep.trial import ballistic_impulse
 
     desc = describe("g1")
-    b = block_for(desc, models.total_mass_kg())
-    block = Block(b.position_m, (15.25, 0.0, 0.2), b.mass_kg)
+    mass, height = robot_block_defaults("g1", models.total_mass_kg())  # as the envelope throws it
+    ctrl = robot_controller(desc, "statics", "none")
+    c = ctrl.link_poses(standing_qpos(desc, ctrl))[0][:3, 3]
+    p0, v0 = aim_block(c[:2], 15.25, 0.0, height, 0.5)
+    block = Block(p0, v0, mass)
     feet = robot_push(desc, 3.0, block=block, early_stop=True)
     assert feet.fell and not feet.steps
     step = robot_push(desc, 3.0, block=block, early_stop=True, stepping=SteppingConfig.for_trigger("capture"))

@@ -24,7 +24,7 @@ the standing pose, W's 0.168 m):
 - but the reach is at least the hip-to-foot distance D at the standing pose (W stands at 83 % of
   its reach; G1, crouched only off the singularity, beyond 0.944 L), and while a foot swings the
   stance hip is lowered at least to W's standing crouch, ``D - (D_W / L_W) L`` (W: D_W / L_W =
-  0.78; G1 stands at 0.96 L: with only s x 0.08 m its swing foot, pulled back within the reach,
+  0.78; G1 stands at 0.99 L: with only s x 0.08 m its swing foot, pulled back within the reach,
   hung 2 cm over the floor past the swing time while the capture point ran sideways);
 - lengths across the body by w: min_width, max_width of both limits, lateral_margin_m,
   lateral_offset_m; a limit's max_step keeps its split, ``sqrt((s f)^2 + (w B_W)^2)`` with ``f =
