@@ -116,7 +116,14 @@ def test_force_pulse_on_a_robot_applies_its_closed_form_impulse(tmp_path):
     [
         (["--perturbation", "release"], "perturbation 'release' is not available on robots"),
         (["--torque-limits", "human"], "torque_limits on a robot must be one of 'model', 'none'"),
-        (["--stepping"], "stepping is not available on robots"),
+        (
+            ["--stepping", "--perturbation", "platform"],
+            "stepping on a moving platform is not available on robots",
+        ),
+        (
+            ["--stepping", "--set", "step_program=program"],
+            "step_program 'program' is not available on robots",
+        ),
         (["--controller", "joint-pd"], "controller 'joint-pd' is not available on robots"),
         (["--physics", "fast"], "--physics not available on robots"),
     ],

@@ -35,17 +35,18 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
         "--set": args.set or None,
         "--controller": args.controller,
         "--physics": args.physics,
-        "--stepping": getattr(args, "stepping", None),
         "--seed": args.seed,
     }
     pert = getattr(args, "perturbation", None) or "block"
     if pert not in ("block", "force", "platform", "pull"):
         unsupported[f"--perturbation {pert}"] = True  # W's scene only (docs/robots.md)
+    if pert == "platform" and getattr(args, "stepping", None):
+        unsupported["--stepping with --perturbation platform"] = True
     given = [k for k, v in unsupported.items() if v]
     if given:
         raise ScenarioError(
             f"--model {args.model}: {', '.join(given)} not supported on robots yet; valid: --duration, "
-            f"--distribution, --timestep, --block-position, --block-velocity, --block-mass"
+            f"--distribution, --timestep, --block-position, --block-velocity, --block-mass, --stepping"
         )
     distribution = args.distribution or "qp"
     seconds = args.duration if args.duration is not None else 3.0
@@ -87,6 +88,11 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
             (-w.force_n[0] * scale, 0.0, 0.0), w.force_start_s, w.force_duration_s, w.force_shape
         )
         block = None
+    stepping = None
+    if getattr(args, "stepping", None):  # capture-point steps (docs/robots.md, "Stepping")
+        from biped.control.stepping_config import SteppingConfig
+
+        stepping = SteppingConfig.for_trigger(Scenario().step_trigger)
     replay, video = not args.no_replay, not args.no_video
     run = robot_push(
         desc,
@@ -98,6 +104,7 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
         pull=pull,
         timestep_s=args.timestep,
         record_qpos=replay or video,
+        stepping=stepping,
     )
     print(
         f"biped push: simulated {run.t[-1] if len(run.t) else 0.0:.2f} s; writing {out} ...",
@@ -123,6 +130,8 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
         if pull is not None
         else ""
     )
+    if run.steps:
+        what += f", {len(run.steps)} step(s)"
     print(
         f"{args.model} ({desc.mass:.1f} kg): {status}; {what}, peak COM velocity "
         f"{summary['peak_com_velocity_x_m_s']:.3f} m/s, "

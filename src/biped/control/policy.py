@@ -109,13 +109,15 @@ def _model_path(config: PolicyConfig):
 
 
 def make_policy(
-    config: PolicyConfig | None = None, joint_order=None, *, tree: TreeModel | None = None
+    config: PolicyConfig | None = None, joint_order=None, *, tree: TreeModel | None = None, **workspace
 ) -> Policy:
     """The policy of ``config`` (W's controller if None), its torques in ``joint_order`` (default
     the controller's own, i.e. the model's joint order), clipped by ``config.torque_limits``.
 
     ``tree``: the biped's :class:`~biped.model.TreeModel` for the workspace controller, if the
     caller already has one (e.g. cached across a sweep's trials); default: read from the model.
+    ``workspace``: more keywords of the :class:`~biped.control.workspace.WorkspaceController`
+    (a robot's ``soles`` and ``big_base``, :mod:`biped.sim.robot_stepping`).
     """
     config = config or PolicyConfig()
     if config.controller == "workspace":
@@ -128,6 +130,7 @@ def make_policy(
             gains=config.gains,
             distribution=config.distribution,
             **qp,
+            **workspace,
         )
         # the QP distributes over the contacts that exist: with W's fixed support it kept loading
         # a foot that had left the floor, and 15 of 64 sweep trials diverged (0 with the sensed

@@ -52,11 +52,12 @@ import numpy as np
 from biped.control import capture as cp
 from biped.control.limits import clip_torques
 from biped.control.policy import PolicyConfig, _model_path, make_policy
+from biped.control.stepping_body import SteppingBody, w_body
 from biped.control.stepping_config import SteppingConfig
-from biped.control.swing import swing_leg_torques, swing_reaction_wrench
+from biped.control.swing import swing_reaction_wrench
 from biped.control.workspace import Gains, Target
 from biped.errors import ScenarioError
-from biped.model import TreeModel, sole_rectangles
+from biped.model import TreeModel
 
 __all__ = ["SteppingConfig", "SteppingController"]
 
@@ -77,7 +78,9 @@ _bump = cp.bump
 class SteppingController:
     """W's controller plus capture-point steps, ``(t, qpos (19,), qvel (18,), feet) -> torques
     (12,)`` in ``joint_order`` (default the model's). ``config`` is the underlying
-    :class:`~biped.control.policy.PolicyConfig` (must be the workspace controller)."""
+    :class:`~biped.control.policy.PolicyConfig` (must be the workspace controller). ``body``: the
+    biped's structure (:class:`~biped.control.stepping_body.SteppingBody`; default W's,
+    :func:`~biped.control.stepping_body.w_body` of the config's model)."""
 
     def __init__(
         self,
@@ -86,14 +89,20 @@ class SteppingController:
         joint_order=None,
         *,
         tree: TreeModel | None = None,
+        body: SteppingBody | None = None,
     ):
         if config.controller != "workspace":
             raise ScenarioError("stepping needs the workspace controller (controller = 'workspace')")
         self.config = config
         self.stepping = stepping or SteppingConfig()
-        path = _model_path(config)
-        self.model = mujoco.MjModel.from_xml_path(str(path))
+        if body is None:
+            self.model = mujoco.MjModel.from_xml_path(str(_model_path(config)))
+        else:
+            self.model = body.model
         self.data = mujoco.MjData(self.model)
+        # a robot's controllers take its soles and big base (W's: read from the tree's model)
+        ws = {} if body is None else {"soles": body.controller_soles, "big_base": body.big_base}
+        ws = {k: v for k, v in ws.items() if v is not None}
         # with "qp" the torque limits are the QP's constraints (as in make_policy); the swing leg's
         # torques and the min-norm split's are clipped (_out)
         inner = replace(config, torque_limits=config.torque_limits if config.distribution == "qp" else None)
@@ -109,22 +118,22 @@ class SteppingController:
                     floor_friction=self.stepping.floor_friction,
                 ),
             )
-        self._inner = make_policy(inner, tree=tree)
+        self._inner = make_policy(inner, tree=tree, **ws)
         self.ctrl = self._inner.controller
         # before the first step: the scenario's own controller (its QP weights), so that a push
         # that takes no step runs exactly as without stepping
         plain = replace(inner, qp_weights=config.qp_weights)
-        self._ctrl_before = make_policy(plain, tree=tree).controller if plain != inner else self.ctrl
+        self._ctrl_before = make_policy(plain, tree=tree, **ws).controller if plain != inner else self.ctrl
         # after a step, once at rest: the stepping QP with the scenario's moment weight
         self._ctrl_settle = self.ctrl
         if self.stepping.settle_after_s is not None and inner.qp_weights is not None and config.qp_weights:
             w = replace(inner.qp_weights, moment=config.qp_weights.moment)
-            self._ctrl_settle = make_policy(replace(inner, qp_weights=w), tree=tree).controller
+            self._ctrl_settle = make_policy(replace(inner, qp_weights=w), tree=tree, **ws).controller
         # single support: the stepping QP, its friction pyramid scaled by swing_friction_scale
         self._ctrl_swing = self.ctrl
         if self.stepping.swing_friction_scale is not None and inner.qp_weights is not None:
             w = replace(inner.qp_weights, friction_scale=self.stepping.swing_friction_scale)
-            self._ctrl_swing = make_policy(replace(inner, qp_weights=w), tree=tree).controller
+            self._ctrl_swing = make_policy(replace(inner, qp_weights=w), tree=tree, **ws).controller
         names = tuple(self.ctrl.joint_names)
         self.joint_names = tuple(joint_order) if joint_order is not None else names
         if sorted(self.joint_names) != sorted(names):
@@ -136,24 +145,20 @@ class SteppingController:
         if config.torque_limits is not None and not config.torque_limits.unlimited:
             self.limits = config.torque_limits.reorder(self.joint_names)
         m = self.model
-        self._foot = [m.body(b).id for b in FOOT_BODIES]
-        self._hip = [m.body(f"{side}_thigh").id for side in FEET]
-        self._shank = [m.body(f"{side}_shank").id for side in FEET]
-        self._root = int(m.jnt_bodyid[0])  # the central body (the free joint's)
-        self._inv_sign = [
-            float(np.sign(m.jnt_axis[m.joint(f"{side}_ankle_inversion").id][0])) for side in FEET
-        ]
-        soles = sole_rectangles(m, FOOT_BODIES)
-        self._sole = []  # (sole centre in the foot body frame (3,), half length, half width)
-        for b, s in zip(self._foot, soles, strict=True):
-            g_bi = np.eye(4)
-            mujoco.mju_quat2Mat(g_bi[:3, :3].reshape(-1), m.body_iquat[b])
-            g_bi[:3, 3] = m.body_ipos[b]
-            self._sole.append(((g_bi @ s.g_foot_sole)[:3, 3].copy(), s.half_length, s.half_width))
-        # each leg's dofs (qvel index) and torque index (controller order), by joint name prefix
+        self.body = body = body if body is not None else w_body(m, self.ctrl.tree)
+        self._foot = list(body.feet)
+        self._hip = list(body.hips)
+        self._shank = list(body.shanks)
+        self._root = body.root
+        self._inv_sign = list(body.inversion_sign)
+        self._sole = list(body.soles)  # (sole centre in the foot body frame (3,), half length, half width)
+        self._sole_axes = body.sole_axes  # None: the foot body's axes (W)
+        self._foot_rot = body.foot_rotation  # None: the identity (W)
+        self._facing = body.facing  # None: facing -x (W)
+        # each leg's dofs (qvel index) and torque index (controller order), hip to ankle
         self._leg_dofs, self._leg_tau, self._leg_qpos = [], [], []
-        for side in FEET:
-            js = [i for i, n in enumerate(names) if n.startswith(side + "_")]
+        for leg in body.leg_joints:
+            js = [names.index(n) for n in leg]
             self._leg_tau.append(np.array(js))
             self._leg_dofs.append(np.array([m.jnt_dofadr[m.joint(names[i]).id] for i in js]))
             self._leg_qpos.append(np.array([m.jnt_qposadr[m.joint(names[i]).id] for i in js]))
@@ -216,7 +221,8 @@ class SteppingController:
         d = self.data
         b = self._foot[i]
         R = d.xmat[b].reshape(3, 3)
-        return d.xpos[b] + R @ self._sole[i][0], math.atan2(R[1, 0], R[0, 0])
+        Rs = R if self._sole_axes is None else R @ self._sole_axes[i]  # the sole's axes
+        return d.xpos[b] + R @ self._sole[i][0], math.atan2(Rs[1, 0], Rs[0, 0])
 
     def _polygon(self, feet) -> np.ndarray:
         soles = []
@@ -372,13 +378,11 @@ class SteppingController:
         cop = stance_c[:2] + np.array([c * loc[0] - sn * loc[1], sn * loc[0] + c * loc[1]])
         side = 1.0 if i == 1 else -1.0
         if self._landing is None or el < s.retarget_until * self._T:
-            self._landing = cp.step_target(
-                xi, cop, omega, self._T - el, stance_c[:2], side, self._offset, self._limits
-            )
+            self._landing = self._step_target(xi, cop, omega, self._T - el, stance_c[:2], side)
         land = self._landing
         step["target_m"] = [float(land[0]), float(land[1]), 0.0]
         # ankle path: the sole centre lands on `land`, flat, zero yaw
-        sole_off = self._sole[i][0]
+        sole_off = self._sole[i][0] if self._foot_rot is None else self._foot_rot[i] @ self._sole[i][0]
         ankle_land = np.array([land[0] - sole_off[0], land[1] - sole_off[1], -sole_off[2]])
         T = self._T
         sc = el / T
@@ -410,7 +414,7 @@ class SteppingController:
         acc = omega**2 * (self.data.subtree_com[0][:2] - cop)
         com = np.array(self.target.com)
         com[2] -= s.swing_height_drop_m
-        target = Target.wendlandt(com=tuple(com), tilt_deg=s.swing_tilt_deg)
+        target = self.body.target(tuple(com), s.swing_tilt_deg)
         target = replace(target, com_acc=(float(acc[0]), float(acc[1]), 0.0))
         tau_swing = self._swing_torques(i, pd, vd, ad)
         if s.swing_reaction:
@@ -440,9 +444,20 @@ class SteppingController:
         ang = np.asarray(target.ang_acc) + Rd.reshape(3, 3) @ dX[3:]
         return replace(target, com_acc=tuple(acc), ang_acc=tuple(ang))
 
+    def _step_target(self, xi, cop, omega, t_remaining, stance, side):
+        """:func:`~biped.control.capture.step_target` in W's facing (the body's ``facing``
+        rotation of the floor, and back)."""
+        R = self._facing
+        if R is None:
+            return cp.step_target(xi, cop, omega, t_remaining, stance, side, self._offset, self._limits)
+        land = cp.step_target(
+            R @ xi, R @ cop, omega, t_remaining, R @ stance, side, self._offset, self._limits
+        )
+        return R.T @ land
+
     def _swing_torques(self, i, pd, vd, ad):
-        """The swing leg's torques (:func:`biped.control.swing.swing_leg_torques`)."""
-        return swing_leg_torques(self, i, pd, vd, ad)
+        """The swing leg's torques (the body's swing law; W's :func:`biped.control.swing.swing_leg_torques`)."""
+        return self.body.swing(self, i, pd, vd, ad)
 
     def _touch_down(self, t, qpos, qvel, feet, xi):
         i = self.swing

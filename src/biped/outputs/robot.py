@@ -63,6 +63,8 @@ def robot_summary(
         "final_com_offset_m": run.final_offset_m,
         "peak_com_velocity_x_m_s": float(np.max(vx)),
         "peak_torque_fraction_of_limit": run.max_torque_fraction,
+        # with --stepping: the steps (foot, start, lift-off, touchdown, where; the set point moved)
+        **({"steps": run.steps, "set_point_com_m": run.target_com.tolist()} if run.steps is not None else {}),
     }
 
 

@@ -16,6 +16,7 @@ exact for the COM) or a block of ``block_mass_kg`` thrown at ``block_speed_m_s``
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import mujoco
 import numpy as np
@@ -71,6 +72,8 @@ class RobotRun:
     stop_reason: str | None = None
     #: the plant's qpos (n, nq) after each step (``record_qpos``; :func:`robot_plant`'s layout)
     qpos: np.ndarray | None = None
+    #: with stepping: the steps taken (:attr:`biped.control.stepping.SteppingController.steps`)
+    steps: list | None = None
 
     @property
     def max_torque_fraction(self) -> float:
@@ -289,12 +292,15 @@ def robot_push(
     record_qpos: bool = False,
     platform: PlatformMove | None = None,
     pull: PullMove | None = None,
+    stepping=None,
 ) -> RobotRun:
     """Stand the robot for ``seconds`` under W's controller, kicked by ``push_m_s`` of COM
     velocity change at ``push_time_s`` (zero: no push) and/or hit by ``block`` (thrown at t = 0)
     and/or carried by the floor's ``platform`` move;
     stops early when it falls, and with ``early_stop`` when it is at rest (:class:`RobotRest`);
-    ``record_qpos``: keep the plant's qpos after every step (:attr:`RobotRun.qpos`, for replays)."""
+    ``record_qpos``: keep the plant's qpos after every step (:attr:`RobotRun.qpos`, for replays);
+    ``stepping`` (a :class:`~biped.control.stepping_config.SteppingConfig`): capture-point steps
+    (:mod:`biped.sim.robot_stepping`), the run judged against the set point moved with the feet."""
     ctrl = robot_controller(desc, distribution, torque_limits, big_base=big_base)
     q0 = standing_qpos(desc, ctrl)
     g = ctrl.link_poses(q0)[0]
@@ -335,6 +341,16 @@ def robot_push(
     others = [int(m.jnt_dofadr[m.joint(PLATFORM_JOINT).id])] if platform is not None else []
     rest = RobotRest(m, desc, block is not None, target, others) if early_stop else None
     cable = _cable(m, d, rb, hips, pull) if pull is not None else None
+    stepper: Any = None
+    feet: Any = None
+    floor_z = g[2, 3]  # a fall: the central-body COM fall_drop_m below this (lowered while stepping)
+    if stepping is not None:
+        if platform is not None:
+            raise ScenarioError("stepping on a moving platform is not available on robots yet")
+        from biped.sim.robot_stepping import FootContacts, robot_stepper, set_point_height
+
+        stepper = robot_stepper(desc, q0, ctrl.target, stepping, distribution, torque_limits, big_base)
+        feet = FootContacts(m, desc, FLOOR)
     ends = (kick if np.any(push_m_s) else 0, f1 + 1, drive.last + 1 if drive is not None else 0)
     over = max(*ends, cable.k1 + 1 if cable is not None else 0)
     stopped = None
@@ -355,7 +371,14 @@ def robot_push(
             cable.apply(i, float(d.time), d)
         if drive is not None:  # the platform's servo references; the set point rides with it
             drive.apply(i, d.qpos, d.ctrl)
-        u = ctrl.torques(d.qpos[: tree.nq], d.qvel[: tree.nv])  # the robot's own layout comes first
+        if stepper is not None:  # the robot's own layout comes first
+            u = stepper(float(d.time), d.qpos[: tree.nq], d.qvel[: tree.nv], feet(d))
+            target[:2] = stepper.target.com[:2]  # the set point moved with the feet
+            floor_z = set_point_height(stepper)
+            if rest is not None:
+                rest.target[:] = target[:2]
+        else:
+            u = ctrl.torques(d.qpos[: tree.nq], d.qvel[: tree.nv])
         tau[i] = u
         d.ctrl[legs] = u
         mujoco.mj_step(m, d)
@@ -366,7 +389,7 @@ def robot_push(
             bv[i] = d.qvel[bq : bq + 3]
         cc[i] = ctrl.link_poses(d.qpos[: tree.nq])[0][:3, 3] if i % 10 == 0 or i == n - 1 else cc[i - 1]
         com[i] = d.subtree_com[m.body(desc.root).id]
-        if cc[i, 2] < g[2, 3] - fall_drop_m:
+        if cc[i, 2] < floor_z - fall_drop_m:
             fell_at = float(d.time)
         elif rest is not None and rest.update(d, cc[i], i >= over):
             stopped = AT_REST
@@ -391,6 +414,7 @@ def robot_push(
         impulse if cable is None else cable.impulse.copy(),
         reason,
         qpos,
+        None if stepper is None else [dict(s) for s in stepper.steps],
     )
 
 

@@ -16,6 +16,10 @@ biped) moved onto the robot (:func:`biped.sim.robot.robot_push`), measured into 
 - **Pull**: W's waist pull (:class:`~biped.sim.robot.PullMove`) from the hip joints' midpoint;
   its impulse the cable's, as applied.
 - Lean-and-release is refused (:func:`check_robot_scenario`).
+- **Stepping** (scenario key ``stepping``): the capture-point steps of
+  :mod:`biped.sim.robot_stepping` (the scenario's ``step_trigger`` and ``max_steps``; W's
+  parameters scaled to the robot's legs); recovered is then judged against the set point moved
+  with the feet, and the rows carry the stepping columns (``step_count``, ...).
 
 The robot's controller is W's with the QP by default, the limits the sweep's ``torque_limits``
 (``"model"``: the joints' ``actuatorfrcrange``). Survived: the central-body COM never 0.15 m below
@@ -48,7 +52,7 @@ from biped.sim.robot import (
 from biped.sim.robot_rest import RECOVERED_WITHIN_M
 from biped.sim.sweep.record import Measured
 from biped.sim.sweep.spec import TrialSetup
-from biped.sim.sweep.trial import ballistic_impulse
+from biped.sim.sweep.trial import _step_columns, ballistic_impulse
 
 #: Perturbations a robot takes.
 ROBOT_PERTURBATIONS = ("block", "force", "platform", "pull")
@@ -64,8 +68,10 @@ def check_robot_scenario(scenario) -> None:
         )
     if s.controller != "workspace":
         raise ScenarioError(f"controller {s.controller!r} is not available on robots; valid: 'workspace'")
-    if s.stepping:
-        raise ScenarioError("stepping is not available on robots yet (feet in place only)")
+    if s.stepping and s.step_program != "feedback":
+        raise ScenarioError(f"step_program {s.step_program!r} is not available on robots; valid: 'feedback'")
+    if s.stepping and s.perturbation == "platform":
+        raise ScenarioError("stepping on a moving platform is not available on robots yet")
     if s.perturbation == "force" and (s.force_body != "central_body" or s.force_point_m != "pelvis"):
         raise ScenarioError(
             "on robots the force pulse acts at the hip joints' midpoint on the floating body: "
@@ -117,6 +123,10 @@ def run_robot(setup: TrialSetup) -> RobotRun:
         )
     else:
         kw["force"] = ForcePulse(tuple(sc.force_n), sc.force_start_s, sc.force_duration_s, sc.force_shape)
+    if sc.stepping:  # capture-point steps (biped.sim.robot_stepping: W's parameters scaled)
+        from biped.control.stepping_config import SteppingConfig
+
+        kw["stepping"] = SteppingConfig.for_trigger(sc.step_trigger, max_steps=sc.max_steps)
     return robot_push(
         desc,
         sc.duration_s,
@@ -175,4 +185,6 @@ def run_robot_trial(setup: TrialSetup) -> dict[str, Any]:
         com_velocity_change_m_s=jh / desc.mass if size is None else size.com_velocity_change_m_s,
         stop_reason=run.stop_reason,
         stopped_at_s=float(run.t[-1]) if run.stop_reason is not None and len(run.t) else math.nan,
+        step_count=len(run.steps or ()),
+        **_step_columns(run.steps or ()),
     ).row()

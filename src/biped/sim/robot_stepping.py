@@ -1,0 +1,281 @@
+"""Stepping on a robot's own MJCF: the capture-point stepping controller
+(:class:`biped.control.stepping.SteppingController`) with the robot's structure
+(:func:`robot_stepping_body`), W's stepping parameters scaled to its legs
+(:func:`scaled_stepping`), and the plant's contact flags per foot (:class:`FootContacts`).
+
+**Structure.** The stepping model is the robot's file as loaded (the plant's qpos layout, held
+joints included: the whole-body COM, mass matrix and bias forces are the plant's). Legs, feet,
+shank (4th hinge's body) and leg length by :mod:`biped.control.stepping_body`'s place rules; the
+hip point is the origin of the leg's *first* hinge's body (a robot's hip hinges are spread along
+its thigh: G1's yaw hinge is 13 cm below its pitch hinge; W's three meet at one point); the
+soles are the robot's (:func:`biped.models.robot.robot_soles`, their axes in the foot frame
+kept: Berkeley Humanoid's foot frame is turned 90 deg from its sole); the set point the standing
+one, tilted about the robot's left axis; the swing law the 6-dof task of
+:func:`biped.control.swing_task.swing_pose_torques` (the foot landing at its standing
+orientation); the landing limits applied in W's facing (the robots face +x, W's biped -x).
+
+**Scaling rule** (:func:`scaled_stepping`; one set of parameters, W's, for every robot). With
+``s = L / L_W`` (leg lengths by :func:`biped.control.stepping_body.leg_length`, W's 0.826 m) and
+``w = B / B_W`` (the stance width: the horizontal distance between the feet bodies' origins at
+the standing pose, W's 0.168 m):
+
+- lengths along the body and vertical scale by s: the trigger's and dwell's margins, offset_m,
+  apex_m, reach_m, the swing and post-step height drops, the landing limits' max_back;
+- but the reach is at least the hip-to-foot distance D at the standing pose (W stands at 83 % of
+  its reach; G1, crouched only off the singularity, beyond 0.944 L), and while a foot swings the
+  stance hip is lowered at least to W's standing crouch, ``D - (D_W / L_W) L`` (W: D_W / L_W =
+  0.78; G1 stands at 0.99 L: with only s x 0.08 m its swing foot, pulled back within the reach,
+  hung 2 cm over the floor past the swing time while the capture point ran sideways);
+- lengths across the body by w: min_width, max_width of both limits, lateral_margin_m,
+  lateral_offset_m; a limit's max_step keeps its split, ``sqrt((s f)^2 + (w B_W)^2)`` with ``f =
+  sqrt(max_step^2 - B_W^2)`` W's forward step at its stance width;
+- times and speeds by sqrt(s), gains (1/s^2, 1/s) by 1/s and 1/sqrt(s): dynamic similarity
+  (equal Froude numbers): swing times, refractory, settle and dwell times, the descent and
+  settle speeds, the swing foot's and the post-step gains. W's controller's own gains stay W's.
+
+A biped of W's size (s = w = 1, D = D_W) gets W's numbers.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import replace
+
+import mujoco
+import numpy as np
+
+from biped.control import capture as cp
+from biped.control.distribution import QPWeights
+from biped.control.limits import TorqueLimits
+from biped.control.policy import PolicyConfig
+from biped.control.setpoint import Target
+from biped.control.stepping import SteppingConfig, SteppingController
+from biped.control.stepping_body import SteppingBody, facing_rotation, leg_chains, leg_length, w_body
+from biped.control.swing_task import swing_pose_torques
+from biped.errors import ModelError, ScenarioError
+from biped.models.robot import RobotDescription, leg_torque_limits, plant_model, robot_soles, robot_tree
+from biped.spatial import axis_angle_quat, quat_mul, quat_to_rot, transform
+
+__all__ = [
+    "FootContacts",
+    "robot_stepper",
+    "robot_stepping_body",
+    "scaled_stepping",
+    "set_point_height",
+    "w_size",
+]
+
+
+@functools.cache
+def w_size() -> tuple[float, float, float]:
+    """(leg length, stance width, hip-to-foot distance standing) [m] of W's biped by the rules of
+    :func:`scaled_stepping`."""
+    from biped import models
+    from biped.model import TreeModel
+
+    m = mujoco.MjModel.from_xml_path(str(models.path("wendlandt")))
+    body = w_body(m, TreeModel.from_mjcf(m))
+    d = mujoco.MjData(m)
+    d.qpos[:] = m.key_qpos[0]
+    mujoco.mj_kinematics(m, d)
+    stand = float(np.linalg.norm(d.xpos[body.hips[0]] - d.xpos[body.feet[0]]))
+    return body.leg_length_m, _hip_width(d, body.feet), stand
+
+
+def _hip_width(d: mujoco.MjData, hips) -> float:
+    return float(np.linalg.norm(d.xpos[hips[0]][:2] - d.xpos[hips[1]][:2]))
+
+
+def _limits(lim: cp.StepLimits, s: float, w: float, width_w: float) -> cp.StepLimits:
+    f = math.sqrt(max(lim.max_step**2 - width_w**2, 0.0))
+    return cp.StepLimits(
+        max_step=math.hypot(s * f, w * width_w),
+        min_width=w * lim.min_width,
+        max_width=w * lim.max_width,
+        max_back=s * lim.max_back,
+    )
+
+
+def scaled_stepping(
+    config: SteppingConfig, leg_length_m: float, hip_width_m: float, stance_reach_m: float = 0.0
+) -> SteppingConfig:
+    """W's stepping parameters ``config`` for a biped of leg length ``leg_length_m``, stance
+    width ``hip_width_m`` and hip-to-foot distance ``stance_reach_m`` standing (the module's rule)."""
+    L_w, B_w, D_w = w_size()
+    s, w = leg_length_m / L_w, hip_width_m / B_w
+    r = math.sqrt(s)
+    if not (s > 0 and w > 0):
+        raise ModelError(f"stepping: leg length {leg_length_m} m and hip width {hip_width_m} m must be > 0")
+    return replace(
+        config,
+        margin_m=s * config.margin_m,
+        rearm_margin_m=s * config.rearm_margin_m,
+        dwell_margin_m=s * config.dwell_margin_m,
+        offset_m=s * config.offset_m,
+        apex_m=s * config.apex_m,
+        reach_m=max(s * config.reach_m, stance_reach_m),
+        swing_height_drop_m=max(s * config.swing_height_drop_m, stance_reach_m - D_w / L_w * leg_length_m),
+        post_step_height_drop_m=s * config.post_step_height_drop_m,
+        lateral_margin_m=w * config.lateral_margin_m,
+        lateral_offset_m=w * config.lateral_offset_m,
+        limits=_limits(config.limits, s, w, B_w),
+        lateral_limits=_limits(config.lateral_limits, s, w, B_w),
+        # dynamic similarity (equal Froude numbers): times and speeds by sqrt(s), gains by 1 / s
+        swing_time_s=r * config.swing_time_s,
+        lateral_swing_time_s=r * config.lateral_swing_time_s,
+        refractory_s=r * config.refractory_s,
+        settle_after_s=None if config.settle_after_s is None else r * config.settle_after_s,
+        dwell_s=None if config.dwell_s is None else r * config.dwell_s,
+        descent_m_s=r * config.descent_m_s,
+        settle_speed_m_s=r * config.settle_speed_m_s,
+        trigger_rate_m_s=None if config.trigger_rate_m_s is None else r * config.trigger_rate_m_s,
+        kp_pos=config.kp_pos / s,
+        kv_pos=config.kv_pos / r,
+        kp_rot=config.kp_rot / s,
+        kv_rot=config.kv_rot / r,
+        post_step_kp_xy=config.post_step_kp_xy / s,
+        post_step_kv_xy=config.post_step_kv_xy / r,
+    )
+
+
+def robot_stepping_body(desc: RobotDescription, qpos: np.ndarray, target: Target) -> SteppingBody:
+    """The stepping controller's structure of the robot ``desc`` (the module's rules), at its
+    standing pose ``qpos`` (the plant's layout) with the standing set point ``target``."""
+    from biped.sim.robot import ROBOT_BIG_BASE
+
+    tree = robot_tree(desc)
+    legs = leg_chains(tree)
+    m = plant_model(desc)
+    d = mujoco.MjData(m)
+    d.qpos[:] = qpos
+    mujoco.mj_kinematics(m, d)
+    bodies = [[int(m.jnt_bodyid[m.joint(j).id]) for j in leg] for leg in legs]
+    feet = (bodies[0][5], bodies[1][5])
+    if tuple(m.body(b).name for b in feet) != tuple(desc.feet):
+        raise ModelError(
+            f"stepping: the legs end at {[m.body(b).name for b in feet]}, not the feet {desc.feet}"
+        )
+    from biped.models.robot import controller_model
+
+    cm = controller_model(desc)  # the soles are in its (fused) foot's inertial frame
+    soles, axes, rots = [], [], []
+    for b, s in zip(feet, robot_soles(desc), strict=True):
+        cb = cm.body(m.body(b).name).id
+        g = (
+            transform(quat_to_rot(cm.body_iquat[cb]), cm.body_ipos[cb]) @ s.g_foot_sole
+        )  # sole in the body frame
+        soles.append((g[:3, 3].copy(), float(s.half_length), float(s.half_width)))
+        axes.append(g[:3, :3].copy())
+        rots.append(d.xmat[b].reshape(3, 3).copy())
+    centres = [d.xpos[b] + R @ c[0] for b, R, c in zip(feet, rots, soles, strict=True)]
+    facing = facing_rotation(centres[0][:2], centres[1][:2])
+    left = centres[0] - centres[1]
+    left[2] = 0.0
+    left /= np.linalg.norm(left)  # forward tilt: about the left axis
+
+    def make_target(com, tilt_deg: float) -> Target:
+        if tilt_deg == 0.0:
+            return replace(target, com=tuple(com))
+        q = quat_mul(axis_angle_quat(left, math.radians(tilt_deg)), np.asarray(target.quat, float))
+        return replace(target, com=tuple(com), quat=tuple(q))
+
+    lengths = [leg_length(m, d, leg, b[0]) for leg, b in zip(legs, bodies, strict=True)]
+    return SteppingBody(
+        model=m,
+        root=int(m.body(desc.root).id),
+        feet=feet,
+        hips=(bodies[0][0], bodies[1][0]),
+        shanks=(bodies[0][3], bodies[1][3]),
+        leg_joints=legs,
+        soles=(soles[0], soles[1]),
+        inversion_sign=(0.0, 0.0),  # W's swing law only
+        leg_length_m=0.5 * (lengths[0] + lengths[1]),
+        target=make_target,
+        swing=swing_pose_torques,
+        sole_axes=(axes[0], axes[1]),
+        foot_rotation=(rots[0], rots[1]),
+        facing=facing,
+        controller_soles=robot_soles(desc),
+        big_base=ROBOT_BIG_BASE,
+    )
+
+
+def robot_stepper(
+    desc: RobotDescription,
+    qpos: np.ndarray,
+    target: Target,
+    stepping: SteppingConfig,
+    distribution: str = "qp",
+    torque_limits: str = "model",
+    big_base: float | None = None,
+) -> SteppingController:
+    """The stepping controller on the robot: W's controller and QP with the robot's soles and
+    ``torque_limits`` ("model": the joints' ``actuatorfrcrange``), ``stepping`` scaled
+    (:func:`scaled_stepping`), its set point ``target`` at the standing pose ``qpos``."""
+    body = robot_stepping_body(desc, qpos, target)
+    if big_base is not None:
+        body = replace(body, big_base=big_base)
+    tree = robot_tree(desc)
+    lim = None
+    if torque_limits == "model":
+        lo, hi = leg_torque_limits(desc).T
+        lim = TorqueLimits("model", tree.joint_names, lo, hi)
+    elif torque_limits != "none":
+        raise ScenarioError(f"unknown torque_limits {torque_limits!r} for a robot; valid: 'model', 'none'")
+    d = mujoco.MjData(body.model)
+    d.qpos[:] = qpos
+    mujoco.mj_kinematics(body.model, d)
+    config = PolicyConfig(
+        target=target,
+        torque_limits=lim,
+        distribution=distribution,
+        qp_weights=QPWeights() if distribution == "qp" else None,
+        model_path=str(desc.path),
+    )
+    stand = max(
+        float(np.linalg.norm(d.xpos[h] - d.xpos[f])) for h, f in zip(body.hips, body.feet, strict=True)
+    )
+    scaled = scaled_stepping(stepping, body.leg_length_m, _hip_width(d, body.feet), stand)
+    from biped.control.setpoint import Gains
+
+    config = replace(config, gains=Gains())  # the robots' gains (W's, as robot_controller takes)
+    return SteppingController(config, scaled, tree.joint_names, tree=tree, body=body)
+
+
+class FootContacts:
+    """``(left, right)``: whether each foot touches the floor in the plant's ``MjData``: a
+    contact between the floor geom ``floor`` and a geom of the foot body or of a body fused
+    into it (its subtree in the plant: the feet are the legs' last jointed bodies)."""
+
+    def __init__(self, m: mujoco.MjModel, desc: RobotDescription, floor: str):
+        self.floor = int(m.geom(floor).id)
+        self.geom_foot = np.full(m.ngeom, -1, dtype=int)
+        for k, name in enumerate(desc.feet):
+            f = m.body(name).id
+            sub = [b for b in range(m.nbody) if _descends(m, b, f)]
+            self.geom_foot[np.isin(m.geom_bodyid, sub)] = k
+
+    def __call__(self, d: mujoco.MjData) -> tuple[bool, bool]:
+        out = [False, False]
+        for c in range(d.ncon):
+            g1, g2 = d.contact.geom1[c], d.contact.geom2[c]
+            other = g2 if g1 == self.floor else g1 if g2 == self.floor else -1
+            if other >= 0 and self.geom_foot[other] >= 0:
+                out[self.geom_foot[other]] = True
+        return out[0], out[1]
+
+
+def _descends(m: mujoco.MjModel, b: int, top: int) -> bool:
+    while b > 0:
+        if b == top:
+            return True
+        b = int(m.body_parentid[b])
+    return False
+
+
+def set_point_height(stepper: SteppingController) -> float:
+    """The central-body COM height [m] the stepping controller holds now: its set point's, lowered
+    by the swing's height drop while a foot swings (a robot's run falls 0.15 m below it)."""
+    z = float(stepper.target.com[2])
+    return z - stepper.stepping.swing_height_drop_m if stepper.phase == "swing" else z
