@@ -130,3 +130,49 @@ def test_the_program_recovers_the_young_preset_from_a_lean_the_feedback_stepper_
     i = ("left", "right").index(r.extra["steps"][0]["foot"])
     moved = float(np.linalg.norm(r.feet_pos[len(r.times) - 2, i, :2] - r.feet_pos[0, i, :2]))
     assert abs(moved - length) < 0.02, (moved, length)
+
+
+def test_the_leg_step_limit_is_the_legs_reach_from_the_hips_standing_height():
+    """``step_reach = "leg"``: the hips' height above the ankles (MuJoCo's kinematics of the initial
+    state) equals de Leva's sagittal chain in closed form, thigh L1 and shank L2 at W's hip
+    flexion 40 deg less the trunk's 5 deg forward tilt and the knee's -77.46 deg
+    (``L1 cos(35 deg) + L2 cos(35 - 77.46 deg)``, to 0.2 mm),
+    and the limit is ``2 sqrt(0.78^2 - h^2)``; with straight legs the hips stand L1 + L2 above
+    the ankles, beyond the 0.78 m reach: no step."""
+    from biped.control.capture import reach_step_limit
+    from biped.models.anthropometry import DE_LEVA, W_INITIAL_ANGLES_DEG, W_INITIAL_TILT_DEG, w_subject
+    from biped.sim.policies import leg_step_limit
+    from biped.sim.scene import build_scene
+
+    sub = w_subject()
+    l1, l2 = DE_LEVA["male"]["thigh"][0] * sub.scale, DE_LEVA["male"]["shank"][0] * sub.scale
+    thigh = math.radians(W_INITIAL_ANGLES_DEG[1] - W_INITIAL_TILT_DEG)  # the thigh from the vertical
+    h = l1 * math.cos(thigh) + l2 * math.cos(thigh + math.radians(W_INITIAL_ANGLES_DEG[3]))
+    s = Scenario(stepping=True, step_reach="leg")
+    got = leg_step_limit(s, build_scene(s), 0.78)
+    assert got == pytest.approx(2.0 * math.sqrt(0.78**2 - h**2), abs=2e-4), (got, h)
+    assert 0.85 < got < 0.92
+    straight = Scenario(stepping=True, initial_joint_angles_deg=(0.0,) * 12, initial_tilt_deg=0.0)
+    assert leg_step_limit(straight, build_scene(straight), 0.78) == 0.0
+    assert reach_step_limit(0.78, 0.0) == pytest.approx(1.56)
+    with pytest.raises(ScenarioError, match="step_reach must be one of 'fixed', 'leg'"):
+        Scenario(step_reach="long")
+
+
+def test_the_leg_reach_lets_the_ideal_stepper_land_past_the_fixed_limit_and_recover():
+    """An 18 deg forward release, ideal preset, one step (validate's protocol): with the fixed
+    0.5 m limit the landing is clamped short of the capture point and the biped falls; with the
+    legs' reach the foot lands over 0.55 m from where it stood (MuJoCo's recorded feet and
+    contacts, validate's measure) and the biped recovers."""
+    from biped.analysis.validate import EXPERIMENTS, _step_measures
+    from biped.sim.push import simulate
+
+    exp = EXPERIMENTS["step_release"]
+    out = {}
+    for reach in ("fixed", "leg"):
+        keys = {**exp.base, **exp.magnitude(18.0), "step_reach": reach}
+        s = Scenario(neuromotor="ideal", **keys)
+        r = simulate(s)
+        out[reach] = (r.fell, *_step_measures(r, s))
+    assert out["fixed"][0] and out["fixed"][2] < 0.51, out
+    assert not out["leg"][0] and out["leg"][1] == 1 and out["leg"][2] > 0.55, out

@@ -119,6 +119,11 @@ def controller_policy(
         from biped.control.stepping import SteppingConfig, SteppingController
 
         stepping = SteppingConfig.for_trigger(scenario.step_trigger, max_steps=scenario.max_steps)
+        if scenario.step_reach == "leg":  # the longest step the legs reach, not the fixed 0.5 m
+            from dataclasses import replace
+
+            limit = leg_step_limit(scenario, scene, stepping.reach_m)
+            stepping = replace(stepping, limits=replace(stepping.limits, max_step=limit))
         if scenario.step_program == "program":  # planned steps for a delayed, lagged plant
             from biped.control.step_program import StepProgram, StepProgramConfig
 
@@ -128,6 +133,27 @@ def controller_policy(
         return SteppingController(config, stepping, scene.joint_names, tree=tree)
     sensed = config.support == "sensed" or config.distribution == "qp"  # as make_policy decides
     return ControllerPolicy(make_policy(config, scene.joint_names, tree=tree), sensed=sensed)
+
+
+def leg_step_limit(scenario: Scenario, scene: Scene, reach_m: float) -> float:
+    """The longest step [m] between the sole centres that the legs reach
+    (:func:`biped.control.capture.reach_step_limit`): both legs at ``reach_m`` from the hip joints,
+    at the hips' height above the ankle joints in the scenario's standing pose (W's initial pose:
+    0.642 m, so 0.886 m with the stepper's 0.78 m reach; MuJoCo's kinematics of the initial state)."""
+    import mujoco
+
+    from biped.control.capture import reach_step_limit
+    from biped.sim.scene import w_initial_state
+
+    m = scene.model
+    d = mujoco.MjData(m)
+    d.qpos[:] = w_initial_state(scene, scenario)[0]
+    mujoco.mj_kinematics(m, d)
+    h = [
+        float(d.xpos[m.body(f"{s}_thigh").id][2] - d.xpos[m.body(f"{s}_ankle_1").id][2])
+        for s in ("left", "right")
+    ]
+    return reach_step_limit(reach_m, float(np.mean(h)))
 
 
 class RecordedTorques:
