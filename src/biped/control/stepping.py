@@ -139,6 +139,7 @@ class SteppingController:
         self._foot = [m.body(b).id for b in FOOT_BODIES]
         self._hip = [m.body(f"{side}_thigh").id for side in FEET]
         self._shank = [m.body(f"{side}_shank").id for side in FEET]
+        self._ankle = [m.body(f"{side}_ankle_1").id for side in FEET]
         self._root = int(m.jnt_bodyid[0])  # the central body (the free joint's)
         self._inv_sign = [
             float(np.sign(m.jnt_axis[m.joint(f"{side}_ankle_inversion").id][0])) for side in FEET
@@ -185,6 +186,7 @@ class SteppingController:
         self.steps: list[dict] = []
         self.swing: int | None = None  # index of the swinging foot
         self._mid0: np.ndarray | None = None  # the feet's midpoint at the first call
+        self._ankle_z0: float | None = None  # the ankles' height above the floor then (feet flat)
         self._t_start = 0.0
         self._p0: np.ndarray | None = None
         self._landing: np.ndarray | None = None
@@ -248,6 +250,7 @@ class SteppingController:
         self.last_capture_point = xi
         if self._mid0 is None:
             self._mid0 = 0.5 * (self._sole_pose(0)[0] + self._sole_pose(1)[0])
+            self._ankle_z0 = float(np.mean([d.xpos[a][2] for a in self._ankle]))
         left, right = bool(feet[0]), bool(feet[1])
         if (
             self.phase == "double"
@@ -274,8 +277,32 @@ class SteppingController:
             flags = (left, right)  # before the first step: the feet-in-place QP exactly
         else:
             flags = self._flags(left, right)
-        tau = ctrl.torques(qpos, qvel, target=self.target, gains=self.gains, feet_in_contact=flags)
+        target = self._leg_capped(self.target, (0, 1))
+        tau = ctrl.torques(qpos, qvel, target=target, gains=self.gains, feet_in_contact=flags)
         return self._out(tau)
+
+    def _leg_capped(self, target: Target, legs) -> Target:
+        """``target`` with its height no higher than the standing ``legs`` reach at the starting
+        pose's hip-to-ankle length (``span_leg_m``; unchanged when it is not set): the central
+        body's COM set point lowered by what the most stretched leg would have to extend beyond
+        that length, its hip joint over its ankle at their present horizontal distance with the
+        ankle at its flat-footed height of the first call (a heel raised does not lengthen it). From
+        upright stance (knee 12 deg) a set point above that asks for a straighter knee than the
+        stance's, toward the straight knee's singularity, which W's controller does not handle."""
+        s = self.stepping
+        if s.span_leg_m is None or not legs:
+            return target
+        d = self.data
+        slack = math.inf
+        for k in legs:
+            hip, ank = d.xpos[self._hip[k]], d.xpos[self._ankle[k]]
+            dxy2 = float((hip[0] - ank[0]) ** 2 + (hip[1] - ank[1]) ** 2)
+            flat = self._ankle_z0 if self._ankle_z0 is not None else float(ank[2])
+            slack = min(slack, flat + math.sqrt(max(s.span_leg_m**2 - dxy2, 0.0)) - float(hip[2]))
+        z = float(d.xipos[self._root][2]) + slack
+        if target.com[2] <= z:
+            return target
+        return replace(target, com=(target.com[0], target.com[1], z))
 
     def _dwelt(self, t, poly, xi) -> bool:
         """The slow trigger (``dwell_margin_m``, ``dwell_s``): True once the capture point has
@@ -409,8 +436,8 @@ class SteppingController:
         # the COM falls freely over the stance sole: the LIPM's acceleration as feed-forward
         acc = omega**2 * (self.data.subtree_com[0][:2] - cop)
         com = np.array(self.target.com)
-        com[2] -= s.swing_height_drop_m
-        target = Target.wendlandt(com=tuple(com), tilt_deg=s.swing_tilt_deg)
+        com[2] -= self._swing_drop(i)
+        target = self._leg_capped(Target.wendlandt(com=tuple(com), tilt_deg=s.swing_tilt_deg), [1 - i])
         target = replace(target, com_acc=(float(acc[0]), float(acc[1]), 0.0))
         tau_swing = self._swing_torques(i, pd, vd, ad)
         if s.swing_reaction:
@@ -422,6 +449,24 @@ class SteppingController:
         )
         tau[self._leg_tau[i]] = tau_swing
         return self._out(tau)
+
+    def _height_drop(self, span_m: float, fixed_m: float) -> float:
+        """How much lower than the set point the hips are held for a step of ``span_m`` between
+        the sole centres: ``fixed_m``, or (``span_leg_m`` set) as low as both legs at that length
+        need to span it, between 0 and ``fixed_m`` (:class:`SteppingConfig`)."""
+        s = self.stepping
+        if s.span_leg_m is None or s.stand_hip_m is None:
+            return fixed_m
+        h = math.sqrt(max(s.span_leg_m**2 - (0.5 * span_m) ** 2, 0.0))
+        return min(max(s.stand_hip_m - h, 0.0), fixed_m)
+
+    def _swing_drop(self, i: int) -> float:
+        """The stance's height drop while foot ``i`` swings toward the landing target."""
+        s = self.stepping
+        if s.span_leg_m is None or self._landing is None:
+            return s.swing_height_drop_m
+        span = float(np.linalg.norm(np.asarray(self._landing)[:2] - self._sole_pose(1 - i)[0][:2]))
+        return self._height_drop(span, s.swing_height_drop_m)
 
     def _with_swing_reaction(self, i, tau_swing, qpos, qvel, target, flags):
         """``target`` with the feed-forward acceleration that adds the driven swing leg's reaction
@@ -462,7 +507,9 @@ class SteppingController:
         mid = 0.5 * (self._sole_pose(0)[0] + self._sole_pose(1)[0])
         com = np.array(self.base_target.com)
         com[:2] += mid[:2] - self._mid0[:2]
-        com[2] -= self.stepping.post_step_height_drop_m  # wider stance: lower hips, bent knees
+        # wider stance: lower hips (fixed, or as low as the legs need to span the step)
+        span = float(np.linalg.norm(self._sole_pose(i)[0][:2] - self._sole_pose(1 - i)[0][:2]))
+        com[2] -= self._height_drop(span, self.stepping.post_step_height_drop_m)
         self.target = replace(self.base_target, com=tuple(com))
         g = self.config.gains
         sp = self.stepping
@@ -477,7 +524,8 @@ class SteppingController:
         self._last_td = t
         self._settled = False
         self.trigger = self._new_trigger()
+        target = self._leg_capped(self.target, (0, 1))
         tau = self.ctrl.torques(
-            qpos, qvel, target=self.target, gains=self.gains, feet_in_contact=self._flags(*feet)
+            qpos, qvel, target=target, gains=self.gains, feet_in_contact=self._flags(*feet)
         )
         return self._out(tau)
