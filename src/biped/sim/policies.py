@@ -122,15 +122,12 @@ def controller_policy(
         if scenario.step_reach == "leg":  # the longest step the legs reach, not the fixed 0.5 m
             from dataclasses import replace
 
-            from biped.control.capture import reach_step_limit
-
             hip, leg = standing_legs(scenario, scene)
             # the swing may reach as far as the stance legs stand long (upright stance: the knee
             # at its 12 deg), never less than the stepper's own reach; the hips sink only as far
             # as both legs at that length need to span the step, at most the stance's drop
-            reach = max(stepping.reach_m, leg)
-            limit = reach_step_limit(reach, max(hip - stepping.swing_height_drop_m, 0.0))
-            stepping = replace(stepping, reach_m=reach, span_leg_m=leg, stand_hip_m=hip,
+            limit = leg_step_limit(scenario, scene, stepping.reach_m, stepping.swing_height_drop_m)
+            stepping = replace(stepping, reach_m=max(stepping.reach_m, leg), span_leg_m=leg, stand_hip_m=hip,
                                limits=replace(stepping.limits, max_step=limit))  # fmt: skip
         if scenario.step_program == "program":  # planned steps for a delayed, lagged plant
             from biped.control.step_program import StepProgram, StepProgramConfig
@@ -162,14 +159,17 @@ def standing_legs(scenario: Scenario, scene: Scene) -> tuple[float, float]:
     return float(h), float(length)
 
 
-def leg_step_limit(scenario: Scenario, scene: Scene, reach_m: float) -> float:
+def leg_step_limit(scenario: Scenario, scene: Scene, reach_m: float, drop_m: float = 0.0) -> float:
     """The longest step [m] between the sole centres that the legs reach
-    (:func:`biped.control.capture.reach_step_limit`): both legs at ``reach_m`` from the hip joints,
-    at the hips' height above the ankle joints in the scenario's standing pose (W's initial pose:
-    0.642 m, so 0.886 m with the stepper's 0.78 m reach; MuJoCo's kinematics of the initial state)."""
+    (:func:`biped.control.capture.reach_step_limit`): both legs at ``reach_m`` or the standing
+    pose's hip-to-ankle length if longer, from the hip joints ``drop_m`` below their height above
+    the ankle joints in the scenario's standing pose (MuJoCo's kinematics of the initial state).
+    W's crouch: hips 0.642 m up, 0.884 m with the stepper's 0.78 m reach and no drop, 1.08 m with
+    the stance's 0.08 m; human quiet stance (legs 0.821 m, hips 0.819 m up): 0.716 m with it."""
     from biped.control.capture import reach_step_limit
 
-    return reach_step_limit(reach_m, standing_legs(scenario, scene)[0])
+    hip, leg = standing_legs(scenario, scene)
+    return reach_step_limit(max(reach_m, leg), max(hip - drop_m, 0.0))
 
 
 class RecordedTorques:
