@@ -50,6 +50,7 @@ import mujoco
 import numpy as np
 
 from biped.control import capture as cp
+from biped.control import leg_geometry
 from biped.control.limits import clip_torques
 from biped.control.policy import PolicyConfig, _model_path, make_policy
 from biped.control.stepping_config import SteppingConfig
@@ -282,27 +283,8 @@ class SteppingController:
         return self._out(tau)
 
     def _leg_capped(self, target: Target, legs) -> Target:
-        """``target`` with its height no higher than the standing ``legs`` reach at the starting
-        pose's hip-to-ankle length (``span_leg_m``; unchanged when it is not set): the central
-        body's COM set point lowered by what the most stretched leg would have to extend beyond
-        that length, its hip joint over its ankle at their present horizontal distance with the
-        ankle at its flat-footed height of the first call (a heel raised does not lengthen it). From
-        upright stance (knee 12 deg) a set point above that asks for a straighter knee than the
-        stance's, toward the straight knee's singularity, which W's controller does not handle."""
-        s = self.stepping
-        if s.span_leg_m is None or not legs:
-            return target
-        d = self.data
-        slack = math.inf
-        for k in legs:
-            hip, ank = d.xpos[self._hip[k]], d.xpos[self._ankle[k]]
-            dxy2 = float((hip[0] - ank[0]) ** 2 + (hip[1] - ank[1]) ** 2)
-            flat = self._ankle_z0 if self._ankle_z0 is not None else float(ank[2])
-            slack = min(slack, flat + math.sqrt(max(s.span_leg_m**2 - dxy2, 0.0)) - float(hip[2]))
-        z = float(d.xipos[self._root][2]) + slack
-        if target.com[2] <= z:
-            return target
-        return replace(target, com=(target.com[0], target.com[1], z))
+        """``target`` no higher than the standing ``legs`` reach (:func:`leg_geometry.leg_capped`)."""
+        return leg_geometry.leg_capped(self, target, legs)
 
     def _dwelt(self, t, poly, xi) -> bool:
         """The slow trigger (``dwell_margin_m``, ``dwell_s``): True once the capture point has
@@ -451,22 +433,10 @@ class SteppingController:
         return self._out(tau)
 
     def _height_drop(self, span_m: float, fixed_m: float) -> float:
-        """How much lower than the set point the hips are held for a step of ``span_m`` between
-        the sole centres: ``fixed_m``, or (``span_leg_m`` set) as low as both legs at that length
-        need to span it, between 0 and ``fixed_m`` (:class:`SteppingConfig`)."""
-        s = self.stepping
-        if s.span_leg_m is None or s.stand_hip_m is None:
-            return fixed_m
-        h = math.sqrt(max(s.span_leg_m**2 - (0.5 * span_m) ** 2, 0.0))
-        return min(max(s.stand_hip_m - h, 0.0), fixed_m)
+        return leg_geometry.height_drop(self.stepping, span_m, fixed_m)
 
     def _swing_drop(self, i: int) -> float:
-        """The stance's height drop while foot ``i`` swings toward the landing target."""
-        s = self.stepping
-        if s.span_leg_m is None or self._landing is None:
-            return s.swing_height_drop_m
-        span = float(np.linalg.norm(np.asarray(self._landing)[:2] - self._sole_pose(1 - i)[0][:2]))
-        return self._height_drop(span, s.swing_height_drop_m)
+        return leg_geometry.swing_drop(self, i)
 
     def _with_swing_reaction(self, i, tau_swing, qpos, qvel, target, flags):
         """``target`` with the feed-forward acceleration that adds the driven swing leg's reaction
