@@ -4,8 +4,10 @@ against numbers it did not compute (the human band of the paper, by hand)."""
 from __future__ import annotations
 
 import json
+import math
 
 import pyarrow.parquet as pq
+import pytest
 
 from biped.analysis.validate import HUMAN
 from biped.cli import main
@@ -120,6 +122,75 @@ def test_human_stance_stands_as_people_do_and_w_crouch_does_not():
     for key in ("platform_backward", "waist_pull"):
         base = EXPERIMENTS[key].base
         assert all(base[k] == v for k, v in HUMAN_STANCE.items())
+
+
+def _release_geometry(lean_deg: float, key: str):
+    """(whole-body COM minus the ankles' midpoint (3,), the hip joints' midpoint minus it (3,), the
+    central body's orientation (4,), the hip and knee angles (8,) [deg], the ankle dorsiflexions
+    (2,) [deg]) at the initial state of experiment ``key`` leaned ``lean_deg``, by MuJoCo's
+    kinematics (subtree COM of the biped's root)."""
+    import mujoco
+    import numpy as np
+
+    from biped.analysis.validate import EXPERIMENTS
+    from biped.sim import Scenario, build_scene
+    from biped.sim.scene import initial_state
+
+    exp = EXPERIMENTS[key]
+    s = Scenario(**{**exp.base, **exp.magnitude(lean_deg)})
+    scene = build_scene(s)
+    m = scene.model
+    d = mujoco.MjData(m)
+    d.qpos[:], _ = initial_state(scene, s)
+    mujoco.mj_forward(m, d)
+    com = d.subtree_com[m.body_rootid[scene.central_body]]
+    ankles = np.mean([d.xpos[m.body(f"{s}_ankle_1").id] for s in ("left", "right")], axis=0)
+    hips = np.mean([d.xpos[m.body(f"{s}_thigh").id] for s in ("left", "right")], axis=0)
+    angle = {n: math.degrees(d.qpos[m.jnt_qposadr[m.joint(n).id]]) for n in scene.joint_names}
+    hk = [v for n, v in angle.items() if "ankle" not in n]
+    ank = [v for n, v in angle.items() if "dorsiflexion" in n]
+    return com - ankles, hips - ankles, d.xquat[scene.central_body].copy(), np.array(hk), np.array(ank)
+
+
+@pytest.mark.parametrize("key", ["ankle_release", "step_release"])
+def test_lean_releases_lean_human_stance_straight_about_the_ankles(key):
+    """Both lean-and-release experiments start from HUMAN_STANCE (Robinovitch's and Wojcik's
+    subjects stood upright), MuJoCo's kinematics of the initial state: at no lean the whole-body
+    COM stands 4.3-6.3 cm ahead of the ankles (the cited alignment of quiet stance, as the
+    platform's); leaned 10 deg the body above the ankles has turned by 10 deg about them, straight:
+    the central body's orientation by 10 deg about the lateral axis and the hip joints' line from
+    the ankles by 10 deg at the same distance (1e-6 deg, 1e-9 m), the hips and knees keep
+    HUMAN_STANCE's angles (1e-6 deg) and only the ankles turn, by the lean; the whole-body COM
+    (with the feet, which stay) moves forward by 13-17 cm (0.89 m x sin 10 deg = 0.155 m)."""
+    import numpy as np
+
+    from biped.analysis.validate import EXPERIMENTS, HUMAN_STANCE
+
+    base = EXPERIMENTS[key].base
+    assert all(base[k] == v for k, v in HUMAN_STANCE.items())
+    c0, h0, q0, hk0, ank0 = _release_geometry(0.0, key)
+    assert 0.043 <= -c0[0] <= 0.063, c0  # the biped faces -x
+    c1, h1, q1, hk1, ank1 = _release_geometry(10.0, key)
+    turn = math.degrees(math.atan2(-h1[0], h1[2]) - math.atan2(-h0[0], h0[2]))
+    assert turn == pytest.approx(10.0, abs=1e-6) and abs(h1[1] - h0[1]) < 1e-9
+    assert np.linalg.norm(h1) == pytest.approx(np.linalg.norm(h0), abs=1e-9)
+    dq = np.zeros(4)
+    import mujoco
+
+    mujoco.mju_mulQuat(dq, q1, np.array([q0[0], -q0[1], -q0[2], -q0[3]]))
+    axis_angle = 2 * math.degrees(math.atan2(np.linalg.norm(dq[1:]), abs(dq[0])))
+    assert axis_angle == pytest.approx(10.0, abs=1e-6) and abs(dq[2]) / np.linalg.norm(dq[1:]) > 1 - 1e-9
+    want = [
+        a for n, a in zip(_JOINTS, HUMAN_STANCE["initial_joint_angles_deg"], strict=True) if "ankle" not in n
+    ]
+    assert np.allclose(hk0, want, atol=1e-6) and np.allclose(hk1, want, atol=1e-6)
+    assert np.allclose(np.abs(ank1 - ank0), 10.0, atol=1e-6), (ank0, ank1)
+    assert 0.13 < c0[0] - c1[0] < 0.17, (c0, c1)
+
+
+_JOINTS = tuple(f"{side}_{j}" for side in ("left", "right")
+                for j in ("hip_abduction", "hip_flexion", "hip_rotation", "knee", "ankle_inversion",
+                          "ankle_dorsiflexion"))  # fmt: skip
 
 
 def test_waist_pull_measure_is_the_waist_carried_the_displacement():

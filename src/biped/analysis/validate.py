@@ -177,33 +177,42 @@ def _pull(d: float) -> dict:
 #: The waist pull's motor speed [m/s] (chosen in Mille's fast range before any run; docs/validate.md).
 PULL_VELOCITY_M_S = 0.5
 
-#: Human quiet stance for the feet-in-place experiments whose subjects stand upright
-#: (``platform_backward``, ``waist_pull``): W's initial pose is a deep crouch (hip 40, knee 77,
-#: ankle 42 deg) with the whole-body COM 10.3 cm ahead of the ankles, where people stand with the
-#: line of gravity 4.7-5.8 cm ahead of the ankle and the hip on it (-0.5 +/- 0.5 cm; Frontiers in
-#: Physiology 2019, 10:625, "Attainment of quiet standing in humans", 13 adults: 47 +/- 4 mm early,
-#: 58 +/- 5 mm after 7.6 s) and the hip joint 6.2 +/- 1.3 cm ahead of the ankle (Woodhull, Maltrud &
-#: Mello 1985, Eur J Appl Physiol 54:109-115). The pose: trunk upright, hip flexion 2, knee 12, ankle
-#: dorsiflexion 10 deg (both legs): the whole-body COM 5.9 cm and the hips 5.8 cm ahead of the
-#: ankles, 0.89 m above them (the knee stays 12 deg bent: W's controller has no straight-knee
-#: singularity handling). Chosen on these alignments alone, before any threshold was run with it.
+#: Human quiet stance, the starting pose of every experiment (the lean releases lean it straight
+#: about the ankles: Robinovitch's and Wojcik's subjects stood upright): W's initial pose is a deep
+#: crouch (hip 40, knee 77, ankle 42 deg) with the whole-body COM 10.3 cm ahead of the ankles,
+#: where people stand with the line of gravity 4.7-5.8 cm ahead of the ankle and the hip on it
+#: (-0.5 +/- 0.5 cm; Frontiers in Physiology 2019, 10:625, "Attainment of quiet standing in
+#: humans", 13 adults: 47 +/- 4 mm early, 58 +/- 5 mm after 7.6 s) and the hip joint
+#: 6.2 +/- 1.3 cm ahead of the ankle (Woodhull, Maltrud & Mello 1985, Eur J Appl Physiol
+#: 54:109-115). The pose: trunk upright, hip flexion 2, knee 12, ankle dorsiflexion 10 deg (both
+#: legs): the whole-body COM 5.9 cm and the hips 5.8 cm ahead of the ankles, 0.89 m above them (the
+#: knee stays 12 deg bent: W's controller has no straight-knee singularity handling). Chosen on
+#: these alignments alone, before any threshold was run with it.
 HUMAN_STANCE = {"initial_joint_angles_deg": (0.0, 2.0, 0.0, -12.0, 0.0, 10.0) * 2, "initial_tilt_deg": 0.0}
 
 
 _COMMON = {"friction": 0.8, "duration_s": 2.5}
-#: The platform and the pull run 4 s: near their thresholds the biped topples slowly over its toes
-#: (heels up), and a 2.5 s run counted a 0.149 m platform move that had not yet fallen as survived
-#: (it falls at 2.6 s; 4 s and 6 s runs agree on 0.148 m).
+#: Every experiment runs 4 s: from human quiet stance, near its threshold the biped topples slowly
+#: over its toes (heels up), and a 2.5 s run counted as survived a 0.149 m platform move that falls
+#: at 2.6 s (4 s and 6 s runs agree on 0.148 m), the young's 5.84 deg ankle-only lean (falls at
+#: 2.73 s) and its 6.19 deg one-step lean (falls at 2.53 s).
 _SLOW_TOPPLE = {"duration_s": 4.0}
 
 EXPERIMENTS = {
     "ankle_release": Experiment(
         "ankle_release",
         "forward lean and release, ankles only (Robinovitch et al. 2002)",
-        "leaning forward straight about the ankles, held by a horizontal tether at the pelvis, "
-        "released without warning at 0.1 s; hips and knees held (ankle_only); the largest lean "
-        "recovered with the feet in place",
-        {**_COMMON, "perturbation": "release", "release_time_s": 0.1, "ankle_only": True},
+        "from human quiet stance (HUMAN_STANCE), leaning forward straight about the ankles, held by a "
+        "horizontal tether at the pelvis, released without warning at 0.1 s; hips and knees held "
+        "(ankle_only); the largest lean recovered with the feet in place",
+        {
+            **_COMMON,
+            **HUMAN_STANCE,
+            **_SLOW_TOPPLE,
+            "perturbation": "release",
+            "release_time_s": 0.1,
+            "ankle_only": True,
+        },  # fmt: skip
         _ankle_release,
         "deg",
         0.25,
@@ -237,19 +246,24 @@ EXPERIMENTS = {
     "step_release": Experiment(
         "step_release",
         "forward lean and release, one step (Wojcik et al. 1999)",
-        "leaning forward straight about the ankles, held by a horizontal tether at the pelvis, "
-        "released without warning at 0.1 s, with capture-point stepping (stepping = true, at most one "
-        "step, the QP distribution; the young and older presets with the step program) on a floor of "
+        "from human quiet stance (HUMAN_STANCE), leaning forward straight about the ankles, held by a "
+        "horizontal tether at the pelvis, released without warning at 0.1 s, with capture-point "
+        "stepping (stepping = true, at most one step, the QP distribution; the young and older "
+        "presets with the step program) on a floor of "
         "friction 1.0 (a shod foot on a dry floor; the tether needs about tan(lean) of the weight in "
         "friction); the largest lean recovered with at most one step",
         {
+            **HUMAN_STANCE,
+            **_SLOW_TOPPLE,
             "friction": 1.0,
-            "duration_s": 2.5,
             "perturbation": "release",
             "release_time_s": 0.1,
             "stepping": True,
             "max_steps": 1,
             "distribution": "qp",
+            # the longest step the legs reach (0.884 m), not the sweeps' fixed 0.5 m: a person
+            # falling takes as long a step as the fall asks (docs/validate.md, "The step program")
+            "step_reach": "leg",
         },  # fmt: skip
         _ankle_release,
         "deg",

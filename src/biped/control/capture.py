@@ -42,6 +42,7 @@ __all__ = [
     "omega0",
     "outward_normal",
     "predict_capture_point",
+    "reach_step_limit",
     "shrink_polygon",
     "signed_distance",
     "sole_corners",
@@ -246,6 +247,15 @@ class StepLimits:
     min_width: float = 0.13
     max_width: float = 0.22
     max_back: float = 0.30
+
+
+def reach_step_limit(reach_m: float, hip_height_m: float) -> float:
+    """The longest step between the ankles that two legs reaching ``reach_m`` from hips
+    ``hip_height_m`` above the ankles allow: each leg at its reach, one ahead of the hips and one
+    behind, ``2 sqrt(reach^2 - h^2)`` [m] (0 if the hips are higher than the reach)."""
+    if not (reach_m > 0 and hip_height_m >= 0):
+        raise ValueError(f"reach_m must be > 0 and hip_height_m >= 0; got {reach_m!r}, {hip_height_m!r}")
+    return 2.0 * math.sqrt(max(reach_m**2 - hip_height_m**2, 0.0))
 
 
 def clamp_step(target_xy, stance_xy, side: float, limits: StepLimits = StepLimits()) -> np.ndarray:

@@ -163,7 +163,7 @@ class StepProgram(SteppingController):
             self._p0 = d.xpos[self._foot[self.swing]].copy()
             self.steps[-1]["transfer_s"] = t - self._t_transfer
             return super().__call__(t, qpos, qvel, feet)
-        tgt = self.target
+        tgt = self._leg_capped(self.target, (0, 1))
         acc = np.array(tgt.com_acc, dtype=float)
         acc[1] += self._side_y * self.program.transfer_acc_m_s2
         target = replace(tgt, com_acc=tuple(map(float, acc)))
@@ -253,8 +253,8 @@ class StepProgram(SteppingController):
         X = -np.linalg.solve(out.P1, np.concatenate([np.zeros(3), R.T @ moment]))
         acc = omega**2 * (d.subtree_com[0][:2] - cop)
         com = np.array(self.target.com)
-        com[2] -= s.swing_height_drop_m
-        target = Target.wendlandt(com=tuple(com), tilt_deg=s.swing_tilt_deg)
+        com[2] -= self._swing_drop(i)
+        target = self._leg_capped(Target.wendlandt(com=tuple(com), tilt_deg=s.swing_tilt_deg), [1 - i])
         ca = R @ X[:3]
         target = replace(target, com_acc=(float(acc[0] + ca[0]), float(acc[1] + ca[1]), float(ca[2])),
                          ang_acc=tuple(map(float, R @ X[3:])))  # fmt: skip

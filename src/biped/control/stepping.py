@@ -50,6 +50,7 @@ import mujoco
 import numpy as np
 
 from biped.control import capture as cp
+from biped.control import leg_geometry
 from biped.control.limits import clip_torques
 from biped.control.policy import PolicyConfig, _model_path, make_policy
 from biped.control.stepping_body import SteppingBody, w_body
@@ -149,6 +150,8 @@ class SteppingController:
         self._foot = list(body.feet)
         self._hip = list(body.hips)
         self._shank = list(body.shanks)
+        # the body of each leg's first ankle hinge (W's {side}_ankle_1): its origin is the ankle
+        self._ankle = [int(m.jnt_bodyid[m.joint(leg[4]).id]) for leg in body.leg_joints]
         self._root = body.root
         self._inv_sign = list(body.inversion_sign)
         self._sole = list(body.soles)  # (sole centre in the foot body frame (3,), half length, half width)
@@ -190,6 +193,7 @@ class SteppingController:
         self.steps: list[dict] = []
         self.swing: int | None = None  # index of the swinging foot
         self._mid0: np.ndarray | None = None  # the feet's midpoint at the first call
+        self._ankle_z0: float | None = None  # the ankles' height above the floor then (feet flat)
         self._t_start = 0.0
         self._p0: np.ndarray | None = None
         self._landing: np.ndarray | None = None
@@ -254,6 +258,7 @@ class SteppingController:
         self.last_capture_point = xi
         if self._mid0 is None:
             self._mid0 = 0.5 * (self._sole_pose(0)[0] + self._sole_pose(1)[0])
+            self._ankle_z0 = float(np.mean([d.xpos[a][2] for a in self._ankle]))
         left, right = bool(feet[0]), bool(feet[1])
         if (
             self.phase == "double"
@@ -280,8 +285,13 @@ class SteppingController:
             flags = (left, right)  # before the first step: the feet-in-place QP exactly
         else:
             flags = self._flags(left, right)
-        tau = ctrl.torques(qpos, qvel, target=self.target, gains=self.gains, feet_in_contact=flags)
+        target = self._leg_capped(self.target, (0, 1))
+        tau = ctrl.torques(qpos, qvel, target=target, gains=self.gains, feet_in_contact=flags)
         return self._out(tau)
+
+    def _leg_capped(self, target: Target, legs) -> Target:
+        """``target`` no higher than the standing ``legs`` reach (:func:`leg_geometry.leg_capped`)."""
+        return leg_geometry.leg_capped(self, target, legs)
 
     def _dwelt(self, t, poly, xi) -> bool:
         """The slow trigger (``dwell_margin_m``, ``dwell_s``): True once the capture point has
@@ -413,8 +423,8 @@ class SteppingController:
         # the COM falls freely over the stance sole: the LIPM's acceleration as feed-forward
         acc = omega**2 * (self.data.subtree_com[0][:2] - cop)
         com = np.array(self.target.com)
-        com[2] -= s.swing_height_drop_m
-        target = self.body.target(tuple(com), s.swing_tilt_deg)
+        com[2] -= self._swing_drop(i)
+        target = self._leg_capped(self.body.target(tuple(com), s.swing_tilt_deg), [1 - i])
         target = replace(target, com_acc=(float(acc[0]), float(acc[1]), 0.0))
         tau_swing = self._swing_torques(i, pd, vd, ad)
         if s.swing_reaction:
@@ -426,6 +436,12 @@ class SteppingController:
         )
         tau[self._leg_tau[i]] = tau_swing
         return self._out(tau)
+
+    def _height_drop(self, span_m: float, fixed_m: float) -> float:
+        return leg_geometry.height_drop(self.stepping, span_m, fixed_m)
+
+    def _swing_drop(self, i: int) -> float:
+        return leg_geometry.swing_drop(self, i)
 
     def _with_swing_reaction(self, i, tau_swing, qpos, qvel, target, flags):
         """``target`` with the feed-forward acceleration that adds the driven swing leg's reaction
@@ -477,7 +493,9 @@ class SteppingController:
         mid = 0.5 * (self._sole_pose(0)[0] + self._sole_pose(1)[0])
         com = np.array(self.base_target.com)
         com[:2] += mid[:2] - self._mid0[:2]
-        com[2] -= self.stepping.post_step_height_drop_m  # wider stance: lower hips, bent knees
+        # wider stance: lower hips (fixed, or as low as the legs need to span the step)
+        span = float(np.linalg.norm(self._sole_pose(i)[0][:2] - self._sole_pose(1 - i)[0][:2]))
+        com[2] -= self._height_drop(span, self.stepping.post_step_height_drop_m)
         self.target = replace(self.base_target, com=tuple(com))
         g = self.config.gains
         sp = self.stepping
@@ -492,7 +510,8 @@ class SteppingController:
         self._last_td = t
         self._settled = False
         self.trigger = self._new_trigger()
+        target = self._leg_capped(self.target, (0, 1))
         tau = self.ctrl.torques(
-            qpos, qvel, target=self.target, gains=self.gains, feet_in_contact=self._flags(*feet)
+            qpos, qvel, target=target, gains=self.gains, feet_in_contact=self._flags(*feet)
         )
         return self._out(tau)

@@ -38,6 +38,13 @@ class SteppingConfig:
     swing_height_drop_m, swing_tilt_deg: while a foot swings the stance leg holds the body this
     much lower than the set point (reach) and upright but for this tilt about -y (the set point's
     forward tilt moves the hips back, away from a forward step).
+    span_leg_m, stand_hip_m: if set (``step_reach = "leg"``: the starting pose's hip-to-ankle length
+    and the hips' height above the ankles), the two height drops above follow the step instead of
+    being fixed: the hips go as low as both legs at ``span_leg_m`` need to span the step (the
+    landing target's, then the feet's, distance from the stance sole, L): ``stand_hip_m -
+    sqrt(span_leg_m^2 - (L / 2)^2)``, between 0 and the fixed drop. From upright stance the
+    legs then keep the stance's knee (not straighter: W's controller has no straight-knee
+    handling) where the fixed 0.08 m bent the knees of W's crouch past 95 deg.
     lateral_margin_m: the trigger's extra margin along y (3 cm; "qp" trigger 0: 3 cm stepped at
     sideways pushes the feet-in-place QP holds, docs/controller.md).
     holding_sensed: before the first step the QP takes the sensed feet, as the QP alone does (W's
@@ -99,6 +106,8 @@ class SteppingConfig:
     swing_height_drop_m: float = 0.08
     post_step_height_drop_m: float = 0.08
     swing_tilt_deg: float = 0.0
+    span_leg_m: float | None = None
+    stand_hip_m: float | None = None
     swing_reaction: bool = False
     floor_friction: bool = False
     swing_friction_scale: float | None = None

@@ -120,6 +120,16 @@ def controller_policy(
         from biped.control.stepping import SteppingConfig, SteppingController
 
         stepping = SteppingConfig.for_trigger(scenario.step_trigger, max_steps=scenario.max_steps)
+        if scenario.step_reach == "leg":  # the longest step the legs reach, not the fixed 0.5 m
+            from dataclasses import replace
+
+            hip, leg = standing_legs(scenario, scene)
+            # the swing may reach as far as the stance legs stand long (upright stance: the knee
+            # at its 12 deg), never less than the stepper's own reach; the hips sink only as far
+            # as both legs at that length need to span the step, at most the stance's drop
+            limit = leg_step_limit(scenario, scene, stepping.reach_m, stepping.swing_height_drop_m)
+            stepping = replace(stepping, reach_m=max(stepping.reach_m, leg), span_leg_m=leg, stand_hip_m=hip,
+                               limits=replace(stepping.limits, max_step=limit))  # fmt: skip
         if scenario.step_program == "program":  # planned steps for a delayed, lagged plant
             from biped.control.step_program import StepProgram, StepProgramConfig
 
@@ -129,6 +139,38 @@ def controller_policy(
         return SteppingController(config, stepping, scene.joint_names, tree=tree)
     sensed = config.support == "sensed" or config.distribution == "qp"  # as make_policy decides
     return ControllerPolicy(make_policy(config, scene.joint_names, tree=tree), sensed=sensed)
+
+
+def standing_legs(scenario: Scenario, scene: Scene) -> tuple[float, float]:
+    """(the hip joints' height above the ankle joints, the hip-to-ankle distance) [m], both legs'
+    mean, in the scenario's standing pose (MuJoCo's kinematics of the initial state; W's crouch:
+    0.642, 0.644 m; human quiet stance, knee 12 deg: 0.819, 0.821 m)."""
+    import mujoco
+
+    from biped.sim.scene import w_initial_state
+
+    m = scene.model
+    d = mujoco.MjData(m)
+    d.qpos[:] = w_initial_state(scene, scenario)[0]
+    mujoco.mj_kinematics(m, d)
+    hip = [d.xpos[m.body(f"{s}_thigh").id] for s in ("left", "right")]
+    ank = [d.xpos[m.body(f"{s}_ankle_1").id] for s in ("left", "right")]
+    h = np.mean([a[2] - b[2] for a, b in zip(hip, ank, strict=True)])
+    length = np.mean([np.linalg.norm(a - b) for a, b in zip(hip, ank, strict=True)])
+    return float(h), float(length)
+
+
+def leg_step_limit(scenario: Scenario, scene: Scene, reach_m: float, drop_m: float = 0.0) -> float:
+    """The longest step [m] between the sole centres that the legs reach
+    (:func:`biped.control.capture.reach_step_limit`): both legs at ``reach_m`` or the standing
+    pose's hip-to-ankle length if longer, from the hip joints ``drop_m`` below their height above
+    the ankle joints in the scenario's standing pose (MuJoCo's kinematics of the initial state).
+    W's crouch: hips 0.642 m up, 0.884 m with the stepper's 0.78 m reach and no drop, 1.08 m with
+    the stance's 0.08 m; human quiet stance (legs 0.821 m, hips 0.819 m up): 0.716 m with it."""
+    from biped.control.capture import reach_step_limit
+
+    hip, leg = standing_legs(scenario, scene)
+    return reach_step_limit(max(reach_m, leg), max(hip - drop_m, 0.0))
 
 
 class RecordedTorques:

@@ -45,6 +45,10 @@ CONTROLLERS = ("workspace", "joint-pd")
 #: How a stepping run makes a step (key ``step_program``): the task-space feedback swing of
 #: biped.control.stepping, or biped.control.step_program's weight transfer and planned swing.
 STEP_PROGRAMS = ("feedback", "program")
+#: The longest step a stepping run may land (key ``step_reach``): "fixed" = StepLimits' 0.5 m
+#: between sole centres (the sweeps' design limit); "leg" = what the legs reach from the hips'
+#: standing height, both legs at the swing's reach (biped.control.capture.reach_step_limit).
+STEP_REACHES = ("fixed", "leg")
 #: Which feet the workspace controller takes as fixed: "fixed" = both, always (W); "sensed" = the
 #: feet whose soles touch the floor at each control step (see WorkspaceController.compute).
 SUPPORTS = ("fixed", "sensed")
@@ -142,6 +146,9 @@ class Scenario:
     # biped.control.stepping; "program": weight transfer, then a feed-forward swing with feedback
     # against the delayed plan (biped.control.step_program), for a delayed, lagged plant
     step_program: str = "feedback"
+    # with stepping: the longest step landed. "fixed": 0.5 m between sole centres; "leg": both legs
+    # at the swing's reach from the hips' standing height (docs/validate.md, "The step program")
+    step_reach: str = "fixed"
     # with stepping: when to step. "capture": the capture point leaves the feet (3 cm sideways
     # margin, W's fixed feet and massless legs before the first step); "qp": the QP alone until
     # its feet cannot hold (docs/controller.md, "Stepping")
@@ -366,6 +373,7 @@ _STRINGS = {
     "perturbation": perturbations.NAMES,
     "force_shape": FORCE_SHAPES,
     "step_program": STEP_PROGRAMS,
+    "step_reach": STEP_REACHES,
     "step_trigger": STEP_TRIGGERS,
 }
 
@@ -373,8 +381,16 @@ _STRINGS = {
 #: Keys :meth:`Scenario.to_dict` leaves out at their default value, so that a scenario without
 #: them writes the same summary.json / sweep identity as before they existed.
 _OMITTED_AT_DEFAULT = frozenset(
-    {"early_stop", "step_program", "step_trigger", "pull_displacement_m", "pull_velocity_m_s", "pull_start_s"}
-    | {"qp_floor_friction"}
+    {
+        "early_stop",
+        "step_program",
+        "step_reach",
+        "step_trigger",
+        "pull_displacement_m",
+        "pull_velocity_m_s",
+        "pull_start_s",
+        "qp_floor_friction",
+    }
 )
 
 
