@@ -123,7 +123,12 @@ class SteppingController:
         # single support: the stepping QP, its friction pyramid scaled by swing_friction_scale
         self._ctrl_swing = self.ctrl
         if self.stepping.swing_friction_scale is not None and inner.qp_weights is not None:
-            w = replace(inner.qp_weights, friction_scale=self.stepping.swing_friction_scale)
+            yaw = self.stepping.swing_yaw_friction_scale
+            if yaw is None or not self.stepping.floor_friction:
+                w = replace(inner.qp_weights, friction_scale=self.stepping.swing_friction_scale)
+            else:  # the yaw-moment rows with friction * yaw, the four friction rows as before
+                k = self.stepping.swing_friction_scale / yaw
+                w = replace(inner.qp_weights, friction_scale=yaw, floor_friction=k)
             self._ctrl_swing = make_policy(replace(inner, qp_weights=w), tree=tree).controller
         names = tuple(self.ctrl.joint_names)
         self.joint_names = tuple(joint_order) if joint_order is not None else names
@@ -373,7 +378,7 @@ class SteppingController:
         side = 1.0 if i == 1 else -1.0
         if self._landing is None or el < s.retarget_until * self._T:
             self._landing = cp.step_target(
-                xi, cop, omega, self._T - el, stance_c[:2], side, self._offset, self._limits
+                xi, cop, omega, self._T - el, stance_c[:2], side, self._offset, self._limits, s.side_margin_m
             )
         land = self._landing
         step["target_m"] = [float(land[0]), float(land[1]), 0.0]
@@ -404,8 +409,12 @@ class SteppingController:
         r = pd - hip
         if np.linalg.norm(r) > s.reach_m:  # out of reach: the nearest point within it
             pd = hip + r * (s.reach_m / np.linalg.norm(r))
-        # stance: W's recursions with the swing foot off (one big base, single-sole QP)
+        # stance: W's recursions with the swing foot off (one big base, single-sole QP); with
+        # "qp", a stance sole over AIRBORNE_M up (the biped tumbling) is left out as in double
+        # support: a QP loading a foot in the air made MuJoCo diverge
         flags = (i == 1, i == 0)
+        if s.airborne_stance and self._sole_pose(1 - i)[0][2] >= AIRBORNE_M:
+            flags = (False, False)
         # the COM falls freely over the stance sole: the LIPM's acceleration as feed-forward
         acc = omega**2 * (self.data.subtree_com[0][:2] - cop)
         com = np.array(self.target.com)

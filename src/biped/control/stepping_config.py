@@ -4,6 +4,7 @@ one set for every direction; :meth:`SteppingConfig.for_trigger` gives the set of
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 from biped.control import capture as cp
@@ -65,6 +66,16 @@ class SteppingConfig:
     dwell_margin_m, dwell_s: if dwell_s is set, a step also starts once the capture point has
     stayed within dwell_margin_m of the support polygon's edge for dwell_s (the feet hold it
     there only with the CoP at the edge while the body creeps over it).
+    side_margin_m: the landing sole centre lies at least this far beyond the predicted capture
+    point sideways, on the swing foot's side (:func:`biped.control.capture.step_target`), so
+    that a backward or forward step also catches the sideways fall over the stance foot.
+    swing_yaw_friction_scale: if set (with floor_friction and swing_friction_scale), single
+    support's yaw-moment rows use ``friction * swing_yaw_friction_scale`` instead of
+    ``friction * swing_friction_scale`` (they scale with the pyramid's mu); the four friction
+    rows keep swing_friction_scale (the soles' yaw moment stops a push's yaw).
+    airborne_stance: in single support, a stance sole over ``AIRBORNE_M`` (10 cm) above the
+    floor is left out of the QP (the biped tumbles; no wrench is distributed), as a foot in the
+    air is in double support.
     The ``"qp"`` set turns on floor_friction, sets swing_friction_scale 0.55 and
     lateral_rot_gain_scale 1 (docs/controller.md, "Stance-foot slip") and dwell_s 0.5 s.
     """
@@ -104,6 +115,9 @@ class SteppingConfig:
     swing_friction_scale: float | None = None
     dwell_margin_m: float = 0.02
     dwell_s: float | None = None
+    side_margin_m: float = 0.0
+    airborne_stance: bool = False
+    swing_yaw_friction_scale: float | None = None
     limits: cp.StepLimits = field(default_factory=cp.StepLimits)
     lateral_margin_m: float = 0.03
     lateral_offset_m: float = 0.15
@@ -126,6 +140,9 @@ class SteppingConfig:
                 "swing_friction_scale": 0.55,
                 "lateral_rot_gain_scale": 1.0,
                 "dwell_s": 0.5,
+                "side_margin_m": 0.04,
+                "airborne_stance": True,
+                "swing_yaw_friction_scale": 1.0 / math.sqrt(2.0),
                 **kw,
             }
         elif trigger != "capture":
