@@ -77,7 +77,8 @@ class SteppingConfig:
     floor is left out of the QP (the biped tumbles; no wrench is distributed), as a foot in the
     air is in double support.
     The ``"qp"`` set turns on floor_friction, sets swing_friction_scale 0.55 and
-    lateral_rot_gain_scale 1 (docs/controller.md, "Stance-foot slip") and dwell_s 0.5 s.
+    lateral_rot_gain_scale 1 (docs/controller.md, "Stance-foot slip"), dwell_s 0.5 s,
+    side_margin_m 0.04, swing_yaw_friction_scale 1/sqrt(2) and airborne_stance.
     """
 
     max_steps: int = 3
