@@ -66,47 +66,6 @@ def test_floor_friction_rows_are_the_floor_pyramid():
             np.testing.assert_allclose(Ct, before, atol=1e-15)
 
 
-def test_floor_friction_scale_scales_the_friction_rows_only(wendlandt_path, wendlandt_mj):
-    """``QPWeights.floor_friction`` = k (the stepping QP's single support with ``swing_scale_yaw``
-    False): the four friction rows of each foot are those of a QP whose friction is ``friction * k``
-    (built by the plain path), every other row (normal force, CoP, the eight yaw-moment rows) is
-    that of ``floor_friction`` = True; True is the scale 1."""
-    from biped.control import WorkspaceController
-    from biped.control.distribution import QPWeights
-
-    k = 0.55 * np.sqrt(2.0)
-    make = lambda **w: WorkspaceController.from_mjcf(  # noqa: E731
-        wendlandt_path, distribution="qp", qp_weights=QPWeights(leg_weight=0.0, **w)
-    )
-    plain, scaled, low = (
-        make(floor_friction=True),
-        make(floor_friction=k),
-        make(floor_friction=True, friction=0.3 * k),
-    )
-    assert QPWeights(floor_friction=True).array[9] == 1.0 and QPWeights(floor_friction=k).array[9] == k
-    m = wendlandt_mj
-    rng = np.random.default_rng(5)
-    d = mujoco.MjData(m)
-    for _ in range(5):
-        d.qpos[:] = m.key_qpos[m.key("wendlandt_initial").id]
-        d.qpos[7:] += rng.uniform(-0.2, 0.2, m.nq - 7)
-        d.qvel[:] = rng.normal(0.0, 1.0, m.nv)
-        for c in (plain, scaled, low):
-            c.compute(d.qpos, d.qvel)
-        for f0 in plain.qp.first:
-            assert f0 >= 0 and scaled.qp.first == plain.qp.first == low.qp.first
-            fr = [f0 + r for r in (2, 3, 6, 7)]
-            rest = [f0 + r for r in range(ROWS_PER_FOOT) if r not in (2, 3, 6, 7)]
-            np.testing.assert_allclose(scaled.qp.Ct[fr], low.qp.Ct[fr], rtol=1e-12, atol=1e-15)
-            assert np.abs(scaled.qp.Ct[fr] - plain.qp.Ct[fr]).max() > 1e-3
-            np.testing.assert_array_equal(scaled.qp.Ct[rest], plain.qp.Ct[rest])
-            np.testing.assert_array_equal(
-                scaled.qp.b[f0 : f0 + ROWS_PER_FOOT], plain.qp.b[f0 : f0 + ROWS_PER_FOOT]
-            )
-    with pytest.raises(Exception, match="floor_friction"):
-        QPWeights(floor_friction=-1.0)
-
-
 def test_swing_reaction_wrench_is_what_the_driven_leg_adds():
     """The wrench of :func:`biped.control.swing.swing_reaction_wrench`, applied to the central body
     (MuJoCo ``xfrc_applied`` at its COM) together with the swing torques on the leg, leaves the

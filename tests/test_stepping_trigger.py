@@ -173,9 +173,10 @@ def _sole_centre(m, d, qpos, foot):
 def test_goal_push_recovers_with_the_qp_trigger():
     """W's goal push of tests/test_stepping.py (4 kg at 8 m/s from behind, 32 N s, faithful
     physics, 4 s) with ``step_trigger = "qp"``: recovered by the strict rule within the three
-    steps allowed. The hit yaws the body ~50 deg; single support's yaw-moment rows keep the
-    double support's friction (``swing_yaw_friction_scale``): with them scaled by 0.55 like the
-    friction rows the soles could not stop the yaw and the biped fell after three steps (measured)."""
+    steps allowed. The hit yaws the body ~50 deg, and after two forward steps the capture point
+    leaves the feet past the right foot, on the side away from the left one: the third step
+    crosses over (``crossover``). Without the crossover the left foot stepped on its own side,
+    away from the capture point, and the biped fell (measured)."""
     from biped.control.stepping import SteppingController
     from biped.control.stepping_config import SteppingConfig
     from biped.sim import Scenario
@@ -192,34 +193,95 @@ def test_goal_push_recovers_with_the_qp_trigger():
     )
     assert sc.physics == "faithful"
     r = simulate(sc)
-    assert 1 <= len(r.extra["steps"]) <= 3
+    steps = r.extra["steps"]
+    assert 1 <= len(steps) <= 3 and any(st["crossover"] for st in steps), steps
     assert r.recovered and r.extra["final_com_speed_m_s"] < 0.05, r.extra
     scene = build_scene(sc)
-    scaled = SteppingConfig.for_trigger("qp", swing_yaw_friction_scale=None)
-    old = run_closed_loop(sc, scene, SteppingController(policy_config(sc), scaled, scene.joint_names))
-    assert not old.recovered
+    plain = SteppingConfig.for_trigger("qp", crossover=False)
+    old = run_closed_loop(sc, scene, SteppingController(policy_config(sc), plain, scene.joint_names))
+    assert old.fell
 
 
 @pytest.mark.slow
 def test_tumble_in_single_support_is_a_fall_not_a_divergence():
-    """22 m/s at 45 deg (beyond the stepping envelope) with single support's yaw rows scaled like
-    its friction rows: the biped cartwheels during its second swing, the stance foot in the air.
-    The stance sole over 10 cm up is left out of the QP (``airborne_stance``), as a foot in the
-    air in double support: the run ends in a fall. With the QP loading the foot in the air MuJoCo
-    diverged (measured at 1.09 s). With the "qp" set itself it does not diverge either."""
+    """22 m/s at 45 deg (beyond the stepping envelope), without the crossover: the biped
+    cartwheels during its second swing, the stance foot in the air. The stance sole over 10 cm up is left out of the QP
+    (``airborne_stance``), as a foot in the air in double support: the run ends in a fall. With
+    the QP loading the foot in the air MuJoCo diverged (measured at 1.09 s)."""
     from biped.control.stepping import SteppingController
     from biped.control.stepping_config import SteppingConfig
     from biped.sim.policies import policy_config
     from biped.sim.push import run_closed_loop
 
     sc = _sweep_scenario(22, 45, "--stepping")
-    assert simulate(sc).diverged is None
     scene = build_scene(sc)
 
-    def run(**kw):  # single support's yaw rows scaled like its friction rows: this push tumbles
-        cfg = SteppingConfig.for_trigger("qp", swing_yaw_friction_scale=None, **kw)
+    def run(**kw):  # without the crossover (with it this push falls otherwise, no tumble)
+        cfg = SteppingConfig.for_trigger("qp", crossover=False, **kw)
         return run_closed_loop(sc, scene, SteppingController(policy_config(sc), cfg, scene.joint_names))
 
+    assert simulate(sc).diverged is None
     r = run()
     assert r.fell and r.diverged is None
     assert run(airborne_stance=False).diverged is not None
+
+
+def _leg_geoms(m, side):
+    """The geoms of one leg's bodies (thigh and below), by the body tree from ``side``_thigh."""
+    top = m.body(f"{side}_thigh").id
+    out = []
+    for g in range(m.ngeom):
+        b = int(m.geom_bodyid[g])
+        while b > 0 and b != top:
+            b = int(m.body_parentid[b])
+        if b == top:
+            out.append(g)
+    return out
+
+
+@pytest.mark.slow
+def test_crossover_step_clears_the_stance_leg_with_leg_contacts_on():
+    """13 m/s at 90 deg, faithful physics: the QP alone holds the push for 2 s, the slow trigger
+    steps the left foot, and the capture point then leaves the polygon past that foot, on the
+    side away from the right foot: the right foot crosses behind the left one (a crossover,
+    issue #23) and the run ends at rest (the strict rule). MuJoCo's contacts between the two legs
+    are switched on (the scene has none: every biped geom is contype 2, conaffinity 1): none occurs
+    in any recorded state, and the run is the same as without them. Without the crossover the
+    right foot steps inward to 13 cm from the left one and the run is not at rest at 4 s (three
+    steps, the third sliding 13.5 cm; measured)."""
+    from biped.control.stepping import SteppingController
+    from biped.control.stepping_config import SteppingConfig
+    from biped.sim.policies import policy_config
+    from biped.sim.push import run_closed_loop
+
+    sc = _sweep_scenario(13, 90, "--stepping", "--physics", "faithful")
+    plain = simulate(sc)
+    scene = build_scene(sc)
+    m = scene.model
+    left, right = _leg_geoms(m, "left"), _leg_geoms(m, "right")
+    assert left and right and not set(left) & set(right)
+    for gs, own, other in ((left, 4, 8), (right, 8, 4)):
+        m.geom_contype[gs] = own
+        m.geom_conaffinity[gs] = 1 | other
+    r = run_closed_loop(
+        sc, scene, SteppingController(policy_config(sc), SteppingConfig.for_trigger("qp"), scene.joint_names)
+    )
+    steps = r.extra["steps"]
+    assert len(steps) == 2 and steps[1]["crossover"] and not steps[0]["crossover"], steps
+    assert steps[1]["foot"] == "right" and steps[1]["position_m"][1] < steps[0]["position_m"][1] - 0.1
+    assert r.recovered and r.extra["final_com_speed_m_s"] < 0.05
+    d = mujoco.MjData(m)
+    lset, rset = set(left), set(right)
+    touching = 0
+    for q in r.qpos:
+        d.qpos[:] = q
+        mujoco.mj_forward(m, d)
+        for c in d.contact[: d.ncon]:
+            a, b = int(c.geom1), int(c.geom2)
+            touching += (a in lset and b in rset) or (a in rset and b in lset)
+    assert touching == 0
+    np.testing.assert_allclose(r.qpos[-1], plain.qpos[-1], atol=1e-9)
+    scene0 = build_scene(sc)
+    no = SteppingConfig.for_trigger("qp", crossover=False)
+    old = run_closed_loop(sc, scene0, SteppingController(policy_config(sc), no, scene0.joint_names))
+    assert not any(st["crossover"] for st in old.extra["steps"]) and not old.recovered

@@ -92,10 +92,7 @@ class QPWeights:
     leg_weight: share in [0, 1] of each leg's weight that the cone rows add to the leg's share
         (:func:`biped.control.cones.carry_leg_weight`; 0: the legs taken as massless).
     floor_friction: the friction pyramid on the floor's axes, not the sole's (a sole tilted on
-        an edge; :func:`biped.control.cones.floor_friction_rows`; the stepping QP sets it). A
-        number > 0 (True is 1) also scales those four rows' coefficient: ``friction *
-        friction_scale * floor_friction``, while the yaw-moment rows keep ``friction *
-        friction_scale`` (the stepping QP's single support: docs/controller.md).
+        an edge; :func:`biped.control.cones.floor_friction_rows`; the stepping QP sets it).
     """
 
     force: float = 1.0
@@ -109,7 +106,7 @@ class QPWeights:
     friction_scale: float = 1.0 / math.sqrt(2.0)
     cop_scale: float = 1.0
     leg_weight: float = 1.0
-    floor_friction: bool | float = False
+    floor_friction: bool = False
     array: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
@@ -130,9 +127,6 @@ class QPWeights:
             v = getattr(self, name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
                 raise ScenarioError(f"QP weight {name} must be a finite number >= 0; got {v!r}")
-        ff = self.floor_friction
-        if not (isinstance(ff, (bool, int, float)) and math.isfinite(ff) and ff >= 0):
-            raise ScenarioError(f"QP floor_friction must be true, false or a scale > 0; got {ff!r}")
         lw = self.leg_weight
         if not (isinstance(lw, (int, float)) and 0.0 <= lw <= 1.0):
             raise ScenarioError(f"QP leg_weight must be a share of the legs' weight in [0, 1]; got {lw!r}")
@@ -147,7 +141,7 @@ class QPWeights:
                 self.friction * self.friction_scale,
                 self.max_normal_n,
                 self.leg_weight,
-                float(self.floor_friction),
+                1.0 if self.floor_friction else 0.0,
             ],
             dtype=float,
         )
@@ -244,7 +238,7 @@ def qp_build(
             m0 = m
             m = cone_rows(dims[f, 0], dims[f, 1], prm[6], prm[5], prm[7], 6 * f, Ct, b, m)
             if prm[9] != 0.0:  # the friction rows on the floor's axes
-                floor_friction_rows(g[feet[f]], soles[f], prm[6] * prm[9], 6 * f, Ct, m0)
+                floor_friction_rows(g[feet[f]], soles[f], prm[6], 6 * f, Ct, m0)
             if prm[8] != 0.0:  # the cone holds the ground's wrench: the QP's share plus the leg's weight
                 leg_weight_wrench(g, feet[f], soles[f], leg, f, mass, grav, prm[8], wg[f])
                 carry_leg_weight(Ct, b, m0, 6 * f, wg[f])

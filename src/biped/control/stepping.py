@@ -123,12 +123,7 @@ class SteppingController:
         # single support: the stepping QP, its friction pyramid scaled by swing_friction_scale
         self._ctrl_swing = self.ctrl
         if self.stepping.swing_friction_scale is not None and inner.qp_weights is not None:
-            yaw = self.stepping.swing_yaw_friction_scale
-            if yaw is None or not self.stepping.floor_friction:
-                w = replace(inner.qp_weights, friction_scale=self.stepping.swing_friction_scale)
-            else:  # the yaw-moment rows with friction * yaw, the four friction rows as before
-                k = self.stepping.swing_friction_scale / yaw
-                w = replace(inner.qp_weights, friction_scale=yaw, floor_friction=k)
+            w = replace(inner.qp_weights, friction_scale=self.stepping.swing_friction_scale)
             self._ctrl_swing = make_policy(replace(inner, qp_weights=w), tree=tree).controller
         names = tuple(self.ctrl.joint_names)
         self.joint_names = tuple(joint_order) if joint_order is not None else names
@@ -201,6 +196,7 @@ class SteppingController:
         self._settled = False  # after a step, at rest: the settling controller
         self.arm_time_s = -math.inf  # no step before [s] (the lean release arms it when sensed)
         self._dwell_since: float | None = None  # since when xi is near the edge (the slow trigger)
+        self._cross = False  # the step swings the foot across the stance foot
 
     def _new_trigger(self) -> cp.CaptureTrigger:
         s = self.stepping
@@ -337,6 +333,11 @@ class SteppingController:
             dy = [abs(self._sole_pose(i)[0][1] - xi[1]) for i in (0, 1)]
             swing = 0 if dy[0] < dy[1] else 1
         self.swing = swing
+        # a crossover: a sideways step whose capture point lies beyond the stance sole's centre,
+        # on the side away from the swing foot (the alternate foot cannot reach it on its own side)
+        stance_y = self._sole_pose(1 - swing)[0][1]
+        own = 1.0 if swing == 1 else -1.0
+        self._cross = bool(s.crossover and self.steps and lateral and own * (xi[1] - stance_y) < 0.0)
         self.phase = "swing"
         self._dwell_since = None
         self._t_start = t
@@ -348,6 +349,7 @@ class SteppingController:
                 "foot": FEET[swing],
                 "start_s": t,
                 "sideways": bool(lateral),
+                "crossover": self._cross,
                 "stance_slip_m": None,
                 "lift_off_s": None,
                 "touch_down_s": None,
@@ -377,9 +379,25 @@ class SteppingController:
         cop = stance_c[:2] + np.array([c * loc[0] - sn * loc[1], sn * loc[0] + c * loc[1]])
         side = 1.0 if i == 1 else -1.0
         if self._landing is None or el < s.retarget_until * self._T:
-            self._landing = cp.step_target(
-                xi, cop, omega, self._T - el, stance_c[:2], side, self._offset, self._limits, s.side_margin_m
-            )
+            if self._cross:  # on the stance foot's far side, ahead of or behind it by crossover_clear_m
+                land = cp.step_target(
+                    xi, cop, omega, self._T - el, stance_c[:2], -side, self._offset, self._limits
+                )
+                ahead = 1.0 if land[0] >= stance_c[0] else -1.0
+                land[0] = stance_c[0] + ahead * max(ahead * (land[0] - stance_c[0]), s.crossover_clear_m)
+                self._landing = land
+            else:
+                self._landing = cp.step_target(
+                    xi,
+                    cop,
+                    omega,
+                    self._T - el,
+                    stance_c[:2],
+                    side,
+                    self._offset,
+                    self._limits,
+                    s.side_margin_m,
+                )
         land = self._landing
         step["target_m"] = [float(land[0]), float(land[1]), 0.0]
         # ankle path: the sole centre lands on `land`, flat, zero yaw
@@ -393,6 +411,13 @@ class SteppingController:
         pd = p0 + (ankle_land - p0) * h
         vd = (ankle_land - p0) * hd / T
         ad = (ankle_land - p0) * hdd / T**2
+        if self._cross:  # around the stance foot: along x in the first 60 % of the swing, y in the last
+            assert p0 is not None  # set when the step started
+            for k, (s0, s1) in ((0, (0.0, 0.6)), (1, (0.4, 1.0))):
+                hk, hdk, hddk = _min_jerk((sc - s0) / (s1 - s0))
+                dk = ankle_land[k] - p0[k]
+                Tk = T * (s1 - s0)
+                pd[k], vd[k], ad[k] = p0[k] + dk * hk, dk * hdk / Tk, dk * hddk / Tk**2
         pd[2] += s.apex_m * b
         vd[2] += s.apex_m * bd / T
         ad[2] += s.apex_m * bdd / T**2

@@ -4,7 +4,6 @@ one set for every direction; :meth:`SteppingConfig.for_trigger` gives the set of
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 from biped.control import capture as cp
@@ -69,16 +68,16 @@ class SteppingConfig:
     side_margin_m: the landing sole centre lies at least this far beyond the predicted capture
     point sideways, on the swing foot's side (:func:`biped.control.capture.step_target`), so
     that a backward or forward step also catches the sideways fall over the stance foot.
-    swing_yaw_friction_scale: if set (with floor_friction and swing_friction_scale), single
-    support's yaw-moment rows use ``friction * swing_yaw_friction_scale`` instead of
-    ``friction * swing_friction_scale`` (they scale with the pyramid's mu); the four friction
-    rows keep swing_friction_scale (the soles' yaw moment stops a push's yaw).
+    crossover, crossover_clear_m: a later sideways step whose capture point lies beyond the
+    stance sole's centre on the side away from the swing foot crosses over: it lands on the
+    stance foot's far side (lateral limits mirrored), at least crossover_clear_m ahead of or
+    behind the stance sole's centre (the soles clear), its path along x first, then across.
     airborne_stance: in single support, a stance sole over ``AIRBORNE_M`` (10 cm) above the
     floor is left out of the QP (the biped tumbles; no wrench is distributed), as a foot in the
     air is in double support.
     The ``"qp"`` set turns on floor_friction, sets swing_friction_scale 0.55 and
     lateral_rot_gain_scale 1 (docs/controller.md, "Stance-foot slip"), dwell_s 0.5 s,
-    side_margin_m 0.04, swing_yaw_friction_scale 1/sqrt(2) and airborne_stance.
+    side_margin_m 0.04, airborne_stance and crossover.
     """
 
     max_steps: int = 3
@@ -118,7 +117,8 @@ class SteppingConfig:
     dwell_s: float | None = None
     side_margin_m: float = 0.0
     airborne_stance: bool = False
-    swing_yaw_friction_scale: float | None = None
+    crossover: bool = False
+    crossover_clear_m: float = 0.24
     limits: cp.StepLimits = field(default_factory=cp.StepLimits)
     lateral_margin_m: float = 0.03
     lateral_offset_m: float = 0.15
@@ -143,7 +143,7 @@ class SteppingConfig:
                 "dwell_s": 0.5,
                 "side_margin_m": 0.04,
                 "airborne_stance": True,
-                "swing_yaw_friction_scale": 1.0 / math.sqrt(2.0),
+                "crossover": True,
                 **kw,
             }
         elif trigger != "capture":
