@@ -16,7 +16,8 @@ Phases (one :class:`SteppingController` call per control period, ``(t, qpos, qve
   ``max_steps`` steps were taken, a step starts.
 - **swing**: swing foot rule: for the first step, the foot off the floor if only one is on it,
   else the foot whose sole centre lies nearer to xi across the body (the push side: a push to
-  the biped's right steps with the right foot; no crossover); later steps alternate feet. The stance
+  the biped's right steps with the right foot); later steps alternate feet, and with ``crossover``
+  a later sideways step whose capture point lies past the stance foot crosses over. The stance
   leg carries the body through W's
   recursions with the contact flags (stance, not swing): Alg. 3 with one big base, the QP's
   single-sole cone (friction rows on the floor's axes and scaled by ``swing_friction_scale``
@@ -349,7 +350,6 @@ class SteppingController:
                 "foot": FEET[swing],
                 "start_s": t,
                 "sideways": bool(lateral),
-                "crossover": self._cross,
                 "stance_slip_m": None,
                 "lift_off_s": None,
                 "touch_down_s": None,
@@ -357,6 +357,8 @@ class SteppingController:
                 "target_m": None,
             }
         )
+        if s.crossover:  # the record says so where crossovers may happen ("capture" as before)
+            self.steps[-1]["crossover"] = self._cross
 
     def _swing_call(self, t, qpos, qvel, xi, omega, feet):
         s = self.stepping
