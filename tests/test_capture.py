@@ -178,3 +178,28 @@ def test_step_target_lands_capture_point_inside_new_sole():
     xi_T = x + xd / W
     assert np.linalg.norm(tgt - xi_T) == pytest.approx(0.03, abs=1e-6)
     assert np.dot(tgt - xi_T, xi_T - p) > 0  # beyond it, away from the stance foot
+
+
+def test_step_target_side_margin_puts_the_capture_point_inside_the_sole_across():
+    """``side_margin_m``: a backward step over a stance foot on the left (the swing foot the right,
+    side +1) whose predicted capture point lies 1 cm right of the stance sole: without the margin
+    the sole centre lands about on xi_td across (the 3 cm offset runs along x); with 4 cm it lies
+    4 cm right of the integrated pendulum's capture point at touchdown; a target already that far
+    out is not moved, and the limits still apply (the 0.22 m width)."""
+    x0, v0 = np.array([0.0, -0.08]), np.array([0.9, 0.15])
+    p = np.array([0.0, -0.09])  # stance (left) sole centre, the CoP held there
+    T = 0.25
+    xi0 = cp.capture_point(x0, v0, W)
+    wide = cp.StepLimits(max_step=5.0, min_width=0.0, max_width=5.0, max_back=5.0)
+    x, xd = _integrate(x0, v0, p, W, T)
+    xi_T = x + xd / W
+    plain = cp.step_target(xi0, p, W, T, p, side=1.0, offset_m=0.03, limits=wide)
+    assert 0.0 < plain[1] - xi_T[1] < 0.01
+    tgt = cp.step_target(xi0, p, W, T, p, side=1.0, offset_m=0.03, limits=wide, side_margin_m=0.04)
+    assert tgt[1] - xi_T[1] == pytest.approx(0.04, abs=1e-6)
+    assert tgt[0] == pytest.approx(plain[0], abs=1e-12)
+    half = 0.5 * (plain[1] - xi_T[1])
+    far = cp.step_target(xi0, p, W, T, p, side=1.0, offset_m=0.03, limits=wide, side_margin_m=half)
+    np.testing.assert_allclose(far, plain)
+    capped = cp.step_target(xi0, p, W, T, p, side=1.0, offset_m=0.03, side_margin_m=0.5)
+    assert capped[1] - p[1] == pytest.approx(cp.StepLimits().max_width)

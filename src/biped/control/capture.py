@@ -282,18 +282,22 @@ def step_target(
     side: float,
     offset_m: float = 0.03,
     limits: StepLimits = StepLimits(),
+    side_margin_m: float = 0.0,
 ) -> np.ndarray:
     """Landing point of the swing sole's centre: ``xi_td = p + (xi - p) e^{omega_0 T}`` (the
     capture point when the foot lands, T = t_remaining, CoP p held), moved ``offset_m`` further
     along ``xi_td - p`` so that the capture point lands inside the new support polygon by that
-    much, then :func:`clamp_step`."""
+    much; with ``side_margin_m`` > 0 the sole centre also lies at least that far beyond xi_td
+    sideways, on the swing foot's side (``side``), so that xi_td lands inside the sole across
+    too; then :func:`clamp_step`."""
     p = np.asarray(cop, dtype=float)[:2]
     xi_td = predict_capture_point(xi, p, omega, max(t_remaining, 0.0))
     d = xi_td - p
     r = np.linalg.norm(d)
-    if r > 1e-9:
-        xi_td = xi_td + offset_m * d / r
-    return clamp_step(xi_td, stance_xy, side, limits)
+    land = xi_td + offset_m * d / r if r > 1e-9 else xi_td.copy()
+    if side_margin_m > 0.0:
+        land[1] = side * max(side * land[1], side * xi_td[1] + side_margin_m)
+    return clamp_step(land, stance_xy, side, limits)
 
 
 def xcom_offset(landing_xy, xcom_xy, stance_xy) -> float:

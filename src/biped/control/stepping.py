@@ -16,7 +16,8 @@ Phases (one :class:`SteppingController` call per control period, ``(t, qpos, qve
   ``max_steps`` steps were taken, a step starts.
 - **swing**: swing foot rule: for the first step, the foot off the floor if only one is on it,
   else the foot whose sole centre lies nearer to xi across the body (the push side: a push to
-  the biped's right steps with the right foot; no crossover); later steps alternate feet. The stance
+  the biped's right steps with the right foot); later steps alternate feet, and with ``crossover``
+  a later sideways step whose capture point lies past the stance foot crosses over. The stance
   leg carries the body through W's
   recursions with the contact flags (stance, not swing): Alg. 3 with one big base, the QP's
   single-sole cone (friction rows on the floor's axes and scaled by ``swing_friction_scale``
@@ -205,6 +206,7 @@ class SteppingController:
         self._settled = False  # after a step, at rest: the settling controller
         self.arm_time_s = -math.inf  # no step before [s] (the lean release arms it when sensed)
         self._dwell_since: float | None = None  # since when xi is near the edge (the slow trigger)
+        self._cross = False  # the step swings the foot across the stance foot
 
     def _new_trigger(self) -> cp.CaptureTrigger:
         s = self.stepping
@@ -348,6 +350,14 @@ class SteppingController:
             dy = [abs(self._sole_pose(i)[0][1] - xi[1]) for i in (0, 1)]
             swing = 0 if dy[0] < dy[1] else 1
         self.swing = swing
+        # a crossover: a sideways step whose capture point lies beyond the stance sole's centre,
+        # on the side away from the swing foot (the alternate foot cannot reach it on its own side)
+        # (in W's facing: a robot's floor turned by its ``facing`` rotation)
+        across = xi[:2] - self._sole_pose(1 - swing)[0][:2]
+        if self._facing is not None:
+            across = self._facing @ across
+        own = 1.0 if swing == 1 else -1.0
+        self._cross = bool(s.crossover and self.steps and lateral and own * across[1] < 0.0)
         self.phase = "swing"
         self._dwell_since = None
         self._t_start = t
@@ -366,6 +376,8 @@ class SteppingController:
                 "target_m": None,
             }
         )
+        if s.crossover:  # the record says so where crossovers may happen ("capture" as before)
+            self.steps[-1]["crossover"] = self._cross
 
     def _swing_call(self, t, qpos, qvel, xi, omega, feet):
         s = self.stepping
@@ -402,6 +414,13 @@ class SteppingController:
         pd = p0 + (ankle_land - p0) * h
         vd = (ankle_land - p0) * hd / T
         ad = (ankle_land - p0) * hdd / T**2
+        if self._cross:  # around the stance foot: along x in the first 60 % of the swing, y in the last
+            assert p0 is not None  # set when the step started
+            for k, (s0, s1) in ((0, (0.0, 0.6)), (1, (0.4, 1.0))):
+                hk, hdk, hddk = _min_jerk((sc - s0) / (s1 - s0))
+                dk = ankle_land[k] - p0[k]
+                Tk = T * (s1 - s0)
+                pd[k], vd[k], ad[k] = p0[k] + dk * hk, dk * hdk / Tk, dk * hddk / Tk**2
         pd[2] += s.apex_m * b
         vd[2] += s.apex_m * bd / T
         ad[2] += s.apex_m * bdd / T**2
@@ -418,8 +437,12 @@ class SteppingController:
         r = pd - hip
         if np.linalg.norm(r) > s.reach_m:  # out of reach: the nearest point within it
             pd = hip + r * (s.reach_m / np.linalg.norm(r))
-        # stance: W's recursions with the swing foot off (one big base, single-sole QP)
+        # stance: W's recursions with the swing foot off (one big base, single-sole QP); with
+        # "qp", a stance sole over AIRBORNE_M up (the biped tumbling) is left out as in double
+        # support: a QP loading a foot in the air made MuJoCo diverge
         flags = (i == 1, i == 0)
+        if s.airborne_stance and self._sole_pose(1 - i)[0][2] >= AIRBORNE_M:
+            flags = (False, False)
         # the COM falls freely over the stance sole: the LIPM's acceleration as feed-forward
         acc = omega**2 * (self.data.subtree_com[0][:2] - cop)
         com = np.array(self.target.com)
@@ -462,14 +485,21 @@ class SteppingController:
 
     def _step_target(self, xi, cop, omega, t_remaining, stance, side):
         """:func:`~biped.control.capture.step_target` in W's facing (the body's ``facing``
-        rotation of the floor, and back)."""
-        R = self._facing
-        if R is None:
-            return cp.step_target(xi, cop, omega, t_remaining, stance, side, self._offset, self._limits)
-        land = cp.step_target(
-            R @ xi, R @ cop, omega, t_remaining, R @ stance, side, self._offset, self._limits
-        )
-        return R.T @ land
+        rotation of the floor, and back); a crossover step lands on the stance foot's far side,
+        ahead of or behind it by ``crossover_clear_m``; else the sole centre lies
+        ``side_margin_m`` beyond the predicted capture point on the swing foot's side."""
+        s, R = self.stepping, self._facing
+        if R is not None:
+            xi, cop, stance = R @ xi, R @ cop, R @ stance
+        if self._cross:
+            land = cp.step_target(xi, cop, omega, t_remaining, stance, -side, self._offset, self._limits)
+            ahead = 1.0 if land[0] >= stance[0] else -1.0
+            land[0] = stance[0] + ahead * max(ahead * (land[0] - stance[0]), s.crossover_clear_m)
+        else:
+            land = cp.step_target(
+                xi, cop, omega, t_remaining, stance, side, self._offset, self._limits, s.side_margin_m
+            )
+        return land if R is None else R.T @ land
 
     def _swing_torques(self, i, pd, vd, ad):
         """The swing leg's torques (the body's swing law; W's :func:`biped.control.swing.swing_leg_torques`)."""

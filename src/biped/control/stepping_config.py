@@ -72,8 +72,19 @@ class SteppingConfig:
     dwell_margin_m, dwell_s: if dwell_s is set, a step also starts once the capture point has
     stayed within dwell_margin_m of the support polygon's edge for dwell_s (the feet hold it
     there only with the CoP at the edge while the body creeps over it).
+    side_margin_m: the landing sole centre lies at least this far beyond the predicted capture
+    point sideways, on the swing foot's side (:func:`biped.control.capture.step_target`), so
+    that a backward or forward step also catches the sideways fall over the stance foot.
+    crossover, crossover_clear_m: a later sideways step whose capture point lies beyond the
+    stance sole's centre on the side away from the swing foot crosses over: it lands on the
+    stance foot's far side (lateral limits mirrored), at least crossover_clear_m ahead of or
+    behind the stance sole's centre (the soles clear), its path along x first, then across.
+    airborne_stance: in single support, a stance sole over ``AIRBORNE_M`` (10 cm) above the
+    floor is left out of the QP (the biped tumbles; no wrench is distributed), as a foot in the
+    air is in double support.
     The ``"qp"`` set turns on floor_friction, sets swing_friction_scale 0.55 and
-    lateral_rot_gain_scale 1 (docs/controller.md, "Stance-foot slip") and dwell_s 0.5 s.
+    lateral_rot_gain_scale 1 (docs/controller.md, "Stance-foot slip"), dwell_s 0.5 s,
+    side_margin_m 0.04, airborne_stance and crossover.
     """
 
     max_steps: int = 3
@@ -113,6 +124,10 @@ class SteppingConfig:
     swing_friction_scale: float | None = None
     dwell_margin_m: float = 0.02
     dwell_s: float | None = None
+    side_margin_m: float = 0.0
+    airborne_stance: bool = False
+    crossover: bool = False
+    crossover_clear_m: float = 0.24
     limits: cp.StepLimits = field(default_factory=cp.StepLimits)
     lateral_margin_m: float = 0.03
     lateral_offset_m: float = 0.15
@@ -135,6 +150,9 @@ class SteppingConfig:
                 "swing_friction_scale": 0.55,
                 "lateral_rot_gain_scale": 1.0,
                 "dwell_s": 0.5,
+                "side_margin_m": 0.04,
+                "airborne_stance": True,
+                "crossover": True,
                 **kw,
             }
         elif trigger != "capture":

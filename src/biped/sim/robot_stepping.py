@@ -20,14 +20,15 @@ orientation); the landing limits applied in W's facing (the robots face +x, W's 
 the standing pose, W's 0.168 m):
 
 - lengths along the body and vertical scale by s: the trigger's and dwell's margins, offset_m,
-  apex_m, reach_m, the swing and post-step height drops, the landing limits' max_back;
+  apex_m, reach_m, the swing and post-step height drops, the landing limits' max_back, the
+  crossover's clearance crossover_clear_m;
 - but the reach is at least the hip-to-foot distance D at the standing pose (W stands at 83 % of
   its reach; G1, crouched only off the singularity, beyond 0.944 L), and while a foot swings the
   stance hip is lowered at least to W's standing crouch, ``D - (D_W / L_W) L`` (W: D_W / L_W =
   0.78; G1 stands at 0.99 L: with only s x 0.08 m its swing foot, pulled back within the reach,
   hung 2 cm over the floor past the swing time while the capture point ran sideways);
 - lengths across the body by w: min_width, max_width of both limits, lateral_margin_m,
-  lateral_offset_m; a limit's max_step keeps its split, ``sqrt((s f)^2 + (w B_W)^2)`` with ``f =
+  lateral_offset_m, side_margin_m; a limit's max_step keeps its split, ``sqrt((s f)^2 + (w B_W)^2)`` with ``f =
   sqrt(max_step^2 - B_W^2)`` W's forward step at its stance width;
 - times and speeds by sqrt(s), gains (1/s^2, 1/s) by 1/s and 1/sqrt(s): dynamic similarity
   (equal Froude numbers): swing times, refractory, settle and dwell times, the descent and
@@ -119,6 +120,8 @@ def scaled_stepping(
         post_step_height_drop_m=s * config.post_step_height_drop_m,
         lateral_margin_m=w * config.lateral_margin_m,
         lateral_offset_m=w * config.lateral_offset_m,
+        side_margin_m=w * config.side_margin_m,
+        crossover_clear_m=s * config.crossover_clear_m,
         limits=_limits(config.limits, s, w, B_w),
         lateral_limits=_limits(config.lateral_limits, s, w, B_w),
         # dynamic similarity (equal Froude numbers): times and speeds by sqrt(s), gains by 1 / s
