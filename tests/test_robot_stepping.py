@@ -159,11 +159,12 @@ def _t1_block(speed):
     return desc, Block(p0, v0, mass)
 
 
-def test_t1_trigger_polygon_is_cut_to_what_its_ankles_hold():
+def test_t1_trigger_polygon_is_cut_to_what_its_ankles_hold(monkeypatch):
     """T1 standing: the trigger's polygon with ``ankle_limited_polygon`` reaches, along the soles,
     exactly ``tau_max / (m g)`` beyond the ankle pitch hinges' axes (MuJoCo's joint anchors, the
     limits and mass read here from the file), short of the toes, and lies inside the geometric
     polygon."""
+    import biped.sim.robot_stepping as rs
     from biped.control import capture as cp
     from biped.control.setpoint import Target
     from biped.models.robot import describe
@@ -176,6 +177,7 @@ def test_t1_trigger_polygon_is_cut_to_what_its_ankles_hold():
     q0 = standing_qpos(desc, ctrl)
     g = ctrl.link_poses(q0)[0]
     target = Target(com=tuple(g[:3, 3]), quat=tuple(rot_to_quat(np.ascontiguousarray(g[:3, :3]))))
+    monkeypatch.setattr(rs, "ROBOT_ANKLE_POLYGON", True)
     st = robot_stepper(desc, q0, target, SteppingConfig.for_trigger("capture"))
     assert st.stepping.ankle_limited_polygon
     m, d = st.model, st.data
@@ -196,9 +198,10 @@ def test_t1_trigger_polygon_is_cut_to_what_its_ankles_hold():
     assert all(cp.signed_distance(full, p) <= 1e-9 for p in cut)
 
 
-def test_t1_push_from_behind_above_its_old_stepping_limit_is_recovered():
+def test_t1_push_from_behind_above_its_old_stepping_limit_is_recovered(monkeypatch):
     """W's block scaled to T1, from behind at 12.25 m/s (T1's stepping limit was 11.75 m/s,
-    docs/robots.md): with the trigger's polygon cut to what T1's ankles hold it steps early and
+    docs/robots.md): with the trigger's polygon cut to what T1's ankles hold (the option
+    ``ROBOT_ANKLE_POLYGON``, off by default: its 8-direction cost, docs/robots.md) it steps early and
     is at rest over the moved set point, within its limits, its trunk upright; with the
     geometric soles (the old trigger: after its step T1 stood on its front ankle's limit, the
     capture point inside the sole, its trunk pitching on, and stepped again too late) the same
@@ -208,16 +211,13 @@ def test_t1_push_from_behind_above_its_old_stepping_limit_is_recovered():
 
     desc, block = _t1_block(12.25)
     config = SteppingConfig.for_trigger("capture")
+    monkeypatch.setattr(rs, "ROBOT_ANKLE_POLYGON", True)  # off by default (docs/robots.md)
     step = robot_push(desc, 3.0, block=block, early_stop=True, stepping=config, record_qpos=True)
     assert not step.fell and step.stop_reason == "at_rest" and step.final_offset_m < 0.01
     assert step.steps[0]["position_m"][0] > 0.2
     assert step.max_torque_fraction <= 1.0 + 1e-9
     w, x, y, z = step.qpos[-1, 3:7]  # the floating body's pitch at rest (MuJoCo's quaternion)
     assert abs(math.degrees(math.asin(2 * (w * y - z * x)))) < 3.0
-    old = rs.ROBOT_ANKLE_POLYGON
-    try:
-        rs.ROBOT_ANKLE_POLYGON = False
-        off = robot_push(desc, 3.0, block=block, early_stop=True, stepping=config)
-    finally:
-        rs.ROBOT_ANKLE_POLYGON = old
+    monkeypatch.setattr(rs, "ROBOT_ANKLE_POLYGON", False)
+    off = robot_push(desc, 3.0, block=block, early_stop=True, stepping=config)
     assert off.fell
