@@ -143,3 +143,81 @@ def test_g1_push_from_behind_past_its_feet_in_place_limit_is_recovered_with_a_st
     j_max = float(robot_hof_bound(desc, [0.0]).j_max_n_s[0])
     assert j_max == pytest.approx(13.7, abs=0.05)  # docs/robots.md
     assert math.hypot(J[0], J[1]) > j_max
+
+
+def _t1_block(speed):
+    from biped.models.robot import describe
+    from biped.sim.robot import Block, robot_controller, standing_qpos
+    from biped.sim.robot_trial import robot_block_defaults
+    from biped.sim.sweep.spec import aim_block
+
+    desc = describe("t1")
+    mass, height = robot_block_defaults("t1", models.total_mass_kg())  # as the envelope throws it
+    ctrl = robot_controller(desc, "statics", "none")
+    c = ctrl.link_poses(standing_qpos(desc, ctrl))[0][:3, 3]
+    p0, v0 = aim_block(c[:2], speed, 0.0, height, 0.5)
+    return desc, Block(p0, v0, mass)
+
+
+def test_t1_trigger_polygon_is_cut_to_what_its_ankles_hold(monkeypatch):
+    """T1 standing: the trigger's polygon with ``ankle_limited_polygon`` reaches, along the soles,
+    exactly ``tau_max / (m g)`` beyond the ankle pitch hinges' axes (MuJoCo's joint anchors, the
+    limits and mass read here from the file), short of the toes, and lies inside the geometric
+    polygon."""
+    import biped.sim.robot_stepping as rs
+    from biped.control import capture as cp
+    from biped.control.setpoint import Target
+    from biped.models.robot import describe
+    from biped.sim.robot import robot_controller, standing_qpos
+    from biped.sim.robot_stepping import robot_stepper
+    from biped.spatial import rot_to_quat
+
+    desc = describe("t1")
+    ctrl = robot_controller(desc, "statics", "none")
+    q0 = standing_qpos(desc, ctrl)
+    g = ctrl.link_poses(q0)[0]
+    target = Target(com=tuple(g[:3, 3]), quat=tuple(rot_to_quat(np.ascontiguousarray(g[:3, :3]))))
+    monkeypatch.setattr(rs, "ROBOT_ANKLE_POLYGON", True)
+    st = robot_stepper(desc, q0, target, SteppingConfig.for_trigger("capture"))
+    assert st.stepping.ankle_limited_polygon
+    m, d = st.model, st.data
+    d.qpos[:] = q0
+    mujoco.mj_forward(m, d)
+    cut = st._polygon((True, True))
+    full = st._polygon((True, True), cut=False)
+    f = mujoco.MjModel.from_xml_path(str(desc.path))
+    weight = float(np.sum(f.body_mass)) * 9.81
+    fronts = []
+    for leg in st.body.leg_joints:
+        j = f.joint(leg[4]).id
+        assert f.jnt_actfrclimited[j]
+        tau = min(-f.jnt_actfrcrange[j, 0], f.jnt_actfrcrange[j, 1])
+        fronts.append(d.xanchor[m.joint(leg[4]).id][0] + tau / weight)
+    assert cut[:, 0].max() == pytest.approx(max(fronts), abs=1e-6)
+    assert cut[:, 0].max() < full[:, 0].max() - 0.02  # T1's toes lie beyond what its ankles hold
+    assert all(cp.signed_distance(full, p) <= 1e-9 for p in cut)
+
+
+def test_t1_push_from_behind_above_its_old_stepping_limit_is_recovered(monkeypatch):
+    """W's block scaled to T1, from behind at 12.25 m/s (T1's stepping limit was 11.75 m/s,
+    docs/robots.md): with the trigger's polygon cut to what T1's ankles hold (the option
+    ``ROBOT_ANKLE_POLYGON``, off by default: its 8-direction cost, docs/robots.md) it steps early and
+    is at rest over the moved set point, within its limits, its trunk upright; with the
+    geometric soles (the old trigger: after its step T1 stood on its front ankle's limit, the
+    capture point inside the sole, its trunk pitching on, and stepped again too late) the same
+    push falls."""
+    import biped.sim.robot_stepping as rs
+    from biped.sim.robot import robot_push
+
+    desc, block = _t1_block(12.25)
+    config = SteppingConfig.for_trigger("capture")
+    monkeypatch.setattr(rs, "ROBOT_ANKLE_POLYGON", True)  # off by default (docs/robots.md)
+    step = robot_push(desc, 3.0, block=block, early_stop=True, stepping=config, record_qpos=True)
+    assert not step.fell and step.stop_reason == "at_rest" and step.final_offset_m < 0.01
+    assert step.steps[0]["position_m"][0] > 0.2
+    assert step.max_torque_fraction <= 1.0 + 1e-9
+    w, x, y, z = step.qpos[-1, 3:7]  # the floating body's pitch at rest (MuJoCo's quaternion)
+    assert abs(math.degrees(math.asin(2 * (w * y - z * x)))) < 3.0
+    monkeypatch.setattr(rs, "ROBOT_ANKLE_POLYGON", False)
+    off = robot_push(desc, 3.0, block=block, early_stop=True, stepping=config)
+    assert off.fell

@@ -167,6 +167,7 @@ class SteppingController:
             self._leg_dofs.append(np.array([m.jnt_dofadr[m.joint(names[i]).id] for i in js]))
             self._leg_qpos.append(np.array([m.jnt_qposadr[m.joint(names[i]).id] for i in js]))
         self._gravity = float(-m.opt.gravity[2])
+        self._ankle_reach = self._ankle_reaches() if self.stepping.ankle_limited_polygon else None
         self.base_target: Target = config.target
         self.gains: Gains = config.gains
         self._gains_by_mode = {
@@ -230,16 +231,45 @@ class SteppingController:
         Rs = R if self._sole_axes is None else R @ self._sole_axes[i]  # the sole's axes
         return d.xpos[b] + R @ self._sole[i][0], math.atan2(Rs[1, 0], Rs[0, 0])
 
-    def _polygon(self, feet) -> np.ndarray:
+    def _ankle_reaches(self) -> list[tuple[int, float]]:
+        """Per leg: (5th hinge's id, reach [m]): the largest CoP offset along the sole from that
+        ankle hinge's axis its torque limit holds with the whole weight on the foot,
+        ``min(|lower|, upper) / (m g)``."""
+        if self.limits is None or self.limits.lower is None or self.limits.upper is None:
+            raise ScenarioError(
+                "ankle_limited_polygon needs torque limits (torque_limits = 'model' or 'human')"
+            )
+        weight = float(np.sum(self.model.body_mass)) * self._gravity
+        out = []
+        for leg in self.body.leg_joints:
+            k = self.joint_names.index(leg[4])
+            tau = min(-float(self.limits.lower[k]), float(self.limits.upper[k]))
+            out.append((int(self.model.joint(leg[4]).id), tau / weight))
+        return out
+
+    def _sole_rect(self, i: int, cut: bool = True):
+        """Foot ``i``'s sole as (centre_xy, yaw, half_length, half_width); with
+        ``ankle_limited_polygon`` (and ``cut``) cut along its length to the CoPs its ankle's
+        limit holds (across it the sole's own width: measured, cutting it too made T1's
+        diagonal steps start early and fail)."""
+        c, yaw = self._sole_pose(i)
+        hl, hw = self._sole[i][1], self._sole[i][2]
+        if self._ankle_reach is None or not cut:
+            return c[:2], yaw, hl, hw
+        j5, rx = self._ankle_reach[i]
+        u = np.array([math.cos(yaw), math.sin(yaw)])
+        ax = float(u @ (self.data.xanchor[j5][:2] - c[:2]))  # the hinge's axis along the sole
+        x0, x1 = max(-hl, ax - rx), min(hl, ax + rx)
+        # at least 1 mm each way (an axis off the sole: a thin strip at its nearest edge)
+        return c[:2] + 0.5 * (x0 + x1) * u, yaw, max(0.5 * (x1 - x0), 1e-3), hw
+
+    def _polygon(self, feet, cut: bool = True) -> np.ndarray:
         soles = []
         for i in (0, 1):  # a foot counts while it touches or its sole is within 2 cm of the floor
             if feet[i] or self._sole_pose(i)[0][2] < 0.02:
-                c, yaw = self._sole_pose(i)
-                soles.append((c[:2], yaw, self._sole[i][1], self._sole[i][2]))
+                soles.append(self._sole_rect(i, cut))
         if not soles:
-            for i in (0, 1):
-                c, yaw = self._sole_pose(i)
-                soles.append((c[:2], yaw, self._sole[i][1], self._sole[i][2]))
+            soles = [self._sole_rect(i, cut) for i in (0, 1)]
         return cp.support_polygon(soles)
 
     # ------------------------------------------------------------------ the call

@@ -67,6 +67,10 @@ class SteppingConfig:
     (``QPWeights.floor_friction``; before the first step the scenario's QP as it is).
     swing_friction_scale: if set, single support uses a stepping QP whose pyramid is
     ``friction * swing_friction_scale`` (a margin for what the massless-leg cone does not see).
+    ankle_limited_polygon: the trigger's support polygon (and the dwell's and the step's
+        sideways test) is each sole cut along its length to the centres of pressure its ankle's
+        torque limit can hold with the whole weight on it: within ``|tau_max| / (m g)`` of the
+        leg's 5th hinge's axis; needs torque limits (off: W's geometric soles).
     swing_reaction: add the driven swing leg's reaction (:func:`biped.control.swing.swing_reaction_wrench`)
     to the stance leg's desired wrench (off: it made the stance foot slide further, measured).
     dwell_margin_m, dwell_s: if dwell_s is set, a step also starts once the capture point has
@@ -120,6 +124,7 @@ class SteppingConfig:
     span_leg_m: float | None = None
     stand_hip_m: float | None = None
     swing_reaction: bool = False
+    ankle_limited_polygon: bool = False
     floor_friction: bool = False
     swing_friction_scale: float | None = None
     dwell_margin_m: float = 0.02

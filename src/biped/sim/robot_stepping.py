@@ -35,6 +35,14 @@ the standing pose, W's 0.168 m):
   settle speeds, the swing foot's and the post-step gains. W's controller's own gains stay W's.
 
 A biped of W's size (s = w = 1, D = D_W) gets W's numbers.
+
+**Robots' option** (off, ``ROBOT_ANKLE_POLYGON``; docs/robots.md, "Stepping on a robot": T1's
+envelope from behind 87 -> 90 %, but 45/315 deg 67 -> 47 %):
+the trigger judges the capture point against each sole cut along its length to the CoPs its
+ankle's torque limit holds with the whole weight on it (``SteppingConfig.ankle_limited_polygon``):
+T1's ankle pitch (20 N m) holds its 31.6 kg only 6.5 cm ahead of its axis, short of its toes, so
+after its first step T1 stood with the capture point inside the geometric sole, its front ankle
+at the limit and its trunk pitching, and stepped again only when it had fallen too far.
 """
 
 from __future__ import annotations
@@ -59,6 +67,7 @@ from biped.models.robot import RobotDescription, leg_torque_limits, plant_model,
 from biped.spatial import axis_angle_quat, quat_mul, quat_to_rot, transform
 
 __all__ = [
+    "ROBOT_ANKLE_POLYGON",
     "FootContacts",
     "robot_stepper",
     "robot_stepping_body",
@@ -66,6 +75,11 @@ __all__ = [
     "set_point_height",
     "w_size",
 ]
+
+
+#: A robot's step trigger judges the capture point against the CoPs its ankles' torque limits can
+#: reach (``SteppingConfig.ankle_limited_polygon``; module docstring, "Robots' rules").
+ROBOT_ANKLE_POLYGON = False  # off: measured, T1's diagonals lose more than behind gains
 
 
 @functools.cache
@@ -106,6 +120,7 @@ def scaled_stepping(
     L_w, B_w, D_w = w_size()
     s, w = leg_length_m / L_w, hip_width_m / B_w
     r = math.sqrt(s)
+    crouch = stance_reach_m - D_w / L_w * leg_length_m  # the drop to W's standing crouch [m]
     if not (s > 0 and w > 0):
         raise ModelError(f"stepping: leg length {leg_length_m} m and hip width {hip_width_m} m must be > 0")
     return replace(
@@ -116,7 +131,7 @@ def scaled_stepping(
         offset_m=s * config.offset_m,
         apex_m=s * config.apex_m,
         reach_m=max(s * config.reach_m, stance_reach_m),
-        swing_height_drop_m=max(s * config.swing_height_drop_m, stance_reach_m - D_w / L_w * leg_length_m),
+        swing_height_drop_m=max(s * config.swing_height_drop_m, crouch),
         post_step_height_drop_m=s * config.post_step_height_drop_m,
         lateral_margin_m=w * config.lateral_margin_m,
         lateral_offset_m=w * config.lateral_offset_m,
@@ -240,6 +255,8 @@ def robot_stepper(
         float(np.linalg.norm(d.xpos[h] - d.xpos[f])) for h, f in zip(body.hips, body.feet, strict=True)
     )
     scaled = scaled_stepping(stepping, body.leg_length_m, _hip_width(d, body.feet), stand)
+    if ROBOT_ANKLE_POLYGON and lim is not None:
+        scaled = replace(scaled, ankle_limited_polygon=True)
     from biped.control.setpoint import Gains
 
     config = replace(config, gains=Gains())  # the robots' gains (W's, as robot_controller takes)
