@@ -123,7 +123,8 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
     if replay:
         write_robot_replay(out, desc, run, block, summary, platform)
     if video:
-        res = write_robot_video(out, desc, run, block, lambda s: print(s, flush=True), platform)
+        say_what = "lean-and-release" if release is not None else None
+        res = write_robot_video(out, desc, run, block, lambda s: print(s, flush=True), platform, say_what)
         if res.path is None:
             print(f"video.mp4 not written: {res.reason}")
     status = "recovered" if summary["recovered"] else "fell" if run.fell else "not recovered"

@@ -125,6 +125,7 @@ def write_robot_video(
     block: Block | None,
     log,
     platform: PlatformMove | None = None,
+    what: str | None = None,
 ) -> VideoResult:
     """``video.mp4`` of the run (:attr:`RobotRun.qpos`), the tracking camera on the floating body,
     ``log`` told the frames rendered every 4 % (a robot's meshes take ~0.4 s of CPU a frame: a
@@ -134,7 +135,9 @@ def write_robot_video(
     if run.qpos is None:
         raise ValueError("the run has no qpos record: run robot_push with record_qpos=True")
     m = robot_plant(desc, block, None, None if platform is None else platform.axis)
-    what = "W's block" if block is not None else "platform" if platform is not None else "force pulse"
+    what = what or (
+        "W's block" if block is not None else "platform" if platform is not None else "force pulse"
+    )
     title = f"{desc.path.stem}: {what}"
     return render_video(
         m,
