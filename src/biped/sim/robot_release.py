@@ -156,8 +156,8 @@ def robot_hold(
     f = tether_force(total, g, e, float(p[2]), pose["direction"], math.inf)
     _check_hold(desc, ctrl, f, total * g, _friction(m, d, floor), pose["direction"])
     tree = ctrl.tree
-    g1 = ctrl.link_poses(q[: tree.nq])[0]  # the folded central body's COM frame
-    c, R = g1[:3, 3].copy(), np.ascontiguousarray(g1[:3, :3])
+    g_cb = ctrl.link_poses(q[: tree.nq])[0]  # the folded central body's COM frame
+    c, R = g_cb[:3, 3].copy(), np.ascontiguousarray(g_cb[:3, :3])
     out = ctrl.compute(q[: tree.nq], np.zeros(tree.nv), feet_in_contact=(True, True))
     return {
         "body": rb,
