@@ -114,7 +114,6 @@ def test_force_pulse_on_a_robot_applies_its_closed_form_impulse(tmp_path):
 @pytest.mark.parametrize(
     "extra, message",
     [
-        (["--perturbation", "release"], "perturbation 'release' is not available on robots"),
         (["--torque-limits", "human"], "torque_limits on a robot must be one of 'model', 'none'"),
         (
             ["--stepping", "--perturbation", "platform"],
@@ -204,7 +203,8 @@ def test_robot_file_names_feet_legs_keyframe_and_is_checked(tmp_path):
 def test_push_force_on_a_robot_is_ws_pulse_scaled_and_other_paradigms_refused(tmp_path, capsys):
     """``biped push --model berkeley_humanoid --perturbation force``: W's pulse (60 N for 0.15 s,
     from behind) scaled with the robot's mass: its applied impulse is 60 x m / W's mass x 0.15 N s
-    toward +x (the robots face +x); release exits 2 with one line, no folder."""
+    toward +x (the robots face +x); a release lean the feet cannot hold exits 2 with one line, no
+    folder (tests/test_robot_release.py)."""
     out = tmp_path / "f"
     assert (
         main(
@@ -229,9 +229,10 @@ def test_push_force_on_a_robot_is_ws_pulse_scaled_and_other_paradigms_refused(tm
     assert s["block"] is None and not s["fell"]
     for p in ("release",):
         capsys.readouterr()
-        assert main(["push", "--model", BH, "--perturbation", p, "--out", str(tmp_path / p)]) == 2
+        bad = ["--perturbation", p, "--set", "release_lean_deg=40", "--out", str(tmp_path / p)]
+        assert main(["push", "--model", BH, *bad]) == 2
         err = capsys.readouterr().err.strip()
-        assert len(err.splitlines()) == 1 and f"--perturbation {p}" in err
+        assert len(err.splitlines()) == 1 and "release_lean_deg" in err
         assert not (tmp_path / p).exists()
 
 

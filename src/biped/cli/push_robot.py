@@ -30,15 +30,15 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
     )
     from biped.sim.scenario import Scenario
 
+    pert = getattr(args, "perturbation", None) or "block"
     unsupported = {
         "--scenario": args.scenario,
-        "--set": args.set or None,
+        "--set": (args.set or None) if pert != "release" else None,  # release: its keys only (below)
         "--controller": args.controller,
         "--physics": args.physics,
         "--seed": args.seed,
     }
-    pert = getattr(args, "perturbation", None) or "block"
-    if pert not in ("block", "force", "platform", "pull"):
+    if pert not in ("block", "force", "platform", "pull", "release"):
         unsupported[f"--perturbation {pert}"] = True  # W's scene only (docs/robots.md)
     if pert == "platform" and getattr(args, "stepping", None):
         unsupported["--stepping with --perturbation platform"] = True
@@ -48,6 +48,7 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
             f"--model {args.model}: {', '.join(given)} not supported on robots yet; valid: --duration, "
             f"--distribution, --timestep, --block-position, --block-velocity, --block-mass, --stepping"
         )
+    release = _release(args) if pert == "release" else None
     distribution = args.distribution or "qp"
     seconds = args.duration if args.duration is not None else 3.0
     if not (0 < seconds <= 60):
@@ -59,6 +60,10 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
         tick=sys.stderr,
     )
     ctrl = robot_controller(desc, distribution)  # checks the feet, soles and limits first
+    if release is not None:  # a lean the feet cannot hold or the legs cannot reach: refused here
+        from biped.sim.robot_release import check_release
+
+        check_release(desc, release, ctrl)
     say = f"biped push: {pert} on {args.model} ({desc.mass:.1f} kg), {seconds:g} s, {distribution} ..."
     print(say, file=sys.stderr, flush=True)  # after every check: a refusal stays one line
     out = out_dir(args)  # after every check: a refused run makes no folder
@@ -69,6 +74,8 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
         args.block_mass if args.block_mass is not None else b.mass_kg,
     )
     force = platform = pull = None
+    if release is not None:
+        block = None
     if pert != "block" and (args.block_position or args.block_velocity or args.block_mass is not None):
         raise ScenarioError(f"--perturbation {pert} takes no --block-* options")
     if pert == "platform":  # W's backward translation (5 cm in 0.3 s from 0.1 s); robots face +x
@@ -105,17 +112,19 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
         timestep_s=args.timestep,
         record_qpos=replay or video,
         stepping=stepping,
+        release=release,
     )
     print(
         f"biped push: simulated {run.t[-1] if len(run.t) else 0.0:.2f} s; writing {out} ...",
         file=sys.stderr,
         flush=True,
     )
-    summary = write_robot_outputs(out, desc, run, block, distribution, force, platform, pull)
+    summary = write_robot_outputs(out, desc, run, block, distribution, force, platform, pull, release)
     if replay:
         write_robot_replay(out, desc, run, block, summary, platform)
     if video:
-        res = write_robot_video(out, desc, run, block, lambda s: print(s, flush=True), platform)
+        say_what = "lean-and-release" if release is not None else None
+        res = write_robot_video(out, desc, run, block, lambda s: print(s, flush=True), platform, say_what)
         if res.path is None:
             print(f"video.mp4 not written: {res.reason}")
     status = "recovered" if summary["recovered"] else "fell" if run.fell else "not recovered"
@@ -128,6 +137,8 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
         if platform is not None
         else f"waist pull {math.hypot(*pull.displacement_m):g} m at {pull.velocity_m_s:g} m/s"
         if pull is not None
+        else f"lean {release.lean_deg:g} deg toward {release.direction_deg:g} deg released at {release.release_s:g} s"
+        if release is not None
         else ""
     )
     if run.steps:
@@ -139,3 +150,26 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
         f"{summary['peak_torque_fraction_of_limit'] * 100:.0f}% of the limits -> {out}"
     )
     return 0
+
+
+def _release(args):
+    """The lean of ``--perturbation release`` on a robot: W's keys (``--set release_lean_deg=...``,
+    ``release_direction_deg``, ``release_time_s``; their defaults and checks), the direction in
+    the robot's own terms (0 forward: the robots face +x, so the world direction; 90 to its
+    left, +y)."""
+    from biped.errors import ScenarioError
+    from biped.sim.robot_release import ReleaseLean
+    from biped.sim.scenario import Scenario, parse_assignment
+
+    keys = ("release_lean_deg", "release_direction_deg", "release_time_s")
+    values = dict(parse_assignment(a) for a in args.set or ())
+    other = sorted(set(values) - set(keys))
+    if other:
+        raise ScenarioError(
+            f"--model {args.model}: --set {', '.join(other)} not supported on robots; valid with "
+            f"--perturbation release: {', '.join(keys)}"
+        )
+    s = Scenario().with_overrides(perturbation="release", **values)
+    return ReleaseLean(
+        float(s.release_lean_deg), float(s.release_direction_deg) % 360.0, float(s.release_time_s)
+    )

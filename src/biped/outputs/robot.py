@@ -28,6 +28,7 @@ def robot_summary(
     force: ForcePulse | None = None,
     platform: PlatformMove | None = None,
     pull: PullMove | None = None,
+    release=None,
 ) -> dict:
     """The run's numbers (SI units); ``recovered``: did not fall and its central-body COM ended
     within 1 cm of the set point horizontally."""
@@ -45,6 +46,7 @@ def robot_summary(
         "force": dataclasses.asdict(force) if force is not None else None,
         "platform": dataclasses.asdict(platform) if platform is not None else None,
         "pull": dataclasses.asdict(pull) if pull is not None else None,
+        **({"release": dataclasses.asdict(release)} if release is not None else {}),
         "pull_impulse_n_s": (
             run.force_impulse_n_s.tolist() if pull is not None and run.force_impulse_n_s is not None else None
         ),
@@ -77,8 +79,9 @@ def write_robot_outputs(
     force: ForcePulse | None = None,
     platform: PlatformMove | None = None,
     pull: PullMove | None = None,
+    release=None,
 ) -> dict:
-    summary = robot_summary(desc, run, block, distribution, force, platform, pull)
+    summary = robot_summary(desc, run, block, distribution, force, platform, pull, release)
     write_json(out / "summary.json", summary)
     head = "t_s,central_com_x_m,central_com_y_m,central_com_z_m,com_x_m,com_y_m,com_z_m," + ",".join(
         f"tau_{j}_n_m" for j in desc.leg_joints
@@ -122,6 +125,7 @@ def write_robot_video(
     block: Block | None,
     log,
     platform: PlatformMove | None = None,
+    what: str | None = None,
 ) -> VideoResult:
     """``video.mp4`` of the run (:attr:`RobotRun.qpos`), the tracking camera on the floating body,
     ``log`` told the frames rendered every 4 % (a robot's meshes take ~0.4 s of CPU a frame: a
@@ -131,7 +135,9 @@ def write_robot_video(
     if run.qpos is None:
         raise ValueError("the run has no qpos record: run robot_push with record_qpos=True")
     m = robot_plant(desc, block, None, None if platform is None else platform.axis)
-    what = "W's block" if block is not None else "platform" if platform is not None else "force pulse"
+    what = what or (
+        "W's block" if block is not None else "platform" if platform is not None else "force pulse"
+    )
     title = f"{desc.path.stem}: {what}"
     return render_video(
         m,

@@ -293,6 +293,7 @@ def robot_push(
     platform: PlatformMove | None = None,
     pull: PullMove | None = None,
     stepping=None,
+    release=None,
 ) -> RobotRun:
     """Stand the robot for ``seconds`` under W's controller, kicked by ``push_m_s`` of COM
     velocity change at ``push_time_s`` (zero: no push) and/or hit by ``block`` (thrown at t = 0)
@@ -300,7 +301,9 @@ def robot_push(
     stops early when it falls, and with ``early_stop`` when it is at rest (:class:`RobotRest`);
     ``record_qpos``: keep the plant's qpos after every step (:attr:`RobotRun.qpos`, for replays);
     ``stepping`` (a :class:`~biped.control.stepping_config.SteppingConfig`): capture-point steps
-    (:mod:`biped.sim.robot_stepping`), the run judged against the set point moved with the feet."""
+    (:mod:`biped.sim.robot_stepping`), the run judged against the set point moved with the feet;
+    ``release`` (a :class:`~biped.sim.robot_release.ReleaseLean`): W's lean-and-release, the run
+    starting leaned and tethered (:mod:`biped.sim.robot_release`)."""
     ctrl = robot_controller(desc, distribution, torque_limits, big_base=big_base)
     q0 = standing_qpos(desc, ctrl)
     g = ctrl.link_poses(q0)[0]
@@ -351,8 +354,14 @@ def robot_push(
 
         stepper = robot_stepper(desc, q0, ctrl.target, stepping, distribution, torque_limits, big_base)
         feet = FootContacts(m, desc, FLOOR)
+    lean = None
+    if release is not None:  # the leaned, tethered start; the set point upright at the release
+        from biped.sim.robot_release import release_driver
+
+        lean = release_driver(desc, m, d, ctrl, q0, release, n, m.geom(FLOOR).id, stepper)
+        floor_z = min(floor_z, float(lean.hold["hold_com"][2]))
     ends = (kick if np.any(push_m_s) else 0, f1 + 1, drive.last + 1 if drive is not None else 0)
-    over = max(*ends, cable.k1 + 1 if cable is not None else 0)
+    over = max(*ends, cable.k1 + 1 if cable is not None else 0, lean.k_sense + 1 if lean is not None else 0)
     stopped = None
     for i in range(n):
         if i == kick and np.any(push_m_s):
@@ -371,6 +380,8 @@ def robot_push(
             cable.apply(i, float(d.time), d)
         if drive is not None:  # the platform's servo references; the set point rides with it
             drive.apply(i, d.qpos, d.ctrl)
+        if lean is not None:  # the tether and the held set point; both gone at the release
+            lean.apply(i, float(d.time), d)
         if stepper is not None:  # the robot's own layout comes first
             u = stepper(float(d.time), d.qpos[: tree.nq], d.qvel[: tree.nv], feet(d))
             target[:2] = stepper.target.com[:2]  # the set point moved with the feet

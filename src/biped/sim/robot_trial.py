@@ -15,7 +15,10 @@ biped) moved onto the robot (:func:`biped.sim.robot.robot_push`), measured into 
   (:class:`~biped.sim.robot.PlatformMove`), its size W's (displacement, peak velocity).
 - **Pull**: W's waist pull (:class:`~biped.sim.robot.PullMove`) from the hip joints' midpoint;
   its impulse the cable's, as applied.
-- Lean-and-release is refused (:func:`check_robot_scenario`).
+- **Release**: W's lean-and-release (:mod:`biped.sim.robot_release`): the lean's world
+  direction is the sweep's (``world_direction(release_direction_deg)``, as on W's biped; the
+  robots face +x, so 0 deg is a forward lean); its size the lean [deg], no impulse. A lean the
+  feet cannot hold or the legs cannot reach raises (the sweep's row holds the error).
 - **Stepping** (scenario key ``stepping``): the capture-point steps of
   :mod:`biped.sim.robot_stepping` (the scenario's ``step_trigger`` and ``max_steps``; W's
   parameters scaled to the robot's legs); recovered is then judged against the set point moved
@@ -55,7 +58,7 @@ from biped.sim.sweep.spec import TrialSetup
 from biped.sim.sweep.trial import _step_columns, ballistic_impulse
 
 #: Perturbations a robot takes.
-ROBOT_PERTURBATIONS = ("block", "force", "platform", "pull")
+ROBOT_PERTURBATIONS = ("block", "force", "platform", "pull", "release")
 
 
 def check_robot_scenario(scenario) -> None:
@@ -63,8 +66,8 @@ def check_robot_scenario(scenario) -> None:
     s = scenario
     if s.perturbation not in ROBOT_PERTURBATIONS:
         raise ScenarioError(
-            f"perturbation {s.perturbation!r} is not available on robots (it needs W's scene: "
-            f"a lean pose solver); valid on robots: {', '.join(ROBOT_PERTURBATIONS)}"
+            f"perturbation {s.perturbation!r} is not available on robots; "
+            f"valid on robots: {', '.join(ROBOT_PERTURBATIONS)}"
         )
     if s.controller != "workspace":
         raise ScenarioError(f"controller {s.controller!r} is not available on robots; valid: 'workspace'")
@@ -117,6 +120,12 @@ def run_robot(setup: TrialSetup) -> RobotRun:
         )
     elif sc.perturbation == "pull":
         kw["pull"] = PullMove(tuple(sc.pull_displacement_m), sc.pull_velocity_m_s, sc.pull_start_s)
+    elif sc.perturbation == "release":
+        from biped.sim.perturbations.release import world_direction
+        from biped.sim.robot_release import ReleaseLean
+
+        rd = world_direction(sc.release_direction_deg)  # the sweep's direction (W's key convention)
+        kw["release"] = ReleaseLean(float(sc.release_lean_deg), rd, float(sc.release_time_s))
     elif sc.perturbation == "platform":
         kw["platform"] = PlatformMove(
             tuple(sc.platform_displacement_m), sc.platform_start_s, sc.platform_duration_s
@@ -153,6 +162,9 @@ def run_robot_trial(setup: TrialSetup) -> dict[str, Any]:
         size = of(sc).size(desc.mass)
         J, t_hit = np.full(3, math.nan), sc.platform_start_s
         magnitude, unit = size.magnitude, size.unit
+    elif sc.perturbation == "release":  # the lean [deg]; nothing is applied at the release
+        J, t_hit = np.full(3, math.nan), sc.release_time_s
+        magnitude, unit = float(sc.release_lean_deg), "deg"
     elif sc.perturbation == "pull":  # the cable's applied impulse; the size is the displacement
         J, t_hit = np.asarray(run.force_impulse_n_s, float), sc.pull_start_s
         magnitude, unit = float(np.hypot(*sc.pull_displacement_m)), "m"

@@ -112,12 +112,22 @@ def turn_body(scene, qpos: np.ndarray, point, axis, angle_rad: float) -> bool:
     ``point`` (world), then solve each leg's six joints (Newton on MuJoCo's body Jacobian) to put
     its foot back where it was, position and orientation; False if a leg finds no solution."""
     m = scene.model
+    legs = [[m.joint(n).id for n in scene.joint_names if n.startswith(leg)] for leg in _LEGS]
+    feet = [m.body(f"{leg}_foot").id for leg in _LEGS]
+    return turn_about(m, qpos, scene.biped_qpos_index[:7], feet, legs, point, axis, angle_rad)
+
+
+def turn_about(m, qpos: np.ndarray, root, feet, legs, point, axis, angle_rad: float) -> bool:
+    """:func:`turn_body` on any MuJoCo model: ``root`` the floating body's 7 qpos addresses,
+    ``feet`` the two foot body ids, ``legs`` each foot's joint ids (its leg's hinges); the
+    floating body of ``qpos`` (in place) turned by ``angle_rad`` about ``axis`` through ``point``
+    (world), each leg's joints solved to put its foot back, position and orientation (every other
+    joint keeps its angle); False if a leg finds no solution."""
     d = mujoco.MjData(m)
     d.qpos[:] = qpos
     mujoco.mj_kinematics(m, d)
-    feet = [m.body(f"{leg}_foot").id for leg in _LEGS]
     goals = [(d.xpos[f].copy(), d.xquat[f].copy()) for f in feet]
-    root = scene.biped_qpos_index[:7]
+    root = np.asarray(root)
     ql = np.zeros(4)
     mujoco.mju_axisAngle2Quat(ql, np.asarray(axis, dtype=float), angle_rad)
     r9 = np.zeros(9)
@@ -125,8 +135,7 @@ def turn_body(scene, qpos: np.ndarray, point, axis, angle_rad: float) -> bool:
     point = np.asarray(point, dtype=float)
     qpos[root[:3]] = point + r9.reshape(3, 3) @ (qpos[root[:3]] - point)
     qpos[root[3:]] = _quat_mul(ql, qpos[root[3:]])
-    for leg, f, (fp, fq) in zip(_LEGS, feet, goals, strict=True):
-        joints = [m.joint(n).id for n in scene.joint_names if n.startswith(leg)]
+    for joints, f, (fp, fq) in zip(legs, feet, goals, strict=True):
         qa = m.jnt_qposadr[joints]
         va = m.jnt_dofadr[joints]
         jp, jr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
@@ -293,25 +302,14 @@ def hold_state(scene, model, data, ctrl, pose: dict) -> dict:
     u = pose["direction"]
     p = data.xpos[cb] + data.xmat[cb].reshape(3, 3) @ pelvis_point(model, cb)  # the pelvis, world
     lean = float((com - pose["upright_body_com"]) @ u)  # the whole-body COM's move along the lean [m]
-    T = total * g * lean / float(p[2])
-    f = -T * u
     mu = float(model.geom_friction[scene.sole_geoms[0], 0])
-    if abs(T) > 0.95 * mu * total * g:
-        raise ScenarioError(
-            f"release_lean_deg: the tether pulls {abs(T):.0f} N, "
-            f"{abs(T) / (total * g):.2f} of the body's weight, more than friction = {mu:g} lets the feet hold "
-            f"(they would slide before the release); set friction >= {abs(T) / (0.95 * total * g):.2f} "
-            "(shod feet on a floor: 0.6 to 1) or lean less"
-        )
+    f = tether_force(total, g, lean, float(p[2]), u, mu)
     c = data.xipos[cb]
     moment = np.cross(p - c, f)
     qb = data.qpos[scene.biped_qpos_index]
     out = ctrl.compute(qb, np.zeros(len(scene.biped_qvel_index)), feet_in_contact=(True, True))
     R = data.ximat[cb].reshape(3, 3)
-    W = np.concatenate([R.T @ f, R.T @ moment])  # the tether's wrench, body COM frame
-    X = -np.linalg.solve(out.P1, W)
-    # at the set point (the pose itself, at rest) W Alg. 4 gives X^b = R^T pddot_d, R^T wdot_d
-    hold_acc = np.concatenate([R @ X[:3], R @ X[3:]])
+    hold_acc = hold_acceleration(out.P1, R, f, moment)
     hold_com = c.copy()
     hold_quat = data.xquat[cb].copy()
     return {
@@ -324,3 +322,28 @@ def hold_state(scene, model, data, ctrl, pose: dict) -> dict:
         "upright_com": pose["upright_com"],
         "upright_quat": pose["upright_quat"],
     }
+
+
+def tether_force(total: float, g: float, lean_m: float, pelvis_z: float, u, mu: float) -> np.ndarray:
+    """(3,) the tether's force [N, world] (module docstring, step 2): ``T = m g e / h`` against the
+    lean's direction ``u``, e = ``lean_m`` the whole-body COM's move along it, h = ``pelvis_z``;
+    refused when friction ``mu`` could not hold it at the feet (``T > 0.95 mu m g``)."""
+    T = total * g * lean_m / pelvis_z
+    if abs(T) > 0.95 * mu * total * g:
+        raise ScenarioError(
+            f"release_lean_deg: the tether pulls {abs(T):.0f} N, "
+            f"{abs(T) / (total * g):.2f} of the body's weight, more than friction = {mu:g} lets the feet hold "
+            f"(they would slide before the release); set friction >= {abs(T) / (0.95 * total * g):.2f} "
+            "(shod feet on a floor: 0.6 to 1) or lean less"
+        )
+    return -T * np.asarray(u, dtype=float)
+
+
+def hold_acceleration(P1: np.ndarray, R: np.ndarray, f: np.ndarray, moment: np.ndarray) -> np.ndarray:
+    """(6,) the set point's feed-forward (COM acceleration, angular acceleration; world) that makes
+    the controller's desired wrench cancel the tether's (force ``f``, ``moment`` about the central
+    body's COM, world) on a central body of orientation ``R`` (module docstring, step 3)."""
+    W = np.concatenate([R.T @ f, R.T @ moment])  # the tether's wrench, body COM frame
+    X = -np.linalg.solve(P1, W)
+    # at the set point (the pose itself, at rest) W Alg. 4 gives X^b = R^T pddot_d, R^T wdot_d
+    return np.concatenate([R @ X[:3], R @ X[3:]])
