@@ -211,7 +211,7 @@ class SteppingController:
         self._closing: int | None = None  # the foot of the closing step (shift and swing)
         self._closed = False  # a closing step was started (one per run)
         self._close_pending = False  # settled after a step: the closing check waits for rest
-        self._shift_t, self._shift_T = 0.0, 1.0  # when the closing step's shift began, its duration
+        self._shift_t = 0.0  # when the closing step's shift began
         self._shift_from = self._shift_to = np.zeros(2)  # the set point's path in the shift
         self._uncross = False  # the closing step uncrosses the feet
 

@@ -87,8 +87,8 @@ class SteppingConfig:
     the first period the COM moves slower than closing_speed_m_s), if the stance is not
     comfortable (crossed, or its width or stagger more than closing_band_m from the starting
     stance's), shift the COM over one foot until it and the capture point lie closing_inside_m
-    inside that sole (a minimum-jerk shift of the set point in closing_shift_base_s +
-    closing_shift_s_per_m per metre, then waiting up to closing_shift_max_s), then swing the other foot in
+    inside that sole (the set point's critically damped approach at closing_shift_rate_1_s,
+    given up after closing_shift_max_s), then swing the other foot in
     closing_swing_time_s beside it at the starting stance (:mod:`biped.control.closing_step`).
     The ``"qp"`` set turns on floor_friction, sets swing_friction_scale 0.55 and
     lateral_rot_gain_scale 1 (docs/controller.md, "Stance-foot slip"), dwell_s 0.5 s,
@@ -141,9 +141,8 @@ class SteppingConfig:
     closing_band_m: float = 0.05
     closing_inside_m: float = 0.015
     closing_swing_time_s: float = 0.6
-    closing_shift_max_s: float = 1.0
-    closing_shift_base_s: float = 0.4
-    closing_shift_s_per_m: float = 2.0
+    closing_shift_max_s: float = 2.5
+    closing_shift_rate_1_s: float = 3.0
     closing_speed_m_s: float = 0.05
     limits: cp.StepLimits = field(default_factory=cp.StepLimits)
     lateral_margin_m: float = 0.03
