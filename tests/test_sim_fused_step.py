@@ -131,3 +131,20 @@ def test_stepping_sweep_rows_unchanged(monkeypatch):
     for key in compiled:
         same = compiled[key] == python[key] or (compiled[key] != compiled[key] and python[key] != python[key])
         assert same, (key, compiled[key], python[key])
+
+
+def test_closing_step_compiled_is_the_python_loop(monkeypatch):
+    """With ``closing_step`` on (16 m/s from behind, 3 s: a backward step, then at rest the
+    closing step): the compiled double support hands the closing check back (``I_CLOSE``), the
+    shift and the swing run in Python; the same run bit for bit."""
+    from biped.control.stepping_config import SteppingConfig
+
+    orig = SteppingConfig.for_trigger
+    monkeypatch.setattr(
+        SteppingConfig,
+        "for_trigger",
+        classmethod(lambda cls, trig, **kw: orig(trig, **{"closing_step": True, **kw})),
+    )
+    a, b, n = both(_sweep_scenario(16, 180, "qp", duration_s=3.0), monkeypatch)
+    assert [st["closing"] for st in a.extra["steps"]] == [False, True]
+    assert_same(a, b)

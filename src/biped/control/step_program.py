@@ -141,8 +141,8 @@ class StepProgram(SteppingController):
             return self._transfer_call(t, qpos, qvel, feet)
         return super().__call__(t, qpos, qvel, feet)
 
-    def _start_step(self, t, xi, feet):
-        super()._start_step(t, xi, feet)
+    def _start_step(self, t, xi, feet, closing=None):
+        super()._start_step(t, xi, feet, closing)
         i = self.swing
         assert i is not None
         self.phase = "transfer" if self.program.transfer_s > 0 else "swing"

@@ -52,11 +52,12 @@ NS = 10
 Q_G, Q_TAU, Q_MARGIN, Q_REARM, Q_LATERAL, Q_MIN_RATE, Q_DWELL_M, Q_DWELL_S = range(8)
 Q_REFRACTORY, Q_LAST_TD, Q_ARM, Q_SETTLE_AFTER, Q_SETTLE_SPEED, Q_AIRBORNE, Q_PERIOD = range(8, 15)
 Q_SOLE = 15  # per foot: the sole centre in the foot body's frame (3), half length, half width
-NQ = 25
+Q_CLOSE_SPEED = 25  # the closing step's at-rest speed
+NQ = 26
 # the int parameters (ints): the foot bodies, hold, the trigger on (fewer steps than max_steps),
-# the settling check on, the contact flags' rule
-I_F0, I_F1, I_HOLD, I_TRIGGER, I_SETTLE, I_FLAGS = range(6)
-NI = 6
+# the settling check on, the contact flags' rule, a closing step's check pending
+I_F0, I_F1, I_HOLD, I_TRIGGER, I_SETTLE, I_FLAGS, I_CLOSE = range(7)
+NI = 7
 FLAGS_BOTH, FLAGS_SENSED, FLAGS_AIRBORNE = 0, 1, 2
 
 
@@ -202,6 +203,10 @@ def double_support(t, left, right, com, vcom, xpos, xmat, st, pend, prm, ints, c
         speed = math.hypot(vcom[0], vcom[1])
         if abs(speed - prm[Q_SETTLE_SPEED]) < EPS or speed < prm[Q_SETTLE_SPEED]:
             return HAND_BACK  # the settling controller takes over (or too close to tell)
+    if ints[I_CLOSE]:  # SteppingController.__call__'s closing check: at rest, Python decides
+        speed = math.hypot(vcom[0], vcom[1])
+        if abs(speed - prm[Q_CLOSE_SPEED]) < EPS or speed < prm[Q_CLOSE_SPEED]:
+            return HAND_BACK
     mode = ints[I_FLAGS]
     for i in range(2):
         if mode == FLAGS_BOTH:
@@ -265,12 +270,14 @@ def params(policy, prm: np.ndarray, ints: np.ndarray, period: float) -> None:
     prm[Q_REFRACTORY], prm[Q_LAST_TD], prm[Q_ARM] = s.refractory_s, policy._last_td, policy.arm_time_s
     prm[Q_SETTLE_AFTER], prm[Q_SETTLE_SPEED] = _nan(s.settle_after_s), s.settle_speed_m_s
     prm[Q_AIRBORNE], prm[Q_PERIOD] = mod.AIRBORNE_M, period
+    prm[Q_CLOSE_SPEED] = s.closing_speed_m_s
     for i in range(2):
         off, hl, hw = policy._sole[i]
         prm[Q_SOLE + 5 * i : Q_SOLE + 5 * i + 5] = (*off, hl, hw)
     ints[I_F0], ints[I_F1] = policy._foot
     ints[I_HOLD] = trig.hold
-    ints[I_TRIGGER] = 1 if len(policy.steps) < s.max_steps else 0
+    ints[I_CLOSE] = 1 if policy._close_pending else 0
+    ints[I_TRIGGER] = 1 if policy.recovery_steps < s.max_steps else 0  # a closing step not counted
     ints[I_SETTLE] = 1 if (s.settle_after_s is not None and policy.steps and not policy._settled) else 0
     if not policy.steps and s.holding_sensed and cfg.distribution == "qp":
         ints[I_FLAGS] = FLAGS_SENSED

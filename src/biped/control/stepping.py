@@ -51,7 +51,7 @@ import mujoco
 import numpy as np
 
 from biped.control import capture as cp
-from biped.control import leg_geometry
+from biped.control import closing_step, leg_geometry
 from biped.control.limits import clip_torques
 from biped.control.policy import PolicyConfig, _model_path, make_policy
 from biped.control.stepping_body import SteppingBody, w_body
@@ -208,6 +208,18 @@ class SteppingController:
         self.arm_time_s = -math.inf  # no step before [s] (the lean release arms it when sensed)
         self._dwell_since: float | None = None  # since when xi is near the edge (the slow trigger)
         self._cross = False  # the step swings the foot across the stance foot
+        self._stance_start = np.zeros(2)  # foot 1's sole centre from foot 0's at the start (facing)
+        self._closing: int | None = None  # the foot of the closing step (shift and swing)
+        self._closed = False  # a closing step was started (one per run)
+        self._close_pending = False  # settled after a step: the closing check waits for rest
+        self._shift_t = 0.0  # when the closing step's shift began
+        self._shift_from = self._shift_to = np.zeros(2)  # the set point's path in the shift
+        self._uncross = False  # the closing step uncrosses the feet
+
+    @property
+    def recovery_steps(self) -> int:
+        """The steps taken but the closing one (those ``max_steps`` counts)."""
+        return sum(1 for st in self.steps if not st.get("closing"))
 
     def _new_trigger(self) -> cp.CaptureTrigger:
         s = self.stepping
@@ -291,16 +303,22 @@ class SteppingController:
         if self._mid0 is None:
             self._mid0 = 0.5 * (self._sole_pose(0)[0] + self._sole_pose(1)[0])
             self._ankle_z0 = float(np.mean([d.xpos[a][2] for a in self._ankle]))
+            self._stance_start = closing_step.facing_offset(self)
         left, right = bool(feet[0]), bool(feet[1])
         if (
-            self.phase == "double"
-            and len(self.steps) < s.max_steps
+            self.phase in ("double", "shift")
+            and self.recovery_steps < s.max_steps
             and t - self._last_td >= s.refractory_s
             and t >= self.arm_time_s
         ):
             poly = self._polygon((left, right))
-            if self.trigger.update(poly, xi, self._xi_rate) or self._dwelt(t, poly, xi):
+            fired = self.trigger.update(poly, xi, self._xi_rate)  # (in the closing shift, not the dwell)
+            if fired or (self.phase == "double" and self._dwelt(t, poly, xi)):
                 self._start_step(t, xi, (left, right))
+        if self.phase == "shift":
+            tau = closing_step.shift_call(self, t, qpos, qvel, com, xi, (left, right))
+            if tau is not None:
+                return tau
         if self.phase == "swing":
             return self._swing_call(t, qpos, qvel, xi, omega, (left, right))
         ctrl = self.ctrl if self.steps else self._ctrl_before
@@ -310,7 +328,13 @@ class SteppingController:
             and t - self._last_td >= s.settle_after_s
             and float(np.hypot(vcom[0], vcom[1])) < s.settle_speed_m_s
         ):
+            self._close_pending |= not self._settled and s.closing_step and not self._closed
             self._settled = True
+        # at rest after a step: the closing step, decided once (a period the compiled loop hands back)
+        if self._close_pending and float(np.hypot(vcom[0], vcom[1])) < s.closing_speed_m_s:
+            self._close_pending = False
+            if closing_step.begin(self, t, com):
+                return self.__call__(t, qpos, qvel, feet)  # the shift's first period
         if self._settled:
             ctrl = self._ctrl_settle
         if not self.steps and s.holding_sensed and self.config.distribution == "qp":
@@ -361,18 +385,23 @@ class SteppingController:
             out = clip_torques(out, self.limits)
         return out
 
-    def _start_step(self, t, xi, feet):
+    def _start_step(self, t, xi, feet, closing=None):
         s = self.stepping
         poly = self._polygon(feet)
         ex = max(xi[0] - poly[:, 0].max(), poly[:, 0].min() - xi[0])
         ey = max(xi[1] - poly[:, 1].max(), poly[:, 1].min() - xi[1])
         lateral = ey > ex
-        if lateral:
+        if closing is not None:  # slow, W's orientation gains, to a fixed landing point
+            self._T, self._offset, self._limits = s.closing_swing_time_s, 0.0, s.limits
+            lateral = True
+        elif lateral:
             self._T, self._offset, self._limits = s.lateral_swing_time_s, s.lateral_offset_m, s.lateral_limits
         else:
             self._T, self._offset, self._limits = s.swing_time_s, s.offset_m, s.limits
         self._swing_gains = self._gains_by_mode[lateral]
-        if self.steps:  # later steps alternate feet
+        if closing is not None:
+            swing = closing
+        elif self.steps:  # later steps alternate feet
             swing = 1 - FEET.index(self.steps[-1]["foot"])
         elif feet[0] != feet[1] and not lateral:
             swing = 0 if not feet[0] else 1
@@ -387,13 +416,17 @@ class SteppingController:
         if self._facing is not None:
             across = self._facing @ across
         own = 1.0 if swing == 1 else -1.0
-        self._cross = bool(s.crossover and self.steps and lateral and own * across[1] < 0.0)
+        self._cross = bool(
+            s.crossover and self.steps and lateral and own * across[1] < 0.0 and closing is None
+        )
         self.phase = "swing"
         self._dwell_since = None
         self._t_start = t
         self._p0 = self.data.xpos[self._foot[swing]].copy()
         self._stance0 = self._sole_pose(1 - swing)[0][:2].copy()
-        self._landing = None
+        self._landing = None if closing is None else closing_step.landing(self, swing)
+        self._closing = closing  # a recovery step during the shift ends it
+        self._uncross = closing is not None and closing_step.crossed(self)
         self.steps.append(
             {
                 "foot": FEET[swing],
@@ -408,6 +441,8 @@ class SteppingController:
         )
         if s.crossover:  # the record says so where crossovers may happen ("capture" as before)
             self.steps[-1]["crossover"] = self._cross
+        if s.closing_step:
+            self.steps[-1]["closing"] = closing is not None
 
     def _swing_call(self, t, qpos, qvel, xi, omega, feet):
         s = self.stepping
@@ -429,9 +464,10 @@ class SteppingController:
         loc = np.clip(loc, [-self._sole[st][1], -self._sole[st][2]], [self._sole[st][1], self._sole[st][2]])
         cop = stance_c[:2] + np.array([c * loc[0] - sn * loc[1], sn * loc[0] + c * loc[1]])
         side = 1.0 if i == 1 else -1.0
-        if self._landing is None or el < s.retarget_until * self._T:
+        if self._closing is None and (self._landing is None or el < s.retarget_until * self._T):
             self._landing = self._step_target(xi, cop, omega, self._T - el, stance_c[:2], side)
         land = self._landing
+        assert land is not None  # set above, or when the closing step started
         step["target_m"] = [float(land[0]), float(land[1]), 0.0]
         # ankle path: the sole centre lands on `land`, flat, zero yaw
         sole_off = self._sole[i][0] if self._foot_rot is None else self._foot_rot[i] @ self._sole[i][0]
@@ -444,9 +480,10 @@ class SteppingController:
         pd = p0 + (ankle_land - p0) * h
         vd = (ankle_land - p0) * hd / T
         ad = (ankle_land - p0) * hdd / T**2
-        if self._cross:  # around the stance foot: along x in the first 60 % of the swing, y in the last
-            assert p0 is not None  # set when the step started
-            for k, (s0, s1) in ((0, (0.0, 0.6)), (1, (0.4, 1.0))):
+        if self._cross or self._uncross:  # around the stance foot: along x in the first 60 % of the swing,
+            assert p0 is not None  # y in the last (uncrossing: across first, then along x)
+            order = (0, 1) if self._cross else (1, 0)
+            for k, (s0, s1) in zip(order, ((0.0, 0.6), (0.4, 1.0)), strict=True):
                 hk, hdk, hddk = _min_jerk((sc - s0) / (s1 - s0))
                 dk = ankle_land[k] - p0[k]
                 Tk = T * (s1 - s0)
@@ -476,7 +513,7 @@ class SteppingController:
         # the COM falls freely over the stance sole: the LIPM's acceleration as feed-forward
         acc = omega**2 * (self.data.subtree_com[0][:2] - cop)
         com = np.array(self.target.com)
-        com[2] -= self._swing_drop(i)
+        com[2] -= 0.0 if self._closing is not None else self._swing_drop(i)
         target = self._leg_capped(self.body.target(tuple(com), s.swing_tilt_deg), [1 - i])
         target = replace(target, com_acc=(float(acc[0]), float(acc[1]), 0.0))
         tau_swing = self._swing_torques(i, pd, vd, ad)
@@ -567,6 +604,8 @@ class SteppingController:
         )
         self.phase = "double"
         self.swing = None
+        self._closing = None
+        self._close_pending = False
         self._last_td = t
         self._settled = False
         self.trigger = self._new_trigger()

@@ -40,6 +40,10 @@ def stepping_outcome(result, policy, *, complete: bool):
         and result.final_orientation_error_deg < s.recovery_orientation_tol_deg
     )
     extra = {**result.extra, "steps": steps, "final_com_speed_m_s": speed}
+    if getattr(policy, "_mid0", None) is not None:  # the feet at the last call, in W's facing
+        from biped.control.closing_step import facing_offset
+
+        extra["final_stance_m"] = [float(x) for x in facing_offset(policy)]
     return dataclasses.replace(
         result, target_com=target, final_com_error_m=com_err, recovered=recovered, extra=extra
     )

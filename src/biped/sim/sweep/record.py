@@ -49,6 +49,8 @@ class _Trial:
     step_count: int = 0  # stepping runs (scenario key stepping): steps taken
     first_step_xcom_offset_m: float = math.nan  # first step: landing beyond the XCoM at touchdown
     max_stance_slip_m: float = math.nan  # stepping: the stance sole's largest slide during a swing
+    closing_steps: int = 0  # stepping: closing steps to a comfortable stance (not in step_count)
+    final_stance_width_m: float = math.nan  # stepping: across distance of the sole centres at the end
     # the perturbation (biped.sim.perturbations); the response follows (Measured)
     paradigm: str = ""
     paradigm_magnitude: float = math.nan  # in paradigm_unit: block m/s, force N, platform m, release deg

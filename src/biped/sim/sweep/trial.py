@@ -213,8 +213,9 @@ def measure(result: PushResult, block_velocity: np.ndarray, *, scene: Scene | No
         fall_reason=result.fall_reason,
         controller_error=result.controller_error,
         diverged=getattr(result, "diverged", None),
-        step_count=len(result.extra.get("steps", ())),
+        step_count=sum(1 for s in result.extra.get("steps", ()) if not s.get("closing")),
         **_step_columns(result.extra.get("steps", ())),
+        final_stance_width_m=abs(result.extra.get("final_stance_m", (np.nan, np.nan))[1]),
         **_perturbation_columns(result, scene, float(np.hypot(J[0], J[1]))),
         stop_reason=stop_reason,
         stopped_at_s=float(t[-1]) if n and stop_reason is not None else float("nan"),
@@ -228,6 +229,7 @@ def _step_columns(steps) -> dict:
     return {
         "first_step_xcom_offset_m": float(off[0]) if off else float("nan"),
         "max_stance_slip_m": float(max(slip)) if slip else float("nan"),
+        "closing_steps": sum(1 for s in steps if s.get("closing")),
     }
 
 
