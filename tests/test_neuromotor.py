@@ -113,9 +113,9 @@ def test_ideal_is_w_and_leaves_the_loop_untouched():
 
 
 def test_the_delayed_feet_agree_with_the_contact_monitor():
-    from biped.sim import contact, fused, neuro
+    from biped.sim import contact, fused_kernel, neuro
 
-    assert neuro.STANDING == fused._STANDING == contact._SOLE_MASK  # both soles down
+    assert neuro.STANDING == fused_kernel._STANDING == contact._SOLE_MASK  # both soles down
     for bits in range(16):
         assert contact._FEET[bits] == (bool(bits & neuro._LEFT_MASK), bool(bits & neuro._RIGHT_MASK))
 
