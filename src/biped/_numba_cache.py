@@ -31,6 +31,7 @@ import logging
 import os
 import sys
 import tempfile
+import threading
 from pathlib import Path
 
 PACKAGE_DIR = Path(__file__).resolve().parent
@@ -190,3 +191,21 @@ def say_if_cold(dispatcher, what: str, name: str, default_s: float) -> None:
         what,
         est,
     )
+
+
+#: One lock for every kernel's one-time compile (:func:`compile_once`); re-entrant, so that a
+#: compile that needs another kernel compiled in the same thread does not wait on itself.
+_COMPILE_LOCK = threading.RLock()
+
+
+def compile_once(kernel, signature) -> None:
+    """Compile the numba dispatcher ``kernel`` for its one ``signature`` (or load it from numba's
+    cache) and allow no other; a no-op once done, or when numba's JIT is disabled (a plain
+    function has no ``compile``). Under a lock: two threads of one process (a Dask worker's)
+    would race between the check and ``disable_compile()``, and the second one's ``compile()``
+    then raises "compilation disabled"."""
+    with _COMPILE_LOCK:
+        if not hasattr(kernel, "compile") or kernel.signatures:
+            return
+        kernel.compile(signature)
+        kernel.disable_compile()

@@ -34,12 +34,13 @@ from __future__ import annotations
 
 import functools
 import math
-import threading
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 from numba import njit, types
+
+from biped._numba_cache import compile_once
 
 #: Constant impedance (d0 = d_width): a linear contact spring-damper; see the module docstring.
 CONTACT_SOLIMP = (0.95, 0.95, 0.001, 0.5, 2.0)
@@ -238,19 +239,10 @@ def _contact_bits(geom, pos, codes, seams, gxpos, gxmat):  # pragma: no cover - 
     return bits
 
 
-_COMPILE_LOCK = threading.Lock()
-
-
 def compile_kernel() -> None:
     """Compile :func:`_contact_bits` for its one signature (or load it from numba's cache) and
     allow no other; a no-op once done, or when numba's JIT is disabled."""
-    # a lock: two threads of one process (a Dask worker's) would race between the check and
-    # disable_compile(), and the second one's compile() then raises "compilation disabled"
-    with _COMPILE_LOCK:
-        if not hasattr(_contact_bits, "compile") or _contact_bits.signatures:
-            return
-        _contact_bits.compile(_KERNEL_SIGNATURE)
-        _contact_bits.disable_compile()
+    compile_once(_contact_bits, _KERNEL_SIGNATURE)
 
 
 class ContactMonitor:

@@ -8,11 +8,11 @@ and why the result is the Python loop's bit for bit). Stepping runs add
 from __future__ import annotations
 
 import os
-import threading
 
 import numpy as np
 from numba import njit, types
 
+from biped._numba_cache import compile_once
 from biped.control.buffers import unpack
 from biped.control.daqp_c import C_TYPES, c_solve
 from biped.control.distribution import qp_build, qp_finish
@@ -267,16 +267,7 @@ def _key_cache_by_what_it_compiles_in() -> None:
 _key_cache_by_what_it_compiles_in()
 
 
-_COMPILE_LOCK = threading.Lock()
-
-
 def compile_kernel() -> None:
     """Compile :func:`_run_rows` for its one signature (or load it from numba's cache); a no-op once
     done, or when numba's JIT is disabled."""
-    # a lock: two threads of one process (a Dask worker's) would race between the check and
-    # disable_compile(), and the second one's compile() then raises "compilation disabled"
-    with _COMPILE_LOCK:
-        if not hasattr(_run_rows, "compile") or _run_rows.signatures:
-            return
-        _run_rows.compile(_SIGNATURE)
-        _run_rows.disable_compile()
+    compile_once(_run_rows, _SIGNATURE)
