@@ -209,12 +209,7 @@ class StepProgram(SteppingController):
         if el > self._T + p.give_up_s and not self._lifted:  # it never rose: stand on both again
             step["aborted"] = True
             return self._touch_down(t, qpos, qvel, feet, xi)
-        stance_c, yaw = self._sole_pose(st)
-        c, sn = math.cos(yaw), math.sin(yaw)
-        rel = self.data.subtree_com[0][:2] - stance_c[:2]
-        loc = np.array([c * rel[0] + sn * rel[1], -sn * rel[0] + c * rel[1]])
-        loc = np.clip(loc, [-self._sole[st][1], -self._sole[st][2]], [self._sole[st][1], self._sole[st][2]])
-        cop = stance_c[:2] + np.array([c * loc[0] - sn * loc[1], sn * loc[0] + c * loc[1]])
+        stance_c, cop = self._stance_cop(st)  # the stepper's stance CoP
         side = 1.0 if i == 1 else -1.0
         if self._landing is None or el < s.retarget_until * self._T:
             xi_now = predicted_capture_point(xi, cop, omega, p.delay_s)

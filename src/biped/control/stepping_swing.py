@@ -122,13 +122,7 @@ class SwingPhase:
         # touchdown: on the floor after half the swing, once seen off it (else the swing goes on)
         if feet[i] and el > 0.5 * self._T and step["lift_off_s"] is not None:
             return self._touch_down(t, qpos, qvel, feet, xi)
-        stance_c, yaw = self._sole_pose(st)
-        # the stance CoP: the point of the stance sole nearest the COM (the QP pushes it there)
-        c, sn = math.cos(yaw), math.sin(yaw)
-        rel = self.data.subtree_com[0][:2] - stance_c[:2]
-        loc = np.array([c * rel[0] + sn * rel[1], -sn * rel[0] + c * rel[1]])
-        loc = np.clip(loc, [-self._sole[st][1], -self._sole[st][2]], [self._sole[st][1], self._sole[st][2]])
-        cop = stance_c[:2] + np.array([c * loc[0] - sn * loc[1], sn * loc[0] + c * loc[1]])
+        stance_c, cop = self._stance_cop(st)
         side = 1.0 if i == 1 else -1.0
         if self._closing is None and (self._landing is None or el < s.retarget_until * self._T):
             self._landing = self._step_target(xi, cop, omega, self._T - el, stance_c[:2], side)
@@ -161,6 +155,16 @@ class SwingPhase:
             pd[2] = ankle_land[2] - s.descent_m_s * (el - T)
             vd[2] = -s.descent_m_s
         return self._single_support(i, qpos, qvel, omega, cop, pd, vd, ad)
+
+    def _stance_cop(self, st: int) -> tuple[np.ndarray, np.ndarray]:
+        """(the stance sole ``st``'s centre (3,), the stance CoP (2,)): the point of the stance
+        sole nearest the COM (the QP pushes it there)."""
+        stance_c, yaw = self._sole_pose(st)
+        c, sn = math.cos(yaw), math.sin(yaw)
+        rel = self.data.subtree_com[0][:2] - stance_c[:2]
+        loc = np.array([c * rel[0] + sn * rel[1], -sn * rel[0] + c * rel[1]])
+        loc = np.clip(loc, [-self._sole[st][1], -self._sole[st][2]], [self._sole[st][1], self._sole[st][2]])
+        return stance_c, stance_c[:2] + np.array([c * loc[0] - sn * loc[1], sn * loc[0] + c * loc[1]])
 
     def _single_support(self, i, qpos, qvel, omega, cop, pd, vd, ad):
         """The torques while foot ``i`` swings toward ``pd`` (velocity ``vd``, acceleration ``ad``;

@@ -242,16 +242,25 @@ def robot_controller(desc: RobotDescription, distribution: str = "qp", torque_li
     """W's controller on the robot's folded tree; ``torque_limits`` "model" (the joints'
     ``actuatorfrcrange`` inside the QP) or "none"."""
     tree = robot_tree(desc)
-    lim = None
-    if torque_limits == "model":
-        lo, hi = leg_torque_limits(desc).T
-        lim = TorqueLimits("model", tree.joint_names, lo, hi)
-    elif torque_limits != "none":
-        raise ScenarioError(f"unknown torque_limits {torque_limits!r} for a robot; valid: 'model', 'none'")
     kw.setdefault("gains", Gains())
     return WorkspaceController(
-        tree, distribution=distribution, torque_limits=lim, soles=robot_soles(desc), **kw
+        tree,
+        distribution=distribution,
+        torque_limits=robot_torque_limits(desc, tree, torque_limits),
+        soles=robot_soles(desc),
+        **kw,
     )
+
+
+def robot_torque_limits(desc: RobotDescription, tree, torque_limits: str) -> TorqueLimits | None:
+    """The legs' torque limits of ``torque_limits``: "model" (the joints' ``actuatorfrcrange``,
+    in ``tree``'s joint order) or "none" (None); anything else is refused."""
+    if torque_limits == "model":
+        lo, hi = leg_torque_limits(desc).T
+        return TorqueLimits("model", tree.joint_names, lo, hi)
+    if torque_limits != "none":
+        raise ScenarioError(f"unknown torque_limits {torque_limits!r} for a robot; valid: 'model', 'none'")
+    return None
 
 
 def _actuator(m: mujoco.MjModel, joint: str) -> int:

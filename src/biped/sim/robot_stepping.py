@@ -56,14 +56,13 @@ import numpy as np
 
 from biped.control import capture as cp
 from biped.control.distribution import QPWeights
-from biped.control.limits import TorqueLimits
 from biped.control.policy import PolicyConfig
 from biped.control.setpoint import Target
 from biped.control.stepping import SteppingConfig, SteppingController
 from biped.control.stepping_body import SteppingBody, facing_rotation, leg_chains, leg_length, w_body
 from biped.control.swing_task import swing_pose_torques
-from biped.errors import ModelError, ScenarioError
-from biped.models.robot import RobotDescription, leg_torque_limits, plant_model, robot_soles, robot_tree
+from biped.errors import ModelError
+from biped.models.robot import RobotDescription, plant_model, robot_soles, robot_tree
 from biped.spatial import axis_angle_quat, quat_mul, quat_to_rot, transform
 
 __all__ = [
@@ -234,13 +233,10 @@ def robot_stepper(
     body = robot_stepping_body(desc, qpos, target)
     if big_base is not None:
         body = replace(body, big_base=big_base)
+    from biped.sim.robot import robot_torque_limits  # (robot.py imports this module)
+
     tree = robot_tree(desc)
-    lim = None
-    if torque_limits == "model":
-        lo, hi = leg_torque_limits(desc).T
-        lim = TorqueLimits("model", tree.joint_names, lo, hi)
-    elif torque_limits != "none":
-        raise ScenarioError(f"unknown torque_limits {torque_limits!r} for a robot; valid: 'model', 'none'")
+    lim = robot_torque_limits(desc, tree, torque_limits)
     d = mujoco.MjData(body.model)
     d.qpos[:] = qpos
     mujoco.mj_kinematics(body.model, d)
