@@ -302,6 +302,17 @@ def _sole_centres(scene, qpos):
     return np.array(out)
 
 
+def _run_closing(sc, scene, on: bool):
+    """The "qp" stepping run of ``sc`` with ``closing_step`` ``on`` (the Python loop's result)."""
+    from biped.control.stepping import SteppingController
+    from biped.control.stepping_config import SteppingConfig
+    from biped.sim.policies import policy_config
+    from biped.sim.push import run_closed_loop
+
+    cfg = SteppingConfig.for_trigger("qp", closing_step=on)
+    return run_closed_loop(sc, scene, SteppingController(policy_config(sc), cfg, scene.joint_names))
+
+
 @pytest.mark.slow
 def test_closing_step_brings_the_feet_back_to_a_comfortable_stance():
     """16 m/s from behind (fast physics, 4 s) with ``closing_step`` on (issue #23 item 2; off in
@@ -311,19 +322,10 @@ def test_closing_step_brings_the_feet_back_to_a_comfortable_stance():
     within 5 cm of the starting stance's, the stagger within 5 cm; at rest by the strict rule. The
     closing step is recorded (``closing``) and not counted among the recovery steps (the sweep's
     ``step_count``). Without it the feet stay staggered."""
-    from biped.control.stepping import SteppingController
-    from biped.control.stepping_config import SteppingConfig
-    from biped.sim.policies import policy_config
-    from biped.sim.push import run_closed_loop
-
     sc = _sweep_scenario(16, 180, "--stepping")
     scene = build_scene(sc)
 
-    def run(on):
-        cfg = SteppingConfig.for_trigger("qp", closing_step=on)
-        return run_closed_loop(sc, scene, SteppingController(policy_config(sc), cfg, scene.joint_names))
-
-    r = run(True)
+    r = _run_closing(sc, scene, True)
     steps = r.extra["steps"]
     assert [st["closing"] for st in steps] == [False, True], steps
     start, end = _sole_centres(scene, r.qpos[0]), _sole_centres(scene, r.qpos[-1])
@@ -331,7 +333,7 @@ def test_closing_step_brings_the_feet_back_to_a_comfortable_stance():
     assert w0[1] > 0.1 and w1[1] > 0.0  # the right foot on its own side (+y), start and end
     assert abs(w1[1] - w0[1]) <= 0.05 and abs(w1[0] - w0[0]) <= 0.05, (w0, w1)
     assert r.recovered and r.extra["final_com_speed_m_s"] < 0.05, r.extra
-    old = run(False)
+    old = _run_closing(sc, scene, False)
     oe = _sole_centres(scene, old.qpos[-1])
     assert abs((oe[1] - oe[0])[0] - w0[0]) > 0.3 and old.recovered  # staggered, at rest
 
@@ -344,19 +346,10 @@ def test_crossover_push_ends_uncrossed_after_the_closing_step():
     lateral distance of the sole centres within 5 cm of the starting stance's, the stagger within
     5 cm; at rest by the strict rule. The closing step starts at ~3.1 s: this needs a 6 s trial
     (at 4 s the run survives, not yet at rest; docs/sweep.md). Without it the feet stay crossed."""
-    from biped.control.stepping import SteppingController
-    from biped.control.stepping_config import SteppingConfig
-    from biped.sim.policies import policy_config
-    from biped.sim.push import run_closed_loop
-
     sc = _sweep_scenario(18, 90, "--stepping").with_overrides(duration_s=6.0)
     scene = build_scene(sc)
 
-    def run(on):
-        cfg = SteppingConfig.for_trigger("qp", closing_step=on)
-        return run_closed_loop(sc, scene, SteppingController(policy_config(sc), cfg, scene.joint_names))
-
-    r = run(True)
+    r = _run_closing(sc, scene, True)
     steps = r.extra["steps"]
     assert any(st["crossover"] for st in steps) and [st["closing"] for st in steps][-1], steps
     start, end = _sole_centres(scene, r.qpos[0]), _sole_centres(scene, r.qpos[-1])
@@ -364,5 +357,5 @@ def test_crossover_push_ends_uncrossed_after_the_closing_step():
     assert w0[1] > 0.1 and w1[1] > 0.0  # the right foot on its own side (+y), start and end
     assert abs(w1[1] - w0[1]) <= 0.05 and abs(w1[0] - w0[0]) <= 0.05, (w0, w1)
     assert r.recovered and r.extra["final_com_speed_m_s"] < 0.05, r.extra
-    oe = _sole_centres(scene, run(False).qpos[-1])
+    oe = _sole_centres(scene, _run_closing(sc, scene, False).qpos[-1])
     assert (oe[1] - oe[0])[1] < 0.0  # crossed: the right foot left of the left one

@@ -86,42 +86,39 @@ def test_step_measures_agree_with_the_feet_and_the_controller():
     assert abs(contact - 1000 * (st["touch_down_s"] - 0.1)) <= 4.0
 
 
-def _standing_geometry(**keys):
-    """(whole-body COM, hips' midpoint) ahead of the ankles' midpoint [m] at the initial state of a
-    platform scenario with ``keys``, and the COM's height above the ankles, by MuJoCo's kinematics
-    (subtree COM of the biped's root), not the project's own COM code."""
+def _initial_kinematics(s):
+    """(scene, MjData after ``mj_forward`` of scenario ``s``'s initial state, the whole-body COM
+    (MuJoCo's subtree COM of the biped's root, not the project's own COM code), the midpoint of
+    the bodies named ``{side}_{body}`` for a body name) by MuJoCo's kinematics."""
     import mujoco
     import numpy as np
 
-    from biped.sim import Scenario, build_scene
+    from biped.sim import build_scene
     from biped.sim.scene import initial_state
 
-    s = Scenario(perturbation="platform", platform_displacement_m=(0.01, 0.0), **keys)
     scene = build_scene(s)
     m = scene.model
     d = mujoco.MjData(m)
     d.qpos[:], _ = initial_state(scene, s)
     mujoco.mj_forward(m, d)
     com = d.subtree_com[m.body_rootid[scene.central_body]]
-    ankles = np.mean([d.xpos[m.body(f"{s}_ankle_1").id] for s in ("left", "right")], axis=0)
-    hips = np.mean([d.xpos[m.body(f"{s}_hip_1").id] for s in ("left", "right")], axis=0)
+
+    def mid(body: str):
+        return np.mean([d.xpos[m.body(f"{side}_{body}").id] for side in ("left", "right")], axis=0)
+
+    return scene, d, com, mid
+
+
+def _standing_geometry(**keys):
+    """(whole-body COM, hips' midpoint) ahead of the ankles' midpoint [m] at the initial state of a
+    platform scenario with ``keys``, and the COM's height above the ankles, by MuJoCo's kinematics
+    (subtree COM of the biped's root), not the project's own COM code."""
+    from biped.sim import Scenario
+
+    s = Scenario(perturbation="platform", platform_displacement_m=(0.01, 0.0), **keys)
+    _, _, com, mid = _initial_kinematics(s)
+    ankles, hips = mid("ankle_1"), mid("hip_1")
     return ankles[0] - com[0], ankles[0] - hips[0], com[2] - ankles[2]  # the biped faces -x
-
-
-def test_human_stance_stands_as_people_do_and_w_crouch_does_not():
-    """HUMAN_STANCE against the cited alignment of quiet stance: the line of gravity 47-58 mm
-    (+/- 4-5) ahead of the ankle, the hip on it (-5 +/- 5 mm), the hip 6.2 +/- 1.3 cm ahead of the
-    ankle (Woodhull et al. 1985); W's crouch puts the COM twice as far forward."""
-    from biped.analysis.validate import EXPERIMENTS, HUMAN_STANCE
-
-    com, hips, height = _standing_geometry(**HUMAN_STANCE)
-    assert 0.043 <= com <= 0.063 and abs(hips - com) <= 0.01 and 0.049 <= hips <= 0.075
-    assert 0.85 < height < 0.95
-    w_com, _, _ = _standing_geometry()
-    assert w_com > 0.09  # W's initial pose: 10.3 cm
-    for key in ("platform_backward", "waist_pull"):
-        base = EXPERIMENTS[key].base
-        assert all(base[k] == v for k, v in HUMAN_STANCE.items())
 
 
 def _release_geometry(lean_deg: float, key: str):
@@ -129,23 +126,15 @@ def _release_geometry(lean_deg: float, key: str):
     central body's orientation (4,), the hip and knee angles (8,) [deg], the ankle dorsiflexions
     (2,) [deg]) at the initial state of experiment ``key`` leaned ``lean_deg``, by MuJoCo's
     kinematics (subtree COM of the biped's root)."""
-    import mujoco
     import numpy as np
 
     from biped.analysis.validate import EXPERIMENTS
-    from biped.sim import Scenario, build_scene
-    from biped.sim.scene import initial_state
+    from biped.sim import Scenario
 
     exp = EXPERIMENTS[key]
-    s = Scenario(**{**exp.base, **exp.magnitude(lean_deg)})
-    scene = build_scene(s)
+    scene, d, com, mid = _initial_kinematics(Scenario(**{**exp.base, **exp.magnitude(lean_deg)}))
     m = scene.model
-    d = mujoco.MjData(m)
-    d.qpos[:], _ = initial_state(scene, s)
-    mujoco.mj_forward(m, d)
-    com = d.subtree_com[m.body_rootid[scene.central_body]]
-    ankles = np.mean([d.xpos[m.body(f"{s}_ankle_1").id] for s in ("left", "right")], axis=0)
-    hips = np.mean([d.xpos[m.body(f"{s}_thigh").id] for s in ("left", "right")], axis=0)
+    ankles, hips = mid("ankle_1"), mid("thigh")
     angle = {n: math.degrees(d.qpos[m.jnt_qposadr[m.joint(n).id]]) for n in scene.joint_names}
     hk = [v for n, v in angle.items() if "ankle" not in n]
     ank = [v for n, v in angle.items() if "dorsiflexion" in n]
