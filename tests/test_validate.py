@@ -121,6 +121,22 @@ def _standing_geometry(**keys):
     return ankles[0] - com[0], ankles[0] - hips[0], com[2] - ankles[2]  # the biped faces -x
 
 
+def test_human_stance_stands_as_people_do_and_w_crouch_does_not():
+    """HUMAN_STANCE against the cited alignment of quiet stance: the line of gravity 47-58 mm
+    (+/- 4-5) ahead of the ankle, the hip on it (-5 +/- 5 mm), the hip 6.2 +/- 1.3 cm ahead of the
+    ankle (Woodhull et al. 1985); W's crouch puts the COM twice as far forward."""
+    from biped.analysis.validate import EXPERIMENTS, HUMAN_STANCE
+
+    com, hips, height = _standing_geometry(**HUMAN_STANCE)
+    assert 0.043 <= com <= 0.063 and abs(hips - com) <= 0.01 and 0.049 <= hips <= 0.075
+    assert 0.85 < height < 0.95
+    w_com, _, _ = _standing_geometry()
+    assert w_com > 0.09  # W's initial pose: 10.3 cm
+    for key in ("platform_backward", "waist_pull"):
+        base = EXPERIMENTS[key].base
+        assert all(base[k] == v for k, v in HUMAN_STANCE.items())
+
+
 def _release_geometry(lean_deg: float, key: str):
     """(whole-body COM minus the ankles' midpoint (3,), the hip joints' midpoint minus it (3,), the
     central body's orientation (4,), the hip and knee angles (8,) [deg], the ankle dorsiflexions
