@@ -225,8 +225,8 @@ def test_from_human_stance_the_stance_knee_stays_bent_and_the_ideal_step_recover
 
 
 def test_the_stance_knee_guard_lands_the_ideal_step_from_a_19_deg_lean(monkeypatch):
-    """``step_reach = "leg"`` keeps the stance knee no straighter than the starting pose's 12 deg
-    in single support (a one-sided spring-damper added to W's torque). A 19 deg forward release
+    """``step_reach = "leg"`` keeps the stance knee 8 deg or more from straight in single support
+    (a one-sided spring-damper added to W's torque). A 19 deg forward release
     from human quiet stance (validate's protocol, ideal preset): without it MuJoCo's recorded
     stance knee comes within 1 deg of straight before any landing and the biped falls with no
     landing; with it the stance knee stays bent (over 5 deg) until the touchdown, the step lands

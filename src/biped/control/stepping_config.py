@@ -84,7 +84,7 @@ class SteppingConfig:
     stance foot's far side (lateral limits mirrored), at least crossover_clear_m ahead of or
     behind the stance sole's centre (the soles clear), its path along x first, then across.
     stance_knee_min_deg, stance_knee_kp, stance_knee_kv: if stance_knee_min_deg is set (``step_reach
-    = "leg"``: the starting pose's knee flexion), in single support the stance knee gets a one-sided
+    = "leg"``: 8 deg, ``biped.sim.policies.STANCE_KNEE_MIN_DEG``), in single support the stance knee gets a one-sided
     spring-damper (kp [N m/rad], kv [N m s/rad] on its extending rate) added to W's torque once
     it is straighter than that: W's controller has no handling of the straight knee's singularity,
     and from upright stance a large forward lean straightened the stance knee past 0 within 0.25 s
