@@ -191,8 +191,9 @@ def test_from_human_stance_the_stance_knee_stays_bent_and_the_ideal_step_recover
     than the standing leg (knee 12 deg), and MuJoCo's recorded knees never come within 8 deg of
     straight until the run's end; the biped recovers with one step of 0.3-0.5 m whose landing
     knee is bent 30-60 deg (measured 9.7 deg least, the landing knee 44). Without that
-    cap (the upright set point and the fixed drops) the stance knee goes straight, through the
-    singularity W's controller does not handle, and the biped falls before any landing."""
+    cap (the upright set point and the fixed drops) and without the stance knee's guard the stance
+    knee goes straight, through the singularity W's controller does not handle, and the biped
+    falls before any landing."""
     from biped.analysis.validate import EXPERIMENTS, _step_measures
     from biped.control.stepping import SteppingController
     from biped.sim.push import simulate
@@ -213,9 +214,58 @@ def test_from_human_stance_the_stance_knee_stays_bent_and_the_ideal_step_recover
     k = int(np.searchsorted(r.times, 0.1 + contact / 1000.0))
     assert 30.0 < knee[k, i] < 60.0, knee[k, i]
     monkeypatch.setattr(SteppingController, "_leg_capped", lambda self, target, legs: target)
+    # and without the stance knee's guard (test below), which alone now lands this step
+    monkeypatch.setattr(SteppingController, "_knee_guarded", lambda self, tau, st: tau)
     s, r, knee = run()
     end = int(np.searchsorted(r.times, r.fall_time_s)) if r.fell else len(r.times)
     assert r.fell and math.isnan(_step_measures(r, s)[1]) and knee[:end].min() < 1.0, (
         r.fall_time_s,
         knee.min(),
     )
+
+
+def test_the_stance_knee_guard_lands_the_ideal_step_from_a_19_deg_lean(monkeypatch):
+    """``step_reach = "leg"`` keeps the stance knee 8 deg or more from straight in single support
+    (a one-sided spring-damper added to W's torque). A 19 deg forward release
+    from human quiet stance (validate's protocol, ideal preset): without it MuJoCo's recorded
+    stance knee comes within 1 deg of straight before any landing and the biped falls with no
+    landing; with it the stance knee stays bent (over 5 deg) until the touchdown, the step lands
+    0.5-0.7 m ahead (measured 0.596 m, 336 ms after the release) and the biped stands 4 s. The
+    guard's torque is the closed form ``kp (q - q_min) + kv max(q', 0)`` on a made-up state."""
+    from types import SimpleNamespace
+
+    from biped.analysis.validate import EXPERIMENTS, _step_measures
+    from biped.control.stepping import SteppingController
+    from biped.control.stepping_config import SteppingConfig
+    from biped.sim.push import simulate
+
+    exp = EXPERIMENTS["step_release"]
+
+    def run():
+        s = Scenario(neuromotor="ideal", **{**exp.base, **exp.magnitude(19.0)})
+        r = simulate(s)
+        st = r.extra["steps"][0]
+        i = 1 - ("left", "right").index(st["foot"])  # the stance leg
+        kn = r.joint_names.index(f"{('left', 'right')[i]}_knee")
+        td = st["touch_down_s"] if st["touch_down_s"] is not None else r.times[-1]
+        k0, k1 = (int(np.searchsorted(r.times, x)) for x in (st["start_s"], td))
+        return s, r, float((-np.degrees(r.joint_angles[k0:k1, kn])).min())
+
+    s, r, least = run()
+    n, length, contact = _step_measures(r, s)
+    assert not r.fell and n == 1 and 0.5 < length < 0.7 and least > 5.0, (r.fall_time_s, n, length, least)
+    monkeypatch.setattr(SteppingController, "_knee_guarded", lambda self, tau, st: tau)
+    s, r, least = run()
+    assert r.fell and math.isnan(_step_measures(r, s)[1]) and least < 1.0, (r.fall_time_s, least)
+    monkeypatch.undo()
+    # the closed form, on a made-up knee 5 deg from straight extending at 2 rad/s
+    cfg = SteppingConfig(stance_knee_min_deg=12.0)
+    fake = SimpleNamespace(stepping=cfg, data=SimpleNamespace(qpos=np.array([-math.radians(5.0)]),
+                                                              qvel=np.array([2.0])),
+                           _leg_qpos=[None, [0, 0, 0, 0]], _leg_dofs=[None, [0, 0, 0, 0]],
+                           _leg_tau=[None, [0, 0, 0, 3]])  # fmt: skip
+    tau = SteppingController._knee_guarded(fake, np.zeros(12), 1)
+    want = -(cfg.stance_knee_kp * math.radians(7.0) + cfg.stance_knee_kv * 2.0)
+    assert tau[3] == pytest.approx(want, rel=1e-12) and not tau[[0, 1, 2, *range(4, 12)]].any()
+    fake.data.qpos[0] = -math.radians(20.0)  # bent more than 12 deg: no torque
+    assert not SteppingController._knee_guarded(fake, np.zeros(12), 1).any()

@@ -257,7 +257,7 @@ class StepProgram(SteppingController):
             self.ctrl.torques(qpos, qvel, target=target, gains=self._swing_gains, feet_in_contact=flags)
         )
         tau[self._leg_tau[i]] = tau_sw
-        return self._out(tau)
+        return self._out(self._knee_guarded(tau, 1 - i))
 
     def _sole_low(self, i: int) -> float:
         """The height of the lowest corner of sole ``i`` above the floor [m] (a heel lifted about

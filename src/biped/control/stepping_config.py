@@ -83,6 +83,13 @@ class SteppingConfig:
     stance sole's centre on the side away from the swing foot crosses over: it lands on the
     stance foot's far side (lateral limits mirrored), at least crossover_clear_m ahead of or
     behind the stance sole's centre (the soles clear), its path along x first, then across.
+    stance_knee_min_deg, stance_knee_kp, stance_knee_kv: if stance_knee_min_deg is set (``step_reach
+    = "leg"``: 8 deg, ``biped.sim.policies.STANCE_KNEE_MIN_DEG``), in single support the stance knee gets a one-sided
+    spring-damper (kp [N m/rad], kv [N m s/rad] on its extending rate) added to W's torque once
+    it is straighter than that: W's controller has no handling of the straight knee's singularity,
+    and from upright stance a large forward lean straightened the stance knee past 0 within 0.25 s
+    of the swing's start, the singular leg throwing the stance foot off the floor before the
+    swing foot landed (docs/validate.md, "Why the ideal stops").
     airborne_stance: in single support, a stance sole over ``AIRBORNE_M`` (10 cm) above the
     floor is left out of the QP (the biped tumbles; no wrench is distributed), as a foot in the
     air is in double support.
@@ -140,6 +147,9 @@ class SteppingConfig:
     dwell_s: float | None = None
     side_margin_m: float = 0.0
     airborne_stance: bool = False
+    stance_knee_min_deg: float | None = None
+    stance_knee_kp: float = 1000.0
+    stance_knee_kv: float = 20.0
     crossover: bool = False
     crossover_clear_m: float = 0.24
     closing_step: bool = False

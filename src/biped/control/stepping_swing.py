@@ -195,7 +195,24 @@ class SwingPhase:
             )
         )
         tau[self._leg_tau[i]] = tau_swing
-        return self._out(tau)
+        return self._out(self._knee_guarded(tau, 1 - i))
+
+    def _knee_guarded(self, tau: np.ndarray, st: int) -> np.ndarray:
+        """``tau`` (controller order) with the stance knee's one-sided spring-damper added
+        (``stance_knee_min_deg``; unchanged when it is not set or the knee is bent more): flexion
+        torque ``kp (q - q_min) + kv max(q', 0)`` once the knee (flexion negative) is straighter
+        than ``-stance_knee_min_deg``."""
+        s = self.stepping
+        if s.stance_knee_min_deg is None:
+            return tau
+        q = float(self.data.qpos[self._leg_qpos[st][3]])
+        q_min = -math.radians(s.stance_knee_min_deg)
+        if q <= q_min:
+            return tau
+        qd = float(self.data.qvel[self._leg_dofs[st][3]])
+        tau = np.array(tau, dtype=float)
+        tau[self._leg_tau[st][3]] -= s.stance_knee_kp * (q - q_min) + s.stance_knee_kv * max(qd, 0.0)
+        return tau
 
     def _height_drop(self, span_m: float, fixed_m: float) -> float:
         return leg_geometry.height_drop(self.stepping, span_m, fixed_m)

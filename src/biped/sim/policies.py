@@ -128,8 +128,12 @@ def controller_policy(
             # at its 12 deg), never less than the stepper's own reach; the hips sink only as far
             # as both legs at that length need to span the step, at most the stance's drop
             limit = leg_step_limit(scenario, scene, stepping.reach_m, stepping.swing_height_drop_m)
+            # the stance knee kept out of the last STANCE_KNEE_MIN_DEG before straight (and no
+            # straighter than the starting pose's knee, were it straighter than that)
+            knee = min(abs(float(a)) for a in scenario.initial_joint_angles_deg[3::6])
             stepping = replace(stepping, reach_m=max(stepping.reach_m, leg), span_leg_m=leg, stand_hip_m=hip,
-                               limits=replace(stepping.limits, max_step=limit))  # fmt: skip
+                               limits=replace(stepping.limits, max_step=limit),
+                               stance_knee_min_deg=min(knee, STANCE_KNEE_MIN_DEG))  # fmt: skip
         if scenario.step_program == "program":  # planned steps for a delayed, lagged plant
             from biped.control.step_program import StepProgram, StepProgramConfig
 
@@ -139,6 +143,12 @@ def controller_policy(
         return SteppingController(config, stepping, scene.joint_names, tree=tree)
     sensed = config.support == "sensed" or config.distribution == "qp"  # as make_policy decides
     return ControllerPolicy(make_policy(config, scene.joint_names, tree=tree), sensed=sensed)
+
+
+#: ``step_reach = "leg"``: the stance knee in single support is kept this far [deg] from straight
+#: (or the starting pose's flexion if less): the band the project's tests count as near the straight
+#: knee's singularity (tests/test_step_program.py); docs/validate.md, "Why the ideal stopped".
+STANCE_KNEE_MIN_DEG = 8.0
 
 
 def standing_legs(scenario: Scenario, scene: Scene) -> tuple[float, float]:

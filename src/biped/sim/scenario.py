@@ -47,7 +47,8 @@ CONTROLLERS = ("workspace", "joint-pd")
 STEP_PROGRAMS = ("feedback", "program")
 #: The longest step a stepping run may land (key ``step_reach``): "fixed" = StepLimits' 0.5 m
 #: between sole centres (the sweeps' design limit); "leg" = what the legs reach from the hips'
-#: standing height, both legs at the swing's reach (biped.control.capture.reach_step_limit).
+#: standing height, both legs at the swing's reach (biped.control.capture.reach_step_limit), with
+#: the stance knee kept off straight in single support (biped.sim.policies.STANCE_KNEE_MIN_DEG).
 STEP_REACHES = ("fixed", "leg")
 #: Which feet the workspace controller takes as fixed: "fixed" = both, always (W); "sensed" = the
 #: feet whose soles touch the floor at each control step (see WorkspaceController.compute).
