@@ -286,15 +286,11 @@ class Scenario:
         out = {}
         for f in dataclasses.fields(self):
             v = getattr(self, f.name)
-            if f.name in _OMITTED_AT_DEFAULT and v == f.default and not self._written(f.name):
+            qp_key = f.name in _WRITTEN_FOR_THE_QP and self.distribution == "qp"  # written at any value
+            if f.name in _OMITTED_AT_DEFAULT and v == f.default and not qp_key:
                 continue  # a key added later: its default leaves old files (and W's outputs) as they were
             out[f.name] = list(v) if isinstance(v, tuple) else v
         return out
-
-    def _written(self, key: str) -> bool:
-        """Whether ``key`` is written even at its default: a key of :data:`_WRITTEN_FOR_THE_QP`
-        whenever the QP reads it."""
-        return key in _WRITTEN_FOR_THE_QP and self.distribution == "qp"
 
     def to_toml(self) -> str:
         """TOML text that :meth:`from_toml` reads back to an equal scenario."""
@@ -407,11 +403,10 @@ _WRITTEN_FOR_THE_QP = {"qp_floor_friction": False}
 
 
 def stored_values(values: dict) -> dict:
-    """``values``, a scenario's :meth:`Scenario.to_dict` as a file stored it (a sweep's or an
-    envelope's Parquet metadata, its parts' manifest), with the keys of the QP that files written
-    before their default changed left out at the old default put back: a QP sweep stored without
-    ``qp_floor_friction`` ran with the pyramid on the sole's axes, and is read so (then a rerun
-    with today's default is refused as a different sweep, never resumed or merged into it)."""
+    """``values``, a scenario's :meth:`Scenario.to_dict` as a file stored it (a sweep's Parquet
+    metadata, its parts' manifest), with the QP's keys it lacks at their old default: a QP sweep
+    stored without ``qp_floor_friction`` ran with the sole's pyramid and is read so (a rerun with
+    today's default is then refused as a different sweep, never resumed or merged into it)."""
     out = dict(values)
     if out.get("distribution") == "qp":
         for key, old_default in _WRITTEN_FOR_THE_QP.items():
