@@ -184,17 +184,23 @@ def test_simulate_refuses_what_is_not_a_scenario(bad):
         simulate(bad)
 
 
-def test_qp_floor_friction_reaches_the_qp_and_leaves_old_files_as_they_were():
-    """Off by default and then absent from to_dict (summary.json, scenario.toml, a sweep's identity
-    as before the key existed); on, the QP's pyramid lies on the floor's axes (QPWeights)."""
+def test_qp_floor_friction_is_on_by_default_and_written_with_the_qp_only():
+    """On by default (the QP's pyramid on the floor's axes, QPWeights); written into to_dict at
+    any value whenever the QP reads it, so a stored QP scenario without it is one written while
+    the default was false; left out of W's (distribution "statics") at its default, so W's
+    summary.json, scenario.toml and sweep identity stay as they were."""
     from biped.sim.policies import policy_config
     from biped.sim.sweep import SweepSpec
 
-    off = Scenario(distribution="qp")
-    on = off.with_overrides(qp_floor_friction=True)
-    assert "qp_floor_friction" not in off.to_dict() and on.to_dict()["qp_floor_friction"] is True
+    on = Scenario(distribution="qp")
+    off = on.with_overrides(qp_floor_friction=False)
+    assert on.qp_floor_friction is True and policy_config(on).qp_weights.floor_friction
     assert not policy_config(off).qp_weights.floor_friction
-    assert policy_config(on).qp_weights.floor_friction
+    assert on.to_dict()["qp_floor_friction"] is True and off.to_dict()["qp_floor_friction"] is False
+    assert "qp_floor_friction" not in Scenario().to_dict()
+    assert "qp_floor_friction" not in Scenario().to_toml()
+    for s in (on, off, Scenario(), Scenario().with_overrides(qp_floor_friction=False)):
+        assert Scenario.from_dict(s.to_dict()) == s
     assert SweepSpec(base=off).identity != SweepSpec(base=on).identity
     with pytest.raises(ScenarioError, match="qp_floor_friction must be true or false"):
         off.with_overrides(qp_floor_friction="yes")

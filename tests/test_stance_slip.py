@@ -1,7 +1,8 @@
 """The stance foot does not slide during a step (issue #23, goal "stance slip <= 2 cm per step at
 friction 0.3"): the floor-frame friction rows of the stepping QP against the floor's cone in
 closed form, the driven swing leg's reaction against MuJoCo's forward dynamics, and a sideways
-step's slip measured in MuJoCo (contacts and foot poses of the recorded run)."""
+step's slip measured in MuJoCo (contacts and foot poses of the recorded run); the feet-in-place QP's
+floor pyramid (its default) against the sole's on the push whose sole rolls onto its edge."""
 
 from __future__ import annotations
 
@@ -194,3 +195,26 @@ def test_sideways_step_stance_foot_slides_at_most_2_cm():
     before = run_closed_loop(sc, scene, SteppingController(policy_config(sc), old, scene.joint_names))
     assert before.extra["steps"]
     assert max(_stance_slips(sc, before)) > 0.05
+
+
+def test_the_feet_in_place_qp_keeps_a_sole_rolled_onto_its_edge_from_sliding():
+    """docs/envelope.md, "Limits against the grid": 10.5 m/s at 67.5 deg rolls the left sole onto
+    its edge. With the pyramid on the sole's axes (qp_floor_friction = false, the default before
+    2026-11-27) the QP asks the floor for more tangential force than mu = 0.3 gives, the foot slides
+    under the body and the biped falls, between survivors at 10.25 and 10.75 m/s; with the floor's
+    pyramid (the default) it survives with the feet within 6 cm. MuJoCo's contact decides both."""
+    from biped.sim.sweep import SweepSpec, hold_scenario
+    from biped.sim.sweep.record import row_survived
+    from biped.sim.sweep.trial import run_trial
+
+    base = hold_scenario().with_overrides(physics="fast", distribution="qp")
+    assert base.qp_floor_friction
+    rows = {}
+    for floor in (True, False):
+        sc = base.with_overrides(qp_floor_friction=floor)
+        spec = SweepSpec(axes={"speed_m_s": (10.5,), "direction_deg": (67.5,)}, base=sc)
+        (trial,) = spec.trials()
+        rows[floor] = run_trial(spec.setup(trial))
+    assert row_survived(rows[True]) and rows[True]["left_slip_m"] < 0.06
+    assert not row_survived(rows[False]) and rows[False]["fell"]
+    assert rows[False]["left_slip_m"] > 0.3  # 0.69 m by the fall (the trace: 0.36 m before it)

@@ -235,3 +235,62 @@ def test_a_torn_part_file_keeps_its_complete_batches(tmp_path):
     data = w.path.read_bytes()
     w.path.write_bytes(data[: size + (len(data) - size) // 2])  # cut inside the 4th batch
     assert read_part(w.path).column("index").to_pylist() == [0, 1, 2]
+
+
+# ---------------------------------------------------------------------------------------------
+# a QP file written while qp_floor_friction defaulted to false
+
+
+def _old_qp_file(tmp_path) -> Path:
+    """A QP sweep file as the code before 2026-11-27 wrote it: qp_floor_friction false, its default
+    then, and so left out of the stored scenario (metadata rewritten from today's false file, whose
+    rows, trial keys and identity are those of that time)."""
+    import json
+
+    import pyarrow.parquet as pq
+
+    out = tmp_path / "old.parquet"
+    spec = SweepSpec(
+        axes=GRID, base=SweepSpec().base.with_overrides(distribution="qp", qp_floor_friction=False)
+    )
+    run_sweep(spec, out, workers=1, trial_fn=toy_trial, progress=False)
+    table = pq.read_table(out)
+    meta = dict(table.schema.metadata)
+    stored = json.loads(meta[b"biped.sweep"])
+    assert stored["scenario"].pop("qp_floor_friction") is False
+    meta[b"biped.sweep"] = json.dumps(stored).encode()
+    toml = meta[b"biped.scenario"].decode().replace("qp_floor_friction = false\n", "")
+    meta[b"biped.scenario"] = toml.encode()
+    assert b"qp_floor_friction" not in meta[b"biped.sweep"] + meta[b"biped.scenario"]
+    assert meta[b"biped.sweep_id"].decode() == spec.identity  # the trials' keys of that time
+    pq.write_table(table.replace_schema_metadata(meta), out)
+    return out
+
+
+def test_an_old_qp_file_reads_as_the_sole_pyramid_and_is_not_resumed_as_the_floors(tmp_path):
+    """Since qp_floor_friction defaults to true, a QP file without the key (written when it
+    defaulted to false) is read as false and refused, with the usual message, by a sweep or an
+    envelope of today's default, which would otherwise have resumed it (and consolidated its rows
+    into a file that says true); a rerun that asks for false resumes it without running a trial."""
+    from biped.sim.sweep import SweepSpec as Spec
+    from biped.sim.sweep.envelope import run_envelope
+
+    out = _old_qp_file(tmp_path)
+    before = out.read_bytes()
+    assert load(out).scenario.qp_floor_friction is False
+    now = Spec(axes=GRID, base=Spec().base.with_overrides(distribution="qp"))
+    assert now.base.qp_floor_friction is True
+    msg = r"holds a different sweep \(scenario key qp_floor_friction: False in the file, True now\)"
+    with pytest.raises(ScenarioError, match=msg):
+        run_sweep(now, out, workers=1, trial_fn=toy_trial, progress=False)
+    with pytest.raises(ScenarioError, match=msg):
+        run_envelope(now.with_axes(speed_m_s=(1.0, 2.0, 3.0)), out, trial_fn=toy_trial, workers=1)
+    assert out.read_bytes() == before and not parts_dir(out).exists()
+
+    def never(setup):
+        raise AssertionError(f"trial {setup.trial.index} ran again: the old rows were not reused")
+
+    same = Spec(axes=GRID, base=now.base.with_overrides(qp_floor_friction=False))
+    s = run_sweep(same, out, workers=1, trial_fn=never, progress=False)
+    assert sorted(load(out).column("index").tolist()) == list(range(8)), s
+    assert load(out).scenario.qp_floor_friction is False

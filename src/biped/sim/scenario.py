@@ -122,8 +122,9 @@ class Scenario:
     qp_min_normal_n: float = 10.0  # "qp": minimum normal force of a foot in contact [N]
     qp_cop_scale: float = 1.0  # "qp": the CoP stays in the sole shrunk by this factor
     qp_leg_weight: float = 1.0  # "qp": share of the legs' weight in the cones (0 with stepping = true)
-    # "qp": the friction pyramid on the floor's axes, not the sole's (a sole rolled onto its edge)
-    qp_floor_friction: bool = False
+    # "qp": the friction pyramid on the floor's axes, not the sole's (a sole rolled onto its edge);
+    # false (the sole's axes) until 2026-11-27: written whenever distribution = "qp" (to_dict)
+    qp_floor_friction: bool = True
     torque_limits: Any = None  # None: the neuromotor preset's ("none" for "ideal", W)
     friction: float = 0.3
     restitution: float = 0.2
@@ -286,7 +287,8 @@ class Scenario:
         out = {}
         for f in dataclasses.fields(self):
             v = getattr(self, f.name)
-            if f.name in _OMITTED_AT_DEFAULT and v == f.default:
+            qp_key = f.name in _WRITTEN_FOR_THE_QP and self.distribution == "qp"  # written at any value
+            if f.name in _OMITTED_AT_DEFAULT and v == f.default and not qp_key:
                 continue  # a key added later: its default leaves old files (and W's outputs) as they were
             out[f.name] = list(v) if isinstance(v, tuple) else v
         return out
@@ -395,6 +397,24 @@ _OMITTED_AT_DEFAULT = frozenset(
 )
 
 
+#: Keys whose default changed (``qp_floor_friction``: false until 2026-11-27, then true): written
+#: whenever ``distribution = "qp"``, at any value, so that a stored scenario of the QP without them
+#: is one written before the change and is read as it was (:func:`stored_values`).
+_WRITTEN_FOR_THE_QP = {"qp_floor_friction": False}
+
+
+def stored_values(values: dict) -> dict:
+    """``values``, a scenario's :meth:`Scenario.to_dict` as a file stored it (a sweep's Parquet
+    metadata, its parts' manifest), with the QP's keys it lacks at their old default: a QP sweep
+    stored without ``qp_floor_friction`` ran with the sole's pyramid and is read so (a rerun with
+    today's default is then refused as a different sweep, never resumed or merged into it)."""
+    out = dict(values)
+    if out.get("distribution") == "qp":
+        for key, old_default in _WRITTEN_FOR_THE_QP.items():
+            out.setdefault(key, old_default)
+    return out
+
+
 def keys() -> tuple[str, ...]:
     """Every valid scenario key, in declaration order."""
     return tuple(f.name for f in dataclasses.fields(Scenario))
@@ -476,6 +496,7 @@ __all__ = [
     "keys",
     "parse_assignment",
     "read_toml",
+    "stored_values",
     "toml_values",
     "validate",
 ]

@@ -309,9 +309,12 @@ class SweepSpec:
                     for k in cls.keys:
                         scen.pop(k, None)
             scen.pop("perturbation", None)
-        # the nervous system's keys at W's ideal values: the identity as before they existed
+        # the nervous system's keys at W's ideal values, qp_floor_friction at false (its default
+        # until it became true, so a file of that time keeps its trials' keys): the identity as
+        # before they existed
         for k, ideal in (("neuromotor", "ideal"), ("feedback_delay_s", 0.0), ("activation_time_s", 0.0),
-                         ("torque_rate_limit_n_m_s", "none"), ("ankle_only", False)):  # fmt: skip
+                         ("torque_rate_limit_n_m_s", "none"), ("ankle_only", False),
+                         ("qp_floor_friction", False)):  # fmt: skip
             if scen.get(k) == ideal:
                 scen.pop(k)
         ident = {

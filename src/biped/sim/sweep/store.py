@@ -38,7 +38,7 @@ import pyarrow.parquet as pq
 from biped import __version__
 from biped import files as _files
 from biped.errors import ScenarioError
-from biped.sim.scenario import Scenario
+from biped.sim.scenario import Scenario, stored_values
 from biped.sim.sweep.record import schema
 from biped.sim.sweep.spec import AXES, GRID_RTOL, SweepSpec, Trial
 
@@ -257,7 +257,7 @@ def spec_difference(
     version, without that hash, by the top-level file's SHA-256."""
     new = spec.to_dict()
     diffs = []
-    old_scen, new_scen = old.get("scenario", {}), new["scenario"]
+    old_scen, new_scen = stored_values(old.get("scenario", {})), new["scenario"]
     added = _defaults_of_new_keys()
     for k in sorted(set(old_scen) | set(new_scen)):
         if k not in old_scen and k in added and new_scen.get(k) == added[k]:
@@ -478,7 +478,7 @@ def load(path: str | os.PathLike) -> SweepData:
     return SweepData(
         table=table,
         spec=spec,
-        scenario=Scenario.from_dict(spec["scenario"]),
+        scenario=Scenario.from_dict(stored_values(spec["scenario"])),
         model_sha256=meta[b"biped.model_sha256"].decode(),
         version=meta[b"biped.version"].decode(),
     )
