@@ -101,6 +101,7 @@ def test_step_program_with_a_nervous_system(monkeypatch):
 
     keys = {"friction": 1.0, "duration_s": 1.5, "perturbation": "release", "release_time_s": 0.1}
     keys |= {"stepping": True, "max_steps": 1, "distribution": "qp", "step_program": "program"}
+    keys |= {"step_trigger": "capture"}  # validate's step release pins it
     sc = Scenario(**keys, release_lean_deg=9.0, neuromotor="young")
     scene = build_scene(sc)
     assert isinstance(controller_policy(sc, scene), StepProgram)

@@ -1,6 +1,7 @@
 """The stepping policy (biped.control.stepping) in the push scene: no step for a small push, the
 swing foot above the floor and within reach, its swing-path pieces against their closed forms,
-and the scenario/CLI plumbing."""
+and the scenario/CLI plumbing. The runs here are the ``"capture"`` trigger's (pinned: the default
+is ``"qp"`` since 2026-11-27, whose runs are tests/test_stepping_trigger.py's)."""
 
 from __future__ import annotations
 
@@ -46,7 +47,7 @@ def test_scenario_keys_validated():
 def test_small_push_takes_no_step_and_recovers():
     """W's own push (1.8 kg at 4.5 m/s, 8 N s, a third of Hof's feet-in-place bound from behind)
     with stepping on: no step, recovered by the stepping rule (COM speed < 5 cm/s too)."""
-    r = simulate(Scenario(stepping=True, distribution="qp", duration_s=3.0))
+    r = simulate(Scenario(stepping=True, distribution="qp", duration_s=3.0, step_trigger="capture"))
     assert r.extra["steps"] == []
     assert r.recovered, (r.final_com_error_m, r.final_orientation_error_deg, r.extra)
     assert r.extra["final_com_speed_m_s"] < 0.05
@@ -60,6 +61,7 @@ def test_big_push_steps_foot_above_floor_within_reach():
     StepLimits of the stance foot."""
     sc = Scenario(
         stepping=True,
+        step_trigger="capture",
         distribution="qp",
         block_mass_kg=4.0,
         block_velocity_m_s=(-8.0, 0.0, 0.2),
@@ -146,7 +148,7 @@ def test_push_beyond_feet_in_place_recovers_with_a_step():
         "duration_s": 4.0,
     }
     assert simulate(Scenario(**base)).fell
-    r = simulate(Scenario(**base, stepping=True))
+    r = simulate(Scenario(**base, stepping=True, step_trigger="capture"))
     steps = r.extra["steps"]
     assert len(steps) >= 1
     assert r.recovered, (r.final_com_error_m, r.final_orientation_error_deg, steps)
@@ -161,11 +163,12 @@ def test_push_beyond_feet_in_place_recovers_with_a_step():
 
 def _sweep_scenario(speed, direction, *flags):
     """The scenario of one `biped sweep --distribution qp` trial (hold task, 1.8 kg block aimed at
-    1.2 m from 0.5 m away, fast physics, 3 s)."""
+    1.2 m from 0.5 m away, fast physics, 3 s), stepping with ``step_trigger = "capture"``."""
     from biped.cli import build_parser
     from biped.cli.sweep import build_spec
 
     args = ["sweep", "--speed", str(speed), "--direction", str(direction), "--distribution", "qp", *flags]
+    args += ["--set", 'step_trigger="capture"']
     spec = build_spec(build_parser().parse_args(args))
     return spec.scenario(spec.trials()[0])
 
@@ -249,8 +252,8 @@ def test_release_forward_with_stepping_steps_forward_once_and_recovers():
     front of the stance foot (its sole centre over 0.25 m further along -x than the stance foot's
     ankle, measured from MuJoCo's foot poses), and the run ends standing still; 30 deg, beyond one
     step's reach (0.5 m), falls; held (no release in the run) it takes no step."""
-    base = {"perturbation": "release", "stepping": True, "max_steps": 1, "distribution": "qp",
-            "friction": 1.0, "duration_s": 2.5, "release_time_s": 0.1}  # fmt: skip
+    base = {"perturbation": "release", "stepping": True, "step_trigger": "capture", "max_steps": 1,
+            "distribution": "qp", "friction": 1.0, "duration_s": 2.5, "release_time_s": 0.1}  # fmt: skip
     r = simulate(Scenario(**base, release_lean_deg=13.0))
     steps = r.extra["steps"]
     assert len(steps) == 1 and r.recovered and not r.fell, steps

@@ -34,13 +34,47 @@ def test_step_trigger_key():
     from biped.errors import ScenarioError
     from biped.sim import Scenario
 
-    assert Scenario().step_trigger == "capture" and "step_trigger" not in Scenario().to_dict()
-    assert Scenario(step_trigger="qp").to_dict()["step_trigger"] == "qp"
+    # the default is "qp"; without stepping the key stays out (W's outputs as before), with
+    # stepping it is recorded (files without it were stepping with the old default, "capture")
+    assert Scenario().step_trigger == "qp" and "step_trigger" not in Scenario().to_dict()
+    assert Scenario(stepping=True).to_dict()["step_trigger"] == "qp"
+    assert Scenario(step_trigger="capture").to_dict()["step_trigger"] == "capture"
     with pytest.raises(ScenarioError, match="step_trigger"):
         Scenario(step_trigger="late")
     q = SteppingConfig.for_trigger("qp")
     assert q.holding_sensed and q.lateral_margin_m == 0.0 and q.limits.max_back == 0.4
     assert SteppingConfig.for_trigger("capture") == SteppingConfig()
+
+
+def test_default_trigger_is_qp_where_users_see_it(tmp_path):
+    """`biped sweep --stepping` and `biped push --stepping` without a trigger: the sweep file's
+    scenario, the trial's controller and the push's summary.json all say "qp" (the controller's
+    parameters those of ``SteppingConfig.for_trigger("qp")``, not "capture"'s); an old stepping
+    sweep file without the key (the old default) is refused, not resumed with "qp"."""
+    import json
+
+    from biped.cli import build_parser, main
+    from biped.cli.sweep import build_spec
+    from biped.control.stepping import SteppingConfig
+    from biped.sim.policies import controller_policy
+    from biped.sim.scenario import stored_values
+    from biped.sim.sweep.store import spec_difference
+
+    spec = build_spec(
+        build_parser().parse_args(["sweep", "--speed", "3", "--direction", "180", "--stepping"])
+    )
+    assert spec.to_dict()["scenario"]["step_trigger"] == "qp"
+    sc = spec.scenario(spec.trials()[0])
+    pol = controller_policy(sc, build_scene(sc))
+    assert pol.stepping == SteppingConfig.for_trigger("qp", max_steps=sc.max_steps)
+    assert pol.stepping != SteppingConfig.for_trigger("capture", max_steps=sc.max_steps)
+    old = spec.to_dict()
+    del old["scenario"]["step_trigger"]
+    assert "step_trigger: 'capture' in the file, 'qp' now" in spec_difference(old, None, spec)
+    assert stored_values(old["scenario"])["step_trigger"] == "capture"  # what the old file ran
+    assert main(["push", "--stepping", "--duration", "0.02", "--no-video", "--out", str(tmp_path / "p")]) == 0
+    summary = json.loads((tmp_path / "p" / "summary.json").read_text())
+    assert summary["scenario"]["step_trigger"] == "qp"
 
 
 def test_trigger_waits_while_the_capture_point_returns():

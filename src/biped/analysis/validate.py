@@ -269,6 +269,8 @@ EXPERIMENTS = {
             # the longest step the legs reach (0.884 m), not the sweeps' fixed 0.5 m: a person
             # falling takes as long a step as the fall asks (docs/validate.md, "The step program")
             "step_reach": "leg",
+            # the trigger this experiment was built and measured with (the sweeps' default is "qp")
+            "step_trigger": "capture",
         },  # fmt: skip
         _ankle_release,
         "deg",

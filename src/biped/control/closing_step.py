@@ -103,12 +103,14 @@ def shift_target(ctl, el: float):
 
 
 def ready(ctl, i: int, com_xy: np.ndarray, xi: np.ndarray) -> bool:
-    """Whether the COM and the capture point lie ``closing_inside_m`` inside foot ``1 - i``'s sole."""
+    """Whether the capture point lies ``closing_inside_m`` and the COM ``closing_com_inside_m``
+    (None: ``closing_inside_m``) inside foot ``1 - i``'s sole."""
     c, yaw = ctl._sole_pose(1 - i)
     _, hl, hw = ctl._sole[1 - i]
     poly = cp.support_polygon([(c[:2], yaw, hl, hw)])
-    m = ctl.stepping.closing_inside_m
-    return cp.signed_distance(poly, xi) <= -m and cp.signed_distance(poly, com_xy) <= -m
+    s = ctl.stepping
+    mc = s.closing_inside_m if s.closing_com_inside_m is None else s.closing_com_inside_m
+    return cp.signed_distance(poly, xi) <= -s.closing_inside_m and cp.signed_distance(poly, com_xy) <= -mc
 
 
 def begin(ctl, t: float, com: np.ndarray) -> bool:

@@ -93,14 +93,15 @@ class SteppingConfig:
     airborne_stance: in single support, a stance sole over ``AIRBORNE_M`` (10 cm) above the
     floor is left out of the QP (the biped tumbles; no wrench is distributed), as a foot in the
     air is in double support.
-    closing_step, closing_speed_m_s, closing_band_m, closing_inside_m, closing_swing_time_s,
-    closing_shift_max_s: once at rest after the last recovery step (after the settling switch,
-    the first period the COM moves slower than closing_speed_m_s), if the stance is not
-    comfortable (crossed, or its width or stagger more than closing_band_m from the starting
-    stance's), shift the COM over one foot until it and the capture point lie closing_inside_m
-    inside that sole (the set point's critically damped approach at closing_shift_rate_1_s,
-    given up after closing_shift_max_s), then swing the other foot in
-    closing_swing_time_s beside it at the starting stance (:mod:`biped.control.closing_step`).
+    closing_step, closing_speed_m_s, closing_band_m, closing_inside_m, closing_com_inside_m,
+    closing_swing_time_s, closing_shift_max_s: once at rest after the last recovery step (after
+    the settling switch, the first period the COM moves slower than closing_speed_m_s), if the
+    stance is not comfortable (crossed, or its width or stagger more than closing_band_m from the
+    starting stance's), shift the COM over one foot until the capture point lies closing_inside_m
+    and the COM closing_com_inside_m (None: closing_inside_m) inside that sole (the set point's
+    critically damped approach at closing_shift_rate_1_s, given up after closing_shift_max_s),
+    then swing the other foot in closing_swing_time_s beside it at the starting stance
+    (:mod:`biped.control.closing_step`).
     The ``"qp"`` set turns on floor_friction, sets swing_friction_scale 0.55 and
     lateral_rot_gain_scale 1 (docs/controller.md, "Stance-foot slip"), dwell_s 0.5 s,
     side_margin_m 0.04, airborne_stance and crossover; closing_step stays off (it lowered every
@@ -155,6 +156,7 @@ class SteppingConfig:
     closing_step: bool = False
     closing_band_m: float = 0.05
     closing_inside_m: float = 0.015
+    closing_com_inside_m: float | None = None
     closing_swing_time_s: float = 0.6
     closing_shift_max_s: float = 2.5
     closing_shift_rate_1_s: float = 3.0

@@ -151,10 +151,11 @@ class Scenario:
     # with stepping: the longest step landed. "fixed": 0.5 m between sole centres; "leg": both legs
     # at the swing's reach from the hips' standing height (docs/validate.md, "The step program")
     step_reach: str = "fixed"
-    # with stepping: when to step. "capture": the capture point leaves the feet (3 cm sideways
-    # margin, W's fixed feet and massless legs before the first step); "qp": the QP alone until
-    # its feet cannot hold (docs/controller.md, "Stepping")
-    step_trigger: str = "capture"
+    # with stepping: when to step. "qp" (the default): the QP alone until its feet cannot hold;
+    # "capture": the capture point leaves the feet (3 cm sideways margin, W's fixed feet and
+    # massless legs before the first step; the default before 2026-11-27; docs/controller.md,
+    # "Stepping"). A stepping scenario always records it (to_dict): files without it meant "capture"
+    step_trigger: str = "qp"
     # not in W: a human nervous system (biped.control.neuromotor; docs/validate.md). The preset
     # fills feedback_delay_s, torque_rate_limit_n_m_s, activation_time_s, torque_limits and the
     # four gains when they are not given; "ideal" is W's controller
@@ -288,7 +289,8 @@ class Scenario:
         for f in dataclasses.fields(self):
             v = getattr(self, f.name)
             qp_key = f.name in _WRITTEN_FOR_THE_QP and self.distribution == "qp"  # written at any value
-            if f.name in _OMITTED_AT_DEFAULT and v == f.default and not qp_key:
+            step_key = f.name == "step_trigger" and self.stepping  # written at any value
+            if f.name in _OMITTED_AT_DEFAULT and v == f.default and not (qp_key or step_key):
                 continue  # a key added later: its default leaves old files (and W's outputs) as they were
             out[f.name] = list(v) if isinstance(v, tuple) else v
         return out
@@ -382,7 +384,8 @@ _STRINGS = {
 
 
 #: Keys :meth:`Scenario.to_dict` leaves out at their default value, so that a scenario without
-#: them writes the same summary.json / sweep identity as before they existed.
+#: them writes the same summary.json / sweep identity as before they existed. (``step_trigger``
+#: only without stepping: its default changed, so a stepping scenario records it.)
 _OMITTED_AT_DEFAULT = frozenset(
     {
         "early_stop",
@@ -405,13 +408,16 @@ _WRITTEN_FOR_THE_QP = {"qp_floor_friction": False}
 
 def stored_values(values: dict) -> dict:
     """``values``, a scenario's :meth:`Scenario.to_dict` as a file stored it (a sweep's Parquet
-    metadata, its parts' manifest), with the QP's keys it lacks at their old default: a QP sweep
-    stored without ``qp_floor_friction`` ran with the sole's pyramid and is read so (a rerun with
+    metadata, its parts' manifest), with the keys it lacks at their old default: a QP sweep
+    stored without ``qp_floor_friction`` ran with the sole's pyramid, a stepping one without
+    ``step_trigger`` with ``"capture"``, and is read so (a rerun with
     today's default is then refused as a different sweep, never resumed or merged into it)."""
     out = dict(values)
     if out.get("distribution") == "qp":
         for key, old_default in _WRITTEN_FOR_THE_QP.items():
             out.setdefault(key, old_default)
+    if out.get("stepping"):
+        out.setdefault("step_trigger", "capture")  # the default until 2026-11-27
     return out
 
 
