@@ -26,7 +26,9 @@ the standing pose, W's 0.168 m):
   its reach; G1, crouched only off the singularity, beyond 0.944 L), and while a foot swings the
   stance hip is lowered at least to W's standing crouch, ``D - (D_W / L_W) L`` (W: D_W / L_W =
   0.78; G1 stands at 0.99 L: with only s x 0.08 m its swing foot, pulled back within the reach,
-  hung 2 cm over the floor past the swing time while the capture point ran sideways);
+  hung 2 cm over the floor past the swing time while the capture point ran sideways), and so is
+  the set point after the step (T1 stands at 0.96 L: with only s x 0.08 m, holding the height
+  with its trunk pitched forward straightened the front leg into its singularity);
 - lengths across the body by w: min_width, max_width of both limits, lateral_margin_m,
   lateral_offset_m, side_margin_m; a limit's max_step keeps its split, ``sqrt((s f)^2 + (w B_W)^2)`` with ``f =
   sqrt(max_step^2 - B_W^2)`` W's forward step at its stance width;
@@ -36,13 +38,20 @@ the standing pose, W's 0.168 m):
 
 A biped of W's size (s = w = 1, D = D_W) gets W's numbers.
 
-**Robots' option** (off, ``ROBOT_ANKLE_POLYGON``; docs/robots.md, "Stepping on a robot": T1's
-envelope from behind 87 -> 90 %, but 45/315 deg 67 -> 47 %):
-the trigger judges the capture point against each sole cut along its length to the CoPs its
-ankle's torque limit holds with the whole weight on it (``SteppingConfig.ankle_limited_polygon``):
-T1's ankle pitch (20 N m) holds its 31.6 kg only 6.5 cm ahead of its axis, short of its toes, so
-after its first step T1 stood with the capture point inside the geometric sole, its front ankle
-at the limit and its trunk pitching, and stepped again only when it had fallen too far.
+**Robots' rules** (docs/robots.md, "Stepping on a robot"; W's stepping keeps both off):
+
+- ``ROBOT_ANKLE_POLYGON``: the trigger judges the capture point against the CoPs the ankles'
+  torque limits hold (``SteppingConfig.ankle_limited_polygon``), the region the QP with those
+  limits can give: each sole cut along its length to within ``tau_max / (w m g)`` of its 5th
+  hinge's axis when it carries the share w of the weight, both feet's shares summing to 1. T1's
+  ankle pitch (20 N m) holds its 31.6 kg only 6.5 cm ahead of its axis with all the weight on
+  one foot, short of its toes: after its first step it stood with the capture point inside the
+  geometric sole, its front ankle at the limit and its trunk pitching, and stepped again too
+  late. With both feet side by side the two ankles hold 2 x 6.5 cm (the first slice cut each
+  sole to the whole weight's reach there too, and T1's diagonal steps started early and fell).
+- ``ROBOT_SWING_REACTION``: the stance leg's desired wrench takes the swing leg's reaction
+  (``SteppingConfig.swing_reaction``) of the swing torques the actuators give (clipped to the
+  limits as the plant gets them): T1's swing hip runs at its limit in the first 0.1 s.
 """
 
 from __future__ import annotations
@@ -67,6 +76,7 @@ from biped.spatial import axis_angle_quat, quat_mul, quat_to_rot, transform
 
 __all__ = [
     "ROBOT_ANKLE_POLYGON",
+    "ROBOT_SWING_REACTION",
     "FootContacts",
     "robot_stepper",
     "robot_stepping_body",
@@ -77,8 +87,12 @@ __all__ = [
 
 
 #: A robot's step trigger judges the capture point against the CoPs its ankles' torque limits can
-#: reach (``SteppingConfig.ankle_limited_polygon``; module docstring, "Robots' rules").
-ROBOT_ANKLE_POLYGON = False  # off: measured, T1's diagonals lose more than behind gains
+#: hold, the weight shared between the feet in any way (``SteppingConfig.ankle_limited_polygon``;
+#: module docstring, "Robots' rules").
+ROBOT_ANKLE_POLYGON = True
+#: A robot's stance leg takes the swing leg's reaction (of the torques its actuators give) into its
+#: desired wrench (``SteppingConfig.swing_reaction``; module docstring, "Robots' rules").
+ROBOT_SWING_REACTION = True
 
 
 @functools.cache
@@ -131,7 +145,13 @@ def scaled_stepping(
         apex_m=s * config.apex_m,
         reach_m=max(s * config.reach_m, stance_reach_m),
         swing_height_drop_m=max(s * config.swing_height_drop_m, crouch),
-        post_step_height_drop_m=s * config.post_step_height_drop_m,
+        post_step_height_drop_m=max(s * config.post_step_height_drop_m, crouch),
+        # at rest the drop of the rule (s x W's), below it the crouch only while the COM moves
+        post_step_rest_drop_m=s * config.post_step_height_drop_m
+        if crouch > s * config.post_step_height_drop_m
+        else None
+        if config.post_step_rest_drop_m is None
+        else s * config.post_step_rest_drop_m,
         lateral_margin_m=w * config.lateral_margin_m,
         lateral_offset_m=w * config.lateral_offset_m,
         side_margin_m=w * config.side_margin_m,
@@ -226,10 +246,13 @@ def robot_stepper(
     distribution: str = "qp",
     torque_limits: str = "model",
     big_base: float | None = None,
+    floor_friction: bool = False,
 ) -> SteppingController:
     """The stepping controller on the robot: W's controller and QP with the robot's soles and
     ``torque_limits`` ("model": the joints' ``actuatorfrcrange``), ``stepping`` scaled
-    (:func:`scaled_stepping`), its set point ``target`` at the standing pose ``qpos``."""
+    (:func:`scaled_stepping`), its set point ``target`` at the standing pose ``qpos``;
+    ``floor_friction``: the feet-in-place QP's (before the first step) friction pyramid on the
+    floor's axes (W's ``qp_floor_friction``; the stepping QP's is ``stepping.floor_friction``)."""
     body = robot_stepping_body(desc, qpos, target)
     if big_base is not None:
         body = replace(body, big_base=big_base)
@@ -244,7 +267,7 @@ def robot_stepper(
         target=target,
         torque_limits=lim,
         distribution=distribution,
-        qp_weights=QPWeights() if distribution == "qp" else None,
+        qp_weights=QPWeights(floor_friction=floor_friction) if distribution == "qp" else None,
         model_path=str(desc.path),
     )
     stand = max(
@@ -253,6 +276,8 @@ def robot_stepper(
     scaled = scaled_stepping(stepping, body.leg_length_m, _hip_width(d, body.feet), stand)
     if ROBOT_ANKLE_POLYGON and lim is not None:
         scaled = replace(scaled, ankle_limited_polygon=True)
+    if ROBOT_SWING_REACTION:
+        scaled = replace(scaled, swing_reaction=True)
     from biped.control.setpoint import Gains
 
     config = replace(config, gains=Gains())  # the robots' gains (W's, as robot_controller takes)
