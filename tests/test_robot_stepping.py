@@ -131,8 +131,7 @@ def test_g1_push_from_behind_past_its_feet_in_place_limit_is_recovered_with_a_st
     block = Block(p0, v0, mass)
     feet = robot_push(desc, 3.0, block=block, early_stop=True)
     assert feet.fell and not feet.steps
-    # 4 s: after its step G1 rises from the post-step crouch as its COM slows (at rest at ~3.1 s)
-    step = robot_push(desc, 4.0, block=block, early_stop=True, stepping=SteppingConfig.for_trigger("capture"))
+    step = robot_push(desc, 3.0, block=block, early_stop=True, stepping=SteppingConfig.for_trigger("capture"))
     assert not step.fell and step.stop_reason == "at_rest" and step.final_offset_m < 0.01
     assert len(step.steps) == 1
     s = step.steps[0]
@@ -281,3 +280,43 @@ def test_t1_push_from_behind_above_its_old_stepping_limit_is_recovered():
     assert abs(math.degrees(math.asin(2 * (w * y - z * x)))) < 3.0
     J, _ = ballistic_impulse(step.t, step.block_velocity, block.mass_kg)
     assert math.hypot(J[0], J[1]) > float(robot_hof_bound(desc, [0.0]).j_max_n_s[0])
+
+
+def test_only_an_ankle_short_of_its_sole_gets_the_crouch_and_the_reaction():
+    """The robots' ankle-limited rules: T1's ankle pitch (20 N m, from the file) holds its weight
+    5.8 cm short of its toes (MuJoCo's hinge anchor, the sole's box), more than the trigger's
+    re-arm margin: its stepping keeps the swing's crouch after a step (rising at rest to the
+    rule's s x 8 cm) and feeds the swing's reaction; G1's 50 N m ankle holds past its toes and
+    heels: W's scaled parameters, unchanged."""
+    from biped.control import capture as cp
+    from biped.control.setpoint import Target
+    from biped.models.robot import describe
+    from biped.sim.robot import robot_controller, standing_qpos
+    from biped.sim.robot_stepping import robot_stepper
+    from biped.spatial import rot_to_quat
+
+    for name, limited in (("t1", True), ("g1", False)):
+        desc = describe(name)
+        ctrl = robot_controller(desc, "statics", "none")
+        q0 = standing_qpos(desc, ctrl)
+        g = ctrl.link_poses(q0)[0]
+        target = Target(com=tuple(g[:3, 3]), quat=tuple(rot_to_quat(np.ascontiguousarray(g[:3, :3]))))
+        st = robot_stepper(desc, q0, target, SteppingConfig.for_trigger("capture"))
+        mujoco.mj_forward(st.model, _set(st.data, q0))
+        f = mujoco.MjModel.from_xml_path(str(desc.path))
+        weight = float(np.sum(f.body_mass)) * 9.81
+        leg = st.body.leg_joints[0]
+        j = f.joint(leg[4]).id
+        reach = min(-f.jnt_actfrcrange[j, 0], f.jnt_actfrcrange[j, 1]) / weight
+        toe = cp.sole_corners(*st._sole_rect(1, cut=False))  # the right sole, geometric
+        hinge = st.data.xanchor[st.model.joint(st.body.leg_joints[1][4]).id]
+        short = max(toe[:, 0].max() - hinge[0], hinge[0] - toe[:, 0].min()) - reach
+        assert (short > st.stepping.rearm_margin_m) == limited, (name, short)
+        s = st.stepping
+        assert s.swing_reaction == limited and (s.post_step_rest_drop_m is not None) == limited
+        if limited:
+            assert short == pytest.approx(0.058, abs=1e-3)  # docs/robots.md
+            assert s.post_step_height_drop_m == pytest.approx(s.swing_height_drop_m)
+            assert s.post_step_rest_drop_m == pytest.approx(s.rearm_margin_m / 0.02 * 0.08)  # s x 8 cm
+        else:
+            assert s.post_step_height_drop_m == pytest.approx(s.rearm_margin_m / 0.02 * 0.08)

@@ -49,9 +49,17 @@ A biped of W's size (s = w = 1, D = D_W) gets W's numbers.
   geometric sole, its front ankle at the limit and its trunk pitching, and stepped again too
   late. With both feet side by side the two ankles hold 2 x 6.5 cm (the first slice cut each
   sole to the whole weight's reach there too, and T1's diagonal steps started early and fell).
-- ``ROBOT_SWING_REACTION``: the stance leg's desired wrench takes the swing leg's reaction
-  (``SteppingConfig.swing_reaction``) of the swing torques the actuators give (clipped to the
-  limits as the plant gets them): T1's swing hip runs at its limit in the first 0.1 s.
+- ``ROBOT_ANKLE_LIMITED_RULES``: a robot whose ankle holds the CoP, with the whole weight on the
+  foot, more than the trigger's re-arm margin short of its sole's toe or heel
+  (:func:`ankle_limited`: T1, 5.8 cm short of its toes; G1, Berkeley Humanoid and Apollo reach
+  theirs, Apollo's toe within 4 mm) falls back on the hip strategy after a step, its trunk
+  pitching: it keeps the swing's crouch after the step while its COM moves, rising to the rule's
+  drop as the COM comes to rest (``SteppingConfig.post_step_rest_drop_m``; T1 stands at 0.96 of
+  its leg, and holding the height with its trunk pitched straightened its front leg into the
+  knee's singularity), and its stance takes the swing leg's reaction of the torques the actuators
+  give (``SteppingConfig.swing_reaction``, clipped to the limits as the plant gets them: T1's swing
+  torques run at 50-80 % of its limits, median per step). On G1 and Apollo the crouch and the
+  reaction lowered envelope cells (G1 45 deg 63 -> 62 %, Apollo from behind 96 -> 91 %).
 """
 
 from __future__ import annotations
@@ -76,7 +84,8 @@ from biped.spatial import axis_angle_quat, quat_mul, quat_to_rot, transform
 
 __all__ = [
     "ROBOT_ANKLE_POLYGON",
-    "ROBOT_SWING_REACTION",
+    "ROBOT_ANKLE_LIMITED_RULES",
+    "ankle_limited",
     "FootContacts",
     "robot_stepper",
     "robot_stepping_body",
@@ -90,9 +99,29 @@ __all__ = [
 #: hold, the weight shared between the feet in any way (``SteppingConfig.ankle_limited_polygon``;
 #: module docstring, "Robots' rules").
 ROBOT_ANKLE_POLYGON = True
-#: A robot's stance leg takes the swing leg's reaction (of the torques its actuators give) into its
-#: desired wrench (``SteppingConfig.swing_reaction``; module docstring, "Robots' rules").
-ROBOT_SWING_REACTION = True
+#: A robot whose ankles cannot hold its CoP at its toes (:func:`ankle_limited`) keeps the crouch
+#: after a step while its COM moves and feeds the swing leg's reaction (of the torques its
+#: actuators give) to its stance (module docstring, "Robots' rules").
+ROBOT_ANKLE_LIMITED_RULES = True
+
+
+def ankle_limited(body: SteppingBody, d: mujoco.MjData, lim, joint_names, tolerance_m: float) -> bool:
+    """Whether a foot's ankle (its 5th hinge's torque limit, the whole weight on the foot) holds
+    the CoP more than ``tolerance_m`` short of where the sole reaches ahead of or behind the
+    hinge's axis, at the pose of ``d`` (MuJoCo's data of ``body.model``, after kinematics);
+    ``lim`` the legs' torque limits in ``joint_names`` order."""
+    m = body.model
+    weight = float(np.sum(m.body_mass)) * float(-m.opt.gravity[2])
+    for k, leg in enumerate(body.leg_joints):
+        j = list(joint_names).index(leg[4])
+        reach = min(-float(lim.lower[j]), float(lim.upper[j])) / weight
+        R = d.xmat[body.feet[k]].reshape(3, 3)
+        axes = R if body.sole_axes is None else R @ body.sole_axes[k]
+        centre, hl = d.xpos[body.feet[k]] + R @ body.soles[k][0], body.soles[k][1]
+        ax = float(axes[:, 0] @ (d.xanchor[m.joint(leg[4]).id] - centre))  # along the sole
+        if reach < max(hl - ax, hl + ax) - tolerance_m:
+            return True
+    return False
 
 
 @functools.cache
@@ -145,11 +174,8 @@ def scaled_stepping(
         apex_m=s * config.apex_m,
         reach_m=max(s * config.reach_m, stance_reach_m),
         swing_height_drop_m=max(s * config.swing_height_drop_m, crouch),
-        post_step_height_drop_m=max(s * config.post_step_height_drop_m, crouch),
-        # at rest the drop of the rule (s x W's), below it the crouch only while the COM moves
-        post_step_rest_drop_m=s * config.post_step_height_drop_m
-        if crouch > s * config.post_step_height_drop_m
-        else None
+        post_step_height_drop_m=s * config.post_step_height_drop_m,
+        post_step_rest_drop_m=None
         if config.post_step_rest_drop_m is None
         else s * config.post_step_rest_drop_m,
         lateral_margin_m=w * config.lateral_margin_m,
@@ -276,8 +302,19 @@ def robot_stepper(
     scaled = scaled_stepping(stepping, body.leg_length_m, _hip_width(d, body.feet), stand)
     if ROBOT_ANKLE_POLYGON and lim is not None:
         scaled = replace(scaled, ankle_limited_polygon=True)
-    if ROBOT_SWING_REACTION:
-        scaled = replace(scaled, swing_reaction=True)
+    if (
+        ROBOT_ANKLE_LIMITED_RULES
+        and lim is not None
+        and ankle_limited(body, d, lim, tree.joint_names, scaled.rearm_margin_m)
+    ):
+        # the ankles, not the soles, bound the CoP: the crouch after a step while the COM moves
+        # (back to the rule's drop at rest) and the swing leg's reaction (module docstring)
+        scaled = replace(
+            scaled,
+            post_step_height_drop_m=max(scaled.post_step_height_drop_m, scaled.swing_height_drop_m),
+            post_step_rest_drop_m=scaled.post_step_height_drop_m,
+            swing_reaction=True,
+        )
     from biped.control.setpoint import Gains
 
     config = replace(config, gains=Gains())  # the robots' gains (W's, as robot_controller takes)
