@@ -159,13 +159,7 @@ def _t1_block(speed):
     return desc, Block(p0, v0, mass)
 
 
-def test_t1_trigger_polygon_is_cut_to_what_its_ankles_hold(monkeypatch):
-    """T1 standing: the trigger's polygon with ``ankle_limited_polygon`` reaches, along the soles,
-    exactly ``tau_max / (m g)`` beyond the ankle pitch hinges' axes (MuJoCo's joint anchors, the
-    limits and mass read here from the file), short of the toes, and lies inside the geometric
-    polygon."""
-    import biped.sim.robot_stepping as rs
-    from biped.control import capture as cp
+def _t1_stepper():
     from biped.control.setpoint import Target
     from biped.models.robot import describe
     from biped.sim.robot import robot_controller, standing_qpos
@@ -177,47 +171,152 @@ def test_t1_trigger_polygon_is_cut_to_what_its_ankles_hold(monkeypatch):
     q0 = standing_qpos(desc, ctrl)
     g = ctrl.link_poses(q0)[0]
     target = Target(com=tuple(g[:3, 3]), quat=tuple(rot_to_quat(np.ascontiguousarray(g[:3, :3]))))
-    monkeypatch.setattr(rs, "ROBOT_ANKLE_POLYGON", True)
     st = robot_stepper(desc, q0, target, SteppingConfig.for_trigger("capture"))
-    assert st.stepping.ankle_limited_polygon
+    mujoco.mj_forward(st.model, _set(st.data, q0))
+    return desc, st
+
+
+def _set(d, q):
+    d.qpos[:] = q
+    return d
+
+
+def _lp_support(st, direction, weight):
+    """max of ``direction . p`` over the total CoPs p the two soles can hold with the ankles'
+    (5th hinges') torque limits, by scipy's LP: per foot its load share w_i >= 0 (sum 1) and
+    y_i = w_i p_i, p_i in the sole's rectangle, |w_i (p_i - axis_i) . u_i| <= tau_i / (m g)."""
+    from scipy.optimize import linprog
+
     m, d = st.model, st.data
-    d.qpos[:] = q0
-    mujoco.mj_forward(m, d)
-    cut = st._polygon((True, True))
-    full = st._polygon((True, True), cut=False)
-    f = mujoco.MjModel.from_xml_path(str(desc.path))
-    weight = float(np.sum(f.body_mass)) * 9.81
-    fronts = []
-    for leg in st.body.leg_joints:
+    f = mujoco.MjModel.from_xml_path(str(st.config.model_path))
+    A, b = [], []
+    for i, leg in enumerate(st.body.leg_joints):
+        c, yaw = st._sole_pose(i)
+        u = np.array([math.cos(yaw), math.sin(yaw)])
+        v = np.array([-u[1], u[0]])
+        hl, hw = st._sole[i][1], st._sole[i][2]
         j = f.joint(leg[4]).id
-        assert f.jnt_actfrclimited[j]
-        tau = min(-f.jnt_actfrcrange[j, 0], f.jnt_actfrcrange[j, 1])
-        fronts.append(d.xanchor[m.joint(leg[4]).id][0] + tau / weight)
-    assert cut[:, 0].max() == pytest.approx(max(fronts), abs=1e-6)
-    assert cut[:, 0].max() < full[:, 0].max() - 0.02  # T1's toes lie beyond what its ankles hold
-    assert all(cp.signed_distance(full, p) <= 1e-9 for p in cut)
+        r = min(-f.jnt_actfrcrange[j, 0], f.jnt_actfrcrange[j, 1]) / weight
+        a = d.xanchor[m.joint(leg[4]).id][:2]
+        for axis, centre, half, cap in ((u, c[:2], hl, None), (v, c[:2], hw, None), (u, a, 0.0, r)):
+            for sgn in (1.0, -1.0):  # sgn axis . (y - w centre) <= w half (+ cap)
+                row = np.zeros(6)
+                row[3 * i : 3 * i + 2] = sgn * axis
+                row[3 * i + 2] = -sgn * float(axis @ centre) - half
+                A.append(row)
+                b.append(0.0 if cap is None else cap)
+    cost = np.zeros(6)
+    cost[[0, 1, 3, 4]] = -np.tile(direction, 2)
+    eq = np.zeros((1, 6))
+    eq[0, [2, 5]] = 1.0
+    res = linprog(
+        cost,
+        A_ub=np.array(A),
+        b_ub=b,
+        A_eq=eq,
+        b_eq=[1.0],
+        bounds=[(None, None), (None, None), (0, None)] * 2,
+    )
+    assert res.status == 0
+    return -res.fun
 
 
-def test_t1_push_from_behind_above_its_old_stepping_limit_is_recovered(monkeypatch):
-    """W's block scaled to T1, from behind at 12.25 m/s (T1's stepping limit was 11.75 m/s,
-    docs/robots.md): with the trigger's polygon cut to what T1's ankles hold (the option
-    ``ROBOT_ANKLE_POLYGON``, off by default: its 8-direction cost, docs/robots.md) it steps early and
-    is at rest over the moved set point, within its limits, its trunk upright; with the
-    geometric soles (the old trigger: after its step T1 stood on its front ankle's limit, the
-    capture point inside the sole, its trunk pitching on, and stepped again too late) the same
-    push falls."""
-    import biped.sim.robot_stepping as rs
+def test_t1_ankle_limited_support_region_is_the_lps_exactly():
+    """T1's trigger polygon with both feet down is the set of total CoPs the two soles can hold
+    when each ankle's (5th hinge's) torque limit bounds its sole's CoP along its length, the
+    weight shared in any way: its support function equals scipy's LP of that set (closed form
+    of neither) in 24 directions, standing and with the left foot 0.3 m ahead (its body and hinge
+    moved in MuJoCo's data), to 1e-9 m. Standing, both ankles together hold 2 tau / (m g) ahead
+    of the hinges, past T1's toes: the front edge is the soles'; staggered, tau / (m g) ahead of
+    the front foot's hinge (all the weight on it), short of its toes."""
+    desc, st = _t1_stepper()
+    assert st.stepping.ankle_limited_polygon  # robots: on
+    m, d = st.model, st.data
+    weight = float(np.sum(m.body_mass)) * 9.81
+    f = mujoco.MjModel.from_xml_path(str(desc.path))
+    leg = st.body.leg_joints[0]
+    tau = min(-f.jnt_actfrcrange[f.joint(leg[4]).id, 0], f.jnt_actfrcrange[f.joint(leg[4]).id, 1])
+    assert tau == pytest.approx(20.0)  # T1's ankle pitch (docs/robots.md)
+    dirs = [np.array([math.cos(a), math.sin(a)]) for a in np.linspace(0, 2 * math.pi, 24, endpoint=False)]
+    for stagger in (0.0, 0.3):
+        if stagger:
+            d.xpos[st._foot[0]][0] += stagger
+            d.xanchor[:, 0][[m.joint(n).id for n in leg]] += stagger
+        poly = st._polygon((True, True))
+        for u in dirs:
+            assert float(np.max(poly @ u)) == pytest.approx(_lp_support(st, u, weight), abs=1e-9)
+        hinge = max(d.xanchor[m.joint(leg[4]).id][0] for leg in st.body.leg_joints)
+        front = poly[:, 0].max()
+        full = st._polygon((True, True), cut=False)[:, 0].max()
+        if not stagger:  # both ankles push: 2 tau / (m g) ahead of the hinges, past the toes
+            assert hinge + 2 * tau / weight > full and front == pytest.approx(full, abs=1e-9)
+        else:  # all the weight on the front foot: tau / (m g) ahead of its hinge, short of its toes
+            assert front == pytest.approx(hinge + tau / weight, abs=1e-9) and front < full - 0.005
+
+
+def test_t1_push_from_behind_above_its_old_stepping_limit_is_recovered():
+    """W's block scaled to T1, from behind at 14.0 m/s (T1's stepping limit was 11.75 m/s, 87 %
+    of its J_max, docs/robots.md): with the robots' stepping (the ankle-limited support region,
+    the crouch after the step, the swing's reaction within the limits) it is at rest over the
+    moved set point, within its limits, its trunk upright; its block's impulse is above T1's
+    J_max from behind (11.0 N s)."""
+    from biped.analysis.robot import robot_hof_bound
     from biped.sim.robot import robot_push
+    from biped.sim.sweep.trial import ballistic_impulse
 
-    desc, block = _t1_block(12.25)
-    config = SteppingConfig.for_trigger("capture")
-    monkeypatch.setattr(rs, "ROBOT_ANKLE_POLYGON", True)  # off by default (docs/robots.md)
-    step = robot_push(desc, 3.0, block=block, early_stop=True, stepping=config, record_qpos=True)
+    desc, block = _t1_block(14.0)
+    step = robot_push(
+        desc,
+        3.0,
+        block=block,
+        early_stop=True,
+        stepping=SteppingConfig.for_trigger("capture"),
+        record_qpos=True,
+    )
     assert not step.fell and step.stop_reason == "at_rest" and step.final_offset_m < 0.01
     assert step.steps[0]["position_m"][0] > 0.2
     assert step.max_torque_fraction <= 1.0 + 1e-9
     w, x, y, z = step.qpos[-1, 3:7]  # the floating body's pitch at rest (MuJoCo's quaternion)
     assert abs(math.degrees(math.asin(2 * (w * y - z * x)))) < 3.0
-    monkeypatch.setattr(rs, "ROBOT_ANKLE_POLYGON", False)
-    off = robot_push(desc, 3.0, block=block, early_stop=True, stepping=config)
-    assert off.fell
+    J, _ = ballistic_impulse(step.t, step.block_velocity, block.mass_kg)
+    assert math.hypot(J[0], J[1]) > float(robot_hof_bound(desc, [0.0]).j_max_n_s[0])
+
+
+def test_only_an_ankle_short_of_its_sole_gets_the_crouch_and_the_reaction():
+    """The robots' ankle-limited rules: T1's ankle pitch (20 N m, from the file) holds its weight
+    5.8 cm short of its toes (MuJoCo's hinge anchor, the sole's box), more than the trigger's
+    re-arm margin: its stepping keeps the swing's crouch after a step (rising at rest to the
+    rule's s x 8 cm) and feeds the swing's reaction; G1's 50 N m ankle holds past its toes and
+    heels: W's scaled parameters, unchanged."""
+    from biped.control import capture as cp
+    from biped.control.setpoint import Target
+    from biped.models.robot import describe
+    from biped.sim.robot import robot_controller, standing_qpos
+    from biped.sim.robot_stepping import robot_stepper
+    from biped.spatial import rot_to_quat
+
+    for name, limited in (("t1", True), ("g1", False)):
+        desc = describe(name)
+        ctrl = robot_controller(desc, "statics", "none")
+        q0 = standing_qpos(desc, ctrl)
+        g = ctrl.link_poses(q0)[0]
+        target = Target(com=tuple(g[:3, 3]), quat=tuple(rot_to_quat(np.ascontiguousarray(g[:3, :3]))))
+        st = robot_stepper(desc, q0, target, SteppingConfig.for_trigger("capture"))
+        mujoco.mj_forward(st.model, _set(st.data, q0))
+        f = mujoco.MjModel.from_xml_path(str(desc.path))
+        weight = float(np.sum(f.body_mass)) * 9.81
+        leg = st.body.leg_joints[0]
+        j = f.joint(leg[4]).id
+        reach = min(-f.jnt_actfrcrange[j, 0], f.jnt_actfrcrange[j, 1]) / weight
+        toe = cp.sole_corners(*st._sole_rect(1, cut=False))  # the right sole, geometric
+        hinge = st.data.xanchor[st.model.joint(st.body.leg_joints[1][4]).id]
+        short = max(toe[:, 0].max() - hinge[0], hinge[0] - toe[:, 0].min()) - reach
+        assert (short > st.stepping.rearm_margin_m) == limited, (name, short)
+        s = st.stepping
+        assert s.swing_reaction == limited and (s.post_step_rest_drop_m is not None) == limited
+        if limited:
+            assert short == pytest.approx(0.058, abs=1e-3)  # docs/robots.md
+            assert s.post_step_height_drop_m == pytest.approx(s.swing_height_drop_m)
+            assert s.post_step_rest_drop_m == pytest.approx(s.rearm_margin_m / 0.02 * 0.08)  # s x 8 cm
+        else:
+            assert s.post_step_height_drop_m == pytest.approx(s.rearm_margin_m / 0.02 * 0.08)

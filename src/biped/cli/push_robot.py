@@ -31,9 +31,11 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
     from biped.sim.scenario import Scenario
 
     pert = getattr(args, "perturbation", None) or "block"
+    values = _set_values(args)
     unsupported = {
         "--scenario": args.scenario,
-        "--set": (args.set or None) if pert != "release" else None,  # release: its keys only (below)
+        # the QP's friction pyramid (qp_floor_friction) on every robot run; release: its keys (below)
+        "--set": None if pert == "release" or set(values) <= {"qp_floor_friction"} else args.set,
         "--controller": args.controller,
         "--physics": args.physics,
         "--seed": args.seed,
@@ -50,6 +52,7 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
         )
     release = _release(args) if pert == "release" else None
     distribution = args.distribution or "qp"
+    floor_friction = bool(Scenario().with_overrides(**_floor_key(values)).qp_floor_friction)
     seconds = args.duration if args.duration is not None else 3.0
     if not (0 < seconds <= 60):
         raise ScenarioError(f"--duration must be in (0, 60] s, got {seconds}")
@@ -113,6 +116,7 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
         record_qpos=replay or video,
         stepping=stepping,
         release=release,
+        qp_floor_friction=floor_friction,
     )
     print(
         f"biped push: simulated {run.t[-1] if len(run.t) else 0.0:.2f} s; writing {out} ...",
@@ -159,17 +163,29 @@ def _release(args):
     left, +y)."""
     from biped.errors import ScenarioError
     from biped.sim.robot_release import ReleaseLean
-    from biped.sim.scenario import Scenario, parse_assignment
+    from biped.sim.scenario import Scenario
 
     keys = ("release_lean_deg", "release_direction_deg", "release_time_s")
-    values = dict(parse_assignment(a) for a in args.set or ())
+    values = {k: v for k, v in _set_values(args).items() if k != "qp_floor_friction"}
     other = sorted(set(values) - set(keys))
     if other:
         raise ScenarioError(
             f"--model {args.model}: --set {', '.join(other)} not supported on robots; valid with "
-            f"--perturbation release: {', '.join(keys)}"
+            f"--perturbation release: {', '.join(keys)} (and qp_floor_friction)"
         )
     s = Scenario().with_overrides(perturbation="release", **values)
     return ReleaseLean(
         float(s.release_lean_deg), float(s.release_direction_deg) % 360.0, float(s.release_time_s)
     )
+
+
+def _set_values(args) -> dict:
+    """``--set KEY=VALUE`` as a dict (W's parsing)."""
+    from biped.sim.scenario import parse_assignment
+
+    return dict(parse_assignment(a) for a in args.set or ())
+
+
+def _floor_key(values: dict) -> dict:
+    """The ``qp_floor_friction`` of ``--set`` (W's key and check), if given."""
+    return {k: v for k, v in values.items() if k == "qp_floor_friction"}

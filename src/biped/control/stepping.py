@@ -142,6 +142,8 @@ class SteppingController(SwingPhase):
         self.limits = None
         if config.torque_limits is not None and not config.torque_limits.unlimited:
             self.limits = config.torque_limits.reorder(self.joint_names)
+            lim = config.torque_limits.reorder(names)  # in the controller's order
+            self._ctrl_limits = (lim.lower, lim.upper)
         m = self.model
         self.body = body = body if body is not None else w_body(m, self.ctrl.tree)
         self._foot = list(body.feet)
@@ -255,30 +257,62 @@ class SteppingController(SwingPhase):
             out.append((int(self.model.joint(leg[4]).id), tau / weight))
         return out
 
-    def _sole_rect(self, i: int, cut: bool = True):
+    def _sole_rect(self, i: int, cut: bool = True, share: float = 1.0):
         """Foot ``i``'s sole as (centre_xy, yaw, half_length, half_width); with
         ``ankle_limited_polygon`` (and ``cut``) cut along its length to the CoPs its ankle's
-        limit holds (across it the sole's own width: measured, cutting it too made T1's
+        limit holds carrying the share ``share`` of the weight: within ``r / share`` of the 5th
+        hinge's axis (across it the sole's own width: measured, cutting it too made T1's
         diagonal steps start early and fail)."""
         c, yaw = self._sole_pose(i)
         hl, hw = self._sole[i][1], self._sole[i][2]
         if self._ankle_reach is None or not cut:
             return c[:2], yaw, hl, hw
-        j5, rx = self._ankle_reach[i]
-        u = np.array([math.cos(yaw), math.sin(yaw)])
-        ax = float(u @ (self.data.xanchor[j5][:2] - c[:2]))  # the hinge's axis along the sole
+        ax, rx = self._ankle_axis(i, c, yaw)
+        rx = rx / share if share > 1e-12 else math.inf
         x0, x1 = max(-hl, ax - rx), min(hl, ax + rx)
+        u = np.array([math.cos(yaw), math.sin(yaw)])
         # at least 1 mm each way (an axis off the sole: a thin strip at its nearest edge)
         return c[:2] + 0.5 * (x0 + x1) * u, yaw, max(0.5 * (x1 - x0), 1e-3), hw
 
+    def _ankle_axis(self, i: int, c, yaw: float) -> tuple[float, float]:
+        """(where foot ``i``'s 5th hinge's axis crosses its sole's length [m, from the sole
+        centre ``c``], the reach ``r`` its limit holds with the whole weight [m])."""
+        assert self._ankle_reach is not None  # ankle_limited_polygon
+        j5, rx = self._ankle_reach[i]
+        u = np.array([math.cos(yaw), math.sin(yaw)])
+        return float(u @ (self.data.xanchor[j5][:2] - c[:2])), rx
+
     def _polygon(self, feet, cut: bool = True) -> np.ndarray:
-        soles = []
-        for i in (0, 1):  # a foot counts while it touches or its sole is within 2 cm of the floor
-            if feet[i] or self._sole_pose(i)[0][2] < 0.02:
-                soles.append(self._sole_rect(i, cut))
-        if not soles:
-            soles = [self._sole_rect(i, cut) for i in (0, 1)]
-        return cp.support_polygon(soles)
+        idx = [i for i in (0, 1) if feet[i] or self._sole_pose(i)[0][2] < 0.02]
+        # a foot counts while it touches or its sole is within 2 cm of the floor
+        if not idx:
+            idx = [0, 1]
+        if self._ankle_reach is not None and cut and len(idx) == 2:
+            return self._shared_polygon()
+        return cp.support_polygon([self._sole_rect(i, cut) for i in idx])
+
+    def _shared_polygon(self) -> np.ndarray:
+        """Both feet down, ``ankle_limited_polygon``: the total CoPs the soles hold when each
+        ankle's limit bounds its own CoP along its sole and the weight is shared in any way, a
+        share w on the left foot, 1 - w on the right: the hull over w of ``w A(w) + (1 - w)
+        B(1 - w)``, each sole cut to its ankle's reach over its share (:meth:`_sole_rect`). Each
+        term's support function is piecewise linear in w, bending where a cut meets the sole's
+        end (``w = r / (hl -/+ ax)``), so the hull over those shares and 0, 1 is the exact set
+        (the linear program of the CoPs, tests/test_robot_stepping.py)."""
+        ws = {0.0, 1.0}
+        for i in (0, 1):
+            c, yaw = self._sole_pose(i)
+            ax, rx = self._ankle_axis(i, c, yaw)
+            hl = self._sole[i][1]
+            for end in (hl - ax, hl + ax):
+                if end > 0 and 0.0 < rx / end < 1.0:
+                    ws.add(rx / end if i == 0 else 1.0 - rx / end)
+        pts = []
+        for w in sorted(ws):
+            a = cp.sole_corners(*self._sole_rect(0, True, w))
+            b = cp.sole_corners(*self._sole_rect(1, True, 1.0 - w))
+            pts.append((w * a[:, None, :] + (1.0 - w) * b[None, :, :]).reshape(-1, 2))
+        return cp.convex_hull(np.vstack(pts))
 
     # ------------------------------------------------------------------ the call
     def __call__(self, t: float, qpos: np.ndarray, qvel: np.ndarray, feet) -> np.ndarray:
@@ -337,9 +371,20 @@ class SteppingController(SwingPhase):
             flags = (left, right)  # before the first step: the feet-in-place QP exactly
         else:
             flags = self._flags(left, right)
-        target = self._leg_capped(self.target, (0, 1))
+        target = self._leg_capped(self._resting(self.target, vcom), (0, 1))
         tau = ctrl.torques(qpos, qvel, target=target, gains=self.gains, feet_in_contact=flags)
         return self._out(tau)
+
+    def _resting(self, target: Target, vcom) -> Target:
+        """After a step, with ``post_step_rest_drop_m``: ``target`` raised from the post-step
+        crouch toward the resting drop as the COM's horizontal speed falls below
+        ``settle_speed_m_s`` (linear in the speed; at rest the resting drop)."""
+        s = self.stepping
+        if s.post_step_rest_drop_m is None or not self.steps or self._closing is not None:
+            return target
+        k = 1.0 - min(1.0, float(np.hypot(vcom[0], vcom[1])) / s.settle_speed_m_s)
+        rise = k * max(s.post_step_height_drop_m - s.post_step_rest_drop_m, 0.0)
+        return replace(target, com=(target.com[0], target.com[1], target.com[2] + rise))
 
     def _leg_capped(self, target: Target, legs) -> Target:
         """``target`` no higher than the standing ``legs`` reach (:func:`leg_geometry.leg_capped`)."""

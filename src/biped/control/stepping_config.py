@@ -38,6 +38,10 @@ class SteppingConfig:
     swing_height_drop_m, swing_tilt_deg: while a foot swings the stance leg holds the body this
     much lower than the set point (reach) and upright but for this tilt about -y (the set point's
     forward tilt moves the hips back, away from a forward step).
+    post_step_rest_drop_m: if set, the set point after a step is post_step_height_drop_m below
+    the standing one only while the COM moves at settle_speed_m_s or faster, and rises linearly
+    with the COM's horizontal speed to this drop at rest (robots: the crouch keeps the front
+    leg off its straight knee while the trunk pitches; at rest the standing height's offset).
     span_leg_m, stand_hip_m: if set (``step_reach = "leg"``: the starting pose's hip-to-ankle length
     and the hips' height above the ankles), the two height drops above follow the step instead of
     being fixed: the hips go as low as both legs at ``span_leg_m`` need to span the step (the
@@ -68,11 +72,13 @@ class SteppingConfig:
     swing_friction_scale: if set, single support uses a stepping QP whose pyramid is
     ``friction * swing_friction_scale`` (a margin for what the massless-leg cone does not see).
     ankle_limited_polygon: the trigger's support polygon (and the dwell's and the step's
-        sideways test) is each sole cut along its length to the centres of pressure its ankle's
-        torque limit can hold with the whole weight on it: within ``|tau_max| / (m g)`` of the
-        leg's 5th hinge's axis; needs torque limits (off: W's geometric soles).
+        sideways test) is the set of total centres of pressure the soles hold when each ankle's
+        torque limit bounds its own along its sole: within ``|tau_max| / (w m g)`` of the leg's
+        5th hinge's axis for a foot carrying the share w of the weight (one foot down: w = 1;
+        both: any split); needs torque limits (off: W's geometric soles).
     swing_reaction: add the driven swing leg's reaction (:func:`biped.control.swing.swing_reaction_wrench`)
-    to the stance leg's desired wrench (off: it made the stance foot slide further, measured).
+    of its torques clipped to the limits to the stance leg's desired wrench (off: on W's biped
+    it made the stance foot slide further, measured; robots: on).
     dwell_margin_m, dwell_s: if dwell_s is set, a step also starts once the capture point has
     stayed within dwell_margin_m of the support polygon's edge for dwell_s (the feet hold it
     there only with the CoP at the edge while the body creeps over it).
@@ -137,6 +143,7 @@ class SteppingConfig:
     swing_torque_max_n_m: float = 1000.0
     swing_height_drop_m: float = 0.08
     post_step_height_drop_m: float = 0.08
+    post_step_rest_drop_m: float | None = None
     swing_tilt_deg: float = 0.0
     span_leg_m: float | None = None
     stand_hip_m: float | None = None

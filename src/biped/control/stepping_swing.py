@@ -187,8 +187,12 @@ class SwingPhase:
         target = self._leg_capped(self.body.target(tuple(com), s.swing_tilt_deg), [1 - i])
         target = replace(target, com_acc=(float(acc[0]), float(acc[1]), 0.0))
         tau_swing = self._swing_torques(i, pd, vd, ad)
-        if s.swing_reaction:
-            target = self._with_swing_reaction(i, tau_swing, qpos, qvel, target, flags)
+        if s.swing_reaction:  # the reaction of the torques the actuators give (clipped as _out clips)
+            applied = tau_swing
+            if self.limits is not None:
+                lo, hi = self._ctrl_limits
+                applied = np.clip(tau_swing, lo[self._leg_tau[i]], hi[self._leg_tau[i]])
+            target = self._with_swing_reaction(i, applied, qpos, qvel, target, flags)
         tau = np.array(
             self._ctrl_swing.torques(
                 qpos, qvel, target=target, gains=self._swing_gains, feet_in_contact=flags

@@ -21,6 +21,7 @@ from typing import Any
 import mujoco
 import numpy as np
 
+from biped.control.distribution import QPWeights
 from biped.control.limits import TorqueLimits
 from biped.control.setpoint import Gains, Target
 from biped.control.workspace import WorkspaceController
@@ -303,6 +304,7 @@ def robot_push(
     pull: PullMove | None = None,
     stepping=None,
     release=None,
+    qp_floor_friction: bool = False,
 ) -> RobotRun:
     """Stand the robot for ``seconds`` under W's controller, kicked by ``push_m_s`` of COM
     velocity change at ``push_time_s`` (zero: no push) and/or hit by ``block`` (thrown at t = 0)
@@ -312,8 +314,10 @@ def robot_push(
     ``stepping`` (a :class:`~biped.control.stepping_config.SteppingConfig`): capture-point steps
     (:mod:`biped.sim.robot_stepping`), the run judged against the set point moved with the feet;
     ``release`` (a :class:`~biped.sim.robot_release.ReleaseLean`): W's lean-and-release, the run
-    starting leaned and tethered (:mod:`biped.sim.robot_release`)."""
-    ctrl = robot_controller(desc, distribution, torque_limits, big_base=big_base)
+    starting leaned and tethered (:mod:`biped.sim.robot_release`); ``qp_floor_friction``: the
+    QP's friction pyramid on the floor's axes (W's scenario key, ``QPWeights.floor_friction``)."""
+    qp = {"qp_weights": QPWeights(floor_friction=True)} if qp_floor_friction and distribution == "qp" else {}
+    ctrl = robot_controller(desc, distribution, torque_limits, big_base=big_base, **qp)
     q0 = standing_qpos(desc, ctrl)
     g = ctrl.link_poses(q0)[0]
     ctrl.target = Target(com=tuple(g[:3, 3]), quat=tuple(rot_to_quat(np.ascontiguousarray(g[:3, :3]))))
@@ -361,7 +365,9 @@ def robot_push(
             raise ScenarioError("stepping on a moving platform is not available on robots yet")
         from biped.sim.robot_stepping import FootContacts, robot_stepper, set_point_height
 
-        stepper = robot_stepper(desc, q0, ctrl.target, stepping, distribution, torque_limits, big_base)
+        stepper = robot_stepper(
+            desc, q0, ctrl.target, stepping, distribution, torque_limits, big_base, qp_floor_friction
+        )
         feet = FootContacts(m, desc, FLOOR)
     lean = None
     if release is not None:  # the leaned, tethered start; the set point upright at the release

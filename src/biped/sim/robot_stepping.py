@@ -26,7 +26,9 @@ the standing pose, W's 0.168 m):
   its reach; G1, crouched only off the singularity, beyond 0.944 L), and while a foot swings the
   stance hip is lowered at least to W's standing crouch, ``D - (D_W / L_W) L`` (W: D_W / L_W =
   0.78; G1 stands at 0.99 L: with only s x 0.08 m its swing foot, pulled back within the reach,
-  hung 2 cm over the floor past the swing time while the capture point ran sideways);
+  hung 2 cm over the floor past the swing time while the capture point ran sideways), and so is
+  the set point after the step (T1 stands at 0.96 L: with only s x 0.08 m, holding the height
+  with its trunk pitched forward straightened the front leg into its singularity);
 - lengths across the body by w: min_width, max_width of both limits, lateral_margin_m,
   lateral_offset_m, side_margin_m; a limit's max_step keeps its split, ``sqrt((s f)^2 + (w B_W)^2)`` with ``f =
   sqrt(max_step^2 - B_W^2)`` W's forward step at its stance width;
@@ -36,13 +38,28 @@ the standing pose, W's 0.168 m):
 
 A biped of W's size (s = w = 1, D = D_W) gets W's numbers.
 
-**Robots' option** (off, ``ROBOT_ANKLE_POLYGON``; docs/robots.md, "Stepping on a robot": T1's
-envelope from behind 87 -> 90 %, but 45/315 deg 67 -> 47 %):
-the trigger judges the capture point against each sole cut along its length to the CoPs its
-ankle's torque limit holds with the whole weight on it (``SteppingConfig.ankle_limited_polygon``):
-T1's ankle pitch (20 N m) holds its 31.6 kg only 6.5 cm ahead of its axis, short of its toes, so
-after its first step T1 stood with the capture point inside the geometric sole, its front ankle
-at the limit and its trunk pitching, and stepped again only when it had fallen too far.
+**Robots' rules** (docs/robots.md, "Stepping on a robot"; W's stepping keeps both off):
+
+- ``ROBOT_ANKLE_POLYGON``: the trigger judges the capture point against the CoPs the ankles'
+  torque limits hold (``SteppingConfig.ankle_limited_polygon``), the region the QP with those
+  limits can give: each sole cut along its length to within ``tau_max / (w m g)`` of its 5th
+  hinge's axis when it carries the share w of the weight, both feet's shares summing to 1. T1's
+  ankle pitch (20 N m) holds its 31.6 kg only 6.5 cm ahead of its axis with all the weight on
+  one foot, short of its toes: after its first step it stood with the capture point inside the
+  geometric sole, its front ankle at the limit and its trunk pitching, and stepped again too
+  late. With both feet side by side the two ankles hold 2 x 6.5 cm (the first slice cut each
+  sole to the whole weight's reach there too, and T1's diagonal steps started early and fell).
+- ``ROBOT_ANKLE_LIMITED_RULES``: a robot whose ankle holds the CoP, with the whole weight on the
+  foot, more than the trigger's re-arm margin short of its sole's toe or heel
+  (:func:`ankle_limited`: T1, 5.8 cm short of its toes; G1, Berkeley Humanoid and Apollo reach
+  theirs, Apollo's toe within 4 mm) falls back on the hip strategy after a step, its trunk
+  pitching: it keeps the swing's crouch after the step while its COM moves, rising to the rule's
+  drop as the COM comes to rest (``SteppingConfig.post_step_rest_drop_m``; T1 stands at 0.96 of
+  its leg, and holding the height with its trunk pitched straightened its front leg into the
+  knee's singularity), and its stance takes the swing leg's reaction of the torques the actuators
+  give (``SteppingConfig.swing_reaction``, clipped to the limits as the plant gets them: T1's swing
+  torques run at 50-80 % of its limits, median per step). On G1 and Apollo the crouch and the
+  reaction lowered envelope cells (G1 45 deg 63 -> 62 %, Apollo from behind 96 -> 91 %).
 """
 
 from __future__ import annotations
@@ -67,6 +84,8 @@ from biped.spatial import axis_angle_quat, quat_mul, quat_to_rot, transform
 
 __all__ = [
     "ROBOT_ANKLE_POLYGON",
+    "ROBOT_ANKLE_LIMITED_RULES",
+    "ankle_limited",
     "FootContacts",
     "robot_stepper",
     "robot_stepping_body",
@@ -77,8 +96,32 @@ __all__ = [
 
 
 #: A robot's step trigger judges the capture point against the CoPs its ankles' torque limits can
-#: reach (``SteppingConfig.ankle_limited_polygon``; module docstring, "Robots' rules").
-ROBOT_ANKLE_POLYGON = False  # off: measured, T1's diagonals lose more than behind gains
+#: hold, the weight shared between the feet in any way (``SteppingConfig.ankle_limited_polygon``;
+#: module docstring, "Robots' rules").
+ROBOT_ANKLE_POLYGON = True
+#: A robot whose ankles cannot hold its CoP at its toes (:func:`ankle_limited`) keeps the crouch
+#: after a step while its COM moves and feeds the swing leg's reaction (of the torques its
+#: actuators give) to its stance (module docstring, "Robots' rules").
+ROBOT_ANKLE_LIMITED_RULES = True
+
+
+def ankle_limited(body: SteppingBody, d: mujoco.MjData, lim, joint_names, tolerance_m: float) -> bool:
+    """Whether a foot's ankle (its 5th hinge's torque limit, the whole weight on the foot) holds
+    the CoP more than ``tolerance_m`` short of where the sole reaches ahead of or behind the
+    hinge's axis, at the pose of ``d`` (MuJoCo's data of ``body.model``, after kinematics);
+    ``lim`` the legs' torque limits in ``joint_names`` order."""
+    m = body.model
+    weight = float(np.sum(m.body_mass)) * float(-m.opt.gravity[2])
+    for k, leg in enumerate(body.leg_joints):
+        j = list(joint_names).index(leg[4])
+        reach = min(-float(lim.lower[j]), float(lim.upper[j])) / weight
+        R = d.xmat[body.feet[k]].reshape(3, 3)
+        axes = R if body.sole_axes is None else R @ body.sole_axes[k]
+        centre, hl = d.xpos[body.feet[k]] + R @ body.soles[k][0], body.soles[k][1]
+        ax = float(axes[:, 0] @ (d.xanchor[m.joint(leg[4]).id] - centre))  # along the sole
+        if reach < max(hl - ax, hl + ax) - tolerance_m:
+            return True
+    return False
 
 
 @functools.cache
@@ -132,6 +175,9 @@ def scaled_stepping(
         reach_m=max(s * config.reach_m, stance_reach_m),
         swing_height_drop_m=max(s * config.swing_height_drop_m, crouch),
         post_step_height_drop_m=s * config.post_step_height_drop_m,
+        post_step_rest_drop_m=None
+        if config.post_step_rest_drop_m is None
+        else s * config.post_step_rest_drop_m,
         lateral_margin_m=w * config.lateral_margin_m,
         lateral_offset_m=w * config.lateral_offset_m,
         side_margin_m=w * config.side_margin_m,
@@ -226,10 +272,13 @@ def robot_stepper(
     distribution: str = "qp",
     torque_limits: str = "model",
     big_base: float | None = None,
+    floor_friction: bool = False,
 ) -> SteppingController:
     """The stepping controller on the robot: W's controller and QP with the robot's soles and
     ``torque_limits`` ("model": the joints' ``actuatorfrcrange``), ``stepping`` scaled
-    (:func:`scaled_stepping`), its set point ``target`` at the standing pose ``qpos``."""
+    (:func:`scaled_stepping`), its set point ``target`` at the standing pose ``qpos``;
+    ``floor_friction``: the feet-in-place QP's (before the first step) friction pyramid on the
+    floor's axes (W's ``qp_floor_friction``; the stepping QP's is ``stepping.floor_friction``)."""
     body = robot_stepping_body(desc, qpos, target)
     if big_base is not None:
         body = replace(body, big_base=big_base)
@@ -244,7 +293,7 @@ def robot_stepper(
         target=target,
         torque_limits=lim,
         distribution=distribution,
-        qp_weights=QPWeights() if distribution == "qp" else None,
+        qp_weights=QPWeights(floor_friction=floor_friction) if distribution == "qp" else None,
         model_path=str(desc.path),
     )
     stand = max(
@@ -253,6 +302,19 @@ def robot_stepper(
     scaled = scaled_stepping(stepping, body.leg_length_m, _hip_width(d, body.feet), stand)
     if ROBOT_ANKLE_POLYGON and lim is not None:
         scaled = replace(scaled, ankle_limited_polygon=True)
+    if (
+        ROBOT_ANKLE_LIMITED_RULES
+        and lim is not None
+        and ankle_limited(body, d, lim, tree.joint_names, scaled.rearm_margin_m)
+    ):
+        # the ankles, not the soles, bound the CoP: the crouch after a step while the COM moves
+        # (back to the rule's drop at rest) and the swing leg's reaction (module docstring)
+        scaled = replace(
+            scaled,
+            post_step_height_drop_m=max(scaled.post_step_height_drop_m, scaled.swing_height_drop_m),
+            post_step_rest_drop_m=scaled.post_step_height_drop_m,
+            swing_reaction=True,
+        )
     from biped.control.setpoint import Gains
 
     config = replace(config, gains=Gains())  # the robots' gains (W's, as robot_controller takes)

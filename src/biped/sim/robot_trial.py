@@ -142,6 +142,7 @@ def run_robot(setup: TrialSetup) -> RobotRun:
         distribution=sc.distribution,
         torque_limits=setup.torque_limits,
         early_stop=bool(sc.early_stop),
+        qp_floor_friction=bool(sc.qp_floor_friction),
         **kw,
     )
 
