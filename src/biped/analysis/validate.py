@@ -278,8 +278,10 @@ EXPERIMENTS = {
         40.0,
         ("step_release.lean_deg", "step_release.step_length_m", "step_release.contact_ms"),
         # the presets with a nervous system step with the step program (planned for a delayed,
-        # lagged plant); W's ideal controller with the feedback stepper (docs/validate.md)
-        {p: {"step_program": "program"} for p in ("young", "older")},
+        # lagged plant) on the present state their internal model predicts over the delay, the
+        # activation lag inverted on it; W's ideal controller with the feedback stepper
+        # (docs/validate.md, "The predicted step")
+        {p: {"step_program": "program-predicted"} for p in ("young", "older")},
     ),
     "waist_pull": Experiment(
         "waist_pull",

@@ -95,6 +95,8 @@ def fused_controller(policy):
     compensation); else None. A stepping policy (:mod:`biped.sim.fused_step`): its controller
     before the first step, its own sensed-feet rule (False here), its limits."""
     if fused_step.is_stepping(policy):
+        if getattr(policy, "forward", None) is not None:
+            return None  # step_program "predicted": its forward model records every period in Python
         if policy.stepping.span_leg_m is not None:
             return None  # step_reach = "leg": the double support's set point is leg-capped in Python
         ctrl = policy._ctrl_before

@@ -21,12 +21,17 @@ from biped import models
 from biped.control.neuromotor import OLDER_RATE_FACTOR, human_rate_limits, neural_filter
 from biped.models import JOINT_NAMES
 
-__all__ = ["NeuroLoop", "neuro_loop", "rate_limits"]
+__all__ = ["NeuroLoop", "feet_of_bits", "neuro_loop", "rate_limits"]
 
 _LEFT_MASK, _RIGHT_MASK = 0b0011, 0b1100  # biped.sim.contact's sole bits (tests check they agree)
 #: The contacts the controller sees before t = 0 + feedback_delay_s: both soles down (the subject
 #: stood before the run; W's biped starts 5 mm above the floor and lands in a few ms).
 STANDING = 0b1111
+
+
+def feet_of_bits(bits: int) -> tuple[bool, bool]:
+    """(left, right) sole on the floor of the contact monitor's ``bits``."""
+    return bool(bits & _LEFT_MASK), bool(bits & _RIGHT_MASK)
 
 
 def rate_limits(scenario) -> np.ndarray:

@@ -134,15 +134,55 @@ def controller_policy(
             stepping = replace(stepping, reach_m=max(stepping.reach_m, leg), span_leg_m=leg, stand_hip_m=hip,
                                limits=replace(stepping.limits, max_step=limit),
                                stance_knee_min_deg=min(knee, STANCE_KNEE_MIN_DEG))  # fmt: skip
-        if scenario.step_program == "program":  # planned steps for a delayed, lagged plant
+        if scenario.step_program in ("program", "program-predicted"):  # planned steps, delayed plant
             from biped.control.step_program import StepProgram, StepProgramConfig
 
-            program = StepProgramConfig(delay_s=scenario.feedback_delay_s, lead_s=scenario.activation_time_s,
+            # on the predicted present (program-predicted) the program's own delay is none
+            delay = scenario.feedback_delay_s if scenario.step_program == "program" else 0.0
+            program = StepProgramConfig(delay_s=delay, lead_s=scenario.activation_time_s,
                                         damping_n_m_s=scenario.joint_damping_n_m_s)  # fmt: skip
+            if scenario.step_program == "program-predicted":
+                return predicted_stepper(scenario, scene, config, stepping, tree, program)
             return StepProgram(config, stepping, scene.joint_names, tree=tree, program=program)
+        if scenario.step_program == "predicted":  # the feedback stepper on the predicted present
+            return predicted_stepper(scenario, scene, config, stepping, tree)
         return SteppingController(config, stepping, scene.joint_names, tree=tree)
     sensed = config.support == "sensed" or config.distribution == "qp"  # as make_policy decides
     return ControllerPolicy(make_policy(config, scene.joint_names, tree=tree), sensed=sensed)
+
+
+def predicted_stepper(scenario: Scenario, scene: Scene, config, stepping, tree, program=None):
+    """``step_program = "predicted"`` (W's feedback stepper; ``program`` None) or
+    ``"program-predicted"`` (the step program ``program``) acting on the present state its internal
+    forward model (:class:`~biped.control.forward_model.ForwardModel`: the scene's own MuJoCo model
+    at the physics step, the loop's contact rule, a copy of the nervous system's filter, the lag
+    inverted on it) predicts from the delayed one."""
+    from biped.control.forward_model import ForwardModel, PredictedProgram, PredictedStepper
+    from biped.control.stepping import SteppingController
+    from biped.sim.contact import ContactMonitor
+    from biped.sim.neuro import NeuroLoop, feet_of_bits
+    from biped.sim.scene import initial_state
+
+    m = scene.model
+    monitor = ContactMonitor(m, floor_geom=scene.floor_geom, block_geom=scene.block_geom,
+                             sole_geoms=scene.sole_geoms, biped_geoms=scene.biped_geoms,
+                             central_body=scene.central_body, fall_height_m=scenario.fall_height_m,
+                             sole_boxes=scene.sole_boxes)  # fmt: skip
+    neuro = NeuroLoop(scenario, len(scene.biped_qpos_index), len(scene.biped_qvel_index), scene.joint_names)
+    qpos0, qvel0 = initial_state(scene, scenario)
+    forward = ForwardModel(m, qpos0, np.zeros_like(qvel0), scene.biped_qpos_index, scene.biped_qvel_index,
+                           scene.actuator_index, delay_steps=scenario.delay_steps,
+                           substeps=scenario.control_substeps, period=1.0 / scenario.control_rate_hz,
+                           alpha=neuro.alpha, rate_step=neuro.rate_step,
+                           feet_of=lambda d: feet_of_bits(monitor._bits_of(d)),
+                           invert_lag=True)  # fmt: skip
+    stepper: SteppingController
+    if program is None:
+        stepper = PredictedStepper(config, stepping, scene.joint_names, tree=tree)
+    else:
+        stepper = PredictedProgram(config, stepping, scene.joint_names, tree=tree, program=program)
+    stepper.forward = forward
+    return stepper
 
 
 #: ``step_reach = "leg"``: the stance knee in single support is kept this far [deg] from straight
