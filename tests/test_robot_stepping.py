@@ -145,6 +145,45 @@ def test_g1_push_from_behind_past_its_feet_in_place_limit_is_recovered_with_a_st
     assert math.hypot(J[0], J[1]) > j_max
 
 
+@pytest.mark.parametrize(("speed", "mass"), [(16.0, None), (6.25, 1.642)])
+def test_g1_from_behind_with_the_default_trigger_past_j_max_and_where_capture_falls(speed, mass):
+    """G1 with the scenario's default step trigger ("qp", docs/robots.md, "The default trigger on
+    robots"): W's scaled block from behind at 16.0 m/s, its impulse (the block's own momentum
+    change) above G1's Hof J_max (13.7 N s; "capture" falls at 14.0 m/s), and the block twice as
+    heavy at 6.25 m/s, the speed where "capture" falls after a sideways second step, are each
+    recovered at rest over the moved set point within G1's limits."""
+    from biped.analysis.robot import robot_hof_bound
+    from biped.models.robot import describe
+    from biped.sim.robot import Block, robot_controller, robot_push, standing_qpos
+    from biped.sim.robot_trial import robot_block_defaults
+    from biped.sim.scenario import Scenario
+    from biped.sim.sweep.spec import aim_block
+    from biped.sim.sweep.trial import ballistic_impulse
+
+    desc = describe("g1")
+    light, height = robot_block_defaults("g1", models.total_mass_kg())  # as the envelope throws it
+    ctrl = robot_controller(desc, "statics", "none")
+    c = ctrl.link_poses(standing_qpos(desc, ctrl))[0][:3, 3]
+    p0, v0 = aim_block(c[:2], speed, 0.0, height, 0.5)
+    block = Block(p0, v0, mass or light)
+    trigger = Scenario().step_trigger
+    assert trigger == "qp"
+    run = robot_push(
+        desc,
+        3.0,
+        block=block,
+        early_stop=True,
+        qp_floor_friction=bool(Scenario().qp_floor_friction),
+        stepping=SteppingConfig.for_trigger(trigger),
+    )
+    assert not run.fell and run.stop_reason == "at_rest" and run.final_offset_m < 0.01
+    assert len(run.steps) >= 1 and run.steps[0]["position_m"][0] > 0.15  # forward: G1 faces +x
+    assert run.max_torque_fraction <= 1.0 + 1e-9
+    J, _ = ballistic_impulse(run.t, run.block_velocity, block.mass_kg)
+    if mass is None:
+        assert math.hypot(J[0], J[1]) > float(robot_hof_bound(desc, [0.0]).j_max_n_s[0])
+
+
 def _t1_block(speed):
     from biped.models.robot import describe
     from biped.sim.robot import Block, robot_controller, standing_qpos
