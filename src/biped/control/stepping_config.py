@@ -66,7 +66,12 @@ class SteppingConfig:
     floor_friction: the stepping QP's friction pyramid on the floor's axes, not the sole's
     (``QPWeights.floor_friction``; before the first step the scenario's QP as it is).
     swing_friction_scale: if set, single support uses a stepping QP whose pyramid is
-    ``friction * swing_friction_scale`` (a margin for what the massless-leg cone does not see).
+    ``friction * swing_friction_scale`` (a margin for what the massless-leg cone does not see:
+    the driven swing leg's inertia; measured with MuJoCo's contact forces, a forward step's
+    stance foot reached |f_t| = mu f_n with the QP planning 0.55 of it, docs/sweep.md).
+    lateral_swing_friction_scale: if set, a *sideways step*'s (and the closing step's) single
+    support uses this scale instead (0.3 there made sideways pushes of 14-18 m/s fall: the
+    sideways step's stance needs the QP's tangential forces for the trunk's roll).
     ankle_limited_polygon: the trigger's support polygon (and the dwell's and the step's
         sideways test) is each sole cut along its length to the centres of pressure its ankle's
         torque limit can hold with the whole weight on it: within ``|tau_max| / (m g)`` of the
@@ -102,7 +107,8 @@ class SteppingConfig:
     critically damped approach at closing_shift_rate_1_s, given up after closing_shift_max_s),
     then swing the other foot in closing_swing_time_s beside it at the starting stance
     (:mod:`biped.control.closing_step`).
-    The ``"qp"`` set turns on floor_friction, sets swing_friction_scale 0.55 and
+    The ``"qp"`` set turns on floor_friction, sets swing_friction_scale 0.3 (sideways steps
+    lateral_swing_friction_scale 0.55, the one scale before) and
     lateral_rot_gain_scale 1 (docs/controller.md, "Stance-foot slip"), dwell_s 0.5 s,
     side_margin_m 0.04, airborne_stance and crossover; closing_step stays off (it lowered every
     direction's envelope, docs/sweep.md).
@@ -144,6 +150,7 @@ class SteppingConfig:
     ankle_limited_polygon: bool = False
     floor_friction: bool = False
     swing_friction_scale: float | None = None
+    lateral_swing_friction_scale: float | None = None
     dwell_margin_m: float = 0.02
     dwell_s: float | None = None
     side_margin_m: float = 0.0
@@ -180,7 +187,8 @@ class SteppingConfig:
                 "limits": cp.StepLimits(max_back=0.4),
                 "settle_after_s": 0.3,
                 "floor_friction": True,
-                "swing_friction_scale": 0.55,
+                "swing_friction_scale": 0.3,
+                "lateral_swing_friction_scale": 0.55,
                 "lateral_rot_gain_scale": 1.0,
                 "dwell_s": 0.5,
                 "side_margin_m": 0.04,

@@ -65,6 +65,7 @@ class SwingPhase:
         else:
             self._T, self._offset, self._limits = s.swing_time_s, s.offset_m, s.limits
         self._swing_gains = self._gains_by_mode[lateral]
+        self._ctrl_swing = self._ctrl_swing_by_mode[lateral]
         if closing is not None:
             swing = closing
         elif self.steps:  # later steps alternate feet
