@@ -107,7 +107,7 @@ class SteppingConfig:
     critically damped approach at closing_shift_rate_1_s, given up after closing_shift_max_s),
     then swing the other foot in closing_swing_time_s beside it at the starting stance
     (:mod:`biped.control.closing_step`).
-    The ``"qp"`` set turns on floor_friction, sets swing_friction_scale 0.3 (sideways steps
+    The ``"qp"`` set turns on floor_friction, sets swing_friction_scale 0.35 (sideways steps
     lateral_swing_friction_scale 0.55, the one scale before) and
     lateral_rot_gain_scale 1 (docs/controller.md, "Stance-foot slip"), dwell_s 0.5 s,
     side_margin_m 0.04, airborne_stance and crossover; closing_step stays off (it lowered every
@@ -187,7 +187,7 @@ class SteppingConfig:
                 "limits": cp.StepLimits(max_back=0.4),
                 "settle_after_s": 0.3,
                 "floor_friction": True,
-                "swing_friction_scale": 0.3,
+                "swing_friction_scale": 0.35,
                 "lateral_swing_friction_scale": 0.55,
                 "lateral_rot_gain_scale": 1.0,
                 "dwell_s": 0.5,
