@@ -124,9 +124,7 @@ def test_front_push_the_feet_hold_only_on_their_toes_steps_and_ends_at_rest():
     steps = r.extra["steps"]
     assert len(steps) == 1 and not steps[0]["sideways"], steps
     assert steps[0]["start_s"] < 1.0
-    # back: +x, the biped faces -x (measured 7.8 cm behind the ankles; 10+ cm before the forward
-    # and backward steps' single support planned 0.3 instead of 0.55 of the floor's friction)
-    assert steps[0]["position_m"][0] > r.feet_pos[0, :, 0].max() + 0.05
+    assert steps[0]["position_m"][0] > r.feet_pos[0, :, 0].max() + 0.1  # back: +x, the biped faces -x
     assert r.recovered and r.extra["final_com_speed_m_s"] < 0.05
     scene = build_scene(sc)
     late = SteppingController(
@@ -212,8 +210,7 @@ def test_goal_push_recovers_with_the_qp_trigger():
     steps allowed. The hit yaws the body ~50 deg, and after two forward steps the capture point
     leaves the feet past the right foot, on the side away from the left one: the third step
     crosses over (``crossover``). Without the crossover the left foot stepped on its own side,
-    away from the capture point, and the biped fell (measured). The crossover part on the set it
-    was traced with (EARLIER); with the default the push recovers in three steps without one."""
+    away from the capture point, and the biped fell (measured)."""
     from biped.control.stepping import SteppingController
     from biped.control.stepping_config import SteppingConfig
     from biped.sim import Scenario
@@ -231,20 +228,10 @@ def test_goal_push_recovers_with_the_qp_trigger():
     assert sc.physics == "faithful"
     r = simulate(sc)
     steps = r.extra["steps"]
-    assert 1 <= len(steps) <= 3, steps
-    assert r.recovered and r.extra["final_com_speed_m_s"] < 0.05, r.extra
-    # the crossover: traced with the single support planning 0.55 of the friction on every step
-    # (EARLIER); with 0.35 on the forward steps (the default) this push needs none (measured)
-    scene = build_scene(sc)
-    r = run_closed_loop(
-        sc,
-        scene,
-        SteppingController(policy_config(sc), SteppingConfig.for_trigger("qp", **EARLIER), scene.joint_names),
-    )
-    steps = r.extra["steps"]
     assert 1 <= len(steps) <= 3 and any(st["crossover"] for st in steps), steps
     assert r.recovered and r.extra["final_com_speed_m_s"] < 0.05, r.extra
-    plain = SteppingConfig.for_trigger("qp", crossover=False, **EARLIER)
+    scene = build_scene(sc)
+    plain = SteppingConfig.for_trigger("qp", crossover=False)
     old = run_closed_loop(sc, scene, SteppingController(policy_config(sc), plain, scene.joint_names))
     assert old.fell
 
@@ -264,21 +251,13 @@ def test_tumble_in_single_support_is_a_fall_not_a_divergence():
     scene = build_scene(sc)
 
     def run(**kw):  # without the crossover (with it this push falls otherwise, no tumble)
-        cfg = SteppingConfig.for_trigger("qp", crossover=False, **EARLIER, **kw)
+        cfg = SteppingConfig.for_trigger("qp", crossover=False, **kw)
         return run_closed_loop(sc, scene, SteppingController(policy_config(sc), cfg, scene.joint_names))
 
     assert simulate(sc).diverged is None
     r = run()
     assert r.fell and r.diverged is None
     assert run(airborne_stance=False).diverged is not None
-
-
-#: The tumble and crossover traces below were measured with the single support's QP planning
-#: 0.55 of the floor's friction on every step (the "qp" set before 2026-11-27 17:45 UTC; now 0.35 on
-#: forward and backward steps): with 0.35 these pushes take no crossover (13 m/s sideways, faithful:
-#: one step; W's goal push: three steps, at rest) and 22 m/s at 45 deg without the
-#: airborne stance falls instead of diverging. The mechanisms are tested on the set they were traced with.
-EARLIER = {"swing_friction_scale": 0.55}
 
 
 def _leg_geoms(m, side):
@@ -310,9 +289,7 @@ def test_crossover_step_clears_the_stance_leg_with_leg_contacts_on():
     from biped.sim.push import run_closed_loop
 
     sc = _sweep_scenario(13, 90, "--stepping", "--physics", "faithful")
-    cfg = SteppingConfig.for_trigger("qp", **EARLIER)  # traced with it (EARLIER)
-    scene = build_scene(sc)
-    plain = run_closed_loop(sc, scene, SteppingController(policy_config(sc), cfg, scene.joint_names))
+    plain = simulate(sc)
     scene = build_scene(sc)
     m = scene.model
     left, right = _leg_geoms(m, "left"), _leg_geoms(m, "right")
@@ -320,7 +297,9 @@ def test_crossover_step_clears_the_stance_leg_with_leg_contacts_on():
     for gs, own, other in ((left, 4, 8), (right, 8, 4)):
         m.geom_contype[gs] = own
         m.geom_conaffinity[gs] = 1 | other
-    r = run_closed_loop(sc, scene, SteppingController(policy_config(sc), cfg, scene.joint_names))
+    r = run_closed_loop(
+        sc, scene, SteppingController(policy_config(sc), SteppingConfig.for_trigger("qp"), scene.joint_names)
+    )
     steps = r.extra["steps"]
     assert len(steps) == 2 and steps[1]["crossover"] and not steps[0]["crossover"], steps
     assert steps[1]["foot"] == "right" and steps[1]["position_m"][1] < steps[0]["position_m"][1] - 0.1
@@ -337,7 +316,7 @@ def test_crossover_step_clears_the_stance_leg_with_leg_contacts_on():
     assert touching == 0
     np.testing.assert_allclose(r.qpos[-1], plain.qpos[-1], atol=1e-9)
     scene0 = build_scene(sc)
-    no = SteppingConfig.for_trigger("qp", crossover=False, **EARLIER)
+    no = SteppingConfig.for_trigger("qp", crossover=False)
     old = run_closed_loop(sc, scene0, SteppingController(policy_config(sc), no, scene0.joint_names))
     assert not any("crossover" in st for st in old.extra["steps"]) and not old.recovered
 

@@ -67,11 +67,11 @@ class SteppingConfig:
     (``QPWeights.floor_friction``; before the first step the scenario's QP as it is).
     swing_friction_scale: if set, single support uses a stepping QP whose pyramid is
     ``friction * swing_friction_scale`` (a margin for what the massless-leg cone does not see:
-    the driven swing leg's inertia; measured with MuJoCo's contact forces, a forward step's
-    stance foot reached |f_t| = mu f_n with the QP planning 0.55 of it, docs/sweep.md).
+    the driven swing leg's inertia; with 0.55, MuJoCo's contact forces on a forward step's
+    stance foot reached mu times the normal force, docs/sweep.md).
     lateral_swing_friction_scale: if set, a *sideways step*'s (and the closing step's) single
-    support uses this scale instead (0.3 there made sideways pushes of 14-18 m/s fall: the
-    sideways step's stance needs the QP's tangential forces for the trunk's roll).
+    support uses this scale instead (measured, not adopted: docs/sweep.md, "The stance foot's
+    friction in single support").
     ankle_limited_polygon: the trigger's support polygon (and the dwell's and the step's
         sideways test) is each sole cut along its length to the centres of pressure its ankle's
         torque limit can hold with the whole weight on it: within ``|tau_max| / (m g)`` of the
@@ -107,8 +107,10 @@ class SteppingConfig:
     critically damped approach at closing_shift_rate_1_s, given up after closing_shift_max_s),
     then swing the other foot in closing_swing_time_s beside it at the starting stance
     (:mod:`biped.control.closing_step`).
-    The ``"qp"`` set turns on floor_friction, sets swing_friction_scale 0.35 (sideways steps
-    lateral_swing_friction_scale 0.55, the one scale before) and
+    The ``"qp"`` set turns on floor_friction, sets swing_friction_scale 0.55 (one scale for
+    every step: 0.35 on forward and backward steps, lateral_swing_friction_scale 0.55, cut the
+    stance slip at 135 deg from 21.8 to 1.4 cm but lowered the front's limit with human torque
+    limits and the 1.55 m subject's from behind, docs/sweep.md) and
     lateral_rot_gain_scale 1 (docs/controller.md, "Stance-foot slip"), dwell_s 0.5 s,
     side_margin_m 0.04, airborne_stance and crossover; closing_step stays off (it lowered every
     direction's envelope, docs/sweep.md).
@@ -187,8 +189,7 @@ class SteppingConfig:
                 "limits": cp.StepLimits(max_back=0.4),
                 "settle_after_s": 0.3,
                 "floor_friction": True,
-                "swing_friction_scale": 0.35,
-                "lateral_swing_friction_scale": 0.55,
+                "swing_friction_scale": 0.55,
                 "lateral_rot_gain_scale": 1.0,
                 "dwell_s": 0.5,
                 "side_margin_m": 0.04,
