@@ -69,6 +69,10 @@ class SteppingConfig:
     ``friction * swing_friction_scale`` (a margin for what the massless-leg cone does not see:
     the driven swing leg's inertia; with 0.55, MuJoCo's contact forces on a forward step's
     stance foot reached mu times the normal force, docs/sweep.md).
+    swing_inertia_share, swing_friction_min_scale: if swing_inertia_share is set, a forward or
+    backward step's single-support QP plans, each period, its friction less what the swing leg's
+    planned horizontal inertial force takes of the weight's, ``share * m_leg * |a_xy| / (m g)``, at
+    least ``swing_friction_min_scale * friction`` (measured, not adopted: docs/sweep.md).
     lateral_swing_friction_scale: if set, a *sideways step*'s (and the closing step's) single
     support uses this scale instead (measured, not adopted: docs/sweep.md, "The stance foot's
     friction in single support").
@@ -153,6 +157,8 @@ class SteppingConfig:
     floor_friction: bool = False
     swing_friction_scale: float | None = None
     lateral_swing_friction_scale: float | None = None
+    swing_inertia_share: float | None = None
+    swing_friction_min_scale: float = 0.2
     dwell_margin_m: float = 0.02
     dwell_s: float | None = None
     side_margin_m: float = 0.0
