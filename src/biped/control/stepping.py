@@ -128,10 +128,17 @@ class SteppingController(SwingPhase):
             w = replace(inner.qp_weights, moment=config.qp_weights.moment)
             self._ctrl_settle = make_policy(replace(inner, qp_weights=w), tree=tree, **ws).controller
         # single support: the stepping QP, its friction pyramid scaled by swing_friction_scale
+        # (a sideways step's: lateral_swing_friction_scale, if set)
         self._ctrl_swing = self.ctrl
         if self.stepping.swing_friction_scale is not None and inner.qp_weights is not None:
             w = replace(inner.qp_weights, friction_scale=self.stepping.swing_friction_scale)
             self._ctrl_swing = make_policy(replace(inner, qp_weights=w), tree=tree, **ws).controller
+        self._ctrl_swing_by_mode = {False: self._ctrl_swing, True: self._ctrl_swing}
+        if self.stepping.lateral_swing_friction_scale is not None and inner.qp_weights is not None:
+            w = replace(inner.qp_weights, friction_scale=self.stepping.lateral_swing_friction_scale)
+            self._ctrl_swing_by_mode[True] = make_policy(
+                replace(inner, qp_weights=w), tree=tree, **ws
+            ).controller
         names = tuple(self.ctrl.joint_names)
         self.joint_names = tuple(joint_order) if joint_order is not None else names
         if sorted(self.joint_names) != sorted(names):

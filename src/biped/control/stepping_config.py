@@ -70,7 +70,16 @@ class SteppingConfig:
     floor_friction: the stepping QP's friction pyramid on the floor's axes, not the sole's
     (``QPWeights.floor_friction``; before the first step the scenario's QP as it is).
     swing_friction_scale: if set, single support uses a stepping QP whose pyramid is
-    ``friction * swing_friction_scale`` (a margin for what the massless-leg cone does not see).
+    ``friction * swing_friction_scale`` (a margin for what the massless-leg cone does not see:
+    the driven swing leg's inertia; with 0.55, MuJoCo's contact forces on a forward step's
+    stance foot reached mu times the normal force, docs/sweep.md).
+    swing_inertia_share, swing_friction_min_scale: if swing_inertia_share is set, a forward or
+    backward step's single-support QP plans, each period, its friction less what the swing leg's
+    planned horizontal inertial force takes of the weight's, ``share * m_leg * |a_xy| / (m g)``, at
+    least ``swing_friction_min_scale * friction`` (measured, not adopted: docs/sweep.md).
+    lateral_swing_friction_scale: if set, a *sideways step*'s (and the closing step's) single
+    support uses this scale instead (measured, not adopted: docs/sweep.md, "The stance foot's
+    friction in single support").
     ankle_limited_polygon: the trigger's support polygon (and the dwell's and the step's
         sideways test) is the set of total centres of pressure the soles hold when each ankle's
         torque limit bounds its own along its sole: within ``|tau_max| / (w m g)`` of the leg's
@@ -108,7 +117,10 @@ class SteppingConfig:
     critically damped approach at closing_shift_rate_1_s, given up after closing_shift_max_s),
     then swing the other foot in closing_swing_time_s beside it at the starting stance
     (:mod:`biped.control.closing_step`).
-    The ``"qp"`` set turns on floor_friction, sets swing_friction_scale 0.55 and
+    The ``"qp"`` set turns on floor_friction, sets swing_friction_scale 0.55 (one scale for
+    every step: 0.35 on forward and backward steps, lateral_swing_friction_scale 0.55, cut the
+    stance slip at 135 deg from 21.8 to 1.4 cm but lowered the front's limit with human torque
+    limits and the 1.55 m subject's from behind, docs/sweep.md) and
     lateral_rot_gain_scale 1 (docs/controller.md, "Stance-foot slip"), dwell_s 0.5 s,
     side_margin_m 0.04, airborne_stance and crossover; closing_step stays off (it lowered every
     direction's envelope, docs/sweep.md).
@@ -151,6 +163,9 @@ class SteppingConfig:
     ankle_limited_polygon: bool = False
     floor_friction: bool = False
     swing_friction_scale: float | None = None
+    lateral_swing_friction_scale: float | None = None
+    swing_inertia_share: float | None = None
+    swing_friction_min_scale: float = 0.2
     dwell_margin_m: float = 0.02
     dwell_s: float | None = None
     side_margin_m: float = 0.0

@@ -65,6 +65,7 @@ class SwingPhase:
         else:
             self._T, self._offset, self._limits = s.swing_time_s, s.offset_m, s.limits
         self._swing_gains = self._gains_by_mode[lateral]
+        self._ctrl_swing = self._ctrl_swing_by_mode[lateral]
         if closing is not None:
             swing = closing
         elif self.steps:  # later steps alternate feet
@@ -187,6 +188,8 @@ class SwingPhase:
         target = self._leg_capped(self.body.target(tuple(com), s.swing_tilt_deg), [1 - i])
         target = replace(target, com_acc=(float(acc[0]), float(acc[1]), 0.0))
         tau_swing = self._swing_torques(i, pd, vd, ad)
+        if s.swing_inertia_share is not None:  # forward and backward steps only
+            self._inertia_friction(i, ad, 0.0 if self.steps[-1]["sideways"] else s.swing_inertia_share)
         if s.swing_reaction:  # the reaction of the torques the actuators give (clipped as _out clips)
             applied = tau_swing
             if self.limits is not None:
@@ -200,6 +203,19 @@ class SwingPhase:
         )
         tau[self._leg_tau[i]] = tau_swing
         return self._out(self._knee_guarded(tau, 1 - i))
+
+    def _inertia_friction(self, i, ad, share):
+        """Set the single-support QP's friction this period: its pyramid's mu less what the swing
+        leg's planned horizontal inertial force takes of the weight's friction,
+        ``swing_inertia_share`` x leg mass x |a_xy| / (m g), at least ``swing_friction_min_scale`` mu."""
+        s, m = self.stepping, self.model
+        qp = self._ctrl_swing.qp
+        w = qp.weights
+        bodies = {int(m.jnt_bodyid[m.joint(j).id]) for j in self.body.leg_joints[i]}
+        leg = float(sum(m.body_mass[b] for b in bodies))
+        total = float(np.sum(m.body_mass))
+        take = share * leg * float(np.hypot(ad[0], ad[1])) / (total * self._gravity)
+        qp._prm[6] = max(w.friction * w.friction_scale - take, s.swing_friction_min_scale * w.friction)
 
     def _knee_guarded(self, tau: np.ndarray, st: int) -> np.ndarray:
         """``tau`` (controller order) with the stance knee's one-sided spring-damper added
