@@ -232,7 +232,8 @@ def test_less_planned_friction_in_forward_steps_keeps_the_135_deg_stance_foot():
     stance sole slides > 5 cm (MuJoCo's contacts and foot poses; measured 21.8 cm: the contact
     force at mu times the normal force, the foot hopping). Planning 0.35 on forward and backward
     steps (``swing_friction_scale`` 0.35, sideways steps ``lateral_swing_friction_scale`` 0.55;
-    measured, not adopted: docs/sweep.md) it recovers with one step sliding <= 2 cm (0.7 cm)."""
+    measured, not adopted: docs/sweep.md) it recovers with one step sliding <= 2 cm (0.7 cm), and
+    so it does with the per-period friction budget (``swing_inertia_share`` 0.5)."""
     from biped.control.stepping import SteppingController
     from biped.control.stepping_config import SteppingConfig
     from biped.sim.policies import policy_config
@@ -249,3 +250,10 @@ def test_less_planned_friction_in_forward_steps_keeps_the_135_deg_stance_foot():
     after = run_closed_loop(sc, scene, SteppingController(policy_config(sc), less, scene.joint_names))
     assert after.recovered and after.extra["steps"]
     assert max(_stance_slips(sc, after)) <= 0.02
+    # the per-period budget (``swing_inertia_share`` 0.5: 0.55 mu less the swing leg's planned
+    # inertial force over the weight, forward and backward steps; measured 1.3 cm in docs/sweep.md)
+    budget = SteppingConfig.for_trigger("qp", swing_inertia_share=0.5)
+    scene = build_scene(sc)
+    held = run_closed_loop(sc, scene, SteppingController(policy_config(sc), budget, scene.joint_names))
+    assert held.recovered and held.extra["steps"]
+    assert max(_stance_slips(sc, held)) <= 0.02
