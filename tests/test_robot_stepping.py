@@ -198,14 +198,15 @@ def _t1_block(speed):
     return desc, Block(p0, v0, mass)
 
 
-def _t1_stepper():
+def _stepper(name):
+    """A robot's stepping controller ("capture" set) at its standing pose, and its description."""
     from biped.control.setpoint import Target
     from biped.models.robot import describe
     from biped.sim.robot import robot_controller, standing_qpos
     from biped.sim.robot_stepping import robot_stepper
     from biped.spatial import rot_to_quat
 
-    desc = describe("t1")
+    desc = describe(name)
     ctrl = robot_controller(desc, "statics", "none")
     q0 = standing_qpos(desc, ctrl)
     g = ctrl.link_poses(q0)[0]
@@ -268,7 +269,7 @@ def test_t1_ankle_limited_support_region_is_the_lps_exactly():
     moved in MuJoCo's data), to 1e-9 m. Standing, both ankles together hold 2 tau / (m g) ahead
     of the hinges, past T1's toes: the front edge is the soles'; staggered, tau / (m g) ahead of
     the front foot's hinge (all the weight on it), short of its toes."""
-    desc, st = _t1_stepper()
+    desc, st = _stepper("t1")
     assert st.stepping.ankle_limited_polygon  # robots: on
     m, d = st.model, st.data
     weight = float(np.sum(m.body_mass)) * 9.81
@@ -328,20 +329,9 @@ def test_only_an_ankle_short_of_its_sole_gets_the_crouch_and_the_reaction():
     rule's s x 8 cm) and feeds the swing's reaction; G1's 50 N m ankle holds past its toes and
     heels: W's scaled parameters, unchanged."""
     from biped.control import capture as cp
-    from biped.control.setpoint import Target
-    from biped.models.robot import describe
-    from biped.sim.robot import robot_controller, standing_qpos
-    from biped.sim.robot_stepping import robot_stepper
-    from biped.spatial import rot_to_quat
 
     for name, limited in (("t1", True), ("g1", False)):
-        desc = describe(name)
-        ctrl = robot_controller(desc, "statics", "none")
-        q0 = standing_qpos(desc, ctrl)
-        g = ctrl.link_poses(q0)[0]
-        target = Target(com=tuple(g[:3, 3]), quat=tuple(rot_to_quat(np.ascontiguousarray(g[:3, :3]))))
-        st = robot_stepper(desc, q0, target, SteppingConfig.for_trigger("capture"))
-        mujoco.mj_forward(st.model, _set(st.data, q0))
+        desc, st = _stepper(name)
         f = mujoco.MjModel.from_xml_path(str(desc.path))
         weight = float(np.sum(f.body_mass)) * 9.81
         leg = st.body.leg_joints[0]
