@@ -16,6 +16,7 @@ import dataclasses
 import difflib
 import os
 import tomllib
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -289,9 +290,9 @@ class Scenario:
         out = {}
         for f in dataclasses.fields(self):
             v = getattr(self, f.name)
-            qp_key = f.name in _WRITTEN_FOR_THE_QP and self.distribution == "qp"  # written at any value
-            step_key = f.name == "step_trigger" and self.stepping  # written at any value
-            if f.name in _OMITTED_AT_DEFAULT and v == f.default and not (qp_key or step_key):
+            changed = CHANGED_DEFAULTS.get(f.name)
+            written = changed is not None and changed[0](getattr(self, changed[1]))  # at any value
+            if f.name in _OMITTED_AT_DEFAULT and v == f.default and not written:
                 continue  # a key added later: its default leaves old files (and W's outputs) as they were
             out[f.name] = list(v) if isinstance(v, tuple) else v
         return out
@@ -385,8 +386,8 @@ _STRINGS = {
 
 
 #: Keys :meth:`Scenario.to_dict` leaves out at their default value, so that a scenario without
-#: them writes the same summary.json / sweep identity as before they existed. (``step_trigger``
-#: only without stepping: its default changed, so a stepping scenario records it.)
+#: them writes the same summary.json / sweep identity as before they existed (except where
+#: :data:`CHANGED_DEFAULTS` says they are written).
 _OMITTED_AT_DEFAULT = frozenset(
     {
         "early_stop",
@@ -401,10 +402,15 @@ _OMITTED_AT_DEFAULT = frozenset(
 )
 
 
-#: Keys whose default changed (``qp_floor_friction``: false until 2026-11-27, then true): written
-#: whenever ``distribution = "qp"``, at any value, so that a stored scenario of the QP without them
-#: is one written before the change and is read as it was (:func:`stored_values`).
-_WRITTEN_FOR_THE_QP = {"qp_floor_friction": False}
+#: Keys whose default changed, ``{key: (applies, on, old default)}``: written whenever
+#: ``applies(scenario[on])``, at any value, so that a stored scenario it applies to
+#: without them is one written before the change and is read as it was (:func:`stored_values`).
+#: ``qp_floor_friction``: false until 2026-11-27 (the QP's pyramid on the sole's axes), then true;
+#: ``step_trigger``: "capture" until 2026-11-27, then "qp".
+CHANGED_DEFAULTS: dict[str, tuple[Callable[[Any], bool], str, Any]] = {
+    "qp_floor_friction": (lambda distribution: distribution == "qp", "distribution", False),
+    "step_trigger": (bool, "stepping", "capture"),
+}
 
 
 def stored_values(values: dict) -> dict:
@@ -414,11 +420,9 @@ def stored_values(values: dict) -> dict:
     ``step_trigger`` with ``"capture"``, and is read so (a rerun with
     today's default is then refused as a different sweep, never resumed or merged into it)."""
     out = dict(values)
-    if out.get("distribution") == "qp":
-        for key, old_default in _WRITTEN_FOR_THE_QP.items():
+    for key, (applies, on, old_default) in CHANGED_DEFAULTS.items():
+        if applies(out.get(on)):
             out.setdefault(key, old_default)
-    if out.get("stepping"):
-        out.setdefault("step_trigger", "capture")  # the default until 2026-11-27
     return out
 
 
@@ -504,6 +508,7 @@ __all__ = [
     "parse_assignment",
     "read_toml",
     "stored_values",
+    "CHANGED_DEFAULTS",
     "toml_values",
     "validate",
 ]
