@@ -17,6 +17,7 @@ import pytest
 from _helpers import toy_trial
 
 from biped.errors import ScenarioError
+from biped.sim.scenario import Scenario
 from biped.sim.sweep import SweepSpec, load, parts_dir, run_sweep
 from biped.sim.sweep.store import part_files, read_part
 
@@ -294,3 +295,46 @@ def test_an_old_qp_file_reads_as_the_sole_pyramid_and_is_not_resumed_as_the_floo
     s = run_sweep(same, out, workers=1, trial_fn=never, progress=False)
     assert sorted(load(out).column("index").tolist()) == list(range(8)), s
     assert load(out).scenario.qp_floor_friction is False
+
+
+def test_an_old_stepping_file_reads_as_capture_and_resumes_only_as_capture(tmp_path):
+    """Since step_trigger defaults to "qp", a stepping file without the key (written when
+    "capture" was the default, and so left out) is read as "capture" and refused by today's
+    default; a rerun asking for "capture" resumes it without running a trial (its trials' keys
+    are those of that time)."""
+    import json
+
+    import pyarrow.parquet as pq
+
+    out = tmp_path / "old.parquet"
+    spec = SweepSpec(axes=GRID, base=SweepSpec().base.with_overrides(stepping=True, step_trigger="capture"))
+    run_sweep(spec, out, workers=1, trial_fn=toy_trial, progress=False)
+    table = pq.read_table(out)
+    meta = dict(table.schema.metadata)
+    stored = json.loads(meta[b"biped.sweep"])
+    assert stored["scenario"].pop("step_trigger") == "capture"
+    meta[b"biped.sweep"] = json.dumps(stored).encode()
+    meta[b"biped.scenario"] = (
+        meta[b"biped.scenario"].decode().replace('step_trigger = "capture"\n', "").encode()
+    )
+    assert b"step_trigger" not in meta[b"biped.sweep"] + meta[b"biped.scenario"]
+    # the trials' keys are those of that time: the identity of a scenario whose to_dict leaves
+    # the key out (as it did at its then default)
+    to_dict = Scenario.to_dict
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(
+            Scenario, "to_dict", lambda sc: {k: v for k, v in to_dict(sc).items() if k != "step_trigger"}
+        )
+        then = spec.identity
+    assert meta[b"biped.sweep_id"].decode() == spec.identity == then
+    pq.write_table(table.replace_schema_metadata(meta), out)
+    assert load(out).scenario.step_trigger == "capture"
+    now = SweepSpec(axes=GRID, base=SweepSpec().base.with_overrides(stepping=True))
+    with pytest.raises(ScenarioError, match=r"scenario key step_trigger: 'capture' in the file, 'qp' now"):
+        run_sweep(now, out, workers=1, trial_fn=toy_trial, progress=False)
+
+    def never(setup):
+        raise AssertionError(f"trial {setup.trial.index} ran again: the old rows were not reused")
+
+    run_sweep(spec, out, workers=1, trial_fn=never, progress=False)
+    assert sorted(load(out).column("index").tolist()) == list(range(8))

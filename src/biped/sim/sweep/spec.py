@@ -23,7 +23,7 @@ import numpy as np
 from biped import models
 from biped.control.limits import KINDS as TORQUE_LIMIT_KINDS
 from biped.errors import ScenarioError
-from biped.sim.scenario import Scenario, read_toml
+from biped.sim.scenario import CHANGED_DEFAULTS, Scenario, read_toml
 from biped.sim.sweep.aim import GRAVITY, aim_block, hold_scenario, trial_scenario
 from biped.sim.sweep.axes import (
     AXES,
@@ -309,12 +309,12 @@ class SweepSpec:
                     for k in cls.keys:
                         scen.pop(k, None)
             scen.pop("perturbation", None)
-        # the nervous system's keys at W's ideal values, qp_floor_friction at false (its default
-        # until it became true, so a file of that time keeps its trials' keys): the identity as
-        # before they existed
+        # the nervous system's keys at W's ideal values, and the keys whose default changed at
+        # their old default (CHANGED_DEFAULTS: a file of that time keeps its trials' keys): the
+        # identity as before they existed
         for k, ideal in (("neuromotor", "ideal"), ("feedback_delay_s", 0.0), ("activation_time_s", 0.0),
                          ("torque_rate_limit_n_m_s", "none"), ("ankle_only", False),
-                         ("qp_floor_friction", False)):  # fmt: skip
+                         *((k, old) for k, (_, _, old) in CHANGED_DEFAULTS.items())):  # fmt: skip
             if scen.get(k) == ideal:
                 scen.pop(k)
         ident = {
