@@ -63,7 +63,6 @@ from biped.model import TreeModel
 
 __all__ = ["SteppingConfig", "SteppingController"]
 
-FOOT_BODIES = ("left_foot", "right_foot")
 #: Time constant of the low-pass filter on the capture point's rate [s].
 RATE_TAU_S = 0.01
 
@@ -172,6 +171,12 @@ class SteppingController(SwingPhase):
             self._leg_dofs.append(np.array([m.jnt_dofadr[m.joint(names[i]).id] for i in js]))
             self._leg_qpos.append(np.array([m.jnt_qposadr[m.joint(names[i]).id] for i in js]))
         self._gravity = float(-m.opt.gravity[2])
+        self._mass = float(np.sum(m.body_mass))
+        # each leg's mass: the bodies its joints move (SwingPhase._inertia_friction)
+        self._leg_mass = [
+            float(sum(m.body_mass[b] for b in {int(m.jnt_bodyid[m.joint(j).id]) for j in leg}))
+            for leg in body.leg_joints
+        ]
         self._ankle_reach = self._ankle_reaches() if self.stepping.ankle_limited_polygon else None
         self.base_target: Target = config.target
         self.gains: Gains = config.gains
@@ -256,7 +261,7 @@ class SteppingController(SwingPhase):
             raise ScenarioError(
                 "ankle_limited_polygon needs torque limits (torque_limits = 'model' or 'human')"
             )
-        weight = float(np.sum(self.model.body_mass)) * self._gravity
+        weight = self._mass * self._gravity
         out = []
         for leg in self.body.leg_joints:
             k = self.joint_names.index(leg[4])

@@ -208,13 +208,10 @@ class SwingPhase:
         """Set the single-support QP's friction this period: its pyramid's mu less what the swing
         leg's planned horizontal inertial force takes of the weight's friction,
         ``swing_inertia_share`` x leg mass x |a_xy| / (m g), at least ``swing_friction_min_scale`` mu."""
-        s, m = self.stepping, self.model
+        s = self.stepping
         qp = self._ctrl_swing.qp
         w = qp.weights
-        bodies = {int(m.jnt_bodyid[m.joint(j).id]) for j in self.body.leg_joints[i]}
-        leg = float(sum(m.body_mass[b] for b in bodies))
-        total = float(np.sum(m.body_mass))
-        take = share * leg * float(np.hypot(ad[0], ad[1])) / (total * self._gravity)
+        take = share * self._leg_mass[i] * float(np.hypot(ad[0], ad[1])) / (self._mass * self._gravity)
         qp._prm[6] = max(w.friction * w.friction_scale - take, s.swing_friction_min_scale * w.friction)
 
     def _knee_guarded(self, tau: np.ndarray, st: int) -> np.ndarray:

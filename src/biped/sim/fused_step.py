@@ -135,11 +135,6 @@ class SteppingRows:
             self.ints,
         )
 
-    @property
-    def limits(self):
-        """The policy's torque limits (its ``_out`` clips every output), or None."""
-        return self.policy.limits
-
     def enter(self):
         """(W's controller, set point array, gains array) of the policy's next double-support
         periods, its state and parameters loaded; None if the next period is Python's (a swing,
