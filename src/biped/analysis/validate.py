@@ -472,23 +472,31 @@ def ankle_to_toe_m(model: str) -> float:
     return float(np.mean(out))
 
 
-def run_experiment(exp: Experiment, neuromotor: str, iterations: int) -> Threshold:
+def run_experiment(
+    exp: Experiment, neuromotor: str, iterations: int, progress: Callable[[Trial], None] | None = None
+) -> Threshold:
     """The threshold of ``exp`` for the preset by bisection of the magnitude in [lo, hi] on a
-    logarithmic scale, ``iterations`` halvings after the bracket's two trials."""
-    trials = []
-    lo_t = run_trial(exp, neuromotor, exp.lo)
-    trials.append(lo_t)
+    logarithmic scale, ``iterations`` halvings after the bracket's two trials; ``progress`` is
+    called with each trial as it ends."""
+    trials: list[Trial] = []
+
+    def run(magnitude: float) -> Trial:
+        t = run_trial(exp, neuromotor, magnitude)
+        trials.append(t)
+        if progress is not None:
+            progress(t)
+        return t
+
+    lo_t = run(exp.lo)
     if not lo_t.survived:
         return Threshold(exp.key, neuromotor, exp.lo, exp.unit, "<", None, trials)
-    hi_t = run_trial(exp, neuromotor, exp.hi)
-    trials.append(hi_t)
+    hi_t = run(exp.hi)
     if hi_t.survived:
         return Threshold(exp.key, neuromotor, exp.hi, exp.unit, ">", hi_t, trials)
     lo, hi, best = exp.lo, exp.hi, lo_t
     for _ in range(iterations):
         mid = math.sqrt(lo * hi)
-        t = run_trial(exp, neuromotor, mid)
-        trials.append(t)
+        t = run(mid)
         if t.survived:
             lo, best = mid, t
         else:

@@ -5,6 +5,7 @@ trials.parquet."""
 
 from __future__ import annotations
 
+import sys
 import time
 
 from biped.cli._common import add_folder_options, run_dir
@@ -48,7 +49,6 @@ def run(args) -> int:
 
 
 def _run(args) -> int:
-    import sys
 
     from biped.analysis.validate import EXPERIMENTS, run_experiment
     from biped.errors import ScenarioError, unknown_name
@@ -74,7 +74,7 @@ def _run(args) -> int:
             per: dict = {}
             results[name] = per
             for preset in presets:
-                th = run_experiment(EXPERIMENTS[name], preset, iterations)
+                th = run_experiment(EXPERIMENTS[name], preset, iterations, progress=_said(name, preset))
                 per[preset] = th
                 n += len(th.trials)
                 print(
@@ -101,3 +101,15 @@ def _run(args) -> int:
         f"  wrote {out}/validation.md, validation.json, trials.parquet, figures/ ({n} trials, {wall:.1f} s)"
     )
     return 0
+
+
+def _said(name: str, preset: str):
+    """Each trial's line on stderr as it ends (a trial may take seconds: the user sees it work)."""
+
+    def said(t) -> None:
+        what = "survived" if t.survived else "fell"
+        print(
+            f"    {name} {preset}: {t.magnitude:.4g} {t.unit} {what} ({t.wall_time_s:.1f} s)", file=sys.stderr
+        )
+
+    return said
