@@ -76,7 +76,11 @@ PETERKA_DAMPING_MGH_S = 0.35
 #: Rate of torque development: knee extensors of young men 881.7 N m/s, older men 577.5 N m/s
 #: (Quinlan et al. 2018, J Gerontol A 73:539-545, PMC5861887); taken for the shipped 73 kg body
 #: and given to the other joints in proportion to their maximal torque (the rate of torque
-#: development scales with maximal strength; Thelen et al. 1996), scaled with body mass.
+#: development scales with maximal strength; Thelen et al. 1996), scaled with body mass. With the
+#: activation lag, a maximal step command rises at exactly this rate for the first ~0.2 s (the
+#: lag alone would ask u / tau, 4.4 times more), so the mean RTD over 0-50, 0-100 and 0-200 ms and
+#: the peak are the cited figure: no double counting (tests/test_rtd.py; docs/validate.md "Is the
+#: rate limit the cited RTD?").
 KNEE_RTD_YOUNG_N_M_S = 881.7
 OLDER_RATE_FACTOR = 577.5 / 881.7
 #: Strength of older adults relative to young ones: 26 % less dorsiflexor and 32 % less knee
