@@ -361,7 +361,7 @@ def _run(args) -> int:
         prewarm()
     scene = build_scene(scenario)
     warm_up(
-        kernels_for(scenario.controller, scenario.distribution, stepping=scenario.stepping),
+        kernels_for(scenario.controller, scenario.distribution),
         log=lambda line: print(line, file=sys.stderr),
         tick=sys.stderr,
     )
