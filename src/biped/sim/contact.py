@@ -180,6 +180,9 @@ _BLOCK_BIT = 1 << len(SOLE_GEOMS)
 _LYING_BIT = 1 << (len(SOLE_GEOMS) + 1)
 _SPLIT_BIT = 1 << (len(SOLE_GEOMS) + 2)
 _SOLE_MASK = _BLOCK_BIT - 1
+#: Each foot's sole bits: SOLE_GEOMS lists the left foot's heel and toe, then the right's (the one
+#: definition; the compiled loop's kernels import them).
+_LEFT_MASK, _RIGHT_MASK = 0b0011, 0b1100
 
 
 def _flag_arrays() -> tuple[np.ndarray, ...]:
@@ -194,7 +197,12 @@ def _flag_arrays() -> tuple[np.ndarray, ...]:
 
 _FLAGS = _flag_arrays()
 #: (left foot, right foot) on the floor (heel or toe) for each value of the sole bits.
-_FEET = tuple((bool(b & 0b0011), bool(b & 0b1100)) for b in range(1 << len(SOLE_GEOMS)))
+_FEET = tuple((bool(b & _LEFT_MASK), bool(b & _RIGHT_MASK)) for b in range(1 << len(SOLE_GEOMS)))
+
+
+def feet_of_bits(bits: int) -> tuple[bool, bool]:
+    """(left, right) foot on the floor (heel or toe) of the contact monitor's ``bits``."""
+    return _FEET[bits & _SOLE_MASK]
 
 
 # One explicit signature: MuJoCo's ``data.contact.geom`` / ``.pos`` are strided views (layout
