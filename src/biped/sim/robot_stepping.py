@@ -80,6 +80,7 @@ from biped.control.stepping_body import SteppingBody, facing_rotation, leg_chain
 from biped.control.swing_task import swing_pose_torques
 from biped.errors import ModelError
 from biped.models.robot import RobotDescription, plant_model, robot_soles, robot_tree
+from biped.sim.measure import subtree
 from biped.spatial import axis_angle_quat, quat_mul, quat_to_rot, transform
 
 __all__ = [
@@ -330,9 +331,7 @@ class FootContacts:
         self.floor = int(m.geom(floor).id)
         self.geom_foot = np.full(m.ngeom, -1, dtype=int)
         for k, name in enumerate(desc.feet):
-            f = m.body(name).id
-            sub = [b for b in range(m.nbody) if _descends(m, b, f)]
-            self.geom_foot[np.isin(m.geom_bodyid, sub)] = k
+            self.geom_foot[np.isin(m.geom_bodyid, subtree(m, m.body(name).id))] = k
 
     def __call__(self, d: mujoco.MjData) -> tuple[bool, bool]:
         out = [False, False]
@@ -342,14 +341,6 @@ class FootContacts:
             if other >= 0 and self.geom_foot[other] >= 0:
                 out[self.geom_foot[other]] = True
         return out[0], out[1]
-
-
-def _descends(m: mujoco.MjModel, b: int, top: int) -> bool:
-    while b > 0:
-        if b == top:
-            return True
-        b = int(m.body_parentid[b])
-    return False
 
 
 def set_point_height(stepper: SteppingController) -> float:
