@@ -72,7 +72,6 @@ import mujoco
 import numpy as np
 
 from biped.control import capture as cp
-from biped.control.distribution import QPWeights
 from biped.control.policy import PolicyConfig
 from biped.control.setpoint import Target
 from biped.control.stepping import SteppingConfig, SteppingController
@@ -283,7 +282,7 @@ def robot_stepper(
     body = robot_stepping_body(desc, qpos, target)
     if big_base is not None:
         body = replace(body, big_base=big_base)
-    from biped.sim.robot import robot_torque_limits  # (robot.py imports this module)
+    from biped.sim.robot import robot_qp_weights, robot_torque_limits  # (robot.py imports this module)
 
     tree = robot_tree(desc)
     lim = robot_torque_limits(desc, tree, torque_limits)
@@ -294,7 +293,7 @@ def robot_stepper(
         target=target,
         torque_limits=lim,
         distribution=distribution,
-        qp_weights=QPWeights(floor_friction=floor_friction) if distribution == "qp" else None,
+        qp_weights=robot_qp_weights(distribution, floor_friction),
         model_path=str(desc.path),
     )
     stand = max(
