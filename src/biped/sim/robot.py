@@ -374,7 +374,7 @@ def robot_push(
         from biped.sim.robot_stepping import FootContacts, robot_stepper, set_point_height
 
         stepper = robot_stepper(
-            desc, q0, ctrl.target, stepping, distribution, torque_limits, big_base, qp_floor_friction
+            desc, q0, ctrl.target, stepping, distribution, torque_limits, big_base, qp_floor_friction, tree
         )
         feet = FootContacts(m, desc, FLOOR)
     lean = None
