@@ -325,18 +325,10 @@ class ContactMonitor:
     @classmethod
     def of_scene(cls, scene, fall_height_m: float) -> ContactMonitor:
         """The monitor of a push scene (:class:`biped.sim.scene.Scene`): its floor, block, soles
-        (one box a foot: ``scene.sole_boxes``), biped geoms and central body; a fall below
-        ``fall_height_m`` [m] (the scenario's)."""
-        return cls(
-            scene.model,
-            floor_geom=scene.floor_geom,
-            block_geom=scene.block_geom,
-            sole_geoms=scene.sole_geoms,
-            biped_geoms=scene.biped_geoms,
-            central_body=scene.central_body,
-            fall_height_m=fall_height_m,
-            sole_boxes=scene.sole_boxes,
-        )
+        (one box a foot: ``scene.sole_boxes``), biped geoms and central body, the scene's fields of
+        the same names; a fall below ``fall_height_m`` [m] (the scenario's)."""
+        fields = ("floor_geom", "block_geom", "sole_geoms", "biped_geoms", "central_body", "sole_boxes")
+        return cls(scene.model, fall_height_m=fall_height_m, **{f: getattr(scene, f) for f in fields})
 
     def _lying_geom(self, data) -> str:
         """Name of the biped geom (not a sole) of the first contact, in MuJoCo's order, that
