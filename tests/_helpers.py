@@ -11,6 +11,7 @@ import json
 import shutil
 import subprocess
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -38,6 +39,19 @@ def one_line_error(err: str, command: str) -> str:
     assert "Traceback" not in err
     assert len(lines) == 1 and lines[0].startswith(f"biped {command}: error: "), err
     return lines[0]
+
+
+def random_states(m, n: int, seed: int, spread: float = 0.25, vel: float = 1.0):
+    """``n`` MjData of W's biped ``m`` after ``mj_forward``: its initial keyframe with each joint
+    moved uniformly within +-``spread`` [rad] and normal velocities of SD ``vel``, from ``seed``."""
+    rng = np.random.default_rng(seed)
+    for _ in range(n):
+        d = mujoco.MjData(m)
+        d.qpos[:] = m.key_qpos[m.key("wendlandt_initial").id]
+        d.qpos[7:] += rng.uniform(-spread, spread, m.nq - 7)
+        d.qvel[:] = rng.normal(0.0, vel, m.nv)
+        mujoco.mj_forward(m, d)
+        yield d
 
 
 # ---------------------------------------------------------------------------------------------
