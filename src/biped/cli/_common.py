@@ -347,6 +347,14 @@ def add_folder_options(parser, default: str = "a new one under runs/") -> None:
     )
 
 
+def add_file_options(parser) -> None:
+    """``--no-video``, ``--no-replay`` and ``--no-figures`` of a command that writes those files
+    of a run (push, walk)."""
+    parser.add_argument("--no-video", action="store_true", help="skip video.mp4")
+    parser.add_argument("--no-replay", action="store_true", help="skip replay.html")
+    parser.add_argument("--no-figures", action="store_true", help="skip figures/")
+
+
 def frame_bar(**tqdm_kwargs):
     """``(on_frame, close)``: ``on_frame(done, total)`` (the video renderer's progress) draws a tqdm
     bar "rendering video.mp4" of ``total`` frames (whole lines when stderr is not a terminal,

@@ -12,7 +12,7 @@ import os
 import sys
 from pathlib import Path
 
-from biped.cli._common import add_folder_options, command_seconds, frame_bar, run_dir
+from biped.cli._common import add_file_options, add_folder_options, command_seconds, frame_bar, run_dir
 
 
 def register(subparsers) -> None:
@@ -89,9 +89,7 @@ def register(subparsers) -> None:
         "--set 'kp_com=[60, 60, 200]' --set target_axis='\"-x\"'",
     )
     add_folder_options(p)
-    p.add_argument("--no-video", action="store_true", help="skip video.mp4")
-    p.add_argument("--no-replay", action="store_true", help="skip replay.html")
-    p.add_argument("--no-figures", action="store_true", help="skip figures/")
+    add_file_options(p)
     p.add_argument("--svg", action="store_true", help="figures as SVG too (default: PNG only)")
     p.add_argument("--viewer", action="store_true", help="show the run live in MuJoCo's viewer")
     p.add_argument("--quiet", action="store_true", help="no progress bar")

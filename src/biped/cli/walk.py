@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from biped.cli._common import add_folder_options, check_range, run_dir
+from biped.cli._common import add_file_options, add_folder_options, check_range, run_dir
 from biped.errors import ScenarioError
 
 _DEFAULT_STEPS = {"forward": 6, "upstairs": 5}
@@ -85,9 +85,7 @@ def register(subparsers) -> None:
     )
     add_folder_options(p)
     p.add_argument("--no-dynamics", action="store_true", help="skip the inverse dynamics")
-    p.add_argument("--no-video", action="store_true", help="skip video.mp4")
-    p.add_argument("--no-replay", action="store_true", help="skip replay.html")
-    p.add_argument("--no-figures", action="store_true", help="skip figures/")
+    add_file_options(p)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
