@@ -72,6 +72,16 @@ def walk_argv(
     return argv
 
 
+def paradigm_push(out, perturbation: str) -> dict:
+    """``biped push --perturbation PERTURBATION`` of 0.4 s on fast physics into ``out``, quiet,
+    without video, replay or figures (it must exit 0): its summary.json."""
+    from biped.cli import main
+
+    argv = ["push", "--perturbation", perturbation, "--duration", "0.4", "--set", 'physics="fast"', "--quiet"]
+    assert main([*argv, "--no-video", "--no-replay", "--no-figures", "--out", str(out)]) == 0
+    return json.loads((out / "summary.json").read_text())
+
+
 def tiny_sweep_argv(out, *extra: str, direction: str = "0") -> list[str]:
     """``biped sweep`` of joint-PD trials at 3 m/s from ``direction`` (deg), 0.02 s each, one
     worker, quiet, into ``out``: seconds of work."""
