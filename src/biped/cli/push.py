@@ -12,7 +12,14 @@ import os
 import sys
 from pathlib import Path
 
-from biped.cli._common import add_file_options, add_folder_options, command_seconds, frame_bar, run_dir
+from biped.cli._common import (
+    add_file_options,
+    add_folder_options,
+    command_seconds,
+    frame_bar,
+    keeps_mujoco_log,
+    run_dir,
+)
 
 
 def register(subparsers) -> None:
@@ -325,15 +332,8 @@ def _writer_progress(quiet: bool):
     return on_stage, on_frame, on_figure, close
 
 
+@keeps_mujoco_log
 def run(args) -> int:
-    """The command; MuJoCo's warnings go to its output's log while it runs (then back)."""
-    from biped.sim.mjlog import preserved
-
-    with preserved():
-        return _run(args)
-
-
-def _run(args) -> int:
     import time
 
     from biped.models.robot import robot_for

@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from biped.cli._common import add_file_options, add_folder_options, check_range, run_dir
+from biped.cli._common import add_file_options, add_folder_options, check_range, keeps_mujoco_log, run_dir
 from biped.errors import ScenarioError
 
 _DEFAULT_STEPS = {"forward": 6, "upstairs": 5}
@@ -165,15 +165,8 @@ def _out_dir(args) -> Path:
     return run_dir(args.out, f"walk-{args.gait}", overwrite=args.overwrite)
 
 
+@keeps_mujoco_log
 def run(args) -> int:
-    """The command; MuJoCo's warnings go to its output's log while it runs (then back)."""
-    from biped.sim.mjlog import preserved
-
-    with preserved():
-        return _run(args)
-
-
-def _run(args) -> int:
     import time
 
     from biped._progress import progress_bar
