@@ -50,6 +50,21 @@ def per_call_us(fn, calls: int) -> np.ndarray:
     return out / 1e3
 
 
+def sampled(fns: dict, calls: int, rounds: int) -> tuple[int, dict[str, np.ndarray]]:
+    """Each of ``fns`` warmed up (1000 calls), then ``rounds`` rounds of ``calls // rounds`` timed
+    calls of each in turn (interleaved: a slow spell of the machine hits every one alike):
+    (calls per round, the per-call times [us] by name)."""
+    for fn in fns.values():  # warm up
+        for _ in range(1000):
+            fn()
+    per_round = max(1, calls // rounds)
+    samples: dict[str, list] = {name: [] for name in fns}
+    for _ in range(rounds):
+        for name, fn in fns.items():
+            samples[name].append(per_call_us(fn, per_round))
+    return per_round, {name: np.concatenate(s) for name, s in samples.items()}
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--calls", type=int, default=20000, help="timed calls per function (>= 10^4)")
@@ -115,15 +130,7 @@ def main(argv=None) -> int:
     except ImportError:
         print("pinocchio is not installed: no reference; pip install pin")
 
-    for fn in fns.values():  # warm up
-        for _ in range(1000):
-            fn()
-    per_round = max(1, args.calls // args.rounds)
-    samples = {name: [] for name in fns}
-    for _ in range(args.rounds):
-        for name, fn in fns.items():
-            samples[name].append(per_call_us(fn, per_round))
-    stats = {name: np.concatenate(s) for name, s in samples.items()}
+    per_round, stats = sampled(fns, args.calls, args.rounds)
 
     print(
         f"W's biped ({m.nbody - 1} bodies, {m.nv} DOF), {per_round * args.rounds} calls each, "
@@ -259,16 +266,8 @@ def robot_bench(args) -> int:
         v, tau = rng.normal(0.0, 0.3, pm.nv), rng.normal(size=pm.nv)
         fns[f"pin.aba ({name})"] = functools.partial(pin.aba, pm, pd, q, v, tau)
         fns[f"pin.rnea ({name})"] = functools.partial(pin.rnea, pm, pd, q, v, tau)
-    for fn in fns.values():  # warm up
-        for _ in range(1000):
-            fn()
-    per_round = max(1, args.calls // args.rounds)
-    samples: dict[str, list] = {name: [] for name in fns}
-    load0 = os.getloadavg()[0]
-    for _ in range(args.rounds):
-        for name, fn in fns.items():
-            samples[name].append(per_call_us(fn, per_round))
-    stats = {name: np.concatenate(s) for name, s in samples.items()}
+    load0 = os.getloadavg()[0]  # before the warm-up (~1 s) and the rounds
+    per_round, stats = sampled(fns, args.calls, args.rounds)
     print(
         f"{desc.path.name} ({desc.mass:.2f} kg): folded tree {pf.nv} DOF ({tree.nv} in the file's "
         f"layout), whole file {pw.nv} DOF; masses [kg] {', '.join(f'{k} {v:.2f}' for k, v in mass.items())}; "

@@ -58,6 +58,30 @@ def _timed(fn):
     return out, time.perf_counter() - w, time.thread_time() - c
 
 
+def _warm(sc, scene, compiled=None) -> None:
+    """A short run of ``sc`` outside the timers (compiles, warms: the QP's first solve)."""
+    run_closed_loop(sc.with_overrides(duration_s=0.1), scene, controller_policy(sc, scene), compiled=compiled)
+
+
+def _interleaved(cases, repeat, after=None):
+    """``repeat`` rounds of one timed closed loop of each case (name: (scenario, scene, compiled)),
+    its controller built outside the timer; ``after(name, scenario, scene, result)`` runs after
+    each, outside the timer. Returns the last results, and the wall and thread-CPU times [s] of
+    every round, by name."""
+    results: dict = {}
+    wall: dict = {k: [] for k in cases}
+    cpu: dict = {k: [] for k in cases}
+    for _ in range(repeat):
+        for name, (sc, scene, compiled) in cases.items():
+            policy = controller_policy(sc, scene)  # built outside the timer
+            results[name], w, c = _timed(lambda: run_closed_loop(sc, scene, policy, compiled=compiled))  # noqa: B023
+            wall[name].append(w)
+            cpu[name].append(c)
+            if after is not None:
+                after(name, sc, scene, results[name])
+    return results, wall, cpu
+
+
 def physics_loop(scenario, scene, torques, steps):
     """The bare reference: same scene and initial state, ``ctrl`` set per control period,
     ``mj_step`` for the period's substeps; returns the final data."""
@@ -236,17 +260,9 @@ def paradigms(args) -> None:
     for name, keys in PARADIGM_RUNS.items():
         sc = base.with_overrides(**keys)
         scene = build_scene(sc)
-        run_closed_loop(sc.with_overrides(duration_s=0.1), scene, controller_policy(sc, scene))  # warm
-        setups[name] = (sc, scene)
-    wall: dict = {k: [] for k in setups}
-    cpu: dict = {k: [] for k in setups}
-    results = {}
-    for _ in range(args.repeat):
-        for name, (sc, scene) in setups.items():
-            policy = controller_policy(sc, scene)  # built outside the timer
-            results[name], w, c = _timed(lambda: run_closed_loop(sc, scene, policy))  # noqa: B023
-            wall[name].append(w)
-            cpu[name].append(c)
+        _warm(sc, scene)
+        setups[name] = (sc, scene, None)
+    results, wall, cpu = _interleaved(setups, args.repeat)
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(
         f"machine: {platform.processor() or platform.machine()}, {os.cpu_count()} cores; load average "
@@ -306,23 +322,17 @@ def stepping(args) -> None:
         "stepping, hold push, Python loop": (_sweep_trial(args.hold_push, args, True), False),
         "stepping, step push, Python loop": (_sweep_trial(args.step_push, args, True), False),
     }
-    scenes = {}
+    setups = {}
     for name, (sc, compiled) in cases.items():
-        scene = scenes[name] = build_scene(sc)
-        run_closed_loop(
-            sc.with_overrides(duration_s=0.1), scene, controller_policy(sc, scene), compiled=compiled
-        )
-    cpu: dict = {k: [] for k in cases}
+        scene = build_scene(sc)
+        _warm(sc, scene, compiled)
+        setups[name] = (sc, scene, compiled)
     phys: dict = {k: [] for k in cases}  # the bare mj_step loop driven by the trial's torques
-    results = {}
-    for _ in range(args.repeat):
-        for name, (sc, compiled) in cases.items():
-            scene = scenes[name]
-            policy = controller_policy(sc, scene)  # built outside the timer
-            results[name], _, c = _timed(lambda: run_closed_loop(sc, scene, policy, compiled=compiled))  # noqa: B023
-            cpu[name].append(c)
-            tq, steps = results[name].torques, len(results[name].times) - 1
-            phys[name].append(_timed(lambda: physics_loop(sc, scene, tq, steps))[2])  # noqa: B023
+
+    def physics(name, sc, scene, r) -> None:
+        phys[name].append(_timed(lambda: physics_loop(sc, scene, r.torques, len(r.times) - 1))[2])
+
+    results, _, cpu = _interleaved(setups, args.repeat, physics)
     load = os.getloadavg() if hasattr(os, "getloadavg") else (float("nan"),) * 3
     sc0 = cases["feet in place, hold push"][0]
     print(

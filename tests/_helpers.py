@@ -11,6 +11,7 @@ import json
 import shutil
 import subprocess
 
+import mujoco
 import numpy as np
 import pytest
 
@@ -40,6 +41,19 @@ def one_line_error(err: str, command: str) -> str:
     return lines[0]
 
 
+def random_states(m, n: int, seed: int, spread: float = 0.25, vel: float = 1.0):
+    """``n`` MjData of W's biped ``m`` after ``mj_forward``: its initial keyframe with each joint
+    moved uniformly within +-``spread`` [rad] and normal velocities of SD ``vel``, from ``seed``."""
+    rng = np.random.default_rng(seed)
+    for _ in range(n):
+        d = mujoco.MjData(m)
+        d.qpos[:] = m.key_qpos[m.key("wendlandt_initial").id]
+        d.qpos[7:] += rng.uniform(-spread, spread, m.nq - 7)
+        d.qvel[:] = rng.normal(0.0, vel, m.nv)
+        mujoco.mj_forward(m, d)
+        yield d
+
+
 # ---------------------------------------------------------------------------------------------
 # command lines of small runs
 
@@ -56,6 +70,16 @@ def walk_argv(
     if not files:
         argv += ["--no-replay", "--no-figures", "--no-dynamics"]
     return argv
+
+
+def paradigm_push(out, perturbation: str) -> dict:
+    """``biped push --perturbation PERTURBATION`` of 0.4 s on fast physics into ``out``, quiet,
+    without video, replay or figures (it must exit 0): its summary.json."""
+    from biped.cli import main
+
+    argv = ["push", "--perturbation", perturbation, "--duration", "0.4", "--set", 'physics="fast"', "--quiet"]
+    assert main([*argv, "--no-video", "--no-replay", "--no-figures", "--out", str(out)]) == 0
+    return json.loads((out / "summary.json").read_text())
 
 
 def tiny_sweep_argv(out, *extra: str, direction: str = "0") -> list[str]:

@@ -15,6 +15,7 @@ import itertools
 import mujoco
 import numpy as np
 import pytest
+from _helpers import random_states
 from scipy.optimize import nnls
 
 from biped.control import WorkspaceController
@@ -107,17 +108,6 @@ def test_sole_rectangle_is_the_bottom_of_the_sole_boxes(wendlandt_mj, soles):
         np.testing.assert_allclose(sole.half_width, np.ptp(bottom[:, 1]) / 2, atol=2e-3)
 
 
-def _states(m, n, seed, spread=0.25, vel=1.0):
-    rng = np.random.default_rng(seed)
-    for _ in range(n):
-        d = mujoco.MjData(m)
-        d.qpos[:] = m.key_qpos[m.key("wendlandt_initial").id]
-        d.qpos[7:] += rng.uniform(-spread, spread, m.nq - 7)
-        d.qvel[:] = rng.normal(0.0, vel, m.nv)
-        mujoco.mj_forward(m, d)
-        yield d
-
-
 def _sole_wrenches(m, d, out, soles):
     """The foot wrenches of ``out`` moved to the sole frames (numpy, MuJoCo's poses), and the
     same wrenches moved to the central body by MuJoCo's poses."""
@@ -163,7 +153,7 @@ def test_qp_wrenches_satisfy_every_cone_cop_and_torque_row(ctrls, wendlandt_mj, 
     mu = wts.friction * wts.friction_scale
     lim = HUMAN.reorder(ctrl.joint_names)
     active = 0
-    for d in _states(m, 40, 1, vel=2.0):
+    for d in random_states(m, 40, 1, vel=2.0):
         out = ctrl.compute(d.qpos, d.qvel)
         assert ctrl.qp.status == SOLVED
         sole_w, body_w = _sole_wrenches(m, d, out, soles)
@@ -191,7 +181,7 @@ def test_clipping_after_the_qp_is_a_no_op(ctrls, wendlandt_mj):
     m = wendlandt_mj
     lim = HUMAN.reorder(ctrls["qp_human"].joint_names)
     clipped_statics = 0.0
-    for d in _states(m, 30, 2, vel=3.0):
+    for d in random_states(m, 30, 2, vel=3.0):
         tau = ctrls["qp_human"].compute(d.qpos, d.qvel).torques
         np.testing.assert_allclose(clip_torques(tau, lim), tau, atol=1e-6)
         ts = ctrls["statics"].compute(d.qpos, d.qvel).torques
@@ -209,7 +199,7 @@ def test_qp_reproduces_a_feasible_min_norm_split(ctrls, wendlandt_mj, soles):
     W = np.array([wts.force] * 3 + [wts.moment] * 3)
     reg = np.array([wts.reg_force] * 3 + [wts.reg_moment] * 3)
     checked = 0
-    for d in _states(m, 60, 3, spread=0.1, vel=0.3):
+    for d in random_states(m, 60, 3, spread=0.1, vel=0.3):
         mn = ctrls["statics"].compute(d.qpos, d.qvel)
         sole_mn, _ = _sole_wrenches(m, d, mn, soles)
         if not all(
@@ -234,7 +224,7 @@ def test_quadprog_matches_daqp_and_the_kkt_conditions(ctrls, wendlandt_mj):
     m = wendlandt_mj
     a, b = ctrls["qp_human"], ctrls["qp_quadprog"]
     assert (a.qp.solver, b.qp.solver) == ("daqp", "quadprog")
-    for i, d in enumerate(_states(m, 30, 4, vel=2.0)):
+    for i, d in enumerate(random_states(m, 30, 4, vel=2.0)):
         ta = a.compute(d.qpos, d.qvel).torques
         tb = b.compute(d.qpos, d.qvel).torques
         xa, xb = a.qp.x.copy(), b.qp.x.copy()
@@ -266,7 +256,7 @@ def test_quadprog_matches_daqp_and_the_kkt_conditions(ctrls, wendlandt_mj):
 def test_a_foot_in_the_air_carries_nothing(ctrls, wendlandt_mj):
     ctrl = ctrls["qp_human"]
     right = [i for i, n in enumerate(ctrl.joint_names) if n.startswith("right")]
-    for d in _states(wendlandt_mj, 5, 5):
+    for d in random_states(wendlandt_mj, 5, 5):
         out = ctrl.compute(d.qpos, d.qvel, feet_in_contact=(True, False))
         assert np.all(out.foot_wrench_right == 0) and np.all(out.wrench_right == 0)
         assert np.all(out.torques[right] == 0)
@@ -287,7 +277,7 @@ def test_infeasible_qp_falls_back_without_an_exception(wendlandt_path, wendlandt
     ctrl = WorkspaceController.from_mjcf(
         wendlandt_path, distribution="qp", torque_limits=tiny, qp_solver=solver, qp_weights=weights
     )
-    d = next(_states(wendlandt_mj, 1, 6))
+    d = next(random_states(wendlandt_mj, 1, 6))
     tau = ctrl.compute(d.qpos, d.qvel).torques
     assert ctrl.qp.status == RELAXED and ctrl.qp.fallbacks[RELAXED] == 1
     assert np.all(np.abs(tau) <= 0.01 + 1e-9)
@@ -299,7 +289,7 @@ def test_a_failed_solve_zeroes_the_wrenches_without_an_exception(wendlandt_path,
     (or too large for double precision in the cost) leaves no solution; the call returns zero
     wrenches (status ZEROED, counted) instead of raising, and the next sane state solves again."""
     ctrl = WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", qp_solver=solver)
-    d = next(_states(wendlandt_mj, 1, 7))
+    d = next(random_states(wendlandt_mj, 1, 7))
     good = ctrl.compute(d.qpos, d.qvel).torques
     qp = ctrl.qp
     for k, bad in enumerate(
@@ -373,7 +363,7 @@ def test_the_qp_policy_always_senses_the_feet(wendlandt_mj):
     diverged); the "qp" policy takes the sensed feet whatever ``support`` says."""
     from biped.control.policy import PolicyConfig, make_policy
 
-    d = next(_states(wendlandt_mj, 1, 8))
+    d = next(random_states(wendlandt_mj, 1, 8))
     qp = make_policy(PolicyConfig(distribution="qp", support="fixed"))
     ws = make_policy(PolicyConfig(distribution="statics", support="fixed"))
     right = [i for i, n in enumerate(qp.joint_names) if n.startswith("right")]
@@ -394,7 +384,7 @@ def test_unlimited_qp_torques_are_alg6_of_the_shares(ctrls, wendlandt_path, wend
     mapped = WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", torque_limits=wide)
     ctrl = ctrls["qp"]
     assert not ctrl.qp.limited and mapped.qp.limited
-    for i, d in enumerate(_states(wendlandt_mj, 10, 9, vel=1.0)):
+    for i, d in enumerate(random_states(wendlandt_mj, 10, 9, vel=1.0)):
         feet = ((True, True), (True, False), (False, True))[i % 3]
         out = ctrl.compute(d.qpos, d.qvel, feet_in_contact=feet)
         ref = mapped.compute(d.qpos, d.qvel, feet_in_contact=feet)
@@ -427,7 +417,7 @@ def test_the_legs_weight_in_the_cones_is_mujocos(ctrls, wendlandt_mj, soles):
     mu = wts.friction * wts.friction_scale
     assert wts.leg_weight == 1.0  # the default
     beyond_share = 0
-    for d in _states(m, 30, 11, vel=2.0):
+    for d in random_states(m, 30, 11, vel=2.0):
         out = ctrl.compute(d.qpos, d.qvel)
         assert ctrl.qp.status == SOLVED
         sole_w, _ = _sole_wrenches(m, d, out, soles)

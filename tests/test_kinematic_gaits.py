@@ -15,6 +15,7 @@ import pytest
 
 from biped.errors import ScenarioError
 from biped.kinematic import (
+    JOINT_NAMES,
     GaitParams,
     demo,
     figure_mjcf,
@@ -44,23 +45,7 @@ def _soles_by_mujoco(motion):
     from scipy.spatial.transform import Rotation
 
     quat = Rotation.from_matrix(motion.pelvis_rot).as_quat()[:, [3, 0, 1, 2]]
-    adr = [
-        m.joint(n).qposadr[0]
-        for n in (
-            "torso_roll",
-            "torso_pitch",
-            "left_hip_flexion",
-            "left_knee",
-            "left_ankle_dorsiflexion",
-            "right_hip_flexion",
-            "right_knee",
-            "right_ankle_dorsiflexion",
-            "left_shoulder_flexion",
-            "left_elbow_flexion",
-            "right_shoulder_flexion",
-            "right_elbow_flexion",
-        )
-    ]
+    adr = [m.joint(n).qposadr[0] for n in JOINT_NAMES]  # motion.angles' columns
     local = np.stack(
         [
             np.linspace(-d_.heel_back, d_.toe_front, N_SOLE),

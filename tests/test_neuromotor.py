@@ -116,8 +116,7 @@ def test_the_delayed_feet_agree_with_the_contact_monitor():
     from biped.sim import contact, fused_kernel, neuro
 
     assert neuro.STANDING == fused_kernel._STANDING == contact._SOLE_MASK  # both soles down
-    for bits in range(16):
-        assert contact._FEET[bits] == (bool(bits & neuro._LEFT_MASK), bool(bits & neuro._RIGHT_MASK))
+    assert contact.feet_of_bits(neuro.STANDING) == (True, True)
 
 
 @pytest.mark.parametrize(

@@ -7,6 +7,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 import pytest
+from _helpers import paradigm_push
 
 from biped.errors import ScenarioError
 from biped.sim import Scenario, build_scene
@@ -302,14 +303,7 @@ def test_sweep_magnitude_and_direction_set_the_paradigm(paradigm, magnitude, key
 
 
 def test_push_command_runs_a_paradigm_and_names_its_strategy(tmp_path):
-    from biped.cli import main
-
-    out = tmp_path / "run"
-    argv = ["push", "--perturbation", "force", "--duration", "0.4", "--set", 'physics="fast"', "--quiet"]
-    assert main([*argv, "--no-video", "--no-replay", "--no-figures", "--out", str(out)]) == 0
-    import json
-
-    summary = json.loads((out / "summary.json").read_text())
+    summary = paradigm_push(tmp_path / "run", "force")
     assert summary["perturbation"]["paradigm"] == "force"
     assert summary["perturbation"]["impulse_applied_n_s"] == pytest.approx([-9.0, 0.0, 0.0])
     assert summary["response"]["strategy"] in ("ankle", "hip")

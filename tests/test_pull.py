@@ -6,6 +6,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 import pytest
+from _helpers import paradigm_push
 
 from biped.errors import ScenarioError
 from biped.sim import Scenario, build_scene
@@ -109,14 +110,7 @@ def test_pull_keys_stay_out_of_a_default_scenario():
 
 
 def test_push_command_runs_the_pull_and_names_its_strategy(tmp_path):
-    import json
-
-    from biped.cli import main
-
-    out = tmp_path / "run"
-    argv = ["push", "--perturbation", "pull", "--duration", "0.4", "--set", 'physics="fast"', "--quiet"]
-    assert main([*argv, "--no-video", "--no-replay", "--no-figures", "--out", str(out)]) == 0
-    summary = json.loads((out / "summary.json").read_text())
+    summary = paradigm_push(tmp_path / "run", "pull")
     assert summary["perturbation"]["paradigm"] == "pull"
     assert summary["perturbation"]["peak_tension_n"] > 0.0
     assert summary["response"]["strategy"] in ("ankle", "hip", "step", "fall")

@@ -15,6 +15,7 @@ import mujoco
 import numpy as np
 import pytest
 import quadprog
+from _helpers import random_states
 
 from biped.control import WorkspaceController
 from biped.control.daqp_c import XS, _unused, daqp_c, unconstrained
@@ -26,16 +27,6 @@ pytestmark = pytest.mark.skipif(daqp_c() is None, reason="the installed daqp is 
 
 HUMAN = torque_limits("human")
 CONTACTS = (None, (True, False), (False, True), (False, False))
-
-
-def _states(m, n, seed, spread=0.25, vel=1.0):
-    rng = np.random.default_rng(seed)
-    for _ in range(n):
-        d = mujoco.MjData(m)
-        d.qpos[:] = m.key_qpos[m.key("wendlandt_initial").id]
-        d.qpos[7:] += rng.uniform(-spread, spread, m.nq - 7)
-        d.qvel[:] = rng.normal(0.0, vel, m.nv)
-        yield d
 
 
 def _pair(path, limits):
@@ -57,8 +48,8 @@ def test_compiled_call_is_the_python_path_bit_for_bit_and_daqp_to_rounding(
     lim = TorqueLimits("t", HUMAN.joint_names, scale * HUMAN.lower, scale * HUMAN.upper)
     fast, slow = _pair(wendlandt_path, lim)
     counts = {"free": 0, "active": 0}
-    calm = [(d, None) for d in _states(wendlandt_mj, 3, 4, 0.01, 0.01)]  # near standing: no active row
-    moving = [(d, CONTACTS[i % 4]) for i, d in enumerate(_states(wendlandt_mj, 12, 3))]
+    calm = [(d, None) for d in random_states(wendlandt_mj, 3, 4, 0.01, 0.01)]  # near standing: no active row
+    moving = [(d, CONTACTS[i % 4]) for i, d in enumerate(random_states(wendlandt_mj, 12, 3))]
     for d, feet in calm + moving:
         a = fast.compute(d.qpos, d.qvel, feet_in_contact=feet)
         b = slow.compute(d.qpos, d.qvel, feet_in_contact=feet)
@@ -113,7 +104,7 @@ def test_compiled_fallbacks_when_daqp_fails(wendlandt_path, wendlandt_mj):
     bit for bit the Python path."""
     tiny = TorqueLimits("tiny", HUMAN.joint_names, -0.01 * np.ones(12), 0.01 * np.ones(12))
     fast, slow = _pair(wendlandt_path, tiny)
-    d = next(_states(wendlandt_mj, 1, 6))
+    d = next(random_states(wendlandt_mj, 1, 6))
     fn = fast.qp._qi[H_FN]
     fast.qp._qi[H_FN] = _unused.address
     out = fast.compute(d.qpos, d.qvel)
@@ -127,7 +118,7 @@ def test_compiled_fallbacks_when_daqp_fails(wendlandt_path, wendlandt_mj):
 
 def test_compiled_call_allocates_nothing(wendlandt_path, wendlandt_mj):
     ctrl = WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", torque_limits=HUMAN)
-    d = next(_states(wendlandt_mj, 1, 2))
+    d = next(random_states(wendlandt_mj, 1, 2))
     qpos, qvel = d.qpos.copy(), np.zeros(wendlandt_mj.nv)
     for _ in range(10):
         ctrl.torques(qpos, qvel)
@@ -188,7 +179,7 @@ def test_torque_map_is_the_soles_jacobian_transpose(wendlandt_path, wendlandt_mj
     is minus the transpose of the soles' Jacobians from MuJoCo, and the six Alg. 6 passes it
     replaced, on random states of W's biped."""
     ctrl = WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", torque_limits=HUMAN)
-    assert _check_torque_map(wendlandt_mj, ctrl, _states(wendlandt_mj, 8, 11)) > 0.1
+    assert _check_torque_map(wendlandt_mj, ctrl, random_states(wendlandt_mj, 8, 11)) > 0.1
 
 
 def test_torque_map_on_g1_is_the_soles_jacobian_transpose():

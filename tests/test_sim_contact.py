@@ -325,15 +325,8 @@ def test_monitor_classifies_a_lying_biped_and_a_resting_block():
     d.qpos[scene.biped_qpos_index[3:7]] = axis_angle_quat(np.array([1.0, 0.0, 0.0]), math.pi / 2)
     d.qpos[scene.biped_qpos_index[2]] = 0.25
     mujoco.mj_forward(m, d)
-    mon = ContactMonitor(
-        m,
-        floor_geom=scene.floor_geom,
-        block_geom=scene.block_geom,
-        sole_geoms=scene.sole_geoms,
-        biped_geoms=scene.biped_geoms,
-        central_body=scene.central_body,
-        fall_height_m=s.fall_height_m,
-    )
+    assert scene.sole_boxes == ()  # W's soles, two geoms a foot
+    mon = ContactMonitor.of_scene(scene, s.fall_height_m)
     ref = ReferenceMonitor(m, scene, s.fall_height_m)
     for k in range(300):
         mon.update(k * 0.001, d)

@@ -40,12 +40,18 @@ def assert_same(a, b):
         assert getattr(a, name) == getattr(b, name), name
 
 
-def test_bits_agree_with_the_contact_monitor():
-    assert fused._LYING_BIT == contact._LYING_BIT
-    assert fused._LEFT_MASK | fused._RIGHT_MASK == contact._SOLE_MASK
-    assert all(
-        contact._FEET[b] == (bool(b & fused._LEFT_MASK), bool(b & fused._RIGHT_MASK)) for b in range(16)
-    )
+def test_the_feet_masks_follow_the_sole_table():
+    """The loop's (contact's) per-foot masks against SOLE_GEOMS: bit i is sole part i."""
+    for b in range(1 << len(contact.SOLE_GEOMS)):
+        on = [foot for i, (foot, _) in enumerate(contact.SOLE_GEOMS) if b >> i & 1]
+        feet = ("left" in on, "right" in on)
+        assert (bool(b & fused._LEFT_MASK), bool(b & fused._RIGHT_MASK)) == feet
+        assert (
+            contact._FEET[b]
+            == contact.feet_of_bits(b)
+            == contact.feet_of_bits(b | contact._BLOCK_BIT)
+            == feet
+        )
 
 
 def test_cache_key_covers_the_controller_sources():

@@ -146,7 +146,6 @@ def test_warm_up_one_line_when_cold_nothing_when_warm(monkeypatch):
     assert "qp" not in jit.kernels_for("workspace")
     # every run is the compiled loop's (the joint PD's, the QP's and a stepping one's too)
     assert "loop" in jit.kernels_for("joint-pd") and "loop" in jit.kernels_for("workspace", "qp")
-    assert "loop" in jit.kernels_for("workspace", "qp", stepping=True)
     # a robot's trial is robot_push's Python loop: compiling the push loop for it cost 43 s
     assert jit.kernels_for("workspace", "qp", sweep=True, robot=True) == ("controller", "qp")
 

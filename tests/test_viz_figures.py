@@ -20,6 +20,7 @@ import pytest
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
+from biped.models import JOINT_NAMES
 from biped.viz.push_figures import (
     ZOOM_S,
     fig3_joint_angles,
@@ -61,18 +62,6 @@ def _fake_run(T=301, dt=0.01):
     target = _target()
     quat = np.array([_compose(target, r, p, y) for r, p, y in zip(roll, pitch, yaw, strict=False)])
     quat[::7] *= -1  # the sign of a quaternion is free
-    joints = [
-        f"{s}_{j}"
-        for s in ("left", "right")
-        for j in (
-            "hip_abduction",
-            "hip_flexion",
-            "hip_rotation",
-            "knee",
-            "ankle_inversion",
-            "ankle_dorsiflexion",
-        )
-    ]
     ev = SimpleNamespace
     events = (
         ev(time_s=0.086, foot="left", part="heel", kind="lift_off"),
@@ -84,7 +73,7 @@ def _fake_run(T=301, dt=0.01):
         times=t,
         quat=quat,
         target_quat=target,
-        joint_names=tuple(joints),
+        joint_names=JOINT_NAMES,  # W's biped's 12 leg joints
         joint_angles=rng.normal(size=(T, 12)).cumsum(0) * 0.01,
         torques=rng.normal(size=(T, 12)),
         com=np.column_stack([0.01 * np.sin(t), 0 * t, 1.1 + 0 * t]),

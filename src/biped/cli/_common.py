@@ -28,6 +28,7 @@ command returns or fails.
 from __future__ import annotations
 
 import datetime as _dt
+import functools
 import json
 import math
 import os
@@ -345,6 +346,29 @@ def add_folder_options(parser, default: str = "a new one under runs/") -> None:
         action="store_true",
         help="allow writing into a folder that already holds a run (its files are removed first)",
     )
+
+
+def keeps_mujoco_log(command):
+    """``command(args)`` (a command's ``run``) with MuJoCo's log routing put back after it
+    (:func:`biped.sim.mjlog.preserved`): the command routes MuJoCo's warnings to its output's
+    log while it runs, and one run from Python (e.g. by the tests) leaves no routing behind."""
+
+    @functools.wraps(command)
+    def run(args) -> int:
+        from biped.sim.mjlog import preserved
+
+        with preserved():
+            return command(args)
+
+    return run
+
+
+def add_file_options(parser) -> None:
+    """``--no-video``, ``--no-replay`` and ``--no-figures`` of a command that writes those files
+    of a run (push, walk)."""
+    parser.add_argument("--no-video", action="store_true", help="skip video.mp4")
+    parser.add_argument("--no-replay", action="store_true", help="skip replay.html")
+    parser.add_argument("--no-figures", action="store_true", help="skip figures/")
 
 
 def frame_bar(**tqdm_kwargs):

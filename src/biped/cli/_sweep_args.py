@@ -237,7 +237,6 @@ def warm_up_kernels(spec, **kwargs) -> None:
             spec.base.controller,
             spec.base.distribution,
             sweep=True,
-            stepping=spec.base.stepping,
             robot=bool(spec.robot),
         ),
         log=lambda line: print(line, file=sys.stderr),

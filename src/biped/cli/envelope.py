@@ -14,7 +14,7 @@ import math
 import sys
 from pathlib import Path
 
-from biped.cli._common import check_file_writable, stopped_trials
+from biped.cli._common import check_file_writable, keeps_mujoco_log, stopped_trials
 from biped.cli._sweep_args import add_by_option, draw_envelope, warm_up_kernels
 from biped.errors import ScenarioError
 
@@ -169,14 +169,8 @@ def build(args):
     return spec, out
 
 
+@keeps_mujoco_log
 def run(args) -> int:
-    from biped.sim.mjlog import preserved
-
-    with preserved():
-        return _run(args)
-
-
-def _run(args) -> int:
     from biped.cli._sweep_args import _check_plot
     from biped.sim.early_stop import applies as early_stop_applies
     from biped.sim.sweep import check_run_args

@@ -12,7 +12,14 @@ import os
 import sys
 from pathlib import Path
 
-from biped.cli._common import add_folder_options, command_seconds, frame_bar, run_dir
+from biped.cli._common import (
+    add_file_options,
+    add_folder_options,
+    command_seconds,
+    frame_bar,
+    keeps_mujoco_log,
+    run_dir,
+)
 
 
 def register(subparsers) -> None:
@@ -89,9 +96,7 @@ def register(subparsers) -> None:
         "--set 'kp_com=[60, 60, 200]' --set target_axis='\"-x\"'",
     )
     add_folder_options(p)
-    p.add_argument("--no-video", action="store_true", help="skip video.mp4")
-    p.add_argument("--no-replay", action="store_true", help="skip replay.html")
-    p.add_argument("--no-figures", action="store_true", help="skip figures/")
+    add_file_options(p)
     p.add_argument("--svg", action="store_true", help="figures as SVG too (default: PNG only)")
     p.add_argument("--viewer", action="store_true", help="show the run live in MuJoCo's viewer")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
@@ -327,15 +332,8 @@ def _writer_progress(quiet: bool):
     return on_stage, on_frame, on_figure, close
 
 
+@keeps_mujoco_log
 def run(args) -> int:
-    """The command; MuJoCo's warnings go to its output's log while it runs (then back)."""
-    from biped.sim.mjlog import preserved
-
-    with preserved():
-        return _run(args)
-
-
-def _run(args) -> int:
     import time
 
     from biped.models.robot import robot_for
@@ -361,7 +359,7 @@ def _run(args) -> int:
         prewarm()
     scene = build_scene(scenario)
     warm_up(
-        kernels_for(scenario.controller, scenario.distribution, stepping=scenario.stepping),
+        kernels_for(scenario.controller, scenario.distribution),
         log=lambda line: print(line, file=sys.stderr),
         tick=sys.stderr,
     )

@@ -50,7 +50,7 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
             f"--model {args.model}: {', '.join(given)} not supported on robots yet; valid: --duration, "
             f"--distribution, --timestep, --block-position, --block-velocity, --block-mass, --stepping"
         )
-    release = _release(args) if pert == "release" else None
+    release = _release(args, values) if pert == "release" else None
     distribution = args.distribution or "qp"
     floor_friction = bool(Scenario().with_overrides(**_floor_key(values)).qp_floor_friction)
     seconds = args.duration if args.duration is not None else 3.0
@@ -156,17 +156,17 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
     return 0
 
 
-def _release(args):
+def _release(args, values: dict):
     """The lean of ``--perturbation release`` on a robot: W's keys (``--set release_lean_deg=...``,
-    ``release_direction_deg``, ``release_time_s``; their defaults and checks), the direction in
-    the robot's own terms (0 forward: the robots face +x, so the world direction; 90 to its
-    left, +y)."""
+    ``release_direction_deg``, ``release_time_s``; their defaults and checks; ``values`` the
+    parsed ``--set``), the direction in the robot's own terms (0 forward: the robots face +x, so
+    the world direction; 90 to its left, +y)."""
     from biped.errors import ScenarioError
     from biped.sim.robot_release import ReleaseLean
     from biped.sim.scenario import Scenario
 
     keys = ("release_lean_deg", "release_direction_deg", "release_time_s")
-    values = {k: v for k, v in _set_values(args).items() if k != "qp_floor_friction"}
+    values = {k: v for k, v in values.items() if k != "qp_floor_friction"}
     other = sorted(set(values) - set(keys))
     if other:
         raise ScenarioError(

@@ -11,7 +11,7 @@ import math
 import sys
 from pathlib import Path
 
-from biped.cli._common import check_file_writable, stopped_trials
+from biped.cli._common import check_file_writable, keeps_mujoco_log, stopped_trials
 from biped.cli._sweep_args import (  # build_spec: also this module's, as before
     _AXIS_OPTIONS,
     _check_plot,
@@ -176,15 +176,8 @@ def _say_warnings(table, mjlog: Path, before: int) -> None:
     print(f"MuJoCo warned {n} time{'s' if n != 1 else ''} ({trials}see {mjlog})", file=sys.stderr)
 
 
+@keeps_mujoco_log
 def run(args) -> int:
-    """The command; MuJoCo's warnings go to its output's log while it runs (then back)."""
-    from biped.sim.mjlog import preserved
-
-    with preserved():
-        return _run(args)
-
-
-def _run(args) -> int:
     from biped.files import check_no_link
     from biped.sim.sweep import check_run_args, check_setups, connect_scheduler, parts_dir
     from biped.sim.sweep.store import check_parts_dir, check_same_sweep, lock_path
@@ -229,7 +222,7 @@ def _run(args) -> int:
 
 
 def _sweep(args, spec, out: Path, n: int, where: str, client) -> int:
-    """The sweep itself, its inputs checked (:func:`_run`)."""
+    """The sweep itself, its inputs checked (:func:`run`)."""
     from biped.analysis import survived
     from biped.sim.mjlog import count_warnings, route_to
     from biped.sim.sweep import load, run_sweep

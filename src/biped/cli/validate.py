@@ -8,7 +8,7 @@ from __future__ import annotations
 import sys
 import time
 
-from biped.cli._common import add_folder_options, run_dir
+from biped.cli._common import add_folder_options, keeps_mujoco_log, run_dir
 
 #: Bisection halvings after the bracket: --quick, full.
 QUICK_ITERATIONS, FULL_ITERATIONS = 3, 9
@@ -40,15 +40,8 @@ def register(subparsers) -> None:
     p.set_defaults(func=run, _parser=p)
 
 
+@keeps_mujoco_log
 def run(args) -> int:
-    """The command; MuJoCo's warnings go to its folder's log while it runs (then back)."""
-    from biped.sim.mjlog import preserved
-
-    with preserved():
-        return _run(args)
-
-
-def _run(args) -> int:
 
     from biped.analysis.validate import EXPERIMENTS, run_experiment
     from biped.errors import ScenarioError, unknown_name

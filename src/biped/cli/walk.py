@@ -10,7 +10,7 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
-from biped.cli._common import add_folder_options, check_range, run_dir
+from biped.cli._common import add_file_options, add_folder_options, check_range, keeps_mujoco_log, run_dir
 from biped.errors import ScenarioError
 
 _DEFAULT_STEPS = {"forward": 6, "upstairs": 5}
@@ -85,9 +85,7 @@ def register(subparsers) -> None:
     )
     add_folder_options(p)
     p.add_argument("--no-dynamics", action="store_true", help="skip the inverse dynamics")
-    p.add_argument("--no-video", action="store_true", help="skip video.mp4")
-    p.add_argument("--no-replay", action="store_true", help="skip replay.html")
-    p.add_argument("--no-figures", action="store_true", help="skip figures/")
+    add_file_options(p)
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(func=run)
 
@@ -167,15 +165,8 @@ def _out_dir(args) -> Path:
     return run_dir(args.out, f"walk-{args.gait}", overwrite=args.overwrite)
 
 
+@keeps_mujoco_log
 def run(args) -> int:
-    """The command; MuJoCo's warnings go to its output's log while it runs (then back)."""
-    from biped.sim.mjlog import preserved
-
-    with preserved():
-        return _run(args)
-
-
-def _run(args) -> int:
     import time
 
     from biped._progress import progress_bar

@@ -180,6 +180,9 @@ _BLOCK_BIT = 1 << len(SOLE_GEOMS)
 _LYING_BIT = 1 << (len(SOLE_GEOMS) + 1)
 _SPLIT_BIT = 1 << (len(SOLE_GEOMS) + 2)
 _SOLE_MASK = _BLOCK_BIT - 1
+#: Each foot's sole bits: SOLE_GEOMS lists the left foot's heel and toe, then the right's (the one
+#: definition; the compiled loop's kernels import them).
+_LEFT_MASK, _RIGHT_MASK = 0b0011, 0b1100
 
 
 def _flag_arrays() -> tuple[np.ndarray, ...]:
@@ -194,7 +197,12 @@ def _flag_arrays() -> tuple[np.ndarray, ...]:
 
 _FLAGS = _flag_arrays()
 #: (left foot, right foot) on the floor (heel or toe) for each value of the sole bits.
-_FEET = tuple((bool(b & 0b0011), bool(b & 0b1100)) for b in range(1 << len(SOLE_GEOMS)))
+_FEET = tuple((bool(b & _LEFT_MASK), bool(b & _RIGHT_MASK)) for b in range(1 << len(SOLE_GEOMS)))
+
+
+def feet_of_bits(bits: int) -> tuple[bool, bool]:
+    """(left, right) foot on the floor (heel or toe) of the contact monitor's ``bits``."""
+    return _FEET[bits & _SOLE_MASK]
 
 
 # One explicit signature: MuJoCo's ``data.contact.geom`` / ``.pos`` are strided views (layout
@@ -313,6 +321,14 @@ class ContactMonitor:
         self.fall_time_s: float | None = None
         self.fall_reason: str | None = None
         self._started = False
+
+    @classmethod
+    def of_scene(cls, scene, fall_height_m: float) -> ContactMonitor:
+        """The monitor of a push scene (:class:`biped.sim.scene.Scene`): its floor, block, soles
+        (one box a foot: ``scene.sole_boxes``), biped geoms and central body, the scene's fields of
+        the same names; a fall below ``fall_height_m`` [m] (the scenario's)."""
+        fields = ("floor_geom", "block_geom", "sole_geoms", "biped_geoms", "central_body", "sole_boxes")
+        return cls(scene.model, fall_height_m=fall_height_m, **{f: getattr(scene, f) for f in fields})
 
     def _lying_geom(self, data) -> str:
         """Name of the biped geom (not a sole) of the first contact, in MuJoCo's order, that

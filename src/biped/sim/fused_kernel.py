@@ -19,7 +19,7 @@ from biped.control.distribution import qp_build, qp_finish
 from biped.control.neuromotor import neural_filter
 from biped.control.recursions import compute_kernel
 from biped.sim import contact as contact_mod
-from biped.sim.contact import contact_code
+from biped.sim.contact import _LEFT_MASK, _LYING_BIT, _RIGHT_MASK, contact_code
 from biped.sim.fused_qp import QP_TYPES, call_solve
 from biped.sim.fused_step import STEP_TYPES, stepping_row
 from biped.sim.loop_measures import record_row
@@ -29,11 +29,6 @@ from biped.sim.schedule import SCHEDULE_TYPES, apply_row
 # why run_rows returned (low 3 bits of its result; the row is result >> 3)
 DONE, FELL, LAST, DIVERGED, PYTHON = 0, 1, 2, 3, 4
 
-# bits of a contact pair's code: biped.sim.contact's table (repeated to keep this kernel's
-# globals plain ints; tests/test_sim_fused.py checks they agree)
-_LYING_BIT = 1 << 5
-_LEFT_MASK = 0b0011
-_RIGHT_MASK = 0b1100
 _STANDING = 0b1111  # biped.sim.neuro.STANDING
 
 # p (int params) entries

@@ -24,6 +24,7 @@ import numpy as np
 from numba import njit, types
 
 from biped.control import step_trigger as trig
+from biped.sim.contact import _LEFT_MASK, _RIGHT_MASK
 from biped.sim.mjdata import STEP_SIG, mj_function
 
 __all__ = ["STEP_TYPES", "SteppingRows", "placeholder_arguments", "stepping_row"]
@@ -42,7 +43,6 @@ STEP_TYPES = (
     types.int64[::1],  # the int parameters (step_trigger.NI)
 )
 
-_LEFT_MASK, _RIGHT_MASK = 0b0011, 0b1100  # biped.sim.contact's sole bits
 _FUNCTIONS = ("mj_kinematics", "mj_comPos", "mj_comVel", "mj_subtreeVel")
 
 

@@ -61,16 +61,15 @@ def kernels_for(
     distribution: str = "statics",
     *,
     sweep: bool = False,
-    stepping: bool = False,
     robot: bool = False,
 ) -> tuple[str, ...]:
     """The kernels a push run with ``controller`` (``"workspace"`` or ``"joint-pd"``) and the
     workspace controller's ``distribution`` uses; ``sweep``: and a sweep row's response
     (:mod:`biped.sim.mos`). Every run goes through the compiled push loop
     (:func:`biped.sim.push.run_closed_loop`), the joint PD's, the QP's and a stepping one's too
-    (whose swings call the controller's and the QP's kernels from Python; ``stepping`` changes
-    nothing); a ``robot`` trial (:func:`biped.sim.robot.robot_push`), which measures no response,
-    goes through its own Python loop."""
+    (whose swings call the controller's and the QP's kernels from Python); a ``robot`` trial
+    (:func:`biped.sim.robot.robot_push`), which measures no response, goes through its own
+    Python loop."""
     calls = ("controller", "qp") if distribution == "qp" else ("controller",)
     if robot:
         return calls

@@ -42,6 +42,7 @@ __all__ = [
     "foot_bodies",
     "foot_drift",
     "measure_rows",
+    "subtree",
 ]
 
 #: The two feet, in the order of every (n, 2, ...) array.
@@ -78,12 +79,13 @@ class RowMeasurements:
 
 def foot_bodies(model: mujoco.MjModel) -> tuple[np.ndarray, np.ndarray]:
     """(left, right): the body ids of each foot (``<side>_foot``) and of every body below it."""
-    out = []
-    for side in FEET:
-        root = model.body(f"{side}_foot").id
-        ids = [b for b in range(model.nbody) if _below(model, b, root)]
-        out.append(np.array(ids, dtype=np.int64))
-    return out[0], out[1]
+    left, right = (subtree(model, model.body(f"{side}_foot").id) for side in FEET)
+    return left, right
+
+
+def subtree(model: mujoco.MjModel, root: int) -> np.ndarray:
+    """The ids of body ``root`` and of every body below it, ascending (int64)."""
+    return np.array([b for b in range(model.nbody) if _below(model, b, root)], dtype=np.int64)
 
 
 def _below(model, body: int, root: int) -> bool:

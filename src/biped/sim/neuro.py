@@ -20,18 +20,14 @@ import numpy as np
 from biped import models
 from biped.control.neuromotor import OLDER_RATE_FACTOR, human_rate_limits, neural_filter
 from biped.models import JOINT_NAMES
+from biped.sim.contact import feet_of_bits
 
+# feet_of_bits is biped.sim.contact's, offered here as before (biped.sim.policies imports it from here)
 __all__ = ["NeuroLoop", "feet_of_bits", "neuro_loop", "rate_limits"]
 
-_LEFT_MASK, _RIGHT_MASK = 0b0011, 0b1100  # biped.sim.contact's sole bits (tests check they agree)
 #: The contacts the controller sees before t = 0 + feedback_delay_s: both soles down (the subject
 #: stood before the run; W's biped starts 5 mm above the floor and lands in a few ms).
 STANDING = 0b1111
-
-
-def feet_of_bits(bits: int) -> tuple[bool, bool]:
-    """(left, right) sole on the floor of the contact monitor's ``bits``."""
-    return bool(bits & _LEFT_MASK), bool(bits & _RIGHT_MASK)
 
 
 def rate_limits(scenario) -> np.ndarray:
@@ -73,8 +69,7 @@ class NeuroLoop:
         self.ring_bits[i] = bits
         j = max(k - self.delay, 0) % n
         b = int(self.ring_bits[j]) if k >= self.delay else STANDING
-        feet = (bool(b & _LEFT_MASK), bool(b & _RIGHT_MASK))
-        out[:] = policy(t, self.ring_q[j], self.ring_v[j], feet)
+        out[:] = policy(t, self.ring_q[j], self.ring_v[j], feet_of_bits(b))
         if self.filtered:
             neural_filter(out, self.act, self.alpha, self.rate_step, k == 0)
 

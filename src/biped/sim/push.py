@@ -201,16 +201,7 @@ def run_closed_loop(
     d.qpos[:] = qpos0
     d.qvel[:] = qvel0
     mujoco.mj_forward(m, d)
-    monitor = ContactMonitor(
-        m,
-        floor_geom=scene.floor_geom,
-        block_geom=scene.block_geom,
-        sole_geoms=scene.sole_geoms,
-        biped_geoms=scene.biped_geoms,
-        central_body=scene.central_body,
-        fall_height_m=scenario.fall_height_m,
-        sole_boxes=scene.sole_boxes,
-    )
+    monitor = ContactMonitor.of_scene(scene, scenario.fall_height_m)
     n_ctrl, sub, period = scenario.control_steps, scenario.control_substeps, 1.0 / scenario.control_rate_hz
     n = n_ctrl + 1
     qpos, qvel, com, torques = np.zeros((n, m.nq)), np.zeros((n, m.nv)), np.zeros((n, 3)), np.zeros((n, 12))
@@ -456,7 +447,7 @@ def simulate(
         )
     scene = scene or build_scene(scenario)
     # says so when cold
-    announce_and_warm(kernels_for(scenario.controller, scenario.distribution, stepping=scenario.stepping))
+    announce_and_warm(kernels_for(scenario.controller, scenario.distribution))
     return run_closed_loop(
         scenario, scene, controller_policy(scenario, scene), progress=progress, on_step=on_step
     )

@@ -253,6 +253,14 @@ def robot_controller(desc: RobotDescription, distribution: str = "qp", torque_li
     )
 
 
+def robot_qp_weights(distribution: str, floor_friction: bool) -> QPWeights | None:
+    """The QP's weights on a robot: W's, with the friction pyramid on the floor's axes
+    (``floor_friction``: W's scenario key ``qp_floor_friction``) or the sole's; None without
+    the QP. The one rule of :func:`robot_push`'s controller and the stepping controller's
+    feet-in-place QP (:func:`biped.sim.robot_stepping.robot_stepper`)."""
+    return QPWeights(floor_friction=floor_friction) if distribution == "qp" else None
+
+
 def robot_torque_limits(desc: RobotDescription, tree, torque_limits: str) -> TorqueLimits | None:
     """The legs' torque limits of ``torque_limits``: "model" (the joints' ``actuatorfrcrange``,
     in ``tree``'s joint order) or "none" (None); anything else is refused."""
@@ -316,8 +324,8 @@ def robot_push(
     ``release`` (a :class:`~biped.sim.robot_release.ReleaseLean`): W's lean-and-release, the run
     starting leaned and tethered (:mod:`biped.sim.robot_release`); ``qp_floor_friction``: the
     QP's friction pyramid on the floor's axes (W's scenario key, ``QPWeights.floor_friction``)."""
-    qp = {"qp_weights": QPWeights(floor_friction=True)} if qp_floor_friction and distribution == "qp" else {}
-    ctrl = robot_controller(desc, distribution, torque_limits, big_base=big_base, **qp)
+    qp = robot_qp_weights(distribution, qp_floor_friction)
+    ctrl = robot_controller(desc, distribution, torque_limits, big_base=big_base, qp_weights=qp)
     q0 = standing_qpos(desc, ctrl)
     g = ctrl.link_poses(q0)[0]
     ctrl.target = Target(com=tuple(g[:3, 3]), quat=tuple(rot_to_quat(np.ascontiguousarray(g[:3, :3]))))
@@ -366,7 +374,7 @@ def robot_push(
         from biped.sim.robot_stepping import FootContacts, robot_stepper, set_point_height
 
         stepper = robot_stepper(
-            desc, q0, ctrl.target, stepping, distribution, torque_limits, big_base, qp_floor_friction
+            desc, q0, ctrl.target, stepping, distribution, torque_limits, big_base, qp_floor_friction, tree
         )
         feet = FootContacts(m, desc, FLOOR)
     lean = None

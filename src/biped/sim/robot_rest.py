@@ -6,7 +6,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from biped.models.robot import RobotDescription, robot_tree
+from biped.models.robot import RobotDescription
 from biped.sim.early_stop import (
     BLOCK_SPEED_M_S,
     BLOCK_SPIN_RAD_S,
@@ -46,7 +46,7 @@ class RobotRest:
         self.gravity = float(-m.opt.gravity[2])
         j = int(root.jntadr[0])
         self.lin = int(m.jnt_dofadr[j])
-        self.legs = np.array([m.jnt_dofadr[m.joint(n).id] for n in robot_tree(desc).joint_names])
+        self.legs = np.array([m.jnt_dofadr[m.joint(n).id] for n in desc.leg_joints])  # the tree's joints
         self.others = np.asarray(others, dtype=int)  # other bodies' dofs (the platform's slide)
         self.block = block
         if block:

@@ -72,14 +72,15 @@ import mujoco
 import numpy as np
 
 from biped.control import capture as cp
-from biped.control.distribution import QPWeights
 from biped.control.policy import PolicyConfig
 from biped.control.setpoint import Target
 from biped.control.stepping import SteppingConfig, SteppingController
 from biped.control.stepping_body import SteppingBody, facing_rotation, leg_chains, leg_length, w_body
 from biped.control.swing_task import swing_pose_torques
 from biped.errors import ModelError
+from biped.model import TreeModel
 from biped.models.robot import RobotDescription, plant_model, robot_soles, robot_tree
+from biped.sim.measure import subtree
 from biped.spatial import axis_angle_quat, quat_mul, quat_to_rot, transform
 
 __all__ = [
@@ -202,12 +203,15 @@ def scaled_stepping(
     )
 
 
-def robot_stepping_body(desc: RobotDescription, qpos: np.ndarray, target: Target) -> SteppingBody:
+def robot_stepping_body(
+    desc: RobotDescription, qpos: np.ndarray, target: Target, tree: TreeModel | None = None
+) -> SteppingBody:
     """The stepping controller's structure of the robot ``desc`` (the module's rules), at its
-    standing pose ``qpos`` (the plant's layout) with the standing set point ``target``."""
+    standing pose ``qpos`` (the plant's layout) with the standing set point ``target``; ``tree``:
+    the robot's :func:`~biped.models.robot.robot_tree` if already built."""
     from biped.sim.robot import ROBOT_BIG_BASE
 
-    tree = robot_tree(desc)
+    tree = robot_tree(desc) if tree is None else tree
     legs = leg_chains(tree)
     m = plant_model(desc)
     d = mujoco.MjData(m)
@@ -222,8 +226,9 @@ def robot_stepping_body(desc: RobotDescription, qpos: np.ndarray, target: Target
     from biped.models.robot import controller_model
 
     cm = controller_model(desc)  # the soles are in its (fused) foot's inertial frame
+    rects = robot_soles(desc)
     soles, axes, rots = [], [], []
-    for b, s in zip(feet, robot_soles(desc), strict=True):
+    for b, s in zip(feet, rects, strict=True):
         cb = cm.body(m.body(b).name).id
         g = (
             transform(quat_to_rot(cm.body_iquat[cb]), cm.body_ipos[cb]) @ s.g_foot_sole
@@ -259,7 +264,7 @@ def robot_stepping_body(desc: RobotDescription, qpos: np.ndarray, target: Target
         sole_axes=(axes[0], axes[1]),
         foot_rotation=(rots[0], rots[1]),
         facing=facing,
-        controller_soles=robot_soles(desc),
+        controller_soles=rects,
         big_base=ROBOT_BIG_BASE,
     )
 
@@ -273,18 +278,21 @@ def robot_stepper(
     torque_limits: str = "model",
     big_base: float | None = None,
     floor_friction: bool = False,
+    tree: TreeModel | None = None,
 ) -> SteppingController:
     """The stepping controller on the robot: W's controller and QP with the robot's soles and
     ``torque_limits`` ("model": the joints' ``actuatorfrcrange``), ``stepping`` scaled
     (:func:`scaled_stepping`), its set point ``target`` at the standing pose ``qpos``;
     ``floor_friction``: the feet-in-place QP's (before the first step) friction pyramid on the
-    floor's axes (W's ``qp_floor_friction``; the stepping QP's is ``stepping.floor_friction``)."""
-    body = robot_stepping_body(desc, qpos, target)
+    floor's axes (W's ``qp_floor_friction``; the stepping QP's is ``stepping.floor_friction``);
+    ``tree``: the robot's :func:`~biped.models.robot.robot_tree` if already built (the plant
+    controller's: it is immutable)."""
+    tree = robot_tree(desc) if tree is None else tree
+    body = robot_stepping_body(desc, qpos, target, tree)
     if big_base is not None:
         body = replace(body, big_base=big_base)
-    from biped.sim.robot import robot_torque_limits  # (robot.py imports this module)
+    from biped.sim.robot import robot_qp_weights, robot_torque_limits  # (robot.py imports this module)
 
-    tree = robot_tree(desc)
     lim = robot_torque_limits(desc, tree, torque_limits)
     d = mujoco.MjData(body.model)
     d.qpos[:] = qpos
@@ -293,7 +301,7 @@ def robot_stepper(
         target=target,
         torque_limits=lim,
         distribution=distribution,
-        qp_weights=QPWeights(floor_friction=floor_friction) if distribution == "qp" else None,
+        qp_weights=robot_qp_weights(distribution, floor_friction),
         model_path=str(desc.path),
     )
     stand = max(
@@ -330,9 +338,7 @@ class FootContacts:
         self.floor = int(m.geom(floor).id)
         self.geom_foot = np.full(m.ngeom, -1, dtype=int)
         for k, name in enumerate(desc.feet):
-            f = m.body(name).id
-            sub = [b for b in range(m.nbody) if _descends(m, b, f)]
-            self.geom_foot[np.isin(m.geom_bodyid, sub)] = k
+            self.geom_foot[np.isin(m.geom_bodyid, subtree(m, m.body(name).id))] = k
 
     def __call__(self, d: mujoco.MjData) -> tuple[bool, bool]:
         out = [False, False]
@@ -342,14 +348,6 @@ class FootContacts:
             if other >= 0 and self.geom_foot[other] >= 0:
                 out[self.geom_foot[other]] = True
         return out[0], out[1]
-
-
-def _descends(m: mujoco.MjModel, b: int, top: int) -> bool:
-    while b > 0:
-        if b == top:
-            return True
-        b = int(m.body_parentid[b])
-    return False
 
 
 def set_point_height(stepper: SteppingController) -> float:
