@@ -38,6 +38,15 @@ class SteppingConfig:
     swing_height_drop_m, swing_tilt_deg: while a foot swings the stance leg holds the body this
     much lower than the set point (reach) and upright but for this tilt about -y (the set point's
     forward tilt moves the hips back, away from a forward step).
+    knee_carried_drop: with torque limits (and no ``span_leg_m``), both drops above no deeper
+        than each stance knee's extension limit carries the whole weight with the CoP at its
+        sole's end farthest from the knee (the heel in W's crouch), the knee found again for the
+        lowered hips from the standing pose (:func:`biped.control.leg_geometry.knee_carried_drop`,
+        once at the first call): lowering the hips bends the knees further and moves them ahead
+        of the feet, so the knee that must hold the body over one foot needs more torque. W's
+        crouch with human limits: 236 N m needed standing against the knee's 234 N m, so the
+        drops are 0 (with 8 cm, the stance knee at its limit for most of a backward step's swing,
+        the body sank 13 cm per step and fell after three at 20 m/s from the front).
     post_step_rest_drop_m: if set, the set point after a step is post_step_height_drop_m below
     the standing one only while the COM moves at settle_speed_m_s or faster, and rises linearly
     with the COM's horizontal speed to this drop at rest (robots: the crouch keeps the front
@@ -156,6 +165,7 @@ class SteppingConfig:
     swing_height_drop_m: float = 0.08
     post_step_height_drop_m: float = 0.08
     post_step_rest_drop_m: float | None = None
+    knee_carried_drop: bool = False
     swing_tilt_deg: float = 0.0
     span_leg_m: float | None = None
     stand_hip_m: float | None = None
@@ -208,6 +218,7 @@ class SteppingConfig:
                 "side_margin_m": 0.04,
                 "airborne_stance": True,
                 "crossover": True,
+                "knee_carried_drop": True,
                 **kw,
             }
         elif trigger != "capture":
