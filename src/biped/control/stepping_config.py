@@ -131,7 +131,7 @@ class SteppingConfig:
     stance slip at 135 deg from 21.8 to 1.4 cm but lowered the front's limit with human torque
     limits and the 1.55 m subject's from behind, docs/sweep.md) and
     lateral_rot_gain_scale 1 (docs/controller.md, "Stance-foot slip"), dwell_s 0.5 s,
-    side_margin_m 0.04, airborne_stance and crossover; closing_step stays off (it lowered every
+    side_margin_m 0.04, airborne_stance, crossover and knee_carried_drop; closing_step stays off (it lowered every
     direction's envelope, docs/sweep.md).
     """
 
