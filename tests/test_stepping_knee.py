@@ -182,3 +182,24 @@ def test_front_push_of_hofs_bound_with_human_limits_ends_at_rest():
     assert sink < 0.025, sink
     old, old_sink = runs[False]
     assert old.fell and not old.recovered and old_sink > 0.10, old_sink
+
+
+@pytest.mark.slow
+def test_human_limit_push_compiled_is_the_python_loop():
+    """The 20 m/s front push with human limits (knee-carried drop, three steps) in the compiled
+    loop (double support compiled, the swings in Python) against the Python loop: the same
+    states, steps and outcome bit for bit."""
+    from test_sim_fused import assert_same
+
+    from biped.sim.push import run_closed_loop
+
+    sc, setup = _sweep_setup(20, 0, "--torque-limits", "human")
+    runs = []
+    for compiled in (True, False):
+        pol, scene = _policy(setup)
+        runs.append((run_closed_loop(sc, scene, pol, compiled=compiled), pol._knee_drop))
+    (a, da), (b, db) = runs
+    assert da == db == 0.0
+    assert len(a.extra["steps"]) == 3 and a.extra["steps"] == b.extra["steps"]
+    assert a.recovered and a.stop_reason == b.stop_reason
+    assert_same(a, b)
