@@ -9,7 +9,12 @@ from dataclasses import dataclass, field
 from biped.control import capture as cp
 from biped.errors import ScenarioError
 
-__all__ = ["SteppingConfig"]
+__all__ = ["QP_MAX_BACK_M", "SteppingConfig"]
+
+#: How far [m] behind the stance sole's centre a backward step of the ``"qp"`` set may land (0.40
+#: before the knee-carried drop: with the hips no longer sinking the 0.45 m step made 20 m/s from
+#: the front with human limits and faithful physics end at rest, docs/sweep.md).
+QP_MAX_BACK_M = 0.45
 
 
 @dataclass(frozen=True)
@@ -209,7 +214,7 @@ class SteppingConfig:
             kw = {
                 "holding_sensed": True,
                 "lateral_margin_m": 0.0,
-                "limits": cp.StepLimits(max_back=0.4),
+                "limits": cp.StepLimits(max_back=QP_MAX_BACK_M),
                 "settle_after_s": 0.3,
                 "floor_friction": True,
                 "swing_friction_scale": 0.55,
