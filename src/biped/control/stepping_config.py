@@ -209,7 +209,7 @@ class SteppingConfig:
     def for_trigger(cls, trigger: str, **kw) -> SteppingConfig:
         """The parameters of the scenario's ``step_trigger``: "capture" (these defaults) or "qp"
         (the QP alone until its feet cannot hold: sensed feet before the first step, no
-        sideways margin, backward steps up to 0.40 m)."""
+        sideways margin, backward steps up to ``QP_MAX_BACK_M``)."""
         if trigger == "qp":
             kw = {
                 "holding_sensed": True,
