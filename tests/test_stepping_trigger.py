@@ -42,7 +42,7 @@ def test_step_trigger_key():
     with pytest.raises(ScenarioError, match="step_trigger"):
         Scenario(step_trigger="late")
     q = SteppingConfig.for_trigger("qp")
-    assert q.holding_sensed and q.lateral_margin_m == 0.0 and q.limits.max_back == 0.4
+    assert q.holding_sensed and q.lateral_margin_m == 0.0 and q.limits.max_back == 0.45
     assert SteppingConfig.for_trigger("capture") == SteppingConfig()
 
 

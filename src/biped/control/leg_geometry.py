@@ -18,7 +18,7 @@ import numpy as np
 
 from biped.control.workspace import Target
 
-__all__ = ["height_drop", "leg_capped", "swing_drop"]
+__all__ = ["height_drop", "knee_carried_drop", "knee_lever", "leg_capped", "swing_drop"]
 
 
 def height_drop(stepping, span_m: float, fixed_m: float) -> float:
@@ -32,12 +32,87 @@ def height_drop(stepping, span_m: float, fixed_m: float) -> float:
 
 
 def swing_drop(ctrl, i: int) -> float:
-    """The stance's height drop while foot ``i`` swings toward the landing target."""
+    """The stance's height drop while foot ``i`` swings toward the landing target (no deeper than
+    the knees carry, :func:`knee_carried_drop`)."""
     s = ctrl.stepping
     if s.span_leg_m is None or ctrl._landing is None:
-        return s.swing_height_drop_m
+        return carried(ctrl, s.swing_height_drop_m)
     span = float(np.linalg.norm(np.asarray(ctrl._landing)[:2] - ctrl._sole_pose(1 - i)[0][:2]))
     return height_drop(s, span, s.swing_height_drop_m)
+
+
+def carried(ctrl, drop_m: float) -> float:
+    """``drop_m`` no deeper than the controller's knee-carried drop (set at its first call; None:
+    ``drop_m``)."""
+    k = getattr(ctrl, "_knee_drop", None)
+    return drop_m if k is None else min(drop_m, k)
+
+
+def knee_lever(hip, knee, ankle, u, ends, drop_m: float) -> float:
+    """The knee's lever [m] for the whole weight on one foot with the hips ``drop_m`` lower: the
+    knee point found again (the thigh ``|hip - knee|`` and the shank ``|knee - ankle|`` kept, the
+    hip joint lowered straight down, the ankle fixed, the knee on its side of the hip-ankle line,
+    in the vertical plane along the sole's axis ``u``), then its largest horizontal distance along
+    ``u`` from the sole's ends ``ends`` (positions along ``u``): the CoP the stance may need,
+    farthest from the knee (W's crouch: the heel)."""
+    hip, knee, ankle = (np.asarray(p, dtype=float) for p in (hip, knee, ankle))
+    a, b = float(np.linalg.norm(hip - knee)), float(np.linalg.norm(knee - ankle))
+
+    def plane(p):  # (along u, up)
+        return np.array([float(u @ p[:2]), float(p[2])])
+
+    H, K, A = plane(hip) - np.array([0.0, drop_m]), plane(knee), plane(ankle)
+    v = A - H
+    D = float(np.linalg.norm(v))
+    if not 1e-9 < D < a + b:  # out of the legs' reach: the knee where it is
+        return max(abs(K[0] - e) for e in ends)
+    x = (a * a - b * b + D * D) / (2.0 * D)  # along hip -> ankle, from the hip
+    y = math.sqrt(max(a * a - x * x, 0.0))
+    n = np.array([-v[1], v[0]]) / D
+    side = 1.0 if float(n @ (K - plane(hip))) >= 0.0 else -1.0
+    k = H + x * v / D + side * y * n
+    return max(abs(float(k[0]) - e) for e in ends)
+
+
+def knee_carried_drop(ctrl, steps: int = 64) -> float | None:
+    """The deepest height drop [m] (0 to the fixed drops) at which each knee's extension torque
+    limit carries the whole weight with the CoP at its sole's end farthest from the knee,
+    ``m g knee_lever <= tau_ext`` (:func:`knee_lever`), from the present state (the controller's
+    first call: the standing pose); 0 if not even the standing knee carries it. None (the fixed
+    drops) without ``knee_carried_drop``, without torque limits, or with ``span_leg_m`` (its drops
+    keep the standing knee's flexion already)."""
+    s = ctrl.stepping
+    lim = ctrl.limits
+    if not s.knee_carried_drop or s.span_leg_m is not None or lim is None or lim.upper is None:
+        return None
+    d, m = ctrl.data, ctrl.model
+    fixed = max(s.swing_height_drop_m, s.post_step_height_drop_m)
+    weight = ctrl._mass * ctrl._gravity
+    best = fixed
+    for leg, (k_hip, foot) in enumerate(zip(ctrl._hip, (0, 1), strict=True)):
+        joints = ctrl.body.leg_joints[leg]
+        kj = ctrl.joint_names.index(joints[3])
+        q = float(d.qpos[ctrl._leg_qpos[leg][3]])
+        tau_ext = float(lim.upper[kj]) if q < 0.0 else -float(lim.lower[kj])  # away from flexion
+        c, yaw = ctrl._sole_pose(foot)
+        u = np.array([math.cos(yaw), math.sin(yaw)])
+        hl = ctrl._sole[foot][1]
+        ends = (float(u @ c[:2]) - hl, float(u @ c[:2]) + hl)
+        hip, knee, ankle = d.xpos[k_hip], d.xanchor[m.joint(joints[3]).id], d.xanchor[m.joint(joints[4]).id]
+
+        def ok(drop, hip=hip, knee=knee, ankle=ankle, u=u, ends=ends, tau_ext=tau_ext):
+            return weight * knee_lever(hip, knee, ankle, u, ends, drop) <= tau_ext
+
+        if not ok(0.0):
+            return 0.0
+        lo, hi = 0.0, best
+        if ok(hi):
+            continue
+        for _ in range(steps):  # the lever grows as the hips sink: bisection
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if ok(mid) else (lo, mid)
+        best = lo
+    return best
 
 
 def leg_capped(ctrl, target: Target, legs) -> Target:

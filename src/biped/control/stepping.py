@@ -225,6 +225,7 @@ class SteppingController(SwingPhase):
         self._shift_t = 0.0  # when the closing step's shift began
         self._shift_from = self._shift_to = np.zeros(2)  # the set point's path in the shift
         self._uncross = False  # the closing step uncrosses the feet
+        self._knee_drop: float | None = None  # the deepest drop the knees carry (first call)
 
     @property
     def recovery_steps(self) -> int:
@@ -346,6 +347,7 @@ class SteppingController(SwingPhase):
             self._mid0 = 0.5 * (self._sole_pose(0)[0] + self._sole_pose(1)[0])
             self._ankle_z0 = float(np.mean([d.xpos[a][2] for a in self._ankle]))
             self._stance_start = closing_step.facing_offset(self)
+            self._knee_drop = leg_geometry.knee_carried_drop(self)
         left, right = bool(feet[0]), bool(feet[1])
         if (
             self.phase in ("double", "shift")

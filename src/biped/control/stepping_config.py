@@ -9,7 +9,12 @@ from dataclasses import dataclass, field
 from biped.control import capture as cp
 from biped.errors import ScenarioError
 
-__all__ = ["SteppingConfig"]
+__all__ = ["QP_MAX_BACK_M", "SteppingConfig"]
+
+#: How far [m] behind the stance sole's centre a backward step of the ``"qp"`` set may land (0.40
+#: before the knee-carried drop: with the hips no longer sinking the 0.45 m step made 20 m/s from
+#: the front with human limits and faithful physics end at rest, docs/sweep.md).
+QP_MAX_BACK_M = 0.45
 
 
 @dataclass(frozen=True)
@@ -38,6 +43,15 @@ class SteppingConfig:
     swing_height_drop_m, swing_tilt_deg: while a foot swings the stance leg holds the body this
     much lower than the set point (reach) and upright but for this tilt about -y (the set point's
     forward tilt moves the hips back, away from a forward step).
+    knee_carried_drop: with torque limits (and no ``span_leg_m``), both drops above no deeper
+        than each stance knee's extension limit carries the whole weight with the CoP at its
+        sole's end farthest from the knee (the heel in W's crouch), the knee found again for the
+        lowered hips from the standing pose (:func:`biped.control.leg_geometry.knee_carried_drop`,
+        once at the first call): lowering the hips bends the knees further and moves them ahead
+        of the feet, so the knee that must hold the body over one foot needs more torque. W's
+        crouch with human limits: 236 N m needed standing against the knee's 234 N m, so the
+        drops are 0 (with 8 cm, the stance knee at its limit for most of a backward step's swing,
+        the body sank 13 cm per step and fell after three at 20 m/s from the front).
     post_step_rest_drop_m: if set, the set point after a step is post_step_height_drop_m below
     the standing one only while the COM moves at settle_speed_m_s or faster, and rises linearly
     with the COM's horizontal speed to this drop at rest (robots: the crouch keeps the front
@@ -122,7 +136,7 @@ class SteppingConfig:
     stance slip at 135 deg from 21.8 to 1.4 cm but lowered the front's limit with human torque
     limits and the 1.55 m subject's from behind, docs/sweep.md) and
     lateral_rot_gain_scale 1 (docs/controller.md, "Stance-foot slip"), dwell_s 0.5 s,
-    side_margin_m 0.04, airborne_stance and crossover; closing_step stays off (it lowered every
+    side_margin_m 0.04, airborne_stance, crossover and knee_carried_drop; closing_step stays off (it lowered every
     direction's envelope, docs/sweep.md).
     """
 
@@ -156,6 +170,7 @@ class SteppingConfig:
     swing_height_drop_m: float = 0.08
     post_step_height_drop_m: float = 0.08
     post_step_rest_drop_m: float | None = None
+    knee_carried_drop: bool = False
     swing_tilt_deg: float = 0.0
     span_leg_m: float | None = None
     stand_hip_m: float | None = None
@@ -194,12 +209,12 @@ class SteppingConfig:
     def for_trigger(cls, trigger: str, **kw) -> SteppingConfig:
         """The parameters of the scenario's ``step_trigger``: "capture" (these defaults) or "qp"
         (the QP alone until its feet cannot hold: sensed feet before the first step, no
-        sideways margin, backward steps up to 0.40 m)."""
+        sideways margin, backward steps up to ``QP_MAX_BACK_M``)."""
         if trigger == "qp":
             kw = {
                 "holding_sensed": True,
                 "lateral_margin_m": 0.0,
-                "limits": cp.StepLimits(max_back=0.4),
+                "limits": cp.StepLimits(max_back=QP_MAX_BACK_M),
                 "settle_after_s": 0.3,
                 "floor_friction": True,
                 "swing_friction_scale": 0.55,
@@ -208,6 +223,7 @@ class SteppingConfig:
                 "side_margin_m": 0.04,
                 "airborne_stance": True,
                 "crossover": True,
+                "knee_carried_drop": True,
                 **kw,
             }
         elif trigger != "capture":

@@ -232,7 +232,7 @@ class SwingPhase:
         return tau
 
     def _height_drop(self, span_m: float, fixed_m: float) -> float:
-        return leg_geometry.height_drop(self.stepping, span_m, fixed_m)
+        return leg_geometry.height_drop(self.stepping, span_m, leg_geometry.carried(self, fixed_m))
 
     def _swing_drop(self, i: int) -> float:
         return leg_geometry.swing_drop(self, i)

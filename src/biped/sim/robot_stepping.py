@@ -76,6 +76,7 @@ from biped.control.policy import PolicyConfig
 from biped.control.setpoint import Target
 from biped.control.stepping import SteppingConfig, SteppingController
 from biped.control.stepping_body import SteppingBody, facing_rotation, leg_chains, leg_length, w_body
+from biped.control.stepping_config import QP_MAX_BACK_M
 from biped.control.swing_task import swing_pose_torques
 from biped.errors import ModelError
 from biped.model import TreeModel
@@ -95,6 +96,11 @@ __all__ = [
     "w_size",
 ]
 
+
+#: The robots' backward landing limit with W's "qp" set, before scaling [m]: the 0.40 m they were
+#: measured with (W's biped and subjects step back up to ``QP_MAX_BACK_M`` since the knee-carried
+#: drop; the robots, with their own crouch and no knee-carried drop, were not re-measured).
+ROBOT_QP_MAX_BACK_M = 0.40
 
 #: A robot's step trigger judges the capture point against the CoPs its ankles' torque limits can
 #: hold, the weight shared between the feet in any way (``SteppingConfig.ankle_limited_polygon``;
@@ -307,7 +313,11 @@ def robot_stepper(
     stand = max(
         float(np.linalg.norm(d.xpos[h] - d.xpos[f])) for h, f in zip(body.hips, body.feet, strict=True)
     )
+    if stepping.limits.max_back == QP_MAX_BACK_M:  # W's "qp" set: the robots' earlier backward limit
+        stepping = replace(stepping, limits=replace(stepping.limits, max_back=ROBOT_QP_MAX_BACK_M))
     scaled = scaled_stepping(stepping, body.leg_length_m, _hip_width(d, body.feet), stand)
+    # the robots keep their own crouch (the drops above, the rules below: off their straight knees)
+    scaled = replace(scaled, knee_carried_drop=False)
     if ROBOT_ANKLE_POLYGON and lim is not None:
         scaled = replace(scaled, ankle_limited_polygon=True)
     if (
