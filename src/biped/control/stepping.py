@@ -128,10 +128,15 @@ class SteppingController(SwingPhase):
             self._ctrl_settle = make_policy(replace(inner, qp_weights=w), tree=tree, **ws).controller
         # single support: the stepping QP, its friction pyramid scaled by swing_friction_scale
         # (a sideways step's: lateral_swing_friction_scale, if set)
-        # (its own controller also when swing_inertia_share rewrites its friction each period: the
-        # lowered friction must not stay in the double support's QP after touchdown)
+        # (its own controller also when swing_inertia_share rewrites its friction each period, or the
+        # stance model its rows: neither must stay in the double support's QP after touchdown)
         self._ctrl_swing = self.ctrl
-        own = self.stepping.swing_friction_scale is not None or self.stepping.swing_inertia_share is not None
+        sp = self.stepping
+        own = (
+            sp.swing_friction_scale is not None
+            or sp.swing_inertia_share is not None
+            or sp.stance_contact_model
+        )
         if own and inner.qp_weights is not None:
             scale = self.stepping.swing_friction_scale
             scale = inner.qp_weights.friction_scale if scale is None else scale
