@@ -83,6 +83,8 @@ class SteppingConfig:
     massless-leg wrench it plans (needs qp_leg_weight 0). stance_contact_rows: which of the stance
     foot's cone rows hold the prediction: 1 the normal-force and friction rows, 2 also the yaw
     rows, 3 also the CoP rows (2 and 3 measured, not better: docs/sweep.md).
+    lateral_stance_contact_model: False: a sideways step's (and the closing step's) single support
+    without it (None: as stance_contact_model).
     lateral_swing_friction_scale: if set, a *sideways step*'s (and the closing step's) single
     support uses this scale instead (measured, not adopted: docs/sweep.md, "The stance foot's
     friction in single support").
@@ -94,6 +96,8 @@ class SteppingConfig:
     swing_reaction: add the driven swing leg's reaction (:func:`biped.control.swing.swing_reaction_wrench`)
     of its torques clipped to the limits to the stance leg's desired wrench (off: on W's biped
     it made the stance foot slide further, measured; robots: on).
+    lateral_swing_reaction: False: a sideways step's (and the closing step's) single support
+    without the swing reaction (None: as swing_reaction).
     dwell_margin_m, dwell_s: if dwell_s is set, a step also starts once the capture point has
     stayed within dwell_margin_m of the support polygon's edge for dwell_s (the feet hold it
     there only with the CoP at the edge while the body creeps over it).
@@ -166,6 +170,7 @@ class SteppingConfig:
     span_leg_m: float | None = None
     stand_hip_m: float | None = None
     swing_reaction: bool = False
+    lateral_swing_reaction: bool | None = None
     ankle_limited_polygon: bool = False
     floor_friction: bool = False
     swing_friction_scale: float | None = None
@@ -174,6 +179,7 @@ class SteppingConfig:
     swing_friction_min_scale: float = 0.2
     stance_contact_model: bool = False
     stance_contact_rows: int = 1
+    lateral_stance_contact_model: bool | None = None
     dwell_margin_m: float = 0.02
     dwell_s: float | None = None
     side_margin_m: float = 0.0

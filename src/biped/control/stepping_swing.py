@@ -194,10 +194,12 @@ class SwingPhase:
         if self.limits is not None and (s.swing_reaction or s.stance_contact_model):
             lo, hi = self._ctrl_limits
             applied = np.clip(tau_swing, lo[self._leg_tau[i]], hi[self._leg_tau[i]])
-        if s.swing_reaction:
+        sideways = self.steps[-1]["sideways"]
+        if s.swing_reaction and not (sideways and s.lateral_swing_reaction is False):
             target = self._with_swing_reaction(i, applied, qpos, qvel, target, flags)
         if s.stance_contact_model:  # the stance foot's friction rows on its predicted contact wrench
-            stance_dynamics.set_stance_map(self, i, applied, flags)
+            on = not (sideways and s.lateral_stance_contact_model is False)
+            stance_dynamics.set_stance_map(self, i, applied, flags if on else (False, False))
         tau = np.array(
             self._ctrl_swing.torques(
                 qpos, qvel, target=target, gains=self._swing_gains, feet_in_contact=flags
