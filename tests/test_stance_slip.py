@@ -257,6 +257,21 @@ def test_less_planned_friction_in_forward_steps_keeps_the_135_deg_stance_foot():
     held = run_closed_loop(sc, scene, SteppingController(policy_config(sc), budget, scene.joint_names))
     assert held.recovered and held.extra["steps"]
     assert max(_stance_slips(sc, held)) <= 0.02
+    # the stance model (the floor's wrench predicted with the driven swing leg) and the swing
+    # reaction on forward and backward steps, 0.35 there (set B of docs/sweep.md; measured 0.5 cm)
+    b = SteppingConfig.for_trigger(
+        "qp",
+        stance_contact_model=True,
+        lateral_stance_contact_model=False,
+        swing_reaction=True,
+        lateral_swing_reaction=False,
+        swing_friction_scale=0.35,
+        lateral_swing_friction_scale=0.55,
+    )
+    scene = build_scene(sc)
+    modelled = run_closed_loop(sc, scene, SteppingController(policy_config(sc), b, scene.joint_names))
+    assert modelled.recovered and modelled.extra["steps"]
+    assert max(_stance_slips(sc, modelled)) <= 0.02
 
 
 def test_the_swing_friction_budget_stays_out_of_double_support():
