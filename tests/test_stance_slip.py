@@ -257,3 +257,38 @@ def test_less_planned_friction_in_forward_steps_keeps_the_135_deg_stance_foot():
     held = run_closed_loop(sc, scene, SteppingController(policy_config(sc), budget, scene.joint_names))
     assert held.recovered and held.extra["steps"]
     assert max(_stance_slips(sc, held)) <= 0.02
+    # the stance model (the floor's wrench predicted with the driven swing leg) and the swing
+    # reaction on forward and backward steps, 0.35 there (set B of docs/sweep.md; measured 0.5 cm)
+    b = SteppingConfig.for_trigger(
+        "qp",
+        stance_contact_model=True,
+        lateral_stance_contact_model=False,
+        swing_reaction=True,
+        lateral_swing_reaction=False,
+        swing_friction_scale=0.35,
+        lateral_swing_friction_scale=0.55,
+    )
+    scene = build_scene(sc)
+    modelled = run_closed_loop(sc, scene, SteppingController(policy_config(sc), b, scene.joint_names))
+    assert modelled.recovered and modelled.extra["steps"]
+    assert max(_stance_slips(sc, modelled)) <= 0.02
+
+
+def test_the_swing_friction_budget_stays_out_of_double_support():
+    """``swing_inertia_share`` lowers the single-support QP's friction each period of a forward
+    step. Without ``swing_friction_scale`` the single support once used the double support's own
+    controller, so the lowered friction stayed in its QP after touchdown; the budget must write
+    only the swing's QP: after a forward swing period at a large planned acceleration the double
+    support's friction is the one its weights give, and the swing's is lower."""
+    from biped.control.policy import PolicyConfig
+    from biped.control.stepping import SteppingController
+    from biped.control.stepping_config import SteppingConfig
+
+    cfg = SteppingConfig.for_trigger("qp", swing_friction_scale=None, swing_inertia_share=0.5)
+    ctl = SteppingController(PolicyConfig(distribution="qp"), cfg)
+    w = ctl.ctrl.qp.weights
+    ctl.steps = [{"sideways": False}]
+    ctl._inertia_friction(0, np.array([80.0, 0.0, 0.0]), cfg.swing_inertia_share)
+    assert ctl._ctrl_swing.qp._prm[6] < w.friction * w.friction_scale - 0.01
+    for c in {id(c): c for c in (ctl.ctrl, ctl._ctrl_settle, ctl._ctrl_before)}.values():
+        assert c.qp._prm[6] == w.friction * w.friction_scale

@@ -28,6 +28,7 @@ __all__ = [
     "cone_rows",
     "floor_friction_rows",
     "leg_weight_wrench",
+    "map_contact_rows",
     "sole_to_body",
 ]
 
@@ -171,6 +172,46 @@ def carry_leg_weight(Ct, b, m, o, wg):
         b[m + 5] -= c5
     else:
         b[m + 9] -= c9
+
+
+@njit(cache=True)
+def map_contact_rows(Ct, b, f0, f1, cmap):
+    """Contact maps: for foot f (cone rows from ``f0`` / ``f1``, -1: not in contact) with
+    ``cmap[f, 0] != 0``, move its two normal-force rows and four friction rows (``cmap[f, 0]`` 2:
+    also the eight yaw rows, 3: also the four CoP rows) onto the contact
+    wrench predicted as ``K w + r`` of the foot's QP wrench ``w = x[6f:6f+6]`` (sole frame, sole
+    centre; ``K = cmap[f, 1:37]`` row by row, ``r = cmap[f, 37:43]``): ``Ct_r . (K w + r) >= b_r``,
+    i.e. the row's coefficients times K and ``b_r -= Ct_r . r``. The stepping controller's stance
+    model (:mod:`biped.control.stance_dynamics`): the prediction carries the legs' inertia, the
+    driven swing leg's reaction and the legs' weight."""
+    for f in range(2):
+        m = f0 if f == 0 else f1
+        if m < 0 or cmap[f, 0] == 0.0:
+            continue
+        o = 6 * f
+        level = cmap[f, 0]
+        for r in range(ROWS_PER_FOOT):
+            if r in (4, 5, 8, 9):  # the CoP rows: level 3
+                if level < 3.0:
+                    continue
+            elif r >= 10 and level < 2.0:  # the yaw rows: level 2 and up
+                continue
+            row = Ct[m + r]
+            s = 0.0
+            for i in range(6):
+                s += row[o + i] * cmap[f, 37 + i]
+            b[m + r] -= s
+            c0, c1, c2, c3, c4, c5 = row[o], row[o + 1], row[o + 2], row[o + 3], row[o + 4], row[o + 5]
+            for j in range(6):
+                k = 1 + j
+                row[o + j] = (
+                    c0 * cmap[f, k]
+                    + c1 * cmap[f, k + 6]
+                    + c2 * cmap[f, k + 12]
+                    + c3 * cmap[f, k + 18]
+                    + c4 * cmap[f, k + 24]
+                    + c5 * cmap[f, k + 30]
+                )
 
 
 @njit(cache=True)

@@ -49,6 +49,7 @@ from biped.control.cones import (
     cone_rows,
     floor_friction_rows,
     leg_weight_wrench,
+    map_contact_rows,
     sole_to_body,
 )
 from biped.control.daqp_c import bind_c, unconstrained
@@ -362,7 +363,8 @@ class ContactQP(QPState):
                 raise ValueError("ContactQP buffers of the wrong size; use ContactQP.buffer_sizes")
         self._qi[H_LIMITED], self._qi[H_ROWS] = self.limited, rows
         (self._soles, self._dims, self._prm, self._lo, self._hi, self.A, self.T, self._F, self._tau, self._col,
-         self.Gq, self.av, self.Ct, self.b, self.x, self.wg, self._upper, self._f, self._xs, self._lam) = qp_views(
+         self.Gq, self.av, self.Ct, self.b, self.x, self.wg, self._upper, self._f, self._xs, self._lam,
+         self.cmap) = qp_views(
             self._qf, nj, rows
         )  # fmt: skip
         self._qstat, self._res32, self._sense = qp_int_views(self._qi, rows)
@@ -420,6 +422,7 @@ class ContactQP(QPState):
             t.gravity,
             self.wg,
         )
+        map_contact_rows(self.Ct, self.b, f0, f1, self.cmap)
         self.meq, self.rows, self.first = meq, used, (f0, f1)
         self._gl = gl
 

@@ -19,6 +19,7 @@ from biped.control.buffers import _take1, _take2, _take3
 from biped.control.daqp_c import XS, c_solve
 
 __all__ = [
+    "CMAP",
     "FLOAT_FIELDS",
     "PRM",
     "QPState",
@@ -30,6 +31,8 @@ __all__ = [
 ]
 
 PRM = 10  # entries of QPWeights.array
+#: entries of a foot's contact map (cones.map_contact_rows): on/off, K (6, 6) row by row, r (6,)
+CMAP = 43
 #: qf's fields (name, shape with nj = joints, rows = constraint rows)
 FLOAT_FIELDS = (
     ("soles", (2, 4, 4)),
@@ -52,6 +55,7 @@ FLOAT_FIELDS = (
     ("f", (12,)),
     ("xs", (XS,)),
     ("lam", ("rows",)),
+    ("cmap", (2, CMAP)),
 )
 # qi's header: torque-limit rows on, rows, daqp_quadprog's address (0: no C solve), the addresses
 # of daqp's result, problem and settings structs and of ContactQP.Gq, a call not yet read by QPState
@@ -94,7 +98,8 @@ def qp_views(qf, nj, rows):
     f, o = _take1(qf, o, 12)
     xs, o = _take1(qf, o, XS)
     lam, o = _take1(qf, o, rows)
-    return soles, dims, prm, lo, hi, A, T, F, tau, col, Gq, av, Ct, b, x, wg, upper, f, xs, lam
+    cmap, o = _take2(qf, o, 2, CMAP)
+    return soles, dims, prm, lo, hi, A, T, F, tau, col, Gq, av, Ct, b, x, wg, upper, f, xs, lam, cmap
 
 
 @njit(cache=True)
@@ -114,7 +119,7 @@ def solve_flat(qf, qi, nj, meq, used, f0, f1):  # pragma: no cover - compiled
     """:func:`biped.control.daqp_c.c_solve` (ContactQP.solve in C) on the flat buffers of a
     ContactQP whose C structs :func:`biped.control.daqp_c.bind_c` set up."""
     rows = qi[H_ROWS]
-    _, dims, prm, _, _, _, _, _, _, _, _, av, Ct, b, x, _, upper, f, xs, _ = qp_views(qf, nj, rows)
+    _, dims, prm, _, _, _, _, _, _, _, _, av, Ct, b, x, _, upper, f, xs, _, _ = qp_views(qf, nj, rows)
     qstat, res32, sense = qp_int_views(qi, rows)
     c_solve(
         qi[H_FN],

@@ -13,8 +13,8 @@ compiled build and finish, and daqp's own C function on the same arrays
 
 numba caches this function with the compiled :func:`~biped.control.qp_buffers.qp_views` inside it
 and checks only this file's stamp: a change of the buffers' layout there (e.g. ``PRM``, the
-entries of ``QPWeights.array``, 10 since ``floor_friction``) needs an edit here too, or the
-cached copy reads the old layout.
+entries of ``QPWeights.array``, 10 since ``floor_friction``; ``cmap`` at the end since the stance
+contact map) needs an edit here too, or the cached copy reads the old layout.
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ from __future__ import annotations
 from numba import njit
 
 from biped.control.buffers import borrowed, unpack
+from biped.control.cones import map_contact_rows
 from biped.control.daqp_c import c_solve
 from biped.control.distribution import qp_build, qp_finish
 from biped.control.qp_buffers import (
@@ -60,7 +61,7 @@ def qp_kernel(qpos, qvel, target, gains, contact, ints, floats):  # pragma: no c
     t, m, w, o = unpack(mi, mf, work, out)
     nj = t.n[0] - 1
     rows = qi[H_ROWS]
-    soles, dims, prm, lo, hi, A, T, F, tau, col, Gq, av, Ct, b, x, wg, upper, f, xs, _ = qp_views(
+    soles, dims, prm, lo, hi, A, T, F, tau, col, Gq, av, Ct, b, x, wg, upper, f, xs, _, cmap = qp_views(
         qf, nj, rows
     )
     qstat, res32, sense = qp_int_views(qi, rows)
@@ -69,6 +70,7 @@ def qp_kernel(qpos, qvel, target, gains, contact, ints, floats):  # pragma: no c
         w.g, w.gl, t.parent, m.H, t.leg, t.beyond, t.feet, contact, o.Fd, soles, dims, prm, lo, hi, nlim,
         A, T, F, tau, col, Gq, av, Ct, b, m.mass, m.gravity, wg,
     )  # fmt: skip
+    map_contact_rows(Ct, b, f0, f1, cmap)
     if contact[0] == 0 and contact[1] == 0:
         x[:] = 0.0
         qstat[S_MEQ], qstat[S_USED], qstat[S_F0], qstat[S_F1] = meq, used, f0, f1

@@ -128,9 +128,19 @@ class SteppingController(SwingPhase):
             self._ctrl_settle = make_policy(replace(inner, qp_weights=w), tree=tree, **ws).controller
         # single support: the stepping QP, its friction pyramid scaled by swing_friction_scale
         # (a sideways step's: lateral_swing_friction_scale, if set)
+        # (its own controller also when swing_inertia_share rewrites its friction each period, or the
+        # stance model its rows: neither must stay in the double support's QP after touchdown)
         self._ctrl_swing = self.ctrl
-        if self.stepping.swing_friction_scale is not None and inner.qp_weights is not None:
-            w = replace(inner.qp_weights, friction_scale=self.stepping.swing_friction_scale)
+        sp = self.stepping
+        own = (
+            sp.swing_friction_scale is not None
+            or sp.swing_inertia_share is not None
+            or sp.stance_contact_model
+        )
+        if own and inner.qp_weights is not None:
+            scale = self.stepping.swing_friction_scale
+            scale = inner.qp_weights.friction_scale if scale is None else scale
+            w = replace(inner.qp_weights, friction_scale=scale)
             self._ctrl_swing = make_policy(replace(inner, qp_weights=w), tree=tree, **ws).controller
         self._ctrl_swing_by_mode = {False: self._ctrl_swing, True: self._ctrl_swing}
         if self.stepping.lateral_swing_friction_scale is not None and inner.qp_weights is not None:

@@ -91,6 +91,14 @@ class SteppingConfig:
     backward step's single-support QP plans, each period, its friction less what the swing leg's
     planned horizontal inertial force takes of the weight's, ``share * m_leg * |a_xy| / (m g)``, at
     least ``swing_friction_min_scale * friction`` (measured, not adopted: docs/sweep.md).
+    stance_contact_model: single support's QP holds the stance foot's normal-force and friction
+    rows on the floor's wrench predicted from the whole biped's dynamics (the swing leg's driven
+    reaction, the legs' inertia and weight; :mod:`biped.control.stance_dynamics`), not on the
+    massless-leg wrench it plans (needs qp_leg_weight 0). stance_contact_rows: which of the stance
+    foot's cone rows hold the prediction: 1 the normal-force and friction rows, 2 also the yaw
+    rows, 3 also the CoP rows (2 and 3 measured, not better: docs/sweep.md).
+    lateral_stance_contact_model: False: a sideways step's (and the closing step's) single support
+    without it (None: as stance_contact_model).
     lateral_swing_friction_scale: if set, a *sideways step*'s (and the closing step's) single
     support uses this scale instead (measured, not adopted: docs/sweep.md, "The stance foot's
     friction in single support").
@@ -102,6 +110,8 @@ class SteppingConfig:
     swing_reaction: add the driven swing leg's reaction (:func:`biped.control.swing.swing_reaction_wrench`)
     of its torques clipped to the limits to the stance leg's desired wrench (off: on W's biped
     it made the stance foot slide further, measured; robots: on).
+    lateral_swing_reaction: False: a sideways step's (and the closing step's) single support
+    without the swing reaction (None: as swing_reaction).
     dwell_margin_m, dwell_s: if dwell_s is set, a step also starts once the capture point has
     stayed within dwell_margin_m of the support polygon's edge for dwell_s (the feet hold it
     there only with the CoP at the edge while the body creeps over it).
@@ -175,12 +185,16 @@ class SteppingConfig:
     span_leg_m: float | None = None
     stand_hip_m: float | None = None
     swing_reaction: bool = False
+    lateral_swing_reaction: bool | None = None
     ankle_limited_polygon: bool = False
     floor_friction: bool = False
     swing_friction_scale: float | None = None
     lateral_swing_friction_scale: float | None = None
     swing_inertia_share: float | None = None
     swing_friction_min_scale: float = 0.2
+    stance_contact_model: bool = False
+    stance_contact_rows: int = 1
+    lateral_stance_contact_model: bool | None = None
     dwell_margin_m: float = 0.02
     dwell_s: float | None = None
     side_margin_m: float = 0.0
@@ -233,5 +247,15 @@ class SteppingConfig:
     def __post_init__(self):
         if not (isinstance(self.max_steps, int) and self.max_steps >= 0):
             raise ScenarioError(f"max_steps must be an integer >= 0; got {self.max_steps!r}")
+        if self.stance_contact_model and self.qp_leg_weight != 0:
+            raise ScenarioError(
+                "stance_contact_model predicts the legs' weight itself: it needs qp_leg_weight = 0; "
+                f"got {self.qp_leg_weight!r}"
+            )
+        if self.stance_contact_rows not in (1, 2, 3):
+            raise ScenarioError(
+                "stance_contact_rows must be 1 (normal force and friction), 2 (and yaw) or 3 (and CoP); "
+                f"got {self.stance_contact_rows!r}"
+            )
         if not self.swing_time_s > 0:
             raise ScenarioError(f"swing_time_s must be > 0 s; got {self.swing_time_s!r}")

@@ -31,7 +31,7 @@ import mujoco
 import numpy as np
 
 from biped.control import capture as cp
-from biped.control import closing_step, leg_geometry
+from biped.control import closing_step, leg_geometry, stance_dynamics
 from biped.control.swing import swing_reaction_wrench
 from biped.control.workspace import Gains
 
@@ -190,12 +190,16 @@ class SwingPhase:
         tau_swing = self._swing_torques(i, pd, vd, ad)
         if s.swing_inertia_share is not None:  # forward and backward steps only
             self._inertia_friction(i, ad, 0.0 if self.steps[-1]["sideways"] else s.swing_inertia_share)
-        if s.swing_reaction:  # the reaction of the torques the actuators give (clipped as _out clips)
-            applied = tau_swing
-            if self.limits is not None:
-                lo, hi = self._ctrl_limits
-                applied = np.clip(tau_swing, lo[self._leg_tau[i]], hi[self._leg_tau[i]])
+        applied = tau_swing  # the torques the actuators give (clipped as _out clips)
+        if self.limits is not None and (s.swing_reaction or s.stance_contact_model):
+            lo, hi = self._ctrl_limits
+            applied = np.clip(tau_swing, lo[self._leg_tau[i]], hi[self._leg_tau[i]])
+        sideways = self.steps[-1]["sideways"]
+        if s.swing_reaction and not (sideways and s.lateral_swing_reaction is False):
             target = self._with_swing_reaction(i, applied, qpos, qvel, target, flags)
+        if s.stance_contact_model:  # the stance foot's friction rows on its predicted contact wrench
+            on = not (sideways and s.lateral_stance_contact_model is False)
+            stance_dynamics.set_stance_map(self, i, applied, flags if on else (False, False))
         tau = np.array(
             self._ctrl_swing.torques(
                 qpos, qvel, target=target, gains=self._swing_gains, feet_in_contact=flags
