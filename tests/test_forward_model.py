@@ -93,7 +93,7 @@ def test_the_predicted_stepper_runs_in_the_python_loop():
     from biped.sim import fused
     from biped.sim.policies import controller_policy
 
-    for program in ("predicted", "program-predicted"):
+    for program in ("predicted", "program-predicted", "program-trail"):
         s = Scenario(neuromotor="young", stepping=True, step_program=program, distribution="qp")
         policy = controller_policy(s, build_scene(s))
         assert policy.forward.delay == s.delay_steps == 50

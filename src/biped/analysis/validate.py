@@ -279,9 +279,10 @@ EXPERIMENTS = {
         ("step_release.lean_deg", "step_release.step_length_m", "step_release.contact_ms"),
         # the presets with a nervous system step with the step program (planned for a delayed,
         # lagged plant) on the present state their internal model predicts over the delay, the
-        # activation lag inverted on it; W's ideal controller with the feedback stepper
-        # (docs/validate.md, "The predicted step")
-        {p: {"step_program": "program-predicted"} for p in ("young", "older")},
+        # activation lag inverted on it, the rear foot trailing after the step ("program-trail");
+        # W's ideal controller with the feedback stepper (docs/validate.md, "The predicted step",
+        # "Braking after the lunge")
+        {p: {"step_program": "program-trail"} for p in ("young", "older")},
     ),
     "waist_pull": Experiment(
         "waist_pull",

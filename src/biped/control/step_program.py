@@ -77,6 +77,10 @@ class StepProgramConfig:
     margin 0.176 s with the young lag; 2 (margin 0.127 s) moved the young threshold by 0.04 deg,
     the feedback stepper's 4 has 0.084 s, below the delay). reaction_ff: the share of the swing
     leg's hip torques' reaction fed forward to the stance (1: all, 0: none, the program before).
+    rear_trails: after the step, in double support, the height set point is capped by the front
+    (landing) leg alone, not by both legs (:meth:`StepProgram._leg_capped`): the rear foot may
+    roll onto its toe and trail instead of the hips being lowered to keep it flat (False: both
+    legs, the program before; docs/validate.md, "Braking after the lunge").
     """
 
     delay_s: float = 0.0
@@ -91,10 +95,15 @@ class StepProgramConfig:
     damping_n_m_s: float = 0.0
     rot_gain_scale: float = 1.0
     reaction_ff: float = 1.0
+    rear_trails: bool = False
 
     def __post_init__(self):
+        if not isinstance(self.rear_trails, bool):
+            raise ScenarioError(f"step program: rear_trails must be true or false; got {self.rear_trails!r}")
         for f in fields(self):
             v = getattr(self, f.name)
+            if f.name == "rear_trails":
+                continue
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
                 raise ScenarioError(f"step program: {f.name} must be a number >= 0; got {v!r}")
         if not self.swing_time_s > 0:
@@ -171,6 +180,16 @@ class StepProgram(SteppingController):
         tau = ctrl.torques(qpos, qvel, target=target, gains=self.gains,
                            feet_in_contact=self._flags(bool(feet[0]), bool(feet[1])))  # fmt: skip
         return self._out(tau)
+
+    def _leg_capped(self, target: Target, legs) -> Target:
+        """The stepping controller's height cap; with ``rear_trails``, after the step in double
+        support, the front (landing) leg's alone: as the COM runs on past the feet's midpoint the
+        rear leg's cap lowered the set point, the hips sank, the front knee folded (from 65 to 107
+        deg at a young 10 deg release) and the rear foot was pulled off the floor; capped by the
+        front leg the hips stay up and the rear heel rises, the foot rolling onto its toe."""
+        if self.program.rear_trails and self.phase == "double" and self.steps and len(legs) == 2:
+            legs = (("left", "right").index(self.steps[-1]["foot"]),)
+        return super()._leg_capped(target, legs)
 
     def _transferred(self, t: float) -> bool:
         """Whether the weight transfer is over: ``transfer_s`` has passed, or the lateral capture

@@ -134,14 +134,17 @@ def controller_policy(
             stepping = replace(stepping, reach_m=max(stepping.reach_m, leg), span_leg_m=leg, stand_hip_m=hip,
                                limits=replace(stepping.limits, max_step=limit),
                                stance_knee_min_deg=min(knee, STANCE_KNEE_MIN_DEG))  # fmt: skip
-        if scenario.step_program in ("program", "program-predicted"):  # planned steps, delayed plant
+        # planned steps for a delayed plant
+        if scenario.step_program in ("program", "program-predicted", "program-trail"):
             from biped.control.step_program import StepProgram, StepProgramConfig
 
             # on the predicted present (program-predicted) the program's own delay is none
             delay = scenario.feedback_delay_s if scenario.step_program == "program" else 0.0
+            # program-trail: after the step the rear foot trails (the height capped by the front leg)
             program = StepProgramConfig(delay_s=delay, lead_s=scenario.activation_time_s,
-                                        damping_n_m_s=scenario.joint_damping_n_m_s)  # fmt: skip
-            if scenario.step_program == "program-predicted":
+                                        damping_n_m_s=scenario.joint_damping_n_m_s,
+                                        rear_trails=scenario.step_program == "program-trail")  # fmt: skip
+            if scenario.step_program in ("program-predicted", "program-trail"):
                 return predicted_stepper(scenario, scene, config, stepping, tree, program)
             return StepProgram(config, stepping, scene.joint_names, tree=tree, program=program)
         if scenario.step_program == "predicted":  # the feedback stepper on the predicted present
@@ -153,10 +156,10 @@ def controller_policy(
 
 def predicted_stepper(scenario: Scenario, scene: Scene, config, stepping, tree, program=None):
     """``step_program = "predicted"`` (W's feedback stepper; ``program`` None) or
-    ``"program-predicted"`` (the step program ``program``) acting on the present state its internal
-    forward model (:class:`~biped.control.forward_model.ForwardModel`: the scene's own MuJoCo model
-    at the physics step, the loop's contact rule, a copy of the nervous system's filter, the lag
-    inverted on it) predicts from the delayed one."""
+    ``"program-predicted"`` / ``"program-trail"`` (the step program ``program``) acting on the
+    present state its internal forward model (:class:`~biped.control.forward_model.ForwardModel`:
+    the scene's own MuJoCo model at the physics step, the loop's contact rule, a copy of the
+    nervous system's filter, the lag inverted on it) predicts from the delayed one."""
     from biped.control.forward_model import ForwardModel, PredictedProgram, PredictedStepper
     from biped.control.stepping import SteppingController
     from biped.sim.contact import ContactMonitor

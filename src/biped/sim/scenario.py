@@ -45,8 +45,10 @@ W_JOINT_ANGLES_DEG = W_INITIAL_ANGLES_DEG
 CONTROLLERS = ("workspace", "joint-pd")
 #: How a stepping run makes a step (key ``step_program``): the task-space feedback swing of
 #: biped.control.stepping, biped.control.step_program's weight transfer and planned swing, or the
-#: feedback swing on the present state predicted over the delay (biped.control.forward_model).
-STEP_PROGRAMS = ("feedback", "program", "predicted", "program-predicted")
+#: feedback swing on the present state predicted over the delay (biped.control.forward_model);
+#: "program-trail": "program-predicted" with the rear foot trailing after the step (the height
+#: set point capped by the front leg alone: StepProgramConfig.rear_trails).
+STEP_PROGRAMS = ("feedback", "program", "predicted", "program-predicted", "program-trail")
 #: The longest step a stepping run may land (key ``step_reach``): "fixed" = StepLimits' 0.5 m
 #: between sole centres (the sweeps' design limit); "leg" = what the legs reach from the hips'
 #: standing height, both legs at the swing's reach (biped.control.capture.reach_step_limit), with
