@@ -46,6 +46,7 @@ import numpy as np
 
 from biped.control import capture as cp
 from biped.control.stepping import SteppingConfig, SteppingController
+from biped.control.swing_plan import scurve
 from biped.control.workspace import Target
 from biped.errors import ScenarioError
 
@@ -77,6 +78,9 @@ class StepProgramConfig:
     margin 0.176 s with the young lag; 2 (margin 0.127 s) moved the young threshold by 0.04 deg,
     the feedback stepper's 4 has 0.084 s, below the delay). reaction_ff: the share of the swing
     leg's hip torques' reaction fed forward to the stance (1: all, 0: none, the program before).
+    swing_brake: None (the ankle's path the minimum-jerk polynomial), or the path the bang-bang
+    jerk profile (:func:`biped.control.swing_plan.scurve`; 1: ending at rest, as the
+    minimum-jerk path, in 0.81 of its time for the same peak jerk; docs/validate.md).
     """
 
     delay_s: float = 0.0
@@ -91,12 +95,19 @@ class StepProgramConfig:
     damping_n_m_s: float = 0.0
     rot_gain_scale: float = 1.0
     reaction_ff: float = 1.0
+    swing_brake: float | None = None
 
     def __post_init__(self):
         for f in fields(self):
+            if f.name == "swing_brake" and self.swing_brake is None:
+                continue
             v = getattr(self, f.name)
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
                 raise ScenarioError(f"step program: {f.name} must be a number >= 0; got {v!r}")
+        if self.swing_brake is not None and self.swing_brake > 1:
+            raise ScenarioError(
+                f"step program: swing_brake must be in [0, 1] or None; got {self.swing_brake!r}"
+            )
         if not self.swing_time_s > 0:
             raise ScenarioError(f"step program: swing_time_s must be > 0 s; got {self.swing_time_s!r}")
 
@@ -327,7 +338,8 @@ class StepProgram(SteppingController):
         p0 = self._p0
         assert p0 is not None
         sc = min(max(el / T, 0.0), 1.0)
-        h, hd, hdd = cp.min_jerk(sc)
+        brake = self.program.swing_brake
+        h, hd, hdd = cp.min_jerk(sc) if brake is None else scurve(sc, brake)  # the path's shape
         b, bd, bdd = cp.bump(sc)
         pd = p0 + (ankle_land - p0) * h
         vd = (ankle_land - p0) * hd / T
