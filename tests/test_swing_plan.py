@@ -69,7 +69,7 @@ def test_the_s_curve_lands_the_young_step_sooner_within_the_rate_limits():
     """Young preset, validate's one-step release from human quiet stance at 8 deg (the step program
     on the predicted state): with the S-curve the stepping foot's landing (validate's rule on
     MuJoCo's recorded feet and contacts) comes at least 0.1 s sooner than with the minimum-jerk
-    path (measured 534 against 688 ms, docs/validate.md), and no joint torque the plant applied
+    path (measured 436 against 688 ms, docs/validate.md), and no joint torque the plant applied
     changed by more than its rate limit in any control period."""
     from biped.analysis.validate import EXPERIMENTS, _step_measures
     from biped.models import JOINT_NAMES

@@ -60,9 +60,9 @@ def jerk_bound(brake: float) -> float:
 #: The step program's settings for each value of the scenario key ``swing_path``
 #: (:class:`~biped.control.step_program.StepProgramConfig` fields): "min-jerk", the program as it
 #: was; "s-curve", the bang-bang jerk path at the minimum-jerk plan's peak jerk (0.45 s x
-#: (32 / 60)^(1/3) = 0.365 s, rounded up to 0.37 s) with a 0.06 s weight transfer (docs/validate.md,
+#: (32 / 60)^(1/3) = 0.365 s, rounded up to 0.37 s), with no weight transfer (docs/validate.md,
 #: "The swing's shape").
 SWING_PATHS: dict[str, dict[str, float]] = {
     "min-jerk": {},
-    "s-curve": {"swing_brake": 1.0, "swing_time_s": 0.37, "transfer_s": 0.06},
+    "s-curve": {"swing_brake": 1.0, "swing_time_s": 0.37, "transfer_s": 0.0},
 }

@@ -158,7 +158,7 @@ class Scenario:
     # at the swing's reach from the hips' standing height (docs/validate.md, "The step program")
     step_reach: str = "fixed"
     # with step_program "program*": the swing ankle's path, "min-jerk" (as before) or "s-curve" (the
-    # bang-bang jerk path, 0.37 s, after a 0.06 s weight transfer; docs/validate.md)
+    # bang-bang jerk path, 0.37 s, with no weight transfer; docs/validate.md)
     swing_path: str = "min-jerk"
     # with stepping: when to step. "qp" (the default): the QP alone until its feet cannot hold;
     # "capture": the capture point leaves the feet (3 cm sideways margin, W's fixed feet and
