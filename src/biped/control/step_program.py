@@ -14,8 +14,9 @@ swing-foot choice, landing rule, stance control and touchdown, and changes how a
    stance foot (W Alg. 4's ``pddot_d``): the contact distribution moves the centre of pressure
    under the swing foot first, which pushes the body over the stance foot (an anticipatory
    postural adjustment), and the stance leg takes the load before the swing foot must rise.
-2. **swing**: the swing ankle's path (minimum jerk to the landing point, a bump of ``apex_m``) is
-   a plan in time from the swing's start. The feed-forward acceleration is the plan's
+2. **swing**: the swing ankle's path (minimum jerk to the landing point, a bump of ``apex_m``; with
+   ``swing_brake``, the bang-bang jerk path :func:`~biped.control.swing_plan.scurve`, scenario key
+   ``swing_path``) is a plan in time from the swing's start. The feed-forward acceleration is the plan's
    ``lead_s`` ahead (the activation lag: a first-order lag delays a smooth command by about its
    time constant); the feedback compares the delayed state with the plan ``delay_s`` ago (the
    state the controller sees is that old), with gains ``kp_pos``, ``kv_pos``. The landing point is

@@ -42,8 +42,8 @@ def _raw(u: float, brake: float) -> tuple[float, float, float]:
 
 
 def scurve(u: float, brake: float) -> tuple[float, float, float]:
-    """(s, s', s'') at ``u`` in [0, 1] of the fastest move of unit length for a bounded jerk (a
-    torque rising and falling at its rate limit): jerk +J on [0, a], -J on [a, 1 - b], +J on
+    """(s, s', s'') at ``u`` in [0, 1] of a move of unit length whose jerk only switches sign (a
+    torque rising and falling at one rate): jerk +J on [0, a], -J on [a, 1 - b], +J on
     [1 - b, 1] with ``b = brake / 4``, ``a = 1/2 - b`` (the acceleration zero at both ends).
     ``brake`` 1: rest to rest (J = 32: the ``(32 d / J)^(1/3)`` move); 0: it ends moving at twice
     the mean speed (J = 8: ``(8 d / J)^(1/3)``). ``u`` is clamped to [0, 1]."""
