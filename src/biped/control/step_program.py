@@ -14,8 +14,9 @@ swing-foot choice, landing rule, stance control and touchdown, and changes how a
    stance foot (W Alg. 4's ``pddot_d``): the contact distribution moves the centre of pressure
    under the swing foot first, which pushes the body over the stance foot (an anticipatory
    postural adjustment), and the stance leg takes the load before the swing foot must rise.
-2. **swing**: the swing ankle's path (minimum jerk to the landing point, a bump of ``apex_m``) is
-   a plan in time from the swing's start. The feed-forward acceleration is the plan's
+2. **swing**: the swing ankle's path (minimum jerk to the landing point, a bump of ``apex_m``; with
+   ``swing_brake``, the bang-bang jerk path :func:`~biped.control.swing_plan.scurve`, scenario key
+   ``swing_path``) is a plan in time from the swing's start. The feed-forward acceleration is the plan's
    ``lead_s`` ahead (the activation lag: a first-order lag delays a smooth command by about its
    time constant); the feedback compares the delayed state with the plan ``delay_s`` ago (the
    state the controller sees is that old), with gains ``kp_pos``, ``kv_pos``. The landing point is
@@ -46,6 +47,7 @@ import numpy as np
 
 from biped.control import capture as cp
 from biped.control.stepping import SteppingConfig, SteppingController
+from biped.control.swing_plan import scurve
 from biped.control.workspace import Target
 from biped.errors import ScenarioError
 
@@ -81,6 +83,9 @@ class StepProgramConfig:
     (landing) leg alone, not by both legs (:meth:`StepProgram._leg_capped`): the rear foot may
     roll onto its toe and trail instead of the hips being lowered to keep it flat (False: both
     legs, the program before; docs/validate.md, "Braking after the lunge").
+    swing_brake: None (the ankle's path the minimum-jerk polynomial), or the path the bang-bang
+    jerk profile (:func:`biped.control.swing_plan.scurve`; 1: ending at rest, as the
+    minimum-jerk path, in 0.81 of its time for the same peak jerk; docs/validate.md).
     """
 
     delay_s: float = 0.0
@@ -96,16 +101,23 @@ class StepProgramConfig:
     rot_gain_scale: float = 1.0
     reaction_ff: float = 1.0
     rear_trails: bool = False
+    swing_brake: float | None = None
 
     def __post_init__(self):
         if not isinstance(self.rear_trails, bool):
             raise ScenarioError(f"step program: rear_trails must be true or false; got {self.rear_trails!r}")
         for f in fields(self):
+            if f.name == "swing_brake" and self.swing_brake is None:
+                continue
             v = getattr(self, f.name)
             if f.name == "rear_trails":
                 continue
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
                 raise ScenarioError(f"step program: {f.name} must be a number >= 0; got {v!r}")
+        if self.swing_brake is not None and self.swing_brake > 1:
+            raise ScenarioError(
+                f"step program: swing_brake must be in [0, 1] or None; got {self.swing_brake!r}"
+            )
         if not self.swing_time_s > 0:
             raise ScenarioError(f"step program: swing_time_s must be > 0 s; got {self.swing_time_s!r}")
 
@@ -346,7 +358,8 @@ class StepProgram(SteppingController):
         p0 = self._p0
         assert p0 is not None
         sc = min(max(el / T, 0.0), 1.0)
-        h, hd, hdd = cp.min_jerk(sc)
+        brake = self.program.swing_brake
+        h, hd, hdd = cp.min_jerk(sc) if brake is None else scurve(sc, brake)  # the path's shape
         b, bd, bdd = cp.bump(sc)
         pd = p0 + (ankle_land - p0) * h
         vd = (ankle_land - p0) * hd / T

@@ -140,10 +140,13 @@ def controller_policy(
 
             # on the predicted present (program-predicted) the program's own delay is none
             delay = scenario.feedback_delay_s if scenario.step_program == "program" else 0.0
+            from biped.control.swing_plan import SWING_PATHS
+
             # program-trail: after the step the rear foot trails (the height capped by the front leg)
             program = StepProgramConfig(delay_s=delay, lead_s=scenario.activation_time_s,
                                         damping_n_m_s=scenario.joint_damping_n_m_s,
-                                        rear_trails=scenario.step_program == "program-trail")  # fmt: skip
+                                        rear_trails=scenario.step_program == "program-trail",
+                                        **SWING_PATHS[scenario.swing_path])  # fmt: skip
             if scenario.step_program in ("program-predicted", "program-trail"):
                 return predicted_stepper(scenario, scene, config, stepping, tree, program)
             return StepProgram(config, stepping, scene.joint_names, tree=tree, program=program)

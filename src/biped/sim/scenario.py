@@ -25,6 +25,7 @@ from biped.control import Target
 from biped.control.neuromotor import NEUROMOTOR
 from biped.control.neuromotor import PRESET_KEYS as NEURO_PRESET_KEYS
 from biped.control.neuromotor import PRESETS as NEUROMOTOR_PRESETS
+from biped.control.swing_plan import SWING_PATHS
 from biped.control.workspace import TARGET_AXES, W_TARGET_AXIS, W_TARGET_TILT_DEG
 from biped.errors import ScenarioError
 from biped.models import (
@@ -49,6 +50,9 @@ CONTROLLERS = ("workspace", "joint-pd")
 #: "program-trail": "program-predicted" with the rear foot trailing after the step (the height
 #: set point capped by the front leg alone: StepProgramConfig.rear_trails).
 STEP_PROGRAMS = ("feedback", "program", "predicted", "program-predicted", "program-trail")
+#: The step program's swing path (key ``swing_path``, with ``step_program`` "program",
+#: "program-predicted" or "program-trail"): biped.control.swing_plan.SWING_PATHS.
+STEP_SWING_PATHS = tuple(SWING_PATHS)
 #: The longest step a stepping run may land (key ``step_reach``): "fixed" = StepLimits' 0.5 m
 #: between sole centres (the sweeps' design limit); "leg" = what the legs reach from the hips'
 #: standing height, both legs at the swing's reach (biped.control.capture.reach_step_limit), with
@@ -155,6 +159,9 @@ class Scenario:
     # with stepping: the longest step landed. "fixed": 0.5 m between sole centres; "leg": both legs
     # at the swing's reach from the hips' standing height (docs/validate.md, "The step program")
     step_reach: str = "fixed"
+    # with step_program "program*": the swing ankle's path, "min-jerk" (as before) or "s-curve" (the
+    # bang-bang jerk path, 0.37 s, with no weight transfer; docs/validate.md)
+    swing_path: str = "min-jerk"
     # with stepping: when to step. "qp" (the default): the QP alone until its feet cannot hold;
     # "capture": the capture point leaves the feet (3 cm sideways margin, W's fixed feet and
     # massless legs before the first step; the default before 2026-11-27; docs/controller.md,
@@ -383,6 +390,7 @@ _STRINGS = {
     "force_shape": FORCE_SHAPES,
     "step_program": STEP_PROGRAMS,
     "step_reach": STEP_REACHES,
+    "swing_path": STEP_SWING_PATHS,
     "step_trigger": STEP_TRIGGERS,
 }
 
@@ -396,6 +404,7 @@ _OMITTED_AT_DEFAULT = frozenset(
         "step_program",
         "step_reach",
         "step_trigger",
+        "swing_path",
         "pull_displacement_m",
         "pull_velocity_m_s",
         "pull_start_s",
