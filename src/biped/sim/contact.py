@@ -349,6 +349,10 @@ class ContactMonitor:
         """Record the contact state at ``time_s``; returns True once the biped has fallen."""
         return self.record(time_s, self._bits_of(data), data.xipos[self._central, 2], data)
 
+    def feet_of(self, data) -> tuple[bool, bool]:
+        """(left, right): which feet touch the floor in ``data`` (:func:`feet_of_bits`)."""
+        return feet_of_bits(self._bits_of(data))
+
     def _bits_of(self, data) -> int:
         """OR of the contacts' codes (:func:`contact_code`) in ``data``."""
         if not data.ncon:

@@ -22,8 +22,7 @@ from biped.control.neuromotor import OLDER_RATE_FACTOR, human_rate_limits, neura
 from biped.models import JOINT_NAMES
 from biped.sim.contact import feet_of_bits
 
-# feet_of_bits is biped.sim.contact's, offered here as before (biped.sim.policies imports it from here)
-__all__ = ["NeuroLoop", "feet_of_bits", "neuro_loop", "rate_limits"]
+__all__ = ["NeuroLoop", "neuro_loop", "rate_limits"]
 
 #: The contacts the controller sees before t = 0 + feedback_delay_s: both soles down (the subject
 #: stood before the run; W's biped starts 5 mm above the floor and lands in a few ms).

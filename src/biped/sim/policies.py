@@ -166,21 +166,18 @@ def predicted_stepper(scenario: Scenario, scene: Scene, config, stepping, tree, 
     from biped.control.forward_model import ForwardModel, PredictedProgram, PredictedStepper
     from biped.control.stepping import SteppingController
     from biped.sim.contact import ContactMonitor
-    from biped.sim.neuro import NeuroLoop, feet_of_bits
+    from biped.sim.neuro import NeuroLoop
     from biped.sim.scene import initial_state
 
     m = scene.model
-    monitor = ContactMonitor(m, floor_geom=scene.floor_geom, block_geom=scene.block_geom,
-                             sole_geoms=scene.sole_geoms, biped_geoms=scene.biped_geoms,
-                             central_body=scene.central_body, fall_height_m=scenario.fall_height_m,
-                             sole_boxes=scene.sole_boxes)  # fmt: skip
+    monitor = ContactMonitor.of_scene(scene, scenario.fall_height_m)
     neuro = NeuroLoop(scenario, len(scene.biped_qpos_index), len(scene.biped_qvel_index), scene.joint_names)
     qpos0, qvel0 = initial_state(scene, scenario)
     forward = ForwardModel(m, qpos0, np.zeros_like(qvel0), scene.biped_qpos_index, scene.biped_qvel_index,
                            scene.actuator_index, delay_steps=scenario.delay_steps,
                            substeps=scenario.control_substeps, period=1.0 / scenario.control_rate_hz,
                            alpha=neuro.alpha, rate_step=neuro.rate_step,
-                           feet_of=lambda d: feet_of_bits(monitor._bits_of(d)),
+                           feet_of=monitor.feet_of,
                            invert_lag=True)  # fmt: skip
     stepper: SteppingController
     if program is None:
