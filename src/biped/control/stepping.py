@@ -121,11 +121,16 @@ class SteppingController(SwingPhase):
         # that takes no step runs exactly as without stepping
         plain = replace(inner, qp_weights=config.qp_weights)
         self._ctrl_before = make_policy(plain, tree=tree, **ws).controller if plain != inner else self.ctrl
+
+        def qp_with(**changes):  # a controller of the stepping QP with these weights changed
+            assert inner.qp_weights is not None  # every caller checks it
+            w = replace(inner.qp_weights, **changes)
+            return make_policy(replace(inner, qp_weights=w), tree=tree, **ws).controller
+
         # after a step, once at rest: the stepping QP with the scenario's moment weight
         self._ctrl_settle = self.ctrl
         if self.stepping.settle_after_s is not None and inner.qp_weights is not None and config.qp_weights:
-            w = replace(inner.qp_weights, moment=config.qp_weights.moment)
-            self._ctrl_settle = make_policy(replace(inner, qp_weights=w), tree=tree, **ws).controller
+            self._ctrl_settle = qp_with(moment=config.qp_weights.moment)
         # single support: the stepping QP, its friction pyramid scaled by swing_friction_scale
         # (a sideways step's: lateral_swing_friction_scale, if set)
         # (its own controller also when swing_inertia_share rewrites its friction each period, or the
@@ -138,16 +143,13 @@ class SteppingController(SwingPhase):
             or sp.stance_contact_model
         )
         if own and inner.qp_weights is not None:
-            scale = self.stepping.swing_friction_scale
-            scale = inner.qp_weights.friction_scale if scale is None else scale
-            w = replace(inner.qp_weights, friction_scale=scale)
-            self._ctrl_swing = make_policy(replace(inner, qp_weights=w), tree=tree, **ws).controller
+            scale = sp.swing_friction_scale
+            self._ctrl_swing = qp_with(
+                friction_scale=inner.qp_weights.friction_scale if scale is None else scale
+            )
         self._ctrl_swing_by_mode = {False: self._ctrl_swing, True: self._ctrl_swing}
-        if self.stepping.lateral_swing_friction_scale is not None and inner.qp_weights is not None:
-            w = replace(inner.qp_weights, friction_scale=self.stepping.lateral_swing_friction_scale)
-            self._ctrl_swing_by_mode[True] = make_policy(
-                replace(inner, qp_weights=w), tree=tree, **ws
-            ).controller
+        if sp.lateral_swing_friction_scale is not None and inner.qp_weights is not None:
+            self._ctrl_swing_by_mode[True] = qp_with(friction_scale=sp.lateral_swing_friction_scale)
         names = tuple(self.ctrl.joint_names)
         self.joint_names = tuple(joint_order) if joint_order is not None else names
         if sorted(self.joint_names) != sorted(names):

@@ -188,13 +188,13 @@ class SwingPhase:
         target = self._leg_capped(self.body.target(tuple(com), s.swing_tilt_deg), [1 - i])
         target = replace(target, com_acc=(float(acc[0]), float(acc[1]), 0.0))
         tau_swing = self._swing_torques(i, pd, vd, ad)
+        sideways = self.steps[-1]["sideways"]
         if s.swing_inertia_share is not None:  # forward and backward steps only
-            self._inertia_friction(i, ad, 0.0 if self.steps[-1]["sideways"] else s.swing_inertia_share)
+            self._inertia_friction(i, ad, 0.0 if sideways else s.swing_inertia_share)
         applied = tau_swing  # the torques the actuators give (clipped as _out clips)
         if self.limits is not None and (s.swing_reaction or s.stance_contact_model):
             lo, hi = self._ctrl_limits
             applied = np.clip(tau_swing, lo[self._leg_tau[i]], hi[self._leg_tau[i]])
-        sideways = self.steps[-1]["sideways"]
         if s.swing_reaction and not (sideways and s.lateral_swing_reaction is False):
             target = self._with_swing_reaction(i, applied, qpos, qvel, target, flags)
         if s.stance_contact_model:  # the stance foot's friction rows on its predicted contact wrench
