@@ -107,11 +107,9 @@ class StepProgramConfig:
         if not isinstance(self.rear_trails, bool):
             raise ScenarioError(f"step program: rear_trails must be true or false; got {self.rear_trails!r}")
         for f in fields(self):
-            if f.name == "swing_brake" and self.swing_brake is None:
-                continue
             v = getattr(self, f.name)
-            if f.name == "rear_trails":
-                continue
+            if f.name == "rear_trails" or (f.name == "swing_brake" and v is None):
+                continue  # a bool (checked above); no brake: the minimum-jerk path
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
                 raise ScenarioError(f"step program: {f.name} must be a number >= 0; got {v!r}")
         if self.swing_brake is not None and self.swing_brake > 1:

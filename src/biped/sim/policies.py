@@ -137,11 +137,10 @@ def controller_policy(
         # planned steps for a delayed plant
         if scenario.step_program in ("program", "program-predicted", "program-trail"):
             from biped.control.step_program import StepProgram, StepProgramConfig
+            from biped.control.swing_plan import SWING_PATHS
 
             # on the predicted present (program-predicted) the program's own delay is none
             delay = scenario.feedback_delay_s if scenario.step_program == "program" else 0.0
-            from biped.control.swing_plan import SWING_PATHS
-
             # program-trail: after the step the rear foot trails (the height capped by the front leg)
             program = StepProgramConfig(delay_s=delay, lead_s=scenario.activation_time_s,
                                         damping_n_m_s=scenario.joint_damping_n_m_s,
