@@ -115,7 +115,8 @@ def test_ideal_is_w_and_leaves_the_loop_untouched():
 def test_the_delayed_feet_agree_with_the_contact_monitor():
     from biped.sim import contact, fused_kernel, neuro
 
-    assert neuro.STANDING == fused_kernel._STANDING == contact._SOLE_MASK  # both soles down
+    assert neuro.STANDING is fused_kernel.STANDING is contact.STANDING  # one definition
+    assert contact.STANDING == contact._SOLE_MASK  # both soles down
     assert contact.feet_of_bits(neuro.STANDING) == (True, True)
 
 

@@ -66,6 +66,19 @@ def test_cache_key_covers_the_controller_sources():
     assert extra[0][1] == __import__("os").stat(biped.control.recursions.__file__).st_size
 
 
+def test_the_stepping_rows_cache_key_covers_the_masks_and_the_trigger():
+    """stepping_row compiles in contact's feet masks and step_trigger's kernel and constants: its
+    cache key names those files too (a user's NUMBA_CACHE_DIR then never loads it stale)."""
+    import os
+
+    from biped.control import step_trigger
+    from biped.sim import fused_step
+
+    own, extra = fused_step.stepping_row._cache._cache_file._source_stamp
+    files = (contact.__file__, step_trigger.__file__)
+    assert extra == tuple((os.stat(f).st_mtime, os.stat(f).st_size) for f in files)
+
+
 def test_mjdata_layout_reads_what_the_bindings_read():
     """ncon and the contacts' geom pairs and positions, read through the struct offsets, equal
     MuJoCo's own ``data.ncon`` / ``data.contact.geom`` / ``.pos`` over a run with changing contacts."""

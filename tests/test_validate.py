@@ -46,6 +46,57 @@ def test_validate_rejects_an_unknown_experiment(tmp_path, capsys):
     assert "experiment" in capsys.readouterr().err
 
 
+def test_a_long_trial_says_its_simulated_time_every_second(tmp_path, monkeypatch):
+    """A young trial may run 10-25 s: ``biped validate`` says its simulated time on stderr a line a
+    second (stderr a pipe here), so that no wait between two lines is longer than the heartbeat's
+    1 s plus the wall time of a report's 50 ms of simulation; a trial that ends within 1 s adds no line. The trials
+    are fakes on a fake clock (the heartbeat's wiring, not the simulation, is under test), each
+    calling the CLI's ``running(t, duration)`` every 50 ms of its 4 s, as ``simulate`` does."""
+    import types
+
+    import biped._progress
+    import biped.analysis.validate as av
+
+    now = [0.0]
+    lines: list[tuple[float, str]] = []  # (fake time, stderr line)
+
+    class Stderr:
+        def write(self, text):
+            lines.extend((now[0], x) for x in text.splitlines() if x)
+
+        def flush(self):
+            pass
+
+        def isatty(self):
+            return False
+
+    def fake_trial(exp, neuromotor, magnitude, running=None):
+        lines.append((now[0], "<start>"))
+        wall = 1 / 128 if magnitude == exp.lo else 1 / 8  # per 50 ms simulated: 0.6 s or 10 s a trial
+        for k in range(1, 81):
+            now[0] += wall
+            running(k * 0.05, 4.0)
+        return av.Trial(
+            exp.key, neuromotor, magnitude, exp.unit, magnitude < 6.0, None, 1.0, 1.0, 0.0, wall * 80
+        )
+
+    monkeypatch.setattr(biped._progress, "time", types.SimpleNamespace(perf_counter=lambda: now[0]))
+    monkeypatch.setattr(av, "run_trial", fake_trial)
+    monkeypatch.setattr("sys.stderr", Stderr())
+    argv = ["validate", "--quick", "--experiment", "ankle_release", "--neuromotor", "young"]
+    assert main([*argv, "--out", str(tmp_path / "v")]) == 0
+    starts = [i for i, (_, x) in enumerate(lines) if x == "<start>"]
+    assert len(starts) == 2 + 3  # the bracket's two trials and --quick's 3 halvings
+    first = lines[starts[0] + 1 : starts[1]]  # the 0.25 deg trial, 0.6 s: its end line alone
+    assert [x for _, x in first] == ["    ankle_release young: 0.25 deg survived (0.6 s)"]
+    heartbeats = [x for _, x in lines if "s simulated" in x]
+    assert len(heartbeats) >= 4 * 8  # four 10 s trials, a line a second after the first
+    assert heartbeats[0] == "    ankle_release young: 16 deg: 0.45/4.00 s simulated (1.0 s)"
+    times = [t for t, x in lines if not x.startswith("  ankle_release")]  # to the last trial's end
+    gaps = [b - a for a, b in zip(times, times[1:], strict=False)]
+    assert max(gaps) <= 1.0 + 1 / 8  # (binary fractions: exact)
+
+
 def test_older_preset_is_held_against_the_older_adults_numbers():
     """Wojcik 1999: young women 30.7 deg, older women 16.2 deg (20 % SD assumed): a 17 deg
     threshold is inside the older band only, a 28 deg one inside the young band only."""

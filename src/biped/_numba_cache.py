@@ -193,6 +193,23 @@ def say_if_cold(dispatcher, what: str, name: str, default_s: float) -> None:
     )
 
 
+def key_by_sources(dispatcher, modules) -> None:
+    """Key the numba dispatcher ``dispatcher``'s cache by the source files of ``modules`` too (their
+    time stamps and sizes, beside its own file's): numba keys a cached kernel by its own file only,
+    so a kernel that compiles in another module's constants or kernels would load stale machine
+    code when only that module changed and the cache folder is not :func:`configure`'s (a
+    ``NUMBA_CACHE_DIR`` of the user's; configure's folder changes with every source). Call it right
+    after the decoration, before the kernel is compiled or loaded. Uses numba's cache internals (as
+    :func:`is_cached` does); without them, numba's own key stands."""
+    try:
+        cache_file = dispatcher._cache._cache_file
+        stats = [os.stat(str(m.__file__)) for m in modules]
+        extra = tuple((st.st_mtime, st.st_size) for st in stats)
+        cache_file._source_stamp = (cache_file._source_stamp, extra)
+    except (AttributeError, OSError, TypeError):  # pragma: no cover - another numba, or no cache
+        pass
+
+
 #: One lock for every kernel's one-time compile (:func:`compile_once`); re-entrant, so that a
 #: compile that needs another kernel compiled in the same thread does not wait on itself.
 _COMPILE_LOCK = threading.RLock()

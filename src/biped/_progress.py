@@ -4,7 +4,8 @@ log file or a pipe.
 A tqdm bar redraws itself with carriage returns; written to a file (``biped sweep ... 2> log``, a
 batch system, CI) it becomes one huge line. :func:`progress_bar` returns a tqdm bar when the stream
 is a terminal and otherwise a :class:`LineProgress`, which prints ``desc: n/total unit (elapsed)``
-as a whole line at the start, every ``every_s`` seconds (default 1) and at the end.
+as a whole line at the start (with tqdm's ``delay``, not before that many seconds), every
+``every_s`` seconds (default 1) and at the end (unless ``line_at_close=False``).
 
 >>> import io
 >>> out = io.StringIO()
@@ -35,7 +36,9 @@ def is_terminal(stream: Any) -> bool:
 
 class LineProgress:
     """A tqdm-like counter (``update``, ``n``, ``total``, ``set_postfix``, ``close``) that writes
-    whole lines: at the first update, then at most every ``every_s`` seconds, and when closed."""
+    whole lines: at the first update (the first after ``delay`` seconds, tqdm's meaning), then at
+    most every ``every_s`` seconds, and when closed (unless ``at_close`` is false, or nothing was
+    said and ``delay`` has not passed)."""
 
     def __init__(
         self,
@@ -47,12 +50,15 @@ class LineProgress:
         initial: float = 0,
         every_s: float = 1.0,
         fmt: str = "{:g}",
+        delay: float = 0.0,
+        at_close: bool = True,
     ):
         self.total, self.desc, self.unit = total, desc, unit
         self.n = initial
         self.file = file
         self.every_s = every_s
         self.fmt = fmt
+        self.delay, self.at_close = delay, at_close
         self._postfix = ""
         self._t0 = time.perf_counter()
         self._last: float | None = None
@@ -70,8 +76,14 @@ class LineProgress:
         self._last = time.perf_counter()
         self._said = self.n
 
+    def _quiet_start(self) -> bool:
+        """Nothing said yet and ``delay`` not over."""
+        return self._last is None and time.perf_counter() - self._t0 < self.delay
+
     def update(self, k: float = 1) -> None:
         self.n += k
+        if self._quiet_start():
+            return
         if self._last is None or time.perf_counter() - self._last >= self.every_s:
             self._say()
 
@@ -84,7 +96,7 @@ class LineProgress:
     def close(self) -> None:
         if not self._closed:
             self._closed = True
-            if self._said != self.n:
+            if self.at_close and self._said != self.n and not self._quiet_start():
                 self._say()
 
 
@@ -114,13 +126,14 @@ def progress_bar(
     *,
     file: TextIO | None = None,
     line_format: str = "{:g}",
+    line_at_close: bool = True,
     **tqdm_kwargs: Any,
 ):
     """A tqdm bar on ``file`` (default ``sys.stderr``) when it is a terminal, else a
-    :class:`LineProgress` (``line_format`` formats its counts, e.g. ``"{:.2f}"``); nothing at all
-    with ``disable=True``.
-    ``tqdm_kwargs`` (``initial``, ``bar_format``, ``leave``...) go to tqdm; of them the line
-    counter takes ``initial``."""
+    :class:`LineProgress` (``line_format`` formats its counts, e.g. ``"{:.2f}"``; ``line_at_close``
+    false: no line when it is closed); nothing at all with ``disable=True``.
+    ``tqdm_kwargs`` (``initial``, ``bar_format``, ``leave``, ``delay``...) go to tqdm; of them the
+    line counter takes ``initial`` and ``delay``."""
     stream = file if file is not None else sys.stderr
     if tqdm_kwargs.get("disable"):
         return _Silent()
@@ -128,7 +141,16 @@ def progress_bar(
         from tqdm import tqdm
 
         return tqdm(total=total, desc=desc, unit=unit, file=stream, **tqdm_kwargs)
-    return LineProgress(total, desc, unit, file=file, initial=tqdm_kwargs.get("initial", 0), fmt=line_format)
+    return LineProgress(
+        total,
+        desc,
+        unit,
+        file=file,
+        initial=tqdm_kwargs.get("initial", 0),
+        fmt=line_format,
+        delay=tqdm_kwargs.get("delay", 0.0),
+        at_close=line_at_close,
+    )
 
 
 def track(iterable, total: int, desc: str, unit: str = "it"):

@@ -366,14 +366,18 @@ def _ankle_measures(r, scenario: Scenario) -> tuple[float, float, float]:
     return peak, onset, motion
 
 
-def run_trial(exp: Experiment, neuromotor: str, magnitude: float) -> Trial:
-    """One trial of ``exp`` at ``magnitude`` with the ``neuromotor`` preset."""
+def run_trial(
+    exp: Experiment, neuromotor: str, magnitude: float, running: Callable[[float, float], None] | None = None
+) -> Trial:
+    """One trial of ``exp`` at ``magnitude`` with the ``neuromotor`` preset; ``running(t, duration)``
+    every 50 ms of simulated time ``t`` of the run's ``duration`` [s] (the same run either way)."""
     s = Scenario(
         neuromotor=neuromotor, **exp.base, **exp.preset_keys.get(neuromotor, {}), **exp.magnitude(magnitude)
     )
     scene = build_scene(s)
     t = time.perf_counter()
-    r = simulate(s, scene=scene)
+    tick = None if running is None else lambda t_sim: running(t_sim, s.duration_s)
+    r = simulate(s, scene=scene, progress=tick)
     wall = time.perf_counter() - t
     if r.interrupted:  # Ctrl-C / SIGTERM inside the run: not a fall, the end of the bisection
         raise KeyboardInterrupt
@@ -474,15 +478,21 @@ def ankle_to_toe_m(model: str) -> float:
 
 
 def run_experiment(
-    exp: Experiment, neuromotor: str, iterations: int, progress: Callable[[Trial], None] | None = None
+    exp: Experiment,
+    neuromotor: str,
+    iterations: int,
+    progress: Callable[[Trial], None] | None = None,
+    running: Callable[[float, float, float], None] | None = None,
 ) -> Threshold:
     """The threshold of ``exp`` for the preset by bisection of the magnitude in [lo, hi] on a
     logarithmic scale, ``iterations`` halvings after the bracket's two trials; ``progress`` is
-    called with each trial as it ends."""
+    called with each trial as it ends, ``running(magnitude, t, duration)`` every 50 ms of a running
+    trial's simulated time (:func:`run_trial`)."""
     trials: list[Trial] = []
 
     def run(magnitude: float) -> Trial:
-        t = run_trial(exp, neuromotor, magnitude)
+        tick = None if running is None else lambda t_sim, dur: running(magnitude, t_sim, dur)
+        t = run_trial(exp, neuromotor, magnitude, tick)
         trials.append(t)
         if progress is not None:
             progress(t)

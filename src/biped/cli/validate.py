@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import sys
 import time
+from typing import Any
 
 from biped.cli._common import add_folder_options, keeps_mujoco_log, run_dir
 
@@ -62,18 +63,28 @@ def run(args) -> int:
     results: dict = {}
     n = 0
     interrupted = False
+    running: _Running | None = None
     try:
         for name in names:
             per: dict = {}
             results[name] = per
             for preset in presets:
-                th = run_experiment(EXPERIMENTS[name], preset, iterations, progress=_said(name, preset))
+                running = _Running(name, preset, EXPERIMENTS[name].unit)
+                th = run_experiment(
+                    EXPERIMENTS[name],
+                    preset,
+                    iterations,
+                    progress=_said(name, preset, running),
+                    running=running,
+                )
                 per[preset] = th
                 n += len(th.trials)
                 print(
                     f"  {name:<18} {preset:<6} threshold {th.bound}{th.value:.4g} {th.unit} ({len(th.trials)} trials)"
                 )
     except KeyboardInterrupt:  # Ctrl-C / SIGTERM: write the finished thresholds, then stop
+        if running is not None:
+            running.close()
         interrupted = True
         results = {k: v for k, v in results.items() if v}
     wall = time.perf_counter() - t0
@@ -96,10 +107,47 @@ def run(args) -> int:
     return 0
 
 
-def _said(name: str, preset: str):
+#: A running trial says nothing for its first second, then its simulated time every second.
+RUNNING_DELAY_S = 1.0
+
+
+class _Running:
+    """A running trial's simulated time on stderr (a young trial may run 10-25 s): a tqdm bar on a
+    terminal, gone when the trial ends, else a line a second (``biped._progress``); nothing for a
+    trial that ends within :data:`RUNNING_DELAY_S`."""
+
+    def __init__(self, name: str, preset: str, unit: str):
+        self.name, self.preset, self.unit = name, preset, unit
+        self.bar: Any = None
+
+    def __call__(self, magnitude: float, t: float, duration: float) -> None:
+        from biped._progress import progress_bar
+
+        if self.bar is None:
+            self.bar = progress_bar(
+                total=duration,
+                desc=f"    {self.name} {self.preset}: {magnitude:.4g} {self.unit}",
+                unit="s simulated",
+                line_format="{:.2f}",
+                line_at_close=False,
+                delay=RUNNING_DELAY_S,
+                leave=False,
+                bar_format="{desc}: {n:.2f}/{total:.2f} s simulated [{elapsed}]",
+            )
+        self.bar.update(t - self.bar.n)
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+            self.bar = None
+
+
+def _said(name: str, preset: str, running: _Running | None = None):
     """Each trial's line on stderr as it ends (a trial may take seconds: the user sees it work)."""
 
     def said(t) -> None:
+        if running is not None:
+            running.close()
         what = "survived" if t.survived else "fell"
         print(
             f"    {name} {preset}: {t.magnitude:.4g} {t.unit} {what} ({t.wall_time_s:.1f} s)", file=sys.stderr

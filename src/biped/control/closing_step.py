@@ -129,6 +129,9 @@ def shift_call(ctl, t, qpos, qvel, com, xi, feet):
     """The closing step's weight shift (double support, the settling controller, the set point
     over the foot that stays): its torques, or None once the swing starts (``ready``) or the
     shift is given up after ``closing_shift_max_s`` (then back to double support over both feet)."""
+    # Imported here, not at the top: biped.control.stepping imports this module (its helpers sit
+    # below it), so a top-level import would be circular, and the class is needed only here, for
+    # its own step start (a StepProgram overrides _start_step; the closing step is not its step).
     from biped.control.stepping import SteppingController
 
     s, i, el = ctl.stepping, ctl._closing, t - ctl._shift_t

@@ -36,16 +36,15 @@ def swing_drop(ctrl, i: int) -> float:
     the knees carry, :func:`knee_carried_drop`)."""
     s = ctrl.stepping
     if s.span_leg_m is None or ctrl._landing is None:
-        return carried(ctrl, s.swing_height_drop_m)
+        return carried(s.swing_height_drop_m, ctrl._knee_drop)
     span = float(np.linalg.norm(np.asarray(ctrl._landing)[:2] - ctrl._sole_pose(1 - i)[0][:2]))
     return height_drop(s, span, s.swing_height_drop_m)
 
 
-def carried(ctrl, drop_m: float) -> float:
-    """``drop_m`` no deeper than the controller's knee-carried drop (set at its first call; None:
-    ``drop_m``)."""
-    k = getattr(ctrl, "_knee_drop", None)
-    return drop_m if k is None else min(drop_m, k)
+def carried(drop_m: float, knee_drop_m: float | None) -> float:
+    """``drop_m`` no deeper than the knee-carried drop ``knee_drop_m`` (the controller's
+    ``_knee_drop``, :func:`knee_carried_drop` at its first call; None: ``drop_m``)."""
+    return drop_m if knee_drop_m is None else min(drop_m, knee_drop_m)
 
 
 def knee_lever(hip, knee, ankle, u, ends, drop_m: float) -> float:

@@ -54,7 +54,7 @@ from biped.control import capture as cp
 from biped.control import closing_step, leg_geometry
 from biped.control.limits import clip_torques
 from biped.control.policy import PolicyConfig, _model_path, make_policy
-from biped.control.stepping_body import SteppingBody, w_body
+from biped.control.stepping_body import SteppingBody, ankle_axis_along_sole, ankle_reaches, sole_pose, w_body
 from biped.control.stepping_config import SteppingConfig
 from biped.control.stepping_swing import AIRBORNE_M, SwingPhase
 from biped.control.workspace import Gains, Target
@@ -260,27 +260,15 @@ class SteppingController(SwingPhase):
 
     # ------------------------------------------------------------------ kinematics
     def _sole_pose(self, i: int) -> tuple[np.ndarray, float]:
-        d = self.data
-        b = self._foot[i]
-        R = d.xmat[b].reshape(3, 3)
-        Rs = R if self._sole_axes is None else R @ self._sole_axes[i]  # the sole's axes
-        return d.xpos[b] + R @ self._sole[i][0], math.atan2(Rs[1, 0], Rs[0, 0])
+        return sole_pose(self.body, self.data, i)
 
     def _ankle_reaches(self) -> list[tuple[int, float]]:
-        """Per leg: (5th hinge's id, reach [m]): the largest CoP offset along the sole from that
-        ankle hinge's axis its torque limit holds with the whole weight on the foot,
-        ``min(|lower|, upper) / (m g)``."""
+        """Per leg: (5th hinge's id, reach [m]) (:func:`~biped.control.stepping_body.ankle_reaches`)."""
         if self.limits is None or self.limits.lower is None or self.limits.upper is None:
             raise ScenarioError(
                 "ankle_limited_polygon needs torque limits (torque_limits = 'model' or 'human')"
             )
-        weight = self._mass * self._gravity
-        out = []
-        for leg in self.body.leg_joints:
-            k = self.joint_names.index(leg[4])
-            tau = min(-float(self.limits.lower[k]), float(self.limits.upper[k]))
-            out.append((int(self.model.joint(leg[4]).id), tau / weight))
-        return out
+        return ankle_reaches(self.body, self.limits, self.joint_names)
 
     def _sole_rect(self, i: int, cut: bool = True, share: float = 1.0):
         """Foot ``i``'s sole as (centre_xy, yaw, half_length, half_width); with
@@ -304,8 +292,7 @@ class SteppingController(SwingPhase):
         centre ``c``], the reach ``r`` its limit holds with the whole weight [m])."""
         assert self._ankle_reach is not None  # ankle_limited_polygon
         j5, rx = self._ankle_reach[i]
-        u = np.array([math.cos(yaw), math.sin(yaw)])
-        return float(u @ (self.data.xanchor[j5][:2] - c[:2])), rx
+        return ankle_axis_along_sole(self.data, j5, c, yaw), rx
 
     def _polygon(self, feet, cut: bool = True) -> np.ndarray:
         idx = [i for i in (0, 1) if feet[i] or self._sole_pose(i)[0][2] < 0.02]

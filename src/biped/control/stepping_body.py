@@ -25,6 +25,7 @@ controllers.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -35,7 +36,17 @@ import numpy as np
 from biped.errors import ModelError
 from biped.model import TreeModel, sole_rectangles
 
-__all__ = ["LEG_JOINTS", "SteppingBody", "facing_rotation", "leg_chains", "leg_length", "w_body"]
+__all__ = [
+    "LEG_JOINTS",
+    "SteppingBody",
+    "ankle_axis_along_sole",
+    "ankle_reaches",
+    "facing_rotation",
+    "leg_chains",
+    "leg_length",
+    "sole_pose",
+    "w_body",
+]
 
 #: Hinges a leg must have for the stepping controller: 3 at the hip, the knee, 2 at the ankle.
 LEG_JOINTS = 6
@@ -125,6 +136,38 @@ def facing_rotation(left_xy, right_xy) -> np.ndarray | None:
         return None
     c, s = np.cos(a), np.sin(a)
     return np.array([[c, -s], [s, c]])
+
+
+def sole_pose(body: SteppingBody, d: mujoco.MjData, i: int) -> tuple[np.ndarray, float]:
+    """(foot ``i``'s sole centre (3,) [m], the yaw of the sole's length [rad]) in ``d``, MuJoCo's
+    data of ``body.model`` after kinematics."""
+    b = body.feet[i]
+    R = d.xmat[b].reshape(3, 3)
+    Rs = R if body.sole_axes is None else R @ body.sole_axes[i]  # the sole's axes
+    return d.xpos[b] + R @ body.soles[i][0], math.atan2(Rs[1, 0], Rs[0, 0])
+
+
+def ankle_reaches(body: SteppingBody, limits, joint_names) -> list[tuple[int, float]]:
+    """Per leg: (its 5th hinge's joint id in ``body.model``, the reach [m]): the largest CoP offset
+    along the sole from that ankle hinge's axis its torque limit holds with the whole weight on the
+    foot, ``min(|lower|, upper) / (m g)``; ``limits`` the torque limits (lower and upper set) in
+    ``joint_names`` order."""
+    m = body.model
+    weight = float(np.sum(m.body_mass)) * float(-m.opt.gravity[2])
+    names = list(joint_names)
+    out = []
+    for leg in body.leg_joints:
+        k = names.index(leg[4])
+        tau = min(-float(limits.lower[k]), float(limits.upper[k]))
+        out.append((int(m.joint(leg[4]).id), tau / weight))
+    return out
+
+
+def ankle_axis_along_sole(d: mujoco.MjData, joint: int, centre, yaw: float) -> float:
+    """Where the ankle hinge ``joint``'s axis crosses a sole's length [m, from the sole centre
+    ``centre``, along the yaw ``yaw`` of :func:`sole_pose`] in ``d`` (kinematics computed)."""
+    u = np.array([math.cos(yaw), math.sin(yaw)])
+    return float(u @ (d.xanchor[joint][:2] - centre[:2]))
 
 
 def w_body(model: mujoco.MjModel, tree: TreeModel) -> SteppingBody:

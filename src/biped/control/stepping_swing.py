@@ -236,7 +236,7 @@ class SwingPhase:
         return tau
 
     def _height_drop(self, span_m: float, fixed_m: float) -> float:
-        return leg_geometry.height_drop(self.stepping, span_m, leg_geometry.carried(self, fixed_m))
+        return leg_geometry.height_drop(self.stepping, span_m, leg_geometry.carried(fixed_m, self._knee_drop))
 
     def _swing_drop(self, i: int) -> float:
         return leg_geometry.swing_drop(self, i)

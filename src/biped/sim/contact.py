@@ -183,6 +183,9 @@ _SOLE_MASK = _BLOCK_BIT - 1
 #: Each foot's sole bits: SOLE_GEOMS lists the left foot's heel and toe, then the right's (the one
 #: definition; the compiled loop's kernels import them).
 _LEFT_MASK, _RIGHT_MASK = 0b0011, 0b1100
+#: Both feet flat: every sole part of SOLE_GEOMS on the floor (the contacts a delayed controller
+#: sees before its first sensed row, biped.sim.neuro; the compiled loop's kernel imports it).
+STANDING = _SOLE_MASK
 
 
 def _flag_arrays() -> tuple[np.ndarray, ...]:

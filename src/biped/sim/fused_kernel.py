@@ -7,19 +7,17 @@ and why the result is the Python loop's bit for bit). Stepping runs add
 
 from __future__ import annotations
 
-import os
-
 import numpy as np
 from numba import njit, types
 
-from biped._numba_cache import compile_once
+from biped._numba_cache import compile_once, key_by_sources
 from biped.control.buffers import unpack
 from biped.control.daqp_c import C_TYPES, c_solve
 from biped.control.distribution import qp_build, qp_finish
 from biped.control.neuromotor import neural_filter
 from biped.control.recursions import compute_kernel
 from biped.sim import contact as contact_mod
-from biped.sim.contact import _LEFT_MASK, _LYING_BIT, _RIGHT_MASK, contact_code
+from biped.sim.contact import _LEFT_MASK, _LYING_BIT, _RIGHT_MASK, STANDING, contact_code
 from biped.sim.fused_qp import QP_TYPES, call_solve
 from biped.sim.fused_step import STEP_TYPES, stepping_row
 from biped.sim.loop_measures import record_row
@@ -28,8 +26,6 @@ from biped.sim.schedule import SCHEDULE_TYPES, apply_row
 
 # why run_rows returned (low 3 bits of its result; the row is result >> 3)
 DONE, FELL, LAST, DIVERGED, PYTHON = 0, 1, 2, 3, 4
-
-_STANDING = 0b1111  # biped.sim.neuro.STANDING
 
 # p (int params) entries
 P_SUB, P_NCTRL, P_CB, P_F0, P_F1, P_NCON, P_CPTR, P_CBASE, P_SENSED, P_BADQACC, P_NJ, P_CLIP, P_PD = range(13)
@@ -140,7 +136,7 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
             nrv[k % nring, :] = v
             nrb[k % nring] = bits
             jd = max(k - nd, 0) % nring
-            qs, vs, sbits = nrq[jd], nrv[jd], nrb[jd] if k >= nd else _STANDING
+            qs, vs, sbits = nrq[jd], nrv[jd], nrb[jd] if k >= nd else STANDING
         if p[P_SENSED]:
             contact[0] = 1 if sbits & _LEFT_MASK else 0
             contact[1] = 1 if sbits & _RIGHT_MASK else 0
@@ -250,13 +246,7 @@ def _key_cache_by_what_it_compiles_in() -> None:
         step_trigger,
         fused_step,
     )
-    try:
-        cache_file = _run_rows._cache._cache_file  # type: ignore[attr-defined]
-        stats = [os.stat(str(m.__file__)) for m in modules]
-        extra = tuple((st.st_mtime, st.st_size) for st in stats)
-        cache_file._source_stamp = (cache_file._source_stamp, extra)
-    except (AttributeError, OSError, TypeError):  # pragma: no cover - another numba, or no cache
-        pass
+    key_by_sources(_run_rows, modules)
 
 
 _key_cache_by_what_it_compiles_in()

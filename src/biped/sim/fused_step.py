@@ -23,7 +23,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, types
 
+from biped._numba_cache import key_by_sources
 from biped.control import step_trigger as trig
+from biped.sim import contact as contact_mod
 from biped.sim.contact import _LEFT_MASK, _RIGHT_MASK
 from biped.sim.mjdata import STEP_SIG, mj_function
 
@@ -88,6 +90,11 @@ def stepping_row(
     t = k * prm[trig.Q_PERIOD]
     left, right = (sbits & _LEFT_MASK) != 0, (sbits & _RIGHT_MASK) != 0
     return trig.double_support(t, left, right, scom[0], slin[0], sxpos, sxmat, st, pend, prm, ints, contact)
+
+
+# its cache keyed by the files whose constants and kernels it compiles in (the feet masks, the
+# trigger), not only its own: a changed mask never runs stale (biped._numba_cache.key_by_sources)
+key_by_sources(stepping_row, (contact_mod, trig))
 
 
 def placeholder_arguments(step_fn) -> tuple:

@@ -20,13 +20,9 @@ import numpy as np
 from biped import models
 from biped.control.neuromotor import OLDER_RATE_FACTOR, human_rate_limits, neural_filter
 from biped.models import JOINT_NAMES
-from biped.sim.contact import feet_of_bits
+from biped.sim.contact import STANDING, feet_of_bits
 
 __all__ = ["NeuroLoop", "neuro_loop", "rate_limits"]
-
-#: The contacts the controller sees before t = 0 + feedback_delay_s: both soles down (the subject
-#: stood before the run; W's biped starts 5 mm above the floor and lands in a few ms).
-STANDING = 0b1111
 
 
 def rate_limits(scenario) -> np.ndarray:
@@ -67,6 +63,8 @@ class NeuroLoop:
         self.ring_v[i] = v
         self.ring_bits[i] = bits
         j = max(k - self.delay, 0) % n
+        # before t = 0 + feedback_delay_s the controller sees both soles down (the subject stood
+        # before the run; W's biped starts 5 mm above the floor and lands in a few ms)
         b = int(self.ring_bits[j]) if k >= self.delay else STANDING
         out[:] = policy(t, self.ring_q[j], self.ring_v[j], feet_of_bits(b))
         if self.filtered:

@@ -75,7 +75,16 @@ from biped.control import capture as cp
 from biped.control.policy import PolicyConfig
 from biped.control.setpoint import Target
 from biped.control.stepping import SteppingConfig, SteppingController
-from biped.control.stepping_body import SteppingBody, facing_rotation, leg_chains, leg_length, w_body
+from biped.control.stepping_body import (
+    SteppingBody,
+    ankle_axis_along_sole,
+    ankle_reaches,
+    facing_rotation,
+    leg_chains,
+    leg_length,
+    sole_pose,
+    w_body,
+)
 from biped.control.stepping_config import QP_MAX_BACK_M
 from biped.control.swing_task import swing_pose_torques
 from biped.errors import ModelError
@@ -116,16 +125,11 @@ def ankle_limited(body: SteppingBody, d: mujoco.MjData, lim, joint_names, tolera
     """Whether a foot's ankle (its 5th hinge's torque limit, the whole weight on the foot) holds
     the CoP more than ``tolerance_m`` short of where the sole reaches ahead of or behind the
     hinge's axis, at the pose of ``d`` (MuJoCo's data of ``body.model``, after kinematics);
-    ``lim`` the legs' torque limits in ``joint_names`` order."""
-    m = body.model
-    weight = float(np.sum(m.body_mass)) * float(-m.opt.gravity[2])
-    for k, leg in enumerate(body.leg_joints):
-        j = list(joint_names).index(leg[4])
-        reach = min(-float(lim.lower[j]), float(lim.upper[j])) / weight
-        R = d.xmat[body.feet[k]].reshape(3, 3)
-        axes = R if body.sole_axes is None else R @ body.sole_axes[k]
-        centre, hl = d.xpos[body.feet[k]] + R @ body.soles[k][0], body.soles[k][1]
-        ax = float(axes[:, 0] @ (d.xanchor[m.joint(leg[4]).id] - centre))  # along the sole
+    ``lim`` the legs' torque limits in ``joint_names`` order (the stepping controller's
+    ``ankle_limited_polygon`` measures the same reach and hinge axis)."""
+    for k, (joint, reach) in enumerate(ankle_reaches(body, lim, joint_names)):
+        centre, yaw = sole_pose(body, d, k)
+        ax, hl = ankle_axis_along_sole(d, joint, centre, yaw), body.soles[k][1]
         if reach < max(hl - ax, hl + ax) - tolerance_m:
             return True
     return False

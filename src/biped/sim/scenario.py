@@ -25,7 +25,6 @@ from biped.control import Target
 from biped.control.neuromotor import NEUROMOTOR
 from biped.control.neuromotor import PRESET_KEYS as NEURO_PRESET_KEYS
 from biped.control.neuromotor import PRESETS as NEUROMOTOR_PRESETS
-from biped.control.swing_plan import SWING_PATHS
 from biped.control.workspace import TARGET_AXES, W_TARGET_AXIS, W_TARGET_TILT_DEG
 from biped.errors import ScenarioError
 from biped.models import (
@@ -36,56 +35,25 @@ from biped.models import (
     W_INITIAL_TILT_DEG,
     subject,
 )
-from biped.sim import perturbations, scenario_checks
-from biped.sim.perturbations.force import SHAPES as FORCE_SHAPES
+from biped.sim import scenario_checks
 from biped.sim.scenario_checks import INTS, MAX_SEED, RANGES, VECTORS, is_number
+from biped.sim.scenario_choices import (
+    CONTROLLERS,
+    DISTRIBUTIONS,
+    PHYSICS,
+    PHYSICS_PRESETS,
+    STEP_PROGRAMS,
+    STEP_REACHES,
+    STEP_SWING_PATHS,
+    STEP_TRIGGERS,
+    STRING_KEYS,
+    SUPPORTS,
+)
 
 #: W's initial joint angles theta_2..theta_13 [deg] (:data:`biped.models.W_INITIAL_ANGLES_DEG`).
 W_JOINT_ANGLES_DEG = W_INITIAL_ANGLES_DEG
 
-CONTROLLERS = ("workspace", "joint-pd")
-#: How a stepping run makes a step (key ``step_program``): the task-space feedback swing of
-#: biped.control.stepping, biped.control.step_program's weight transfer and planned swing, or the
-#: feedback swing on the present state predicted over the delay (biped.control.forward_model);
-#: "program-trail": "program-predicted" with the rear foot trailing after the step (the height
-#: set point capped by the front leg alone: StepProgramConfig.rear_trails).
-STEP_PROGRAMS = ("feedback", "program", "predicted", "program-predicted", "program-trail")
-#: The step program's swing path (key ``swing_path``, with ``step_program`` "program",
-#: "program-predicted" or "program-trail"): biped.control.swing_plan.SWING_PATHS.
-STEP_SWING_PATHS = tuple(SWING_PATHS)
-#: The longest step a stepping run may land (key ``step_reach``): "fixed" = StepLimits' 0.5 m
-#: between sole centres (the sweeps' design limit); "leg" = what the legs reach from the hips'
-#: standing height, both legs at the swing's reach (biped.control.capture.reach_step_limit), with
-#: the stance knee kept off straight in single support (biped.sim.policies.STANCE_KNEE_MIN_DEG).
-STEP_REACHES = ("fixed", "leg")
-#: Which feet the workspace controller takes as fixed: "fixed" = both, always (W); "sensed" = the
-#: feet whose soles touch the floor at each control step (see WorkspaceController.compute).
-SUPPORTS = ("fixed", "sensed")
-STEP_TRIGGERS = ("capture", "qp")
-#: The workspace controller's wrench distribution (W Alg. 5): W's min-norm split ("statics", its
-#: print's subscripts "printed") or the contact-feasible QP ("qp", biped.control.distribution).
-DISTRIBUTIONS = ("statics", "printed", "qp")
-
-#: Physics presets (key ``physics``): the values they give ``physics_timestep_s`` and
-#: ``contact_timeconst_s`` when those keys are not set, whether MuJoCo's sleep flag is on, and
-#: whether each foot collides as one box (``sole_box``: the union of its flush heel and toe
-#: boxes, 4 corner contacts instead of 8, two pairs of which sit on the same points of the seam;
-#: see :func:`biped.sim.scene.scene_spec`). "faithful" is the reference (0.5 ms step, 5 ms contact
-#: time constant, the MJCF's heel and toe boxes); "fast" costs about 2.5x less per simulated
-#: second and is checked against it in docs/sweep.md ("Physics presets"). The one box is used
-#: only where it was checked, W's shipped biped with its feet in place (:attr:`Scenario.sole_box`):
-#: it lets a stance foot slide twice as far during a sideways step, and W's min-norm split on a
-#: 55 kg subject diverges with it where the two boxes held.
-PHYSICS_PRESETS = {
-    "faithful": {
-        "physics_timestep_s": 0.0005,
-        "contact_timeconst_s": 0.005,
-        "sleep": False,
-        "sole_box": False,
-    },
-    "fast": {"physics_timestep_s": 0.001, "contact_timeconst_s": 0.0075, "sleep": True, "sole_box": True},
-}
-PHYSICS = tuple(PHYSICS_PRESETS)
+#: The keys a physics preset fills when they are not set (:data:`PHYSICS_PRESETS`).
 _PRESET_KEYS = ("physics_timestep_s", "contact_timeconst_s")
 
 
@@ -378,23 +346,6 @@ def toml_values(path: str | Path) -> dict:
 # ---------------------------------------------------------------------------------------------
 # keys and values
 
-#: The string keys and their valid values (the rest of the rules: biped.sim.scenario_checks).
-_STRINGS = {
-    "target_axis": TARGET_AXES,
-    "controller": CONTROLLERS,
-    "support": SUPPORTS,
-    "physics": PHYSICS,
-    "distribution": DISTRIBUTIONS,
-    "neuromotor": NEUROMOTOR,
-    "perturbation": perturbations.NAMES,
-    "force_shape": FORCE_SHAPES,
-    "step_program": STEP_PROGRAMS,
-    "step_reach": STEP_REACHES,
-    "swing_path": STEP_SWING_PATHS,
-    "step_trigger": STEP_TRIGGERS,
-}
-
-
 #: Keys :meth:`Scenario.to_dict` leaves out at their default value, so that a scenario without
 #: them writes the same summary.json / sweep identity as before they existed (except where
 #: :data:`CHANGED_DEFAULTS` says they are written).
@@ -463,7 +414,9 @@ def _coerce(key: str, v):
             return tuple(float(x) if is_number(x) else x for x in v)
         return float(v) if is_number(v) else v
     if (
-        key in _STRINGS or key in INTS or key in ("stepping", "ankle_only", "early_stop", "qp_floor_friction")
+        key in STRING_KEYS
+        or key in INTS
+        or key in ("stepping", "ankle_only", "early_stop", "qp_floor_friction")
     ):  # a bool is checked, not converted
         return v
     if key in ("model", "force_body"):
@@ -474,7 +427,7 @@ def _coerce(key: str, v):
 def validate(s: Scenario) -> None:
     """Raise :class:`ScenarioError` naming the first invalid key of ``s`` and what is valid
     (the rules: :func:`biped.sim.scenario_checks.validate`)."""
-    scenario_checks.validate(s, _STRINGS)
+    scenario_checks.validate(s, STRING_KEYS)
 
 
 def _toml_value(v) -> str:
@@ -512,6 +465,11 @@ __all__ = [
     "PHYSICS",
     "PHYSICS_PRESETS",
     "RANGES",
+    "STEP_PROGRAMS",
+    "STEP_REACHES",
+    "STEP_SWING_PATHS",
+    "STEP_TRIGGERS",
+    "SUPPORTS",
     "TARGET_AXES",
     "W_JOINT_ANGLES_DEG",
     "Scenario",
