@@ -206,7 +206,9 @@ class SwingPhase:
             drop, vz, az = drop * h, -drop * hd / self._T, -drop * hdd / self._T**2
         com[2] -= drop
         target = self._leg_capped(self.body.target(tuple(com), s.swing_tilt_deg), [1 - i])
-        target = replace(target, com_vel=(0.0, 0.0, vz), com_acc=(float(acc[0]), float(acc[1]), az))
+        target = replace(target, com_acc=(float(acc[0]), float(acc[1]), az))
+        if ramp:  # (without it the target as before, bit for bit)
+            target = replace(target, com_vel=(target.com_vel[0], target.com_vel[1], vz))
         tau_swing = self._swing_torques(i, pd, vd, ad)
         if s.swing_inertia_share is not None:  # forward and backward steps only
             self._inertia_friction(i, ad, 0.0 if sideways else s.swing_inertia_share)
