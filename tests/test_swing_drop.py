@@ -145,3 +145,17 @@ def test_the_ramped_drop_is_a_minimum_jerk_path_from_the_set_point():
         zp, zm = height(s * T + h)[0], height(s * T - h)[0]
         assert vz == pytest.approx((zp - zm) / (2 * h), rel=1e-5)
         assert az == pytest.approx((zp - 2 * z + zm) / h**2, rel=1e-3)
+
+
+def test_crossover_side_takes_only_its_three_rules():
+    """``crossover_side`` (the traced crossover's side, docs/sweep.md): a one-line error names the
+    valid values."""
+    from biped.control.stepping_config import SteppingConfig
+    from biped.errors import ScenarioError
+
+    for ok in ("retarget", "start", "near"):
+        assert SteppingConfig(crossover_side=ok).crossover_side == ok
+    with pytest.raises(
+        ScenarioError, match="crossover_side must be 'retarget', 'start' or 'near'; got 'ahead'"
+    ):
+        SteppingConfig(crossover_side="ahead")
