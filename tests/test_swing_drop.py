@@ -159,3 +159,72 @@ def test_crossover_side_takes_only_its_three_rules():
         ScenarioError, match="crossover_side must be 'retarget', 'start' or 'near'; got 'ahead'"
     ):
         SteppingConfig(crossover_side="ahead")
+
+
+@pytest.mark.slow
+def test_the_135_deg_hop_load_is_the_whipped_legs_bias_wrench_and_real():
+    """The `"qp"` set at 135 deg 16 m/s (fast physics): its second step, a crossover, plans over
+    two body weights of vertical force early in the swing (traced: 1.7 kN). Of the plan's
+    ``F_1^bd = P_1 X^b + z_1`` it is W Alg. 3's bias ``z_1`` (over 90 % of it), not the set
+    point's feedback: ``z_1`` with every velocity zero is about the weight (its gravity part), so
+    the rest is the velocity products of the whipped swing leg and spinning body. MuJoCo agrees
+    the load is real: its normal force on the stance sole exceeds 2.5 body weights in the same
+    window, and its tangential force reaches mu times it (the sole slides)."""
+    from test_stance_slip import _sweep_scenario
+
+    from biped.control.stepping import SteppingController
+    from biped.control.stepping_config import SteppingConfig
+    from biped.sim.policies import policy_config
+    from biped.sim.push import run_closed_loop
+    from biped.sim.scene import build_scene
+
+    sc = _sweep_scenario(16, 135)
+    scene = build_scene(sc)
+    ctl = SteppingController(policy_config(sc), SteppingConfig.for_trigger("qp"), scene.joint_names)
+    swing_qp = ctl._ctrl_swing_by_mode[True]
+    names = ("tau", "P1", "z1", "X", "Fd")
+    plan = []
+    real = swing_qp.torques
+
+    def spy(qpos, qvel, target=None, gains=None, feet_in_contact=None):
+        tau = real(qpos, qvel, target=target, gains=gains, feet_in_contact=feet_in_contact)
+        if len(ctl.steps) == 2 and ctl._cross:
+            f = {n: swing_qp._out[sl].copy() for n, (sl, _) in zip(names, swing_qp._fields, strict=False)}
+            R = ctl.data.ximat[ctl._root].reshape(3, 3)
+            still = ctl._ctrl_before.compute(qpos, np.zeros_like(qvel), feet_in_contact=feet_in_contact)
+            plan.append((len(times), (R @ f["Fd"][:3])[2], (R @ f["z1"][:3])[2], (R @ still.z1[:3])[2]))
+        return tau
+
+    swing_qp.torques = spy
+    m = scene.model
+    soles = {m.geom(f"{s}_{p}").id: k for k, s in enumerate(("left", "right")) for p in ("heel", "toe")}
+    times, normal, tangential = [], [], []
+    c6 = np.zeros(6)
+
+    def on_step(m, d):
+        fn, ft = np.zeros(2), np.zeros(2)
+        for k in range(d.ncon):
+            con = d.contact[k]
+            g = con.geom1 if con.geom1 in soles else (con.geom2 if con.geom2 in soles else None)
+            if g is None:
+                continue
+            mujoco.mj_contactForce(m, d, k, c6)
+            f = con.frame.reshape(3, 3).T @ c6[:3]
+            fn[soles[g]] += abs(f[2])
+            ft[soles[g]] += np.hypot(f[0], f[1])
+        times.append(d.time)
+        normal.append(fn)
+        tangential.append(ft)
+
+    run_closed_loop(sc, scene, ctl, on_step=on_step)
+    st = ctl.steps[1]
+    assert st["crossover"] and st["foot"] == "left", ctl.steps
+    weight = float(ctl._mass) * 9.81
+    early = [p for p in plan if p[0] - plan[0][0] < 60]  # the swing's first 60 ms
+    k, fz, z1, z1_still = max(early, key=lambda p: p[1])
+    assert fz > 2.0 * weight, (fz, weight)
+    assert z1 > 0.9 * fz and abs(z1_still - weight) < 0.2 * weight, (fz, z1, z1_still, weight)
+    rows = slice(early[0][0], early[-1][0] + 1)
+    n, t = np.array(normal)[rows, 1], np.array(tangential)[rows, 1]  # the right (stance) sole
+    assert n.max() > 2.5 * weight, n.max() / weight
+    assert np.max(t / np.maximum(n, 1.0)) > 0.29, np.max(t / np.maximum(n, 1.0))
