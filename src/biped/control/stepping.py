@@ -230,6 +230,9 @@ class SteppingController(SwingPhase):
         self.arm_time_s = -math.inf  # no step before [s] (the lean release arms it when sensed)
         self._dwell_since: float | None = None  # since when xi is near the edge (the slow trigger)
         self._cross = False  # the step swings the foot across the stance foot
+        self._cross_ahead: float | None = None  # its end of the stance foot, once decided
+        self._swing0 = np.zeros(2)  # the swing sole's centre when the step started
+        self._swing_el = 0.0  # time into the swing [s] (swing_drop_ramp)
         self._stance_start = np.zeros(2)  # foot 1's sole centre from foot 0's at the start (facing)
         self._closing: int | None = None  # the foot of the closing step (shift and swing)
         self._closed = False  # a closing step was started (one per run)

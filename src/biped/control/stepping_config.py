@@ -122,6 +122,19 @@ class SteppingConfig:
     stance sole's centre on the side away from the swing foot crosses over: it lands on the
     stance foot's far side (lateral limits mirrored), at least crossover_clear_m ahead of or
     behind the stance sole's centre (the soles clear), its path along x first, then across.
+    crossover_side: which of the stance foot's ends a crossover passes: "retarget" (the side of
+    the landing target, decided again every period it is recomputed), "start" (decided when the
+    step starts, then kept), "near" (decided when the step starts: the side of the target if it
+    lies beyond crossover_clear_m, else the side on which the swing foot starts, the shorter path).
+    crossover_swing_time_s: a crossover's planned swing time (None: lateral_swing_time_s).
+    reach_on_floor: a swing point beyond reach_m from the swing hip is pulled in horizontally at
+    its own height (the foot still comes down to the floor at the farthest point it reaches there)
+    instead of toward the hip (which lifts it: the foot hangs above the floor and never lands).
+    swing_drop_ramp: the single support's height drop below the set point (swing_height_drop_m,
+    or what the span needs) reached along a minimum-jerk path over the planned swing time, its
+    velocity and acceleration fed forward, instead of at once (a set point 8 cm lower at the
+    swing's start asks for ~16 m/s^2 down with W's height gain: the plan unloads the stance foot).
+    lateral_swing_drop_ramp: a sideways step's (None: as swing_drop_ramp).
     stance_knee_min_deg, stance_knee_kp, stance_knee_kv: if stance_knee_min_deg is set (``step_reach
     = "leg"``: 8 deg, ``biped.sim.policies.STANCE_KNEE_MIN_DEG``), in single support the stance knee gets a one-sided
     spring-damper (kp [N m/rad], kv [N m s/rad] on its extending rate) added to W's torque once
@@ -204,6 +217,11 @@ class SteppingConfig:
     stance_knee_kv: float = 20.0
     crossover: bool = False
     crossover_clear_m: float = 0.24
+    crossover_side: str = "retarget"
+    crossover_swing_time_s: float | None = None
+    reach_on_floor: bool = False
+    swing_drop_ramp: bool = False
+    lateral_swing_drop_ramp: bool | None = None
     closing_step: bool = False
     closing_band_m: float = 0.05
     closing_inside_m: float = 0.015
@@ -251,6 +269,10 @@ class SteppingConfig:
             raise ScenarioError(
                 "stance_contact_model predicts the legs' weight itself: it needs qp_leg_weight = 0; "
                 f"got {self.qp_leg_weight!r}"
+            )
+        if self.crossover_side not in ("retarget", "start", "near"):
+            raise ScenarioError(
+                f"crossover_side must be 'retarget', 'start' or 'near'; got {self.crossover_side!r}"
             )
         if self.stance_contact_rows not in (1, 2, 3):
             raise ScenarioError(

@@ -86,6 +86,10 @@ class SwingPhase:
         self._cross = bool(
             s.crossover and self.steps and lateral and own * across[1] < 0.0 and closing is None
         )
+        if self._cross and s.crossover_swing_time_s is not None:
+            self._T = s.crossover_swing_time_s
+        self._cross_ahead = None  # a crossover's end of the stance foot (+1 ahead, -1 behind)
+        self._swing0 = self._sole_pose(swing)[0][:2].copy()  # the swing sole's centre at the start
         self.phase = "swing"
         self._dwell_since = None
         self._t_start = t
@@ -124,6 +128,7 @@ class SwingPhase:
         if feet[i] and el > 0.5 * self._T and step["lift_off_s"] is not None:
             return self._touch_down(t, qpos, qvel, feet, xi)
         stance_c, cop = self._stance_cop(st)
+        self._swing_el = el  # (the drop's ramp, swing_drop_ramp)
         side = 1.0 if i == 1 else -1.0
         if self._closing is None and (self._landing is None or el < s.retarget_until * self._T):
             self._landing = self._step_target(xi, cop, omega, self._T - el, stance_c[:2], side)
@@ -174,7 +179,11 @@ class SwingPhase:
         hip = self.data.xpos[self._hip[i]]
         r = pd - hip
         if np.linalg.norm(r) > s.reach_m:  # out of reach: the nearest point within it
-            pd = hip + r * (s.reach_m / np.linalg.norm(r))
+            if s.reach_on_floor and abs(r[2]) < s.reach_m:  # at its height: the foot still lands
+                k = math.sqrt(s.reach_m**2 - r[2] ** 2) / float(np.hypot(r[0], r[1]))
+                pd = np.array([hip[0] + k * r[0], hip[1] + k * r[1], pd[2]])
+            else:
+                pd = hip + r * (s.reach_m / np.linalg.norm(r))
         # stance: W's recursions with the swing foot off (one big base, single-sole QP); with
         # "qp", a stance sole over AIRBORNE_M up (the biped tumbling) is left out as in double
         # support: a QP loading a foot in the air made MuJoCo diverge
@@ -184,11 +193,23 @@ class SwingPhase:
         # the COM falls freely over the stance sole: the LIPM's acceleration as feed-forward
         acc = omega**2 * (self.data.subtree_com[0][:2] - cop)
         com = np.array(self.target.com)
-        com[2] -= 0.0 if self._closing is not None else self._swing_drop(i)
-        target = self._leg_capped(self.body.target(tuple(com), s.swing_tilt_deg), [1 - i])
-        target = replace(target, com_acc=(float(acc[0]), float(acc[1]), 0.0))
-        tau_swing = self._swing_torques(i, pd, vd, ad)
+        drop = 0.0 if self._closing is not None else self._swing_drop(i)
+        vz = az = 0.0
         sideways = self.steps[-1]["sideways"]
+        ramp = (
+            s.swing_drop_ramp
+            if not sideways or s.lateral_swing_drop_ramp is None
+            else s.lateral_swing_drop_ramp
+        )
+        if ramp:  # the drop reached along a minimum-jerk path over the planned swing
+            h, hd, hdd = cp.min_jerk(min(self._swing_el / self._T, 1.0))
+            drop, vz, az = drop * h, -drop * hd / self._T, -drop * hdd / self._T**2
+        com[2] -= drop
+        target = self._leg_capped(self.body.target(tuple(com), s.swing_tilt_deg), [1 - i])
+        target = replace(target, com_acc=(float(acc[0]), float(acc[1]), az))
+        if ramp:  # (without it the target as before, bit for bit)
+            target = replace(target, com_vel=(target.com_vel[0], target.com_vel[1], vz))
+        tau_swing = self._swing_torques(i, pd, vd, ad)
         if s.swing_inertia_share is not None:  # forward and backward steps only
             self._inertia_friction(i, ad, 0.0 if sideways else s.swing_inertia_share)
         applied = tau_swing  # the torques the actuators give (clipped as _out clips)
@@ -268,7 +289,14 @@ class SwingPhase:
             xi, cop, stance = R @ xi, R @ cop, R @ stance
         if self._cross:
             land = cp.step_target(xi, cop, omega, t_remaining, stance, -side, self._offset, self._limits)
-            ahead = 1.0 if land[0] >= stance[0] else -1.0
+            ahead = self._cross_ahead
+            if ahead is None:
+                ahead = 1.0 if land[0] >= stance[0] else -1.0
+                if s.crossover_side == "near" and abs(land[0] - stance[0]) < s.crossover_clear_m:
+                    start = self._swing0 if R is None else R @ self._swing0
+                    ahead = 1.0 if start[0] >= stance[0] else -1.0
+                if s.crossover_side != "retarget":
+                    self._cross_ahead = ahead
             land[0] = stance[0] + ahead * max(ahead * (land[0] - stance[0]), s.crossover_clear_m)
         else:
             land = cp.step_target(
