@@ -13,6 +13,11 @@ jerk (the same torque rate) it takes ``(60 / 32)^(1/3) = 1.23`` times longer.
 down through zero, and back): the same endpoints (zero rate and acceleration at both ends,
 ``brake = 1``) in 0.81 of the time at the same peak jerk; with ``brake < 1`` the path ends
 still moving (``brake = 0``: at twice the mean speed, peak jerk 8 d / T^3).
+
+At 0.37 s the S-curve of a 0.7 m step asks 442 m/s^3, more than the young hip's rate limit gives
+(~170 m/s^3): its foot lagged the plan 0.25 m and was counted as landed short. ``"s-curve-timed"``
+times the path for the step's own length (:func:`swing_jerk_m_s3`; docs/validate.md, "The S-curve
+tracked").
 """
 
 from __future__ import annotations
@@ -64,7 +69,8 @@ LEG_MASS_AT_ANKLE_KG = 6.0
 LEG_LEVER_M = 0.8
 #: The share of the hip flexion's rate limit a timed swing's plan asks for (the rest is left to
 #: the feedback, the bump's lift and the leg's gravity); chosen by trying (docs/validate.md, "The
-#: S-curve tracked"): at 1.0 the young foot lagged its plan 0.13 m at 11 deg, at 0.7 0.03 m.
+#: S-curve tracked"): at 11 deg the young foot lagged its plan 0.13 m at J 180 m/s^3 (share 1.05),
+#: 0.03 m at 0.7 (J 120).
 SWING_RATE_SHARE = 0.7
 
 
