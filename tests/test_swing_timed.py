@@ -68,3 +68,26 @@ def test_the_timed_s_curve_lands_on_its_landing_point_and_the_s_curve_short_of_i
     landed, target, *_ = _landing("s-curve", 10.0)
     assert math.isfinite(landed[0])
     assert float(np.linalg.norm(landed[:2] - target[:2])) > 0.2, (landed, target)
+
+
+def test_the_timed_paths_settings_are_checked_and_the_ideal_keeps_the_fixed_time():
+    """A negative touchdown distance or jerk is a one-line error; with no rate limit (the ideal
+    preset) the timed path keeps its fixed 0.37 s (no jerk set), with the young one J = 0.7 x the
+    hip flexion's rate limit / (6 kg x 0.8 m)."""
+    from biped.control.step_program import StepProgramConfig
+    from biped.errors import ScenarioError
+    from biped.models import JOINT_NAMES
+    from biped.sim.neuro import rate_limits
+    from biped.sim.policies import controller_policy
+    from biped.sim.scene import build_scene
+
+    for key in ("land_within_m", "swing_jerk_m_s3"):
+        with pytest.raises(ScenarioError, match=f"{key} must be a number >= 0"):
+            StepProgramConfig(**{key: -1.0})
+    keys = {"stepping": True, "step_program": "program-trail", "swing_path": "s-curve-timed"}
+    for preset in ("ideal", "young"):
+        s = Scenario(neuromotor=preset, **keys)
+        p = controller_policy(s, build_scene(s)).program
+        rate = float(rate_limits(s)[JOINT_NAMES.index("left_hip_flexion")])
+        assert p.swing_jerk_m_s3 == (0.0 if preset == "ideal" else pytest.approx(0.7 * rate / 4.8))
+        assert (p.swing_brake, p.swing_time_s, p.transfer_s, p.land_within_m) == (1.0, 0.37, 0.0, 0.1)

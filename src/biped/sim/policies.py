@@ -8,6 +8,7 @@ runs any of them. (Split from :mod:`biped.sim.push`, which still offers every na
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -146,9 +147,9 @@ def controller_policy(
                 from biped.models import JOINT_NAMES
                 from biped.sim.neuro import rate_limits
 
-                path["swing_jerk_m_s3"] = swing_jerk_m_s3(
-                    float(rate_limits(scenario)[JOINT_NAMES.index("left_hip_flexion")])
-                )
+                jerk = swing_jerk_m_s3(float(rate_limits(scenario)[JOINT_NAMES.index("left_hip_flexion")]))
+                if math.isfinite(jerk):  # no rate limit: the path's own 0.37 s
+                    path["swing_jerk_m_s3"] = jerk
             # program-trail: after the step the rear foot trails (the height capped by the front leg)
             program = StepProgramConfig(delay_s=delay, lead_s=scenario.activation_time_s,
                                         damping_n_m_s=scenario.joint_damping_n_m_s,
