@@ -30,8 +30,9 @@ swing-foot choice, landing rule, stance control and touchdown, and changes how a
    reaction); without it the swing's hip flexion pitched the trunk 24 deg forward and the foot
    rose instead of travelling (docs/validate.md).
 3. **touchdown**: the swing foot's contact once its sole has been seen 1 cm above the floor (a
-   sliding foot's contact flicker is not a landing), or the planned swing time plus
-   ``give_up_s`` after the swing's start if it never rose.
+   sliding foot's contact flicker is not a landing) and half the planned swing has passed (with
+   ``land_within_m``: only near the landing point or once the plan is over), or the planned swing
+   time plus ``give_up_s`` after the swing's start if it never rose.
 
 With no delay and no lag (``delay_s = lead_s = 0``) the swing follows the plan with the gains
 given; W's ideal runs use the feedback stepping controller (the default ``step_program``).
@@ -47,7 +48,7 @@ import numpy as np
 
 from biped.control import capture as cp
 from biped.control.stepping import SteppingConfig, SteppingController
-from biped.control.swing_plan import scurve
+from biped.control.swing_plan import jerk_bound, scurve
 from biped.control.workspace import Target
 from biped.errors import ScenarioError
 
@@ -86,6 +87,16 @@ class StepProgramConfig:
     swing_brake: None (the ankle's path the minimum-jerk polynomial), or the path the bang-bang
     jerk profile (:func:`biped.control.swing_plan.scurve`; 1: ending at rest, as the
     minimum-jerk path, in 0.81 of its time for the same peak jerk; docs/validate.md).
+    swing_jerk_m_s3: 0 (the swing takes ``swing_time_s``), or the path's peak jerk [m/s^3]: the
+    swing's time is then the shortest whose path reaches the landing point within it (the
+    bang-bang path's ``jerk_bound d / T^3``, the minimum-jerk's ``60 d / T^3``), d from the swing's
+    start to the landing point planned for the time left, recomputed with the landing point, and
+    the plan's clock runs at ``1 / T`` (a longer T slows the plan, it does not move it back); at
+    least ``swing_time_s`` (:func:`biped.control.swing_plan.swing_jerk_m_s3`; docs/validate.md,
+    "The S-curve tracked").
+    land_within_m: None (a contact after half the planned swing is the landing), or a contact of
+    the swing foot counts as its landing only with the sole centre within this distance of the
+    landing point, or once the planned swing is over; before, the swing goes on.
     """
 
     delay_s: float = 0.0
@@ -102,13 +113,15 @@ class StepProgramConfig:
     reaction_ff: float = 1.0
     rear_trails: bool = False
     swing_brake: float | None = None
+    swing_jerk_m_s3: float = 0.0
+    land_within_m: float | None = None
 
     def __post_init__(self):
         if not isinstance(self.rear_trails, bool):
             raise ScenarioError(f"step program: rear_trails must be true or false; got {self.rear_trails!r}")
         for f in fields(self):
             v = getattr(self, f.name)
-            if f.name == "rear_trails" or (f.name == "swing_brake" and v is None):
+            if f.name == "rear_trails" or (f.name in ("swing_brake", "land_within_m") and v is None):
                 continue  # a bool (checked above); no brake: the minimum-jerk path
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
                 raise ScenarioError(f"step program: {f.name} must be a number >= 0; got {v!r}")
@@ -152,6 +165,8 @@ class StepProgram(SteppingController):
         self._side_y = 0.0  # the lateral direction toward the stance foot (+-1)
         self._lifted = False
         self._el = 0.0  # time since the swing's start [s]
+        self._u = 0.0  # the swing's phase (with swing_jerk_m_s3: its clock at 1 / T)
+        self._t_clock = 0.0  # the swing clock's last call [s]
         self._v_ff: np.ndarray | None = None  # the plan's ankle velocity lead_s ahead
 
     # ------------------------------------------------------------------ the call
@@ -228,12 +243,20 @@ class StepProgram(SteppingController):
         st = 1 - i
         step = self.steps[-1]
         el = t - self._t_start
+        timed = p.swing_jerk_m_s3 > 0  # the swing's clock runs at 1 / T, T from the step's length
+        if timed:
+            if self._landing is None:
+                self._u = 0.0
+            else:
+                self._u += (t - self._t_clock) / self._T
+            self._t_clock = t
+            el = self._u * self._T
         self._el = el
         if self._sole_low(i) > LIFT_M:
             self._lifted = True
         if step["lift_off_s"] is None and not feet[i]:
             step["lift_off_s"] = t
-        if feet[i] and el > 0.5 * self._T and self._lifted:
+        if feet[i] and el > 0.5 * self._T and self._lifted and self._arrived(i, el):
             return self._touch_down(t, qpos, qvel, feet, xi)
         if el > self._T + p.give_up_s and not self._lifted:  # it never rose: stand on both again
             step["aborted"] = True
@@ -242,9 +265,14 @@ class StepProgram(SteppingController):
         side = 1.0 if i == 1 else -1.0
         if self._landing is None or el < s.retarget_until * self._T:
             xi_now = predicted_capture_point(xi, cop, omega, p.delay_s)
-            remaining = max(self._T - el, 0.0)
-            self._landing = cp.step_target(xi_now, cop, omega, remaining, stance_c[:2], side, self._offset,
-                                           self._limits)  # fmt: skip
+            if timed:
+                self._T, self._landing = self._feasible_time(xi_now, cop, omega, stance_c, side, i)
+                el = self._el = self._u * self._T
+                step["swing_time_s"] = self._T
+            else:
+                remaining = max(self._T - el, 0.0)
+                self._landing = cp.step_target(xi_now, cop, omega, remaining, stance_c[:2], side, self._offset,
+                                               self._limits)  # fmt: skip
         land = self._landing
         step["target_m"] = [float(land[0]), float(land[1]), 0.0]
         sole_off = self._sole[i][0]
@@ -252,6 +280,36 @@ class StepProgram(SteppingController):
         pd, vd, _ = self._plan(el - p.delay_s, ankle_land)  # what the delayed state is compared with
         _, self._v_ff, ad = self._plan(el + p.lead_s, ankle_land)  # the feed-forward, ahead of the lag
         return self._single_support(i, qpos, qvel, omega, cop, pd, vd, ad)
+
+    def _feasible_time(self, xi, cop, omega, stance_c, side, i):
+        """(T, the landing point): the swing's time for its own length, the shortest whose path's
+        peak jerk (:func:`~biped.control.swing_plan.jerk_bound` d / T^3; the minimum-jerk path's
+        60 d / T^3) is ``swing_jerk_m_s3``, d the distance from the swing's start to the landing
+        point planned for the time left, ``(1 - u) T`` (a fixed point; the landing limits bound d),
+        never less than ``swing_time_s``."""
+        p = self.program
+        assert self._p0 is not None
+        k = 60.0 if p.swing_brake is None else jerk_bound(p.swing_brake)
+        c0 = self._p0[:2] + self._sole[i][0][:2]  # the sole centre at the swing's start
+        T = max(self._T, p.swing_time_s)
+        for _ in range(30):
+            land = cp.step_target(xi, cop, omega, max(T * (1.0 - self._u), 0.0), stance_c[:2], side, self._offset,
+                                  self._limits)  # fmt: skip
+            d = float(np.linalg.norm(np.asarray(land[:2]) - c0))
+            T_new = max(p.swing_time_s, (k * d / p.swing_jerk_m_s3) ** (1.0 / 3.0))
+            if abs(T_new - T) < 1e-5:
+                break
+            T = T_new
+        return T_new, land
+
+    def _arrived(self, i: int, el: float) -> bool:
+        """Whether a contact of the swing foot is its landing (``land_within_m``): its sole centre
+        within that distance of the landing point, or the planned swing over; None: any contact
+        after half the swing (the program before)."""
+        w = self.program.land_within_m
+        if w is None or el >= self._T or self._landing is None:
+            return True
+        return float(np.linalg.norm(self._sole_pose(i)[0][:2] - self._landing[:2])) <= w
 
     def _single_support(self, i, qpos, qvel, omega, cop, pd, vd, ad):
         """The stepping controller's single support, with the swing leg's hip torques' reaction

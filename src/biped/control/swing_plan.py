@@ -13,11 +13,16 @@ jerk (the same torque rate) it takes ``(60 / 32)^(1/3) = 1.23`` times longer.
 down through zero, and back): the same endpoints (zero rate and acceleration at both ends,
 ``brake = 1``) in 0.81 of the time at the same peak jerk; with ``brake < 1`` the path ends
 still moving (``brake = 0``: at twice the mean speed, peak jerk 8 d / T^3).
+
+At 0.37 s the S-curve of a 0.7 m step asks 442 m/s^3, more than the young hip's rate limit gives
+(~170 m/s^3): its foot lagged the plan 0.25 m and was counted as landed short. ``"s-curve-timed"``
+times the path for the step's own length (:func:`swing_jerk_m_s3`; docs/validate.md, "The S-curve
+tracked").
 """
 
 from __future__ import annotations
 
-__all__ = ["SWING_PATHS", "jerk_bound", "scurve"]
+__all__ = ["SWING_PATHS", "jerk_bound", "scurve", "swing_jerk_m_s3"]
 
 
 def _segments(brake: float):
@@ -57,12 +62,37 @@ def jerk_bound(brake: float) -> float:
     return 1.0 / _raw(1.0, brake)[0]
 
 
+#: The leg's effective mass at the ankle [kg] and its length from the hip [m] that turn a hip
+#: torque rate into an ankle jerk (the step program's 0.45 s swing was chosen with them:
+#: :class:`~biped.control.step_program.StepProgramConfig`).
+LEG_MASS_AT_ANKLE_KG = 6.0
+LEG_LEVER_M = 0.8
+#: The share of the hip flexion's rate limit a timed swing's plan asks for (the rest is left to
+#: the feedback, the bump's lift and the leg's gravity); chosen by trying (docs/validate.md, "The
+#: S-curve tracked"): at 11 deg the young foot lagged its plan 0.13 m at J 180 m/s^3 (share 1.05),
+#: 0.03 m at 0.7 (J 120).
+SWING_RATE_SHARE = 0.7
+
+
+def swing_jerk_m_s3(hip_flexion_rate_n_m_s: float) -> float:
+    """The ankle's jerk [m/s^3] that a hip torque rising at ``SWING_RATE_SHARE`` of its rate limit
+    gives a leg of :data:`LEG_MASS_AT_ANKLE_KG` at :data:`LEG_LEVER_M`: J = share x rate / (m l)
+    (young 827 N m/s: 120 m/s^3; no limit: inf)."""
+    return SWING_RATE_SHARE * hip_flexion_rate_n_m_s / (LEG_MASS_AT_ANKLE_KG * LEG_LEVER_M)
+
+
 #: The step program's settings for each value of the scenario key ``swing_path``
 #: (:class:`~biped.control.step_program.StepProgramConfig` fields): "min-jerk", the program as it
 #: was; "s-curve", the bang-bang jerk path at the minimum-jerk plan's peak jerk (0.45 s x
 #: (32 / 60)^(1/3) = 0.365 s, rounded up to 0.37 s), with no weight transfer (docs/validate.md,
-#: "The swing's shape").
+#: "The swing's shape"); "s-curve-timed", the same path timed for the step's own length (its
+#: swing time the shortest whose peak jerk is :func:`swing_jerk_m_s3` of the preset's hip flexion
+#: rate limit, at least 0.37 s) and a contact counted as the landing only within 0.1 m of the
+#: landing point or once the plan is over (docs/validate.md, "The S-curve tracked").
 SWING_PATHS: dict[str, dict[str, float]] = {
     "min-jerk": {},
     "s-curve": {"swing_brake": 1.0, "swing_time_s": 0.37, "transfer_s": 0.0},
+    "s-curve-timed": {"swing_brake": 1.0, "swing_time_s": 0.37, "transfer_s": 0.0, "land_within_m": 0.1},
 }
+#: The paths timed by the preset's rate limit (``swing_jerk_m_s3`` set from it by the policy).
+TIMED_PATHS = ("s-curve-timed",)

@@ -8,6 +8,7 @@ runs any of them. (Split from :mod:`biped.sim.push`, which still offers every na
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
@@ -137,15 +138,23 @@ def controller_policy(
         # planned steps for a delayed plant
         if scenario.step_program in ("program", "program-predicted", "program-trail"):
             from biped.control.step_program import StepProgram, StepProgramConfig
-            from biped.control.swing_plan import SWING_PATHS
+            from biped.control.swing_plan import SWING_PATHS, TIMED_PATHS, swing_jerk_m_s3
 
             # on the predicted present (program-predicted) the program's own delay is none
             delay = scenario.feedback_delay_s if scenario.step_program == "program" else 0.0
+            path = dict(SWING_PATHS[scenario.swing_path])
+            if scenario.swing_path in TIMED_PATHS:  # the swing timed by the hip flexion's rate limit
+                from biped.models import JOINT_NAMES
+                from biped.sim.neuro import rate_limits
+
+                jerk = swing_jerk_m_s3(float(rate_limits(scenario)[JOINT_NAMES.index("left_hip_flexion")]))
+                if math.isfinite(jerk):  # no rate limit: the path's own 0.37 s
+                    path["swing_jerk_m_s3"] = jerk
             # program-trail: after the step the rear foot trails (the height capped by the front leg)
             program = StepProgramConfig(delay_s=delay, lead_s=scenario.activation_time_s,
                                         damping_n_m_s=scenario.joint_damping_n_m_s,
                                         rear_trails=scenario.step_program == "program-trail",
-                                        **SWING_PATHS[scenario.swing_path])  # fmt: skip
+                                        **path)  # fmt: skip
             if scenario.step_program in ("program-predicted", "program-trail"):
                 return predicted_stepper(scenario, scene, config, stepping, tree, program)
             return StepProgram(config, stepping, scene.joint_names, tree=tree, program=program)
