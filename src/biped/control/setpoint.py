@@ -4,14 +4,22 @@ values. World frame, SI units; the orientation is a unit quaternion (w, x, y, z)
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from biped.errors import ScenarioError
 from biped.spatial import axis_angle_quat
 
-__all__ = ["TARGET_AXES", "W_TARGET_AXIS", "W_TARGET_COM_M", "W_TARGET_TILT_DEG", "Gains", "Target"]
+__all__ = [
+    "TARGET_AXES",
+    "W_TARGET_AXIS",
+    "W_TARGET_COM_M",
+    "W_TARGET_TILT_DEG",
+    "Gains",
+    "Target",
+    "replaced",
+]
 
 _AXES = {"-y": (0.0, -1.0, 0.0), "-x": (-1.0, 0.0, 0.0)}
 #: Axes of the desired tilt: "-y" is W's text, "-x" the quaternion W prints (docs/controller.md).
@@ -75,6 +83,43 @@ class Target:
         if axis not in _AXES:
             raise ScenarioError(f"unknown target axis {axis!r}; valid: {sorted(_AXES)}")
         return cls(com=tuple(com), quat=tuple(axis_angle_quat(_AXES[axis], np.radians(tilt_deg))))
+
+
+#: Each vector field of :class:`Target` but the quaternion, and its slice of ``Target.array``.
+_TARGET_SLICES = {
+    "com": (0, 3),
+    "com_vel": (3, 6),
+    "com_acc": (6, 9),
+    "ang_vel": (13, 16),
+    "ang_acc": (16, 19),
+}
+
+
+def replaced(target: Target, **changes) -> Target:
+    """``dataclasses.replace(target, **changes)`` for a hot path (the stepping controller's swing
+    builds a set point every control period): the same Target, its ``array`` equal bit for bit,
+    without the dataclass's re-validation of the fields not changed. Each changed field must be
+    one of :data:`_TARGET_SLICES` (not the quaternion), a tuple or list of 3 finite numbers, else
+    the dataclass's own ``replace`` does it (and raises its one-line error)."""
+    vals = {}
+    for name, value in changes.items():
+        if (
+            name not in _TARGET_SLICES
+            or not isinstance(value, (tuple, list))
+            or len(value) != 3
+            or not all(isinstance(x, (float, int)) and math.isfinite(x) for x in value)
+        ):
+            return replace(target, **changes)
+        vals[name] = value
+    out = object.__new__(Target)
+    out.__dict__.update(target.__dict__)
+    arr = target.array.copy()
+    for name, value in vals.items():
+        a, b = _TARGET_SLICES[name]
+        arr[a:b] = value
+        out.__dict__[name] = value
+    out.__dict__["array"] = arr
+    return out
 
 
 @dataclass(frozen=True)

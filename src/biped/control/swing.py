@@ -11,6 +11,26 @@ import numpy as np
 __all__ = ["swing_leg_torques", "swing_reaction_wrench"]
 
 
+#: The leg joints the swing law holds by joint-space PD (hip rotation, the two ankle hinges) and
+#: those that move the ankle point (hip abduction, hip flexion, knee), by their place in W's leg.
+_HELD = np.array([2, 4, 5])
+_TASK = np.array([0, 1, 3])
+
+
+def _buffers(ctl, i):
+    """(jacp (3, nv), jacr (3, nv), M (nv, nv), the leg block's index, damping 1e-4 I) for
+    :func:`swing_leg_torques` of foot ``i``: made once per controller, each array written whole
+    by MuJoCo at every call (the same numbers as new ones, without a period's allocations)."""
+    bufs = getattr(ctl, "_swing_buffers", None)
+    if bufs is None:
+        nv = ctl.model.nv
+        bufs = ctl._swing_buffers = [
+            (np.zeros((3, nv)), np.zeros((3, nv)), np.zeros((nv, nv)), np.ix_(dofs, dofs), 1e-4 * np.eye(3))
+            for dofs in ctl._leg_dofs
+        ]
+    return bufs[i]
+
+
 def swing_leg_torques(ctl, i, pd, vd, ad):
     """Swing-leg torques of :class:`~biped.control.stepping.SteppingController` ``ctl`` (its
     model, data at the current state, leg indices and config) for foot ``i``: the ankle point
@@ -23,10 +43,10 @@ def swing_leg_torques(ctl, i, pd, vd, ad):
     m, d, s = ctl.model, ctl.data, ctl.stepping
     b = ctl._foot[i]
     dofs = ctl._leg_dofs[i]
+    jp, jr, M, ix, damp = _buffers(ctl, i)
     q = d.qpos[ctl._leg_qpos[i]]
     qd = d.qvel[dofs]
-    jp = np.zeros((3, m.nv))
-    mujoco.mj_jacBody(m, d, jp, None, b)
+    mujoco.mj_jacBody(m, d, jp, jr, b)  # (each written whole; jr is used below)
     Jl = jp[:, dofs]
     # joint-space parts: hip rotation to 0, ankle to the flat-foot angles
     R = d.xmat[ctl._shank[i]].reshape(3, 3).T  # desired foot orientation (I) in the shank frame
@@ -35,19 +55,17 @@ def swing_leg_torques(ctl, i, pd, vd, ad):
     qdd = np.zeros(6)
     for k, qk in ((2, 0.0), (4, inv), (5, dors)):
         qdd[k] = s.kp_rot * (qk - q[k]) - s.kv_rot * qd[k]
-    a = ad + s.kp_pos * (pd - d.xpos[b]) + s.kv_pos * (vd - jp[:, dofs] @ qd - jp @ d.qvel + jp[:, dofs] @ qd)
-    a = a - Jl[:, [2, 4, 5]] @ qdd[[2, 4, 5]]
-    J3 = Jl[:, [0, 1, 3]]
-    qdd[[0, 1, 3]] = J3.T @ np.linalg.solve(J3 @ J3.T + 1e-4 * np.eye(3), a)
-    M = np.zeros((m.nv, m.nv))
-    mujoco.mj_fullM(m, d, M)
-    tau = M[np.ix_(dofs, dofs)] @ qdd + d.qfrc_bias[dofs] - d.qfrc_passive[dofs]
+    vl = Jl @ qd  # the leg's part of the foot's velocity (taken out and added back: as it was)
+    a = ad + s.kp_pos * (pd - d.xpos[b]) + s.kv_pos * (vd - vl - jp @ d.qvel + vl)
+    a = a - Jl[:, _HELD] @ qdd[_HELD]
+    J3 = Jl[:, _TASK]
+    qdd[_TASK] = J3.T @ np.linalg.solve(J3 @ J3.T + damp, a)
+    mujoco.mj_fullM(m, d, M)  # (written whole)
+    tau = M[ix] @ qdd + d.qfrc_bias[dofs] - d.qfrc_passive[dofs]
     # the ankle's tiny inertia makes M_ll qdd a few N m that unmodelled coupling (the base's
     # acceleration) swamps: a stiff joint PD on the ankle instead [N m/rad, N m s/rad]
     # (damping on the foot's own angular velocity in the world, not the joint rate: the
     # shank turns fast during the swing and the flat foot must not follow it)
-    jr = np.zeros((3, m.nv))
-    mujoco.mj_jacBody(m, d, None, jr, b)
     w = jr @ d.qvel
     for k, qk, wk in ((4, inv, ctl._inv_sign[i] * w[0]), (5, dors, w[1])):
         tau[k] = s.ankle_kp * (qk - q[k]) - s.ankle_kv * wk + d.qfrc_bias[dofs[k]]
