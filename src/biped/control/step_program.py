@@ -97,6 +97,10 @@ class StepProgramConfig:
     land_within_m: None (a contact after half the planned swing is the landing), or a contact of
     the swing foot counts as its landing only with the sole centre within this distance of the
     landing point, or once the planned swing is over; before, the swing goes on.
+    aim_offset_m: None (the landing point lies the stepper's ``offset_m`` beyond the capture point
+    predicted for the touchdown), or this offset instead (< 0: behind it; Hof, Vermerris &
+    Gjaltema 2010: people land a constant offset beyond the XCoM; docs/validate.md, "Aiming the
+    timed step").
     """
 
     delay_s: float = 0.0
@@ -115,12 +119,19 @@ class StepProgramConfig:
     swing_brake: float | None = None
     swing_jerk_m_s3: float = 0.0
     land_within_m: float | None = None
+    aim_offset_m: float | None = None
 
     def __post_init__(self):
         if not isinstance(self.rear_trails, bool):
             raise ScenarioError(f"step program: rear_trails must be true or false; got {self.rear_trails!r}")
         for f in fields(self):
             v = getattr(self, f.name)
+            if f.name == "aim_offset_m":
+                if v is not None and not (isinstance(v, (int, float)) and math.isfinite(v) and abs(v) <= 0.3):
+                    raise ScenarioError(
+                        f"step program: aim_offset_m must be None or a number in [-0.3, 0.3] m; got {v!r}"
+                    )
+                continue
             if f.name == "rear_trails" or (f.name in ("swing_brake", "land_within_m") and v is None):
                 continue  # a bool (checked above); no brake: the minimum-jerk path
             if not (isinstance(v, (int, float)) and math.isfinite(v) and v >= 0):
@@ -271,7 +282,7 @@ class StepProgram(SteppingController):
                 step["swing_time_s"] = self._T
             else:
                 remaining = max(self._T - el, 0.0)
-                self._landing = cp.step_target(xi_now, cop, omega, remaining, stance_c[:2], side, self._offset,
+                self._landing = cp.step_target(xi_now, cop, omega, remaining, stance_c[:2], side, self._aim_offset(),
                                                self._limits)  # fmt: skip
         land = self._landing
         step["target_m"] = [float(land[0]), float(land[1]), 0.0]
@@ -293,7 +304,7 @@ class StepProgram(SteppingController):
         c0 = self._p0[:2] + self._sole[i][0][:2]  # the sole centre at the swing's start
         T = max(self._T, p.swing_time_s)
         for _ in range(30):
-            land = cp.step_target(xi, cop, omega, max(T * (1.0 - self._u), 0.0), stance_c[:2], side, self._offset,
+            land = cp.step_target(xi, cop, omega, max(T * (1.0 - self._u), 0.0), stance_c[:2], side, self._aim_offset(),
                                   self._limits)  # fmt: skip
             d = float(np.linalg.norm(np.asarray(land[:2]) - c0))
             T_new = max(p.swing_time_s, (k * d / p.swing_jerk_m_s3) ** (1.0 / 3.0))
@@ -301,6 +312,11 @@ class StepProgram(SteppingController):
                 break
             T = T_new
         return T_new, land
+
+    def _aim_offset(self) -> float:
+        """The landing point's offset beyond the predicted capture point [m]."""
+        a = self.program.aim_offset_m
+        return self._offset if a is None else float(a)
 
     def _arrived(self, i: int, el: float) -> bool:
         """Whether a contact of the swing foot is its landing (``land_within_m``): its sole centre
