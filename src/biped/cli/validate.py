@@ -67,7 +67,9 @@ def run(args) -> int:
             per: dict = {}
             results[name] = per
             for preset in presets:
-                th = run_experiment(EXPERIMENTS[name], preset, iterations, progress=_said(name, preset))
+                th = run_experiment(
+                    EXPERIMENTS[name], preset, iterations, progress=_said(name, preset), quick=args.quick
+                )
                 per[preset] = th
                 n += len(th.trials)
                 print(
@@ -79,7 +81,10 @@ def run(args) -> int:
     wall = time.perf_counter() - t0
     note = (
         "Each threshold is the largest magnitude the biped survived (bisection on a log scale; '<' "
-        "below the searched range, '>' above it). Presets: biped.control.neuromotor, docs/validate.md."
+        "below the searched range, '>' above it); the one-step lean's, the largest lean recovered (at "
+        "rest over the final feet at the end of a 7 s run) with every lean below it recovered (raised "
+        "1 deg at a time from 2 deg until one failed, then bisected). Presets: biped.control.neuromotor, "
+        "docs/validate.md."
     )
     meta = {"mode": "quick" if args.quick else "full", "iterations": iterations, "presets": presets,
             "trials": n, "wall_time_s": wall, "note": note, "interrupted": interrupted}  # fmt: skip
@@ -98,9 +103,12 @@ def run(args) -> int:
 
 def _said(name: str, preset: str):
     """Each trial's line on stderr as it ends (a trial may take seconds: the user sees it work)."""
+    from biped.analysis.validate import EXPERIMENTS, RECOVERED
 
     def said(t) -> None:
         what = "survived" if t.survived else "fell"
+        if t.survived and EXPERIMENTS[t.experiment].criterion == RECOVERED:
+            what = "recovered" if t.recovered else "stood, not at rest"
         print(
             f"    {name} {preset}: {t.magnitude:.4g} {t.unit} {what} ({t.wall_time_s:.1f} s)", file=sys.stderr
         )
