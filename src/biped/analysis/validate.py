@@ -367,6 +367,7 @@ class Trial:
     end_s: float = math.nan  # the simulated time the run ended (a fall, at rest, or its duration)
     final_com_error_m: float = math.nan  # at the end: the COM from the set point judged by
     final_com_speed_m_s: float = math.nan  # at the end: the central body's COM speed
+    final_orientation_error_deg: float = math.nan  # at the end: the trunk from the set point's
 
     def row(self) -> dict:
         return dict(self.__dict__)
@@ -440,7 +441,8 @@ def run_trial(exp: Experiment, neuromotor: str, magnitude: float) -> Trial:
     return Trial(exp.key, neuromotor, float(magnitude), exp.unit, bool(survived), r.fall_time_s, peak, onset,
                  motion, wall, bos, n_steps, length, contact, recovered,
                  recovered if exp.criterion == RECOVERED else bool(survived),
-                 float(r.times[-1]) if len(r.times) else math.nan, float(r.final_com_error_m), speed)  # fmt: skip
+                 float(r.times[-1]) if len(r.times) else math.nan, float(r.final_com_error_m), speed,
+                 float(r.final_orientation_error_deg))  # fmt: skip
 
 
 #: The staircase's bisection between the last magnitude that passed and the first that failed:
