@@ -108,7 +108,7 @@ def _said(name: str, preset: str):
     def said(t) -> None:
         what = "survived" if t.survived else "fell"
         if t.survived and EXPERIMENTS[t.experiment].criterion == RECOVERED:
-            what = "recovered" if t.recovered else "stood, not at rest"
+            what = "recovered" if t.recovered else "stood, not recovered"
         print(
             f"    {name} {preset}: {t.magnitude:.4g} {t.unit} {what} ({t.wall_time_s:.1f} s)", file=sys.stderr
         )
