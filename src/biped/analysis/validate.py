@@ -283,7 +283,9 @@ EXPERIMENTS = {
         "stepping (stepping = true, at most one step, the QP distribution; the young and older "
         "presets with the step program) on a floor of "
         "friction 1.0 (a shod foot on a dry floor; the tether needs about tan(lean) of the weight in "
-        "friction); the largest lean recovered with at most one step",
+        "friction); the largest lean recovered with at most one step (recovered: at rest over the final feet "
+        "at the end of a 7 s run, the stepping rule) with every lean below it recovered (raised 1 deg at a "
+        "time from 2 deg until one fails, then bisected)",
         {
             **HUMAN_STANCE,
             **_AT_REST,
