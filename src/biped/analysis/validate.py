@@ -24,6 +24,7 @@ import numpy as np
 
 from biped.analysis.validate_measures import (  # noqa: F401 (re-exported: tests and outputs read them here)
     LANDING_S,
+    _ankle_measures,
     _step_measures,
     ankle_to_toe_m,
     waist_ahead_of_ankles_m,
@@ -400,23 +401,6 @@ class Threshold:
         """The largest magnitude tried that passed (None if none did)."""
         passed = [t.magnitude for t in self.trials if t.passed]
         return max(passed) if passed else None
-
-
-def _ankle_measures(r, scenario: Scenario) -> tuple[float, float, float]:
-    """(peak change of the summed ankle plantar/dorsiflexion torque after release [N m], its onset
-    [ms]: the first row where it exceeds 10 % of that peak, the largest hip or knee motion [deg])."""
-    ank = [i for i, n in enumerate(r.joint_names) if "dorsiflexion" in n]
-    tau = r.torques[:, ank].sum(axis=1)
-    t0 = getattr(scenario, "release_time_s", 0.0) if scenario.perturbation == "release" else 0.0
-    k0 = min(round(t0 * scenario.control_rate_hz), len(tau) - 1)
-    change = np.abs(tau[k0:] - tau[k0])
-    peak = float(change.max()) if len(change) else math.nan
-    onset = (
-        float(np.argmax(change > 0.1 * peak)) * 1000.0 / scenario.control_rate_hz if peak > 0 else math.nan
-    )
-    hk = [i for i, n in enumerate(r.joint_names) if "ankle" not in n]
-    motion = float(np.degrees(np.abs(r.joint_angles[:, hk] - r.joint_angles[0, hk])).max())
-    return peak, onset, motion
 
 
 def run_trial(exp: Experiment, neuromotor: str, magnitude: float) -> Trial:

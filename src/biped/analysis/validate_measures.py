@@ -1,4 +1,5 @@
-"""The measures :mod:`biped.analysis.validate` reads off a trial's recorded run: the first step's
+"""The measures :mod:`biped.analysis.validate` reads off a trial's recorded run: the ankle torque's
+peak change and onset after a release, the first step's
 length and time to contact, the waist's position ahead of the ankles (Mille et al. 2003), the
 base of support ahead of the ankles."""
 
@@ -11,6 +12,24 @@ import mujoco
 import numpy as np
 
 from biped.sim import Scenario
+
+
+def _ankle_measures(r, scenario: Scenario) -> tuple[float, float, float]:
+    """(peak change of the summed ankle plantar/dorsiflexion torque after release [N m], its onset
+    [ms]: the first row where it exceeds 10 % of that peak, the largest hip or knee motion [deg])."""
+    ank = [i for i, n in enumerate(r.joint_names) if "dorsiflexion" in n]
+    tau = r.torques[:, ank].sum(axis=1)
+    t0 = getattr(scenario, "release_time_s", 0.0) if scenario.perturbation == "release" else 0.0
+    k0 = min(round(t0 * scenario.control_rate_hz), len(tau) - 1)
+    change = np.abs(tau[k0:] - tau[k0])
+    peak = float(change.max()) if len(change) else math.nan
+    onset = (
+        float(np.argmax(change > 0.1 * peak)) * 1000.0 / scenario.control_rate_hz if peak > 0 else math.nan
+    )
+    hk = [i for i, n in enumerate(r.joint_names) if "ankle" not in n]
+    motion = float(np.degrees(np.abs(r.joint_angles[:, hk] - r.joint_angles[0, hk])).max())
+    return peak, onset, motion
+
 
 #: A landing is a contact of the stepping foot that lasts this long [s].
 LANDING_S = 0.03
