@@ -76,6 +76,7 @@ def run(args) -> int:
                     iterations,
                     progress=_said(name, preset, running),
                     running=running,
+                    quick=args.quick,
                 )
                 per[preset] = th
                 n += len(th.trials)
@@ -90,7 +91,10 @@ def run(args) -> int:
     wall = time.perf_counter() - t0
     note = (
         "Each threshold is the largest magnitude the biped survived (bisection on a log scale; '<' "
-        "below the searched range, '>' above it). Presets: biped.control.neuromotor, docs/validate.md."
+        "below the searched range, '>' above it); the one-step lean's, the largest lean recovered (at "
+        "rest over the final feet at the end of a 7 s run) with every lean below it recovered (raised "
+        "1 deg at a time from 2 deg until one failed, then bisected). Presets: biped.control.neuromotor, "
+        "docs/validate.md."
     )
     meta = {"mode": "quick" if args.quick else "full", "iterations": iterations, "presets": presets,
             "trials": n, "wall_time_s": wall, "note": note, "interrupted": interrupted}  # fmt: skip
@@ -144,11 +148,14 @@ class _Running:
 
 def _said(name: str, preset: str, running: _Running | None = None):
     """Each trial's line on stderr as it ends (a trial may take seconds: the user sees it work)."""
+    from biped.analysis.validate import EXPERIMENTS, RECOVERED
 
     def said(t) -> None:
         if running is not None:
             running.close()
         what = "survived" if t.survived else "fell"
+        if t.survived and EXPERIMENTS[t.experiment].criterion == RECOVERED:
+            what = "recovered" if t.recovered else "stood, not recovered"
         print(
             f"    {name} {preset}: {t.magnitude:.4g} {t.unit} {what} ({t.wall_time_s:.1f} s)", file=sys.stderr
         )

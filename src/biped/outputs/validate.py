@@ -94,6 +94,25 @@ def _markdown(rows: list[dict], presets: list[str], meta: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _searches(results: dict[str, dict[str, Threshold]]) -> str:
+    """One line per preset and experiment: what counted, and the lowest magnitude that failed
+    (an island below the threshold, if a bisection passed one)."""
+    lines = ["", "Searches (the threshold; the lowest magnitude tried that failed; the highest that passed):"]
+    for key, per in results.items():
+        exp = EXPERIMENTS[key]
+        how = (f"raised {exp.staircase:g} {exp.unit} at a time from {exp.lo:g} until one failed, then bisected"
+               if exp.staircase > 0 else "bisection on a log scale")  # fmt: skip
+        for p, th in per.items():
+            low, high = th.lowest_failure, th.highest_pass
+            island = low is not None and not th.bound and low < th.value
+            lines.append(
+                f"- {key}, {p}: {exp.criterion}, {how}: {_fmt(th.value, th.bound)} {exp.unit}; lowest failed "
+                f"{_fmt(low)}; highest passed {_fmt(high)}"
+                + (" (fails below the threshold)" if island else "")
+            )
+    return "\n".join(lines) + "\n"
+
+
 def write_validation(out: Path, results: dict[str, dict[str, Threshold]], meta: dict) -> list[Path]:
     """Write the files into ``out``; returns their paths."""
     import pyarrow as pa
@@ -103,10 +122,12 @@ def write_validation(out: Path, results: dict[str, dict[str, Threshold]], meta: 
     rows = table_rows(results)
     written = [write_json(out / "validation.json", {"meta": meta, "rows": rows, "experiments": {
         k: {"title": EXPERIMENTS[k].title, "protocol": EXPERIMENTS[k].protocol, "unit": EXPERIMENTS[k].unit,
-            "thresholds": {p: {"value": th.value, "bound": th.bound} for p, th in per.items()}}
+            "criterion": EXPERIMENTS[k].criterion, "staircase_step": EXPERIMENTS[k].staircase,
+            "thresholds": {p: {"value": th.value, "bound": th.bound, "lowest_failure": th.lowest_failure,
+                               "highest_pass": th.highest_pass} for p, th in per.items()}}
         for k, per in results.items()}})]  # fmt: skip
     md = out / "validation.md"
-    files.write_text(md, _markdown(rows, presets, meta))
+    files.write_text(md, _markdown(rows, presets, meta) + _searches(results))
     written.append(md)
     trials = [t.row() for per in results.values() for th in per.values() for t in th.trials]
     table = pa.Table.from_pylist(trials)
