@@ -41,3 +41,27 @@ def test_the_added_torques_cancel_mujocos_passive_damping_after_a_step():
     dofs = [m.jnt_dofadr[m.joint(n).id] for n in on.joint_names]
     np.testing.assert_allclose(diff, -d.qfrc_passive[dofs], rtol=1e-9, atol=1e-12)
     assert np.abs(diff).max() > 0.1
+
+
+def test_rest_damping_joints_compensates_only_the_named_hinges():
+    """``rest_damping_joints=("hip_rotation",)``: MuJoCo's passive force cancelled on the two hip
+    rotation hinges, nothing added on the other ten."""
+    on = _controller(rest_damping_compensation=True, rest_damping_joints=("hip_rotation",))
+    off = _controller()
+    m, d = on.model, on.data
+    mujoco.mj_resetData(m, d)
+    q = d.qpos.copy()
+    v = np.random.default_rng(5).normal(0.0, 0.5, m.nv)
+    v[:6] = 0.0
+    for ctl in (on, off):
+        ctl.steps.append({"foot": "right", "closing": None})
+        ctl._settled = True
+    diff = on(0.5, q, v, (True, True)) - off(0.5, q, v, (True, True))
+    d.qpos[:], d.qvel[:] = q, v
+    mujoco.mj_forward(m, d)
+    dofs = [m.jnt_dofadr[m.joint(n).id] for n in on.joint_names]
+    hip = np.array([n.endswith("hip_rotation") for n in on.joint_names])
+    assert hip.sum() == 2
+    np.testing.assert_allclose(diff[hip], -d.qfrc_passive[dofs][hip], rtol=1e-9, atol=1e-12)
+    np.testing.assert_array_equal(diff[~hip], 0.0)
+    assert np.abs(diff[hip]).max() > 0.05

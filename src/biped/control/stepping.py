@@ -160,6 +160,9 @@ class SteppingController(SwingPhase):
         m0 = self.model  # each output joint's dof and passive damping (rest_damping_compensation)
         self._out_dof = np.array([m0.jnt_dofadr[m0.joint(n).id] for n in self.joint_names])
         self._out_damping = np.asarray(m0.dof_damping)[self._out_dof].copy()
+        only = self.stepping.rest_damping_joints
+        if only is not None:
+            self._out_damping *= [any(n.endswith(e) for e in only) for n in self.joint_names]
         self.limits = None
         if config.torque_limits is not None and not config.torque_limits.unlimited:
             self.limits = config.torque_limits.reorder(self.joint_names)

@@ -141,6 +141,9 @@ class SteppingConfig:
     feet it damps the trunk's yaw by ~12 N m s/rad (a backward-stepped 1.55 m subject), 5x the yaw
     PD's own ``P_1 k_v`` (2.4), and the trunk turned back with a ~1.7 s time constant. Before
     settling the damping stays (cancelled there too, the subject fell more: docs/sweep.md).
+    rest_damping_joints: with rest_damping_compensation, only the joints whose names end with one
+    of these (e.g. ``("hip_rotation",)``: the hinges that turn most with the trunk's yaw); None:
+    every joint.
     stance_knee_min_deg, stance_knee_kp, stance_knee_kv: if stance_knee_min_deg is set (``step_reach
     = "leg"``: 8 deg, ``biped.sim.policies.STANCE_KNEE_MIN_DEG``), in single support the stance knee gets a one-sided
     spring-damper (kp [N m/rad], kv [N m s/rad] on its extending rate) added to W's torque once
@@ -229,6 +232,7 @@ class SteppingConfig:
     swing_drop_ramp: bool = False
     lateral_swing_drop_ramp: bool | None = None
     rest_damping_compensation: bool = False
+    rest_damping_joints: tuple | None = None
     closing_step: bool = False
     closing_band_m: float = 0.05
     closing_inside_m: float = 0.015
