@@ -157,6 +157,12 @@ class SteppingController(SwingPhase):
                 f"controller joints {names} differ from the requested order {self.joint_names}"
             )
         self._order = np.array([names.index(n) for n in self.joint_names])
+        m0 = self.model  # each output joint's dof and passive damping (rest_damping_compensation)
+        self._out_dof = np.array([m0.jnt_dofadr[m0.joint(n).id] for n in self.joint_names])
+        self._out_damping = np.asarray(m0.dof_damping)[self._out_dof].copy()
+        only = self.stepping.rest_damping_joints
+        if only is not None:
+            self._out_damping *= [any(n.endswith(e) for e in only) for n in self.joint_names]
         self.limits = None
         if config.torque_limits is not None and not config.torque_limits.unlimited:
             self.limits = config.torque_limits.reorder(self.joint_names)
@@ -389,6 +395,9 @@ class SteppingController(SwingPhase):
             flags = self._flags(left, right)
         target = self._leg_capped(self._resting(self.target, vcom), (0, 1))
         tau = ctrl.torques(qpos, qvel, target=target, gains=self.gains, feet_in_contact=flags)
+        if s.rest_damping_compensation and self._settled:
+            # the hinges' passive damping the controller does not model, cancelled (before the clip)
+            return self._out(tau, self._out_damping * np.asarray(qvel)[self._out_dof])
         return self._out(tau)
 
     def _resting(self, target: Target, vcom) -> Target:
@@ -436,8 +445,10 @@ class SteppingController(SwingPhase):
             return None
         return tuple(bool(f) or self._sole_pose(k)[0][2] < AIRBORNE_M for k, f in enumerate((left, right)))
 
-    def _out(self, tau):
+    def _out(self, tau, extra=None):
         out = np.asarray(tau)[self._order]
+        if extra is not None:
+            out = out + extra
         if self.limits is not None:
             out = clip_torques(out, self.limits)
         return out

@@ -135,6 +135,15 @@ class SteppingConfig:
     velocity and acceleration fed forward, instead of at once (a set point 8 cm lower at the
     swing's start asks for ~16 m/s^2 down with W's height gain: the plan unloads the stance foot).
     lateral_swing_drop_ramp: a sideways step's (None: as swing_drop_ramp).
+    rest_damping_compensation: once settled after a step (``settle_after_s``), each joint's torque
+    adds the model's passive hinge damping times the joint's rate (the MJCF's ``damping``, 1.0 N m
+    s/rad a hinge), which W's controller does not model: through the closed chain of two planted
+    feet it damps the trunk's yaw by ~12 N m s/rad (a backward-stepped 1.55 m subject), 5x the yaw
+    PD's own ``P_1 k_v`` (2.4), and the trunk turned back with a ~1.7 s time constant. Before
+    settling the damping stays (cancelled there too, the subject fell more: docs/sweep.md).
+    rest_damping_joints: with rest_damping_compensation, only the joints whose names end with one
+    of these (e.g. ``("hip_rotation",)``: the hinges that turn most with the trunk's yaw); None:
+    every joint.
     stance_knee_min_deg, stance_knee_kp, stance_knee_kv: if stance_knee_min_deg is set (``step_reach
     = "leg"``: 8 deg, ``biped.sim.policies.STANCE_KNEE_MIN_DEG``), in single support the stance knee gets a one-sided
     spring-damper (kp [N m/rad], kv [N m s/rad] on its extending rate) added to W's torque once
@@ -222,6 +231,8 @@ class SteppingConfig:
     reach_on_floor: bool = False
     swing_drop_ramp: bool = False
     lateral_swing_drop_ramp: bool | None = None
+    rest_damping_compensation: bool = False
+    rest_damping_joints: tuple | None = None
     closing_step: bool = False
     closing_band_m: float = 0.05
     closing_inside_m: float = 0.015

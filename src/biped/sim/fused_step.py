@@ -149,6 +149,8 @@ class SteppingRows:
         p = self.policy
         if p.phase != "double" or p._mid0 is None:
             return None
+        if p.stepping.rest_damping_compensation and p._settled:  # (its added torques: Python's)
+            return None
         trig.load(p, self.st)
         trig.params(p, self.prm, self.ints, self.period)
         return trig.double_support_controller(p), p.target.array, p.gains.array
