@@ -77,7 +77,17 @@ def test_a_long_trial_says_its_simulated_time_every_second(tmp_path, monkeypatch
             now[0] += wall
             running(k * 0.05, 4.0)
         return av.Trial(
-            exp.key, neuromotor, magnitude, exp.unit, magnitude < 6.0, None, 1.0, 1.0, 0.0, wall * 80
+            exp.key,
+            neuromotor,
+            magnitude,
+            exp.unit,
+            magnitude < 6.0,
+            None,
+            1.0,
+            1.0,
+            0.0,
+            wall * 80,
+            passed=magnitude < 6.0,  # the experiment's criterion (survived, for the ankle-only lean)
         )
 
     monkeypatch.setattr(biped._progress, "time", types.SimpleNamespace(perf_counter=lambda: now[0]))
