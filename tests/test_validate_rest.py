@@ -44,7 +44,7 @@ def test_a_trial_at_rest_ends_early_and_counts_with_its_speed_below_5_cm_s():
 def _fake_trial(passes):
     """A stand-in for :func:`run_trial`: the trial passes where ``passes(magnitude)``."""
 
-    def run(exp, neuromotor, magnitude):
+    def run(exp, neuromotor, magnitude, running=None):  # running: the heartbeat (unused)
         ok = bool(passes(magnitude))
         return validate.Trial(exp.key, neuromotor, float(magnitude), exp.unit, ok, None if ok else 1.0,
                               0.0, 0.0, 0.0, 0.0, recovered=ok, passed=ok)  # fmt: skip
