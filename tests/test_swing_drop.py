@@ -24,6 +24,22 @@ SET_B = {
 }
 
 
+def _sole_forces(m, d, soles: dict, c6: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """MuJoCo's floor force on each sole's geoms (``soles``: geom id -> 0 left, 1 right) after a
+    step: (normal |world z|, tangential |world xy|) [N] per sole."""
+    fn, ft = np.zeros(2), np.zeros(2)
+    for k in range(d.ncon):
+        con = d.contact[k]
+        g = con.geom1 if con.geom1 in soles else (con.geom2 if con.geom2 in soles else None)
+        if g is None:
+            continue
+        mujoco.mj_contactForce(m, d, k, c6)
+        f = con.frame.reshape(3, 3).T @ c6[:3]
+        fn[soles[g]] += abs(f[2])
+        ft[soles[g]] += np.hypot(f[0], f[1])
+    return fn, ft
+
+
 def _goal_push(**params):
     """W's goal push (4 kg at 8 m/s from behind, faithful physics, 4 s), stepping with the
     ``"qp"`` set and ``params``: (result, per step (foot, start_s), times, normal forces (n, 2)
@@ -50,14 +66,7 @@ def _goal_push(**params):
     c6 = np.zeros(6)
 
     def on_step(m, d):
-        fn = np.zeros(2)
-        for k in range(d.ncon):
-            con = d.contact[k]
-            g = con.geom1 if con.geom1 in soles else (con.geom2 if con.geom2 in soles else None)
-            if g is None:
-                continue
-            mujoco.mj_contactForce(m, d, k, c6)
-            fn[soles[g]] += abs((con.frame.reshape(3, 3).T @ c6[:3])[2])  # world z
+        fn = _sole_forces(m, d, soles, c6)[0]
         times.append(d.time)
         normal.append(fn)
 
@@ -202,16 +211,7 @@ def test_the_135_deg_hop_load_is_the_whipped_legs_bias_wrench_and_real():
     c6 = np.zeros(6)
 
     def on_step(m, d):
-        fn, ft = np.zeros(2), np.zeros(2)
-        for k in range(d.ncon):
-            con = d.contact[k]
-            g = con.geom1 if con.geom1 in soles else (con.geom2 if con.geom2 in soles else None)
-            if g is None:
-                continue
-            mujoco.mj_contactForce(m, d, k, c6)
-            f = con.frame.reshape(3, 3).T @ c6[:3]
-            fn[soles[g]] += abs(f[2])
-            ft[soles[g]] += np.hypot(f[0], f[1])
+        fn, ft = _sole_forces(m, d, soles, c6)
         times.append(d.time)
         normal.append(fn)
         tangential.append(ft)
