@@ -476,14 +476,23 @@ def run_experiment(
     hi_t = run(exp.hi)
     if hi_t.passed:
         return Threshold(exp.key, neuromotor, exp.hi, exp.unit, ">", hi_t, trials)
-    lo, hi, best = exp.lo, exp.hi, lo_t
-    for _ in range(iterations):
-        mid = math.sqrt(lo * hi)
-        t = run(mid)
+    return _bisect(
+        exp, neuromotor, run, trials, (exp.lo, exp.hi, lo_t), iterations, lambda a, b: math.sqrt(a * b)
+    )
+
+
+def _bisect(exp: Experiment, neuromotor: str, run, trials: list, bracket, halvings: int, mid) -> Threshold:
+    """``halvings`` of ``bracket`` = (the magnitude that passed, the one that failed, the trial that
+    passed) at ``mid(lo, hi)`` (the log scale's or the staircase's plain mean): the largest magnitude
+    that passed, and its trial."""
+    lo, hi, best = bracket
+    for _ in range(halvings):
+        m = mid(lo, hi)
+        t = run(m)
         if t.passed:
-            lo, best = mid, t
+            lo, best = m, t
         else:
-            hi = mid
+            hi = m
     return Threshold(exp.key, neuromotor, lo, exp.unit, "", best, trials)
 
 
@@ -503,12 +512,7 @@ def _staircase(
         return Threshold(exp.key, neuromotor, best.magnitude, exp.unit, ">", best, trials)
     if best is None:
         return Threshold(exp.key, neuromotor, exp.lo, exp.unit, "<", None, trials)
-    lo, hi = best.magnitude, m
-    for _ in range(min(iterations, STAIRCASE_HALVINGS)):
-        mid = 0.5 * (lo + hi)
-        t = run(mid)
-        if t.passed:
-            lo, best = mid, t
-        else:
-            hi = mid
-    return Threshold(exp.key, neuromotor, lo, exp.unit, "", best, trials)
+    halvings = min(iterations, STAIRCASE_HALVINGS)
+    return _bisect(
+        exp, neuromotor, run, trials, (best.magnitude, m, best), halvings, lambda a, b: 0.5 * (a + b)
+    )
