@@ -207,9 +207,10 @@ class SwingPhase:
             drop, vz, az = drop * h, -drop * hd / self._T, -drop * hdd / self._T**2
         com[2] -= drop
         target = self._leg_capped(self._swing_set_point(com), [1 - i])
-        target = replaced(target, com_acc=(float(acc[0]), float(acc[1]), az))
-        if ramp:  # (without it the target as before, bit for bit)
-            target = replaced(target, com_vel=(target.com_vel[0], target.com_vel[1], vz))
+        changes = {"com_acc": (float(acc[0]), float(acc[1]), az)}
+        if ramp:  # the drop's rate too (without the ramp the target as before, bit for bit)
+            changes["com_vel"] = (target.com_vel[0], target.com_vel[1], vz)
+        target = replaced(target, **changes)
         tau_swing = self._swing_torques(i, pd, vd, ad)
         if s.swing_inertia_share is not None:  # forward and backward steps only
             self._inertia_friction(i, ad, 0.0 if sideways else s.swing_inertia_share)
