@@ -125,9 +125,9 @@ class _Running:
         self.bar: Any = None
 
     def __call__(self, magnitude: float, t: float, duration: float) -> None:
-        from biped._progress import progress_bar
-
         if self.bar is None:
+            from biped._progress import progress_bar
+
             self.bar = progress_bar(
                 total=duration,
                 desc=f"    {self.name} {self.preset}: {magnitude:.4g} {self.unit}",
