@@ -149,3 +149,14 @@ def run_chromium(tmp_path, *args: str, url: str) -> str:
     proc = subprocess.run(cmd, capture_output=True, text=True, timeout=90, check=False)
     assert proc.returncode == 0, proc.stderr[-2000:]
     return proc.stdout
+
+
+def goal_push_scenario(**changes):
+    """W's goal push for stepping (issue #23; tests/test_stepping.py): a 4 kg block at 8 m/s from
+    behind (32 N s; the biped faces -x), faithful physics, 4 s, the QP, stepping with the ``"qp"``
+    trigger; ``changes`` other scenario keys."""
+    from biped.sim import Scenario
+
+    keys = dict(distribution="qp", block_mass_kg=4.0, block_velocity_m_s=(-8.0, 0.0, 0.2), duration_s=4.0,
+                stepping=True, step_trigger="qp")  # fmt: skip
+    return Scenario(**{**keys, **changes})

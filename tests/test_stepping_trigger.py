@@ -10,6 +10,7 @@ import math
 import mujoco
 import numpy as np
 import pytest
+from _helpers import goal_push_scenario
 
 from biped.control import capture as cp
 from biped.control.capture import xcom_offset
@@ -213,18 +214,10 @@ def test_goal_push_recovers_with_the_qp_trigger():
     away from the capture point, and the biped fell (measured)."""
     from biped.control.stepping import SteppingController
     from biped.control.stepping_config import SteppingConfig
-    from biped.sim import Scenario
     from biped.sim.policies import policy_config
     from biped.sim.push import run_closed_loop
 
-    sc = Scenario(
-        distribution="qp",
-        block_mass_kg=4.0,
-        block_velocity_m_s=(-8.0, 0.0, 0.2),
-        duration_s=4.0,
-        stepping=True,
-        step_trigger="qp",
-    )
+    sc = goal_push_scenario()
     assert sc.physics == "faithful"
     r = simulate(sc)
     steps = r.extra["steps"]

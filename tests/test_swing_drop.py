@@ -9,6 +9,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 import pytest
+from _helpers import goal_push_scenario
 
 from biped.control import capture as cp
 
@@ -46,19 +47,11 @@ def _goal_push(**params):
     on the left and right soles [N] after every control period)."""
     from biped.control.stepping import SteppingController
     from biped.control.stepping_config import SteppingConfig
-    from biped.sim import Scenario
     from biped.sim.policies import policy_config
     from biped.sim.push import run_closed_loop
     from biped.sim.scene import build_scene
 
-    sc = Scenario(
-        distribution="qp",
-        block_mass_kg=4.0,
-        block_velocity_m_s=(-8.0, 0.0, 0.2),
-        duration_s=4.0,
-        stepping=True,
-        step_trigger="qp",
-    )
+    sc = goal_push_scenario()
     scene = build_scene(sc)
     m = scene.model
     soles = {m.geom(f"{s}_{p}").id: k for k, s in enumerate(("left", "right")) for p in ("heel", "toe")}
