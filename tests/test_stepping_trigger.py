@@ -142,7 +142,7 @@ def test_front_push_beyond_hofs_bound_ends_at_rest_over_the_new_feet():
     sc = _sweep_scenario(20, 0, "--stepping")
     r = simulate(sc)
     j_max = float(feet_in_place_bound([0.0], sc).j_max_n_s[0])
-    assert measure(r, np.asarray(r.block_velocity)).impulse_n_s > j_max
+    assert measure(r, np.asarray(r.block_velocity)).impulse_horizontal_n_s > j_max  # (Hof: horizontal)
     steps = r.extra["steps"]
     assert len(steps) == 1 and not steps[0]["sideways"], steps
     assert steps[0]["position_m"][0] > r.feet_pos[0, :, 0].max() + 0.2  # back: +x, the biped faces -x
