@@ -160,3 +160,25 @@ def goal_push_scenario(**changes):
     keys = dict(distribution="qp", block_mass_kg=4.0, block_velocity_m_s=(-8.0, 0.0, 0.2), duration_s=4.0,
                 stepping=True, step_trigger="qp")  # fmt: skip
     return Scenario(**{**keys, **changes})
+
+
+def qp_stepping(sc, scene, **params):
+    """W's stepping controller of scenario ``sc`` on ``scene`` (``policy_config(sc)``, the
+    scene's joints) with the ``"qp"`` trigger's set changed by ``params`` (SteppingConfig keys)."""
+    from biped.control.stepping import SteppingController
+    from biped.control.stepping_config import SteppingConfig
+    from biped.sim.policies import policy_config
+
+    return SteppingController(
+        policy_config(sc), SteppingConfig.for_trigger("qp", **params), scene.joint_names
+    )
+
+
+def run_qp_stepping(sc, scene=None, *, on_step=None, **params):
+    """``run_closed_loop`` of ``sc`` on ``scene`` (default: a fresh ``build_scene(sc)``) with
+    :func:`qp_stepping`'s controller of ``params``; ``on_step`` as there."""
+    from biped.sim.push import run_closed_loop
+    from biped.sim.scene import build_scene
+
+    scene = build_scene(sc) if scene is None else scene
+    return run_closed_loop(sc, scene, qp_stepping(sc, scene, **params), on_step=on_step)

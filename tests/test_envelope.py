@@ -124,6 +124,51 @@ def test_envelope_on_local_workers_gives_the_same_limits(tmp_path):
     ]
 
 
+def bouncing_block_trial(setup) -> dict:
+    """The closed-form plant's outcome, its block measured as a sweep trial measures it
+    (``ballistic_impulse`` of the block's velocity at 500 Hz): mass m, the trial's speed v along
+    its direction, horizontal, falling; the hit at 0.05 s stops it along the floor and adds v / 2
+    up. Its momentum change: m v horizontal, m v / 2 vertical."""
+    from biped.sim.sweep.record import Measured
+    from biped.sim.sweep.trial import ballistic_impulse
+
+    t = setup.trial
+    a = math.radians(t.direction_deg)
+    times = np.arange(0.0, 0.1, 0.002)
+    g = np.array([0.0, 0.0, -9.81])
+    hit = times >= 0.05
+    v = t.speed_m_s
+    vel = np.where(hit[:, None], [0.0, 0.0, 0.5 * v], [v * math.cos(a), v * math.sin(a), 0.0]) + np.outer(
+        times, g
+    )
+    J, _ = ballistic_impulse(times, vel, t.block_mass_kg, gravity=g)
+    fell = t.speed_m_s > plant_limit(t.direction_deg)
+    return Measured(
+        impulse_n_s=float(np.linalg.norm(J)), horizontal_impulse_n_s=float(np.hypot(J[0], J[1])),
+        completed=not fell, fell=fell,
+    ).row()  # fmt: skip
+
+
+def test_the_tables_impulse_is_the_horizontal_one_hofs_bound_is_on(tmp_path):
+    """Hof's J_max bounds the horizontal momentum (the extrapolated COM moves in the floor's
+    plane): the envelope's impulse, COM velocity change and % J_max of a block that also sends
+    the body's momentum up are m v, m v / M and 100 m v / J_max (v the limit speed), not the
+    whole momentum change's sqrt(5) / 2 m v."""
+    from biped.analysis.envelope_table import envelope_table
+
+    out = tmp_path / "env.parquet"
+    table = envelope_table(run_envelope(_spec(), out, trial_fn=bouncing_block_trial, workers=1, checks=0))
+    rows = {(r["direction_deg"], r["speed_m_s"]): r for r in load(out).table.to_pylist()}
+    for r in table.rows:
+        assert r.limit == plant_limit(r.direction_deg)
+        limit_row = rows[(r.direction_deg, r.limit)]
+        j = limit_row["block_mass_kg"] * r.limit  # the closed form
+        assert limit_row["impulse_n_s"] == pytest.approx(math.sqrt(1.25) * j, rel=1e-9)  # with the vertical
+        assert r.impulse_n_s == pytest.approx(j, rel=1e-9)
+        assert r.delta_v_m_s == pytest.approx(j / table.body_mass_kg, rel=1e-9)
+        assert r.percent_j_max == pytest.approx(100.0 * j / r.j_max_n_s, rel=1e-9)
+
+
 def test_row_survived_agrees_with_the_table_rule(tmp_path):
     from biped.analysis import survived
 

@@ -204,12 +204,13 @@ def test_compile_estimate_is_measured_once_compiled_here(tmp_path, monkeypatch):
     assert "measured on this machine" in lines[0]
 
 
-def test_the_kernel_cache_folder_changes_with_any_source(tmp_path):
+def test_the_kernel_cache_folder_changes_with_the_sources_kernels_compile_in(tmp_path):
     """numba keys a kernel's cache on its own file; a constant changed in another module left a
     cached kernel stale (the QP call kept an old buffer layout). ``import biped`` puts numba's
-    cache in a folder named by a hash of every source: a copy of the package, one constant of one
-    module edited, gets another folder, under its own ``__pycache__``; the user's
-    ``NUMBA_CACHE_DIR`` still wins."""
+    cache in a folder named by a hash of the sources kernels can compile in: a copy of the
+    package, one constant of one such module edited, gets another folder, under its own
+    ``__pycache__``; an edit of a module no kernel module imports (the envelope's table, the CLI)
+    keeps the folder; the user's ``NUMBA_CACHE_DIR`` still wins."""
     import shutil
 
     pkg = tmp_path / "src" / "biped"
@@ -225,8 +226,35 @@ def test_the_kernel_cache_folder_changes_with_any_source(tmp_path):
 
     first = folder()
     assert first.startswith(str(pkg / "__pycache__" / "numba")) and folder() == first
+    for other in (pkg / "analysis" / "envelope_table.py", pkg / "cli" / "envelope.py"):
+        other.write_text(other.read_text() + "\n_EDITED = 1\n")
+    assert folder() == first
     buffers = pkg / "control" / "qp_buffers.py"
     buffers.write_text(buffers.read_text() + "\n_EDITED = 1\n")
     second = folder()
     assert second != first and Path(second).parent == Path(first).parent
     assert folder({"NUMBA_CACHE_DIR": str(tmp_path / "mine")}) == str(tmp_path / "mine")
+
+
+def test_kernel_sources_hold_every_module_python_imports_with_them():
+    """:func:`biped._numba_cache.kernel_sources` (read from the import statements' text) against
+    Python's own imports: a fresh interpreter that imports every module of the list loads no other
+    module of the package; the list holds every module that defines a kernel and leaves the
+    command line, the plots and the outputs out."""
+    from biped._numba_cache import PACKAGE_DIR, kernel_sources
+
+    names = sorted(
+        ".".join(p.relative_to(PACKAGE_DIR.parent).with_suffix("").parts).removesuffix(".__init__")
+        for p in kernel_sources()
+    )
+    assert {"biped.sim.fused_kernel", "biped.control.recursions", "biped.sim.contact"} <= set(names)
+    assert "biped.control.qp_buffers" in names  # no kernel; the QP call's compiles in its layout
+    assert not any(n.startswith(("biped.cli", "biped.viz", "biped.outputs")) for n in names)
+    code = "import importlib, sys\nfor n in sys.argv[1:]: importlib.import_module(n)\n"
+    code += "print('\\n'.join(sorted(m for m in sys.modules if m == 'biped' or m.startswith('biped.'))))"
+    env = {**os.environ, "PYTHONPATH": SRC, "NUMBA_DISABLE_JIT": "1"}
+    out = subprocess.run(
+        [sys.executable, "-c", code, *names], env=env, capture_output=True, text=True, check=True
+    )
+    loaded = set(out.stdout.split())
+    assert loaded and loaded <= set(names), sorted(loaded - set(names))

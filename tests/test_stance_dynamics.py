@@ -8,6 +8,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 import pytest
+from _helpers import qp_stepping
 
 from biped.control.cones import ROWS_PER_FOOT, cone_rows, map_contact_rows
 
@@ -53,15 +54,12 @@ def _swing_trace(cfg_kw, speed, direction, duration):
     sys.path.insert(0, str(Path(__file__).parent))
     from test_stance_slip import _sweep_scenario
 
-    from biped.control.stepping import SteppingController
-    from biped.control.stepping_config import SteppingConfig
-    from biped.sim.policies import policy_config
     from biped.sim.push import run_closed_loop
     from biped.sim.scene import build_scene
 
     sc = _sweep_scenario(speed, direction).with_overrides(duration_s=duration)
     scene = build_scene(sc)
-    ctl = SteppingController(policy_config(sc), SteppingConfig.for_trigger("qp", **cfg_kw), scene.joint_names)
+    ctl = qp_stepping(sc, scene, **cfg_kw)
     rows: list = []
 
     def policy(t, q, v, feet):

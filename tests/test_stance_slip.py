@@ -9,6 +9,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 import pytest
+from _helpers import run_qp_stepping
 
 from biped.control.cones import ROWS_PER_FOOT, cone_rows, floor_friction_rows
 
@@ -173,11 +174,7 @@ def test_sideways_step_stance_foot_slides_at_most_2_cm():
     contacts and foot poses of the recorded run; measured 1.4 cm). The measure sees a slide: the
     same push with the stepping QP's friction pyramid on the sole's axes and W's orientation gains
     x4 during the sideways swing (the parameters before) slides > 5 cm (measured 11.6 cm)."""
-    from biped.control.stepping import SteppingController
-    from biped.control.stepping_config import SteppingConfig
-    from biped.sim.policies import policy_config
-    from biped.sim.push import run_closed_loop, simulate
-    from biped.sim.scene import build_scene
+    from biped.sim.push import simulate
 
     sc = _sweep_scenario(14, 90)
     assert sc.friction == 0.3
@@ -188,15 +185,13 @@ def test_sideways_step_stance_foot_slides_at_most_2_cm():
     assert slip <= 0.02, slip
     assert r.recovered
 
-    old = SteppingConfig.for_trigger(
-        "qp",
+    before = run_qp_stepping(
+        sc,
         floor_friction=False,
         swing_friction_scale=None,
         lateral_swing_friction_scale=None,
         lateral_rot_gain_scale=4.0,
     )
-    scene = build_scene(sc)
-    before = run_closed_loop(sc, scene, SteppingController(policy_config(sc), old, scene.joint_names))
     assert before.extra["steps"]
     assert max(_stance_slips(sc, before)) > 0.05
 
@@ -234,33 +229,25 @@ def test_less_planned_friction_in_forward_steps_keeps_the_135_deg_stance_foot():
     steps (``swing_friction_scale`` 0.35, sideways steps ``lateral_swing_friction_scale`` 0.55;
     measured, not adopted: docs/sweep.md) it recovers with one step sliding <= 2 cm (0.7 cm), and
     so it does with the per-period friction budget (``swing_inertia_share`` 0.5)."""
-    from biped.control.stepping import SteppingController
-    from biped.control.stepping_config import SteppingConfig
-    from biped.sim.policies import policy_config
-    from biped.sim.push import run_closed_loop, simulate
-    from biped.sim.scene import build_scene
+    from biped.sim.push import simulate
 
     sc = _sweep_scenario(16, 135)
     assert sc.friction == 0.3
     r = simulate(sc)
     assert r.recovered and max(_stance_slips(sc, r)) > 0.05
 
-    less = SteppingConfig.for_trigger("qp", swing_friction_scale=0.35, lateral_swing_friction_scale=0.55)
-    scene = build_scene(sc)
-    after = run_closed_loop(sc, scene, SteppingController(policy_config(sc), less, scene.joint_names))
+    after = run_qp_stepping(sc, swing_friction_scale=0.35, lateral_swing_friction_scale=0.55)
     assert after.recovered and after.extra["steps"]
     assert max(_stance_slips(sc, after)) <= 0.02
     # the per-period budget (``swing_inertia_share`` 0.5: 0.55 mu less the swing leg's planned
     # inertial force over the weight, forward and backward steps; measured 1.3 cm in docs/sweep.md)
-    budget = SteppingConfig.for_trigger("qp", swing_inertia_share=0.5)
-    scene = build_scene(sc)
-    held = run_closed_loop(sc, scene, SteppingController(policy_config(sc), budget, scene.joint_names))
+    held = run_qp_stepping(sc, swing_inertia_share=0.5)
     assert held.recovered and held.extra["steps"]
     assert max(_stance_slips(sc, held)) <= 0.02
     # the stance model (the floor's wrench predicted with the driven swing leg) and the swing
     # reaction on forward and backward steps, 0.35 there (set B of docs/sweep.md; measured 0.5 cm)
-    b = SteppingConfig.for_trigger(
-        "qp",
+    modelled = run_qp_stepping(
+        sc,
         stance_contact_model=True,
         lateral_stance_contact_model=False,
         swing_reaction=True,
@@ -268,8 +255,6 @@ def test_less_planned_friction_in_forward_steps_keeps_the_135_deg_stance_foot():
         swing_friction_scale=0.35,
         lateral_swing_friction_scale=0.55,
     )
-    scene = build_scene(sc)
-    modelled = run_closed_loop(sc, scene, SteppingController(policy_config(sc), b, scene.joint_names))
     assert modelled.recovered and modelled.extra["steps"]
     assert max(_stance_slips(sc, modelled)) <= 0.02
 

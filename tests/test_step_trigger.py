@@ -115,3 +115,103 @@ def test_compiled_double_support_is_the_python_one(keys, steps):
             counts["flags"].add(want)
     assert counts["go"] > 500 and counts["fired"] >= 2 and counts["back"] < counts["go"] / 5, counts
     assert len(counts["flags"]) >= 2 or keys.get("distribution") == "statics", counts
+
+
+def _sole_centres(m, d) -> np.ndarray:
+    """Each foot's sole centre (world, (2, 3)): the centre of the rectangle bounding its box geoms'
+    bottom faces in the foot body's frame (docs/controller.md's sole), from MuJoCo's model and
+    ``d``'s poses."""
+    out = []
+    for side in ("left", "right"):
+        b = m.body(f"{side}_foot").id
+        boxes = [
+            g for g in range(m.ngeom) if m.geom_bodyid[g] == b and m.geom_type[g] == mujoco.mjtGeom.mjGEOM_BOX
+        ]
+        lo = np.min([m.geom_pos[g][:2] - m.geom_size[g][:2] for g in boxes], axis=0)
+        hi = np.max([m.geom_pos[g][:2] + m.geom_size[g][:2] for g in boxes], axis=0)
+        z = min(m.geom_pos[g][2] - m.geom_size[g][2] for g in boxes)
+        c = np.array([*(0.5 * (lo + hi)), z])
+        out.append(d.xpos[b] + d.xmat[b].reshape(3, 3) @ c)
+    return np.array(out)
+
+
+@pytest.mark.parametrize("closing", [True, False])
+def test_closing_check_is_pending_after_settling_and_starts_where_the_stance_is_not_comfortable(closing):
+    """The closing step's check (``closing_step``, docs/controller.md "The closing step"): after a
+    step, the settling switch (COM 8 cm/s, under ``settle_speed_m_s``) makes it pending
+    (``I_CLOSE`` for the compiled double support) only with ``closing_step`` on; at 8 cm/s (over
+    ``closing_speed_m_s``) the compiled period runs and nothing starts; at rest the compiled code
+    hands the period back and the Python controller starts the closing step exactly where the
+    feet, by MuJoCo's sole centres, are not comfortable: crossed (the right foot no longer on +y of
+    the left), or their lateral distance more than 5 cm from the start's (W's 16.8 cm), or one more
+    than 5 cm ahead. Random leg postures (the trigger off: ``arm_time_s``) give both outcomes."""
+    from _helpers import qp_stepping
+
+    sc = Scenario(stepping=True, physics="fast", distribution="qp", step_trigger="qp")
+    policy = qp_stepping(sc, build_scene(sc), closing_step=closing)
+    s = policy.stepping
+    assert s.closing_speed_m_s < 0.08 < s.settle_speed_m_s and s.closing_band_m == 0.05
+    m = policy.model
+    d = mujoco.MjData(m)
+    q0 = m.key_qpos[m.key("wendlandt_initial").id].copy()
+    d.qpos[:] = q0
+    mujoco.mj_kinematics(m, d)
+    w0 = np.diff(_sole_centres(m, d)[:, :2], axis=0)[0]  # the right sole centre from the left one
+    assert w0[1] == pytest.approx(0.168, abs=5e-4) and abs(w0[0]) < 1e-9  # W's stance (the docs)
+    period = 1.0 / sc.control_rate_hz
+    prm, ints = np.zeros(st.NQ), np.zeros(st.NI, dtype=np.int64)
+    contact = np.zeros(2, dtype=np.int64)
+    rng = np.random.default_rng(11)
+    started = {True: 0, False: 0}
+    crossed = 0
+    for _ in range(24):
+        policy.reset()
+        policy(0.0, q0, np.zeros(m.nv), (True, True))  # the starting stance
+        policy.steps, policy._last_td, policy.arm_time_s = [{"foot": "left"}], 0.5, np.inf
+        q = q0.copy()
+        for leg in (7, 13):  # each hip's abduction, flexion and rotation
+            q[leg : leg + 3] += rng.uniform(-1.0, 1.0, 3) * (0.25, 0.06, 0.2)
+        d.qpos[:] = q
+        mujoco.mj_kinematics(m, d)
+        w = np.diff(_sole_centres(m, d)[:, :2], axis=0)[0]
+        edges = (w[1], abs(w[1]) - w0[1] - 0.05, abs(w[1]) - w0[1] + 0.05, w[0] - 0.05, w[0] + 0.05)
+        if min(abs(e) for e in edges) < 1e-6:
+            continue  # too close to the rule's edge to tell
+        comfortable = w[1] > 0.0 and abs(abs(w[1]) - w0[1]) <= 0.05 and abs(w[0]) <= 0.05
+        crossed += w[1] <= 0.0
+        codes = []
+        for k, speed in enumerate((0.08, 0.08, 0.0)):  # the settling switch, moving, at rest
+            t = 1.0 + k * period
+            v = np.zeros(m.nv)
+            v[0] = speed  # the whole body translating: the COM's speed
+            st.params(policy, prm, ints, period)
+            assert ints[st.I_CLOSE] == (closing and k > 0)
+            d.qpos[:], d.qvel[:] = q, v
+            for f in (mujoco.mj_kinematics, mujoco.mj_comPos, mujoco.mj_comVel, mujoco.mj_subtreeVel):
+                f(m, d)
+            codes.append(
+                st.double_support(
+                    t,
+                    True,
+                    True,
+                    d.subtree_com[0],
+                    d.subtree_linvel[0],
+                    d.xpos,
+                    d.xmat,
+                    _state(policy),
+                    np.zeros(st.NS),
+                    prm,
+                    ints,
+                    contact,
+                )  # fmt: skip
+            )
+            policy(t, q, v, (True, True))
+            if k < 2:
+                assert policy.phase == "double" and not policy._closed
+        assert codes[0] == st.HAND_BACK and codes[1] == st.GO  # the settling switch; over 5 cm/s
+        assert codes[2] == (st.HAND_BACK if closing else st.GO)
+        assert policy._closed == (closing and not comfortable), (w, w0)
+        assert (policy.phase != "double") == policy._closed
+        started[policy._closed] += 1
+    assert started[False] >= 6 and (started[True] >= 6 if closing else started[True] == 0), started
+    assert crossed >= 2  # (9 comfortable, 4 crossed of 24)

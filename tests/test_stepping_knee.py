@@ -177,7 +177,7 @@ def test_front_push_of_hofs_bound_with_human_limits_ends_at_rest():
         first = (r.times >= steps[0]["start_s"]) & (r.times < steps[0]["touch_down_s"])
         runs[on] = (r, float(r.com[0, 2] - r.com[first, 2].min()))
     r, sink = runs[True]
-    assert measure(r, np.asarray(r.block_velocity)).impulse_n_s > j_max
+    assert measure(r, np.asarray(r.block_velocity)).impulse_horizontal_n_s > j_max  # (Hof: horizontal)
     assert r.recovered and not r.fell and r.extra["final_com_speed_m_s"] < 0.05
     assert len(r.extra["steps"]) == 2 and not any(st["sideways"] for st in r.extra["steps"])
     assert sink < 0.025, sink

@@ -10,7 +10,7 @@ import math
 import mujoco
 import numpy as np
 import pytest
-from _helpers import goal_push_scenario
+from _helpers import goal_push_scenario, run_qp_stepping
 
 from biped.control import capture as cp
 from biped.control.capture import xcom_offset
@@ -115,11 +115,6 @@ def test_front_push_the_feet_hold_only_on_their_toes_steps_and_ends_at_rest():
     for ``dwell_s``) steps once, back, at 0.66 s (measured), and the run is at rest over the new
     feet at 4 s (the strict rule). Without it (``dwell_s`` None) the step comes at >= 3 s and
     the run ends not at rest."""
-    from biped.control.stepping import SteppingController
-    from biped.control.stepping_config import SteppingConfig
-    from biped.sim.policies import policy_config
-    from biped.sim.push import run_closed_loop
-
     sc = _sweep_scenario(16, 0, "--stepping")
     r = simulate(sc)
     steps = r.extra["steps"]
@@ -127,11 +122,7 @@ def test_front_push_the_feet_hold_only_on_their_toes_steps_and_ends_at_rest():
     assert steps[0]["start_s"] < 1.0
     assert steps[0]["position_m"][0] > r.feet_pos[0, :, 0].max() + 0.1  # back: +x, the biped faces -x
     assert r.recovered and r.extra["final_com_speed_m_s"] < 0.05
-    scene = build_scene(sc)
-    late = SteppingController(
-        policy_config(sc), SteppingConfig.for_trigger("qp", dwell_s=None), scene.joint_names
-    )
-    old = run_closed_loop(sc, scene, late)
+    old = run_qp_stepping(sc, dwell_s=None)
     assert old.extra["steps"] and old.extra["steps"][0]["start_s"] >= 3.0
     assert not old.recovered
 
@@ -151,7 +142,7 @@ def test_front_push_beyond_hofs_bound_ends_at_rest_over_the_new_feet():
     sc = _sweep_scenario(20, 0, "--stepping")
     r = simulate(sc)
     j_max = float(feet_in_place_bound([0.0], sc).j_max_n_s[0])
-    assert measure(r, np.asarray(r.block_velocity)).impulse_n_s > j_max
+    assert measure(r, np.asarray(r.block_velocity)).impulse_horizontal_n_s > j_max  # (Hof: horizontal)
     steps = r.extra["steps"]
     assert len(steps) == 1 and not steps[0]["sideways"], steps
     assert steps[0]["position_m"][0] > r.feet_pos[0, :, 0].max() + 0.2  # back: +x, the biped faces -x
@@ -212,20 +203,13 @@ def test_goal_push_recovers_with_the_qp_trigger():
     leaves the feet past the right foot, on the side away from the left one: the third step
     crosses over (``crossover``). Without the crossover the left foot stepped on its own side,
     away from the capture point, and the biped fell (measured)."""
-    from biped.control.stepping import SteppingController
-    from biped.control.stepping_config import SteppingConfig
-    from biped.sim.policies import policy_config
-    from biped.sim.push import run_closed_loop
-
     sc = goal_push_scenario()
     assert sc.physics == "faithful"
     r = simulate(sc)
     steps = r.extra["steps"]
     assert 1 <= len(steps) <= 3 and any(st["crossover"] for st in steps), steps
     assert r.recovered and r.extra["final_com_speed_m_s"] < 0.05, r.extra
-    scene = build_scene(sc)
-    plain = SteppingConfig.for_trigger("qp", crossover=False)
-    old = run_closed_loop(sc, scene, SteppingController(policy_config(sc), plain, scene.joint_names))
+    old = run_qp_stepping(sc, crossover=False)
     assert old.fell
 
 
@@ -235,17 +219,11 @@ def test_tumble_in_single_support_is_a_fall_not_a_divergence():
     cartwheels during its second swing, the stance foot in the air. The stance sole over 10 cm up is left out of the QP
     (``airborne_stance``), as a foot in the air in double support: the run ends in a fall. With
     the QP loading the foot in the air MuJoCo diverged (measured at 1.09 s)."""
-    from biped.control.stepping import SteppingController
-    from biped.control.stepping_config import SteppingConfig
-    from biped.sim.policies import policy_config
-    from biped.sim.push import run_closed_loop
-
     sc = _sweep_scenario(22, 45, "--stepping")
     scene = build_scene(sc)
 
     def run(**kw):  # without the crossover (with it this push falls otherwise, no tumble)
-        cfg = SteppingConfig.for_trigger("qp", crossover=False, **kw)
-        return run_closed_loop(sc, scene, SteppingController(policy_config(sc), cfg, scene.joint_names))
+        return run_qp_stepping(sc, scene, crossover=False, **kw)
 
     assert simulate(sc).diverged is None
     r = run()
@@ -276,11 +254,6 @@ def test_crossover_step_clears_the_stance_leg_with_leg_contacts_on():
     in any recorded state, and the run is the same as without them. Without the crossover the
     right foot steps inward to 13 cm from the left one and the run is not at rest at 4 s (three
     steps, the third sliding 13.5 cm; measured)."""
-    from biped.control.stepping import SteppingController
-    from biped.control.stepping_config import SteppingConfig
-    from biped.sim.policies import policy_config
-    from biped.sim.push import run_closed_loop
-
     sc = _sweep_scenario(13, 90, "--stepping", "--physics", "faithful")
     plain = simulate(sc)
     scene = build_scene(sc)
@@ -290,9 +263,7 @@ def test_crossover_step_clears_the_stance_leg_with_leg_contacts_on():
     for gs, own, other in ((left, 4, 8), (right, 8, 4)):
         m.geom_contype[gs] = own
         m.geom_conaffinity[gs] = 1 | other
-    r = run_closed_loop(
-        sc, scene, SteppingController(policy_config(sc), SteppingConfig.for_trigger("qp"), scene.joint_names)
-    )
+    r = run_qp_stepping(sc, scene)
     steps = r.extra["steps"]
     assert len(steps) == 2 and steps[1]["crossover"] and not steps[0]["crossover"], steps
     assert steps[1]["foot"] == "right" and steps[1]["position_m"][1] < steps[0]["position_m"][1] - 0.1
@@ -308,9 +279,7 @@ def test_crossover_step_clears_the_stance_leg_with_leg_contacts_on():
             touching += (a in lset and b in rset) or (a in rset and b in lset)
     assert touching == 0
     np.testing.assert_allclose(r.qpos[-1], plain.qpos[-1], atol=1e-9)
-    scene0 = build_scene(sc)
-    no = SteppingConfig.for_trigger("qp", crossover=False)
-    old = run_closed_loop(sc, scene0, SteppingController(policy_config(sc), no, scene0.joint_names))
+    old = run_qp_stepping(sc, crossover=False)
     assert not any("crossover" in st for st in old.extra["steps"]) and not old.recovered
 
 
@@ -329,17 +298,6 @@ def _sole_centres(scene, qpos):
     return np.array(out)
 
 
-def _run_closing(sc, scene, on: bool):
-    """The "qp" stepping run of ``sc`` with ``closing_step`` ``on`` (the Python loop's result)."""
-    from biped.control.stepping import SteppingController
-    from biped.control.stepping_config import SteppingConfig
-    from biped.sim.policies import policy_config
-    from biped.sim.push import run_closed_loop
-
-    cfg = SteppingConfig.for_trigger("qp", closing_step=on)
-    return run_closed_loop(sc, scene, SteppingController(policy_config(sc), cfg, scene.joint_names))
-
-
 @pytest.mark.slow
 def test_closing_step_brings_the_feet_back_to_a_comfortable_stance():
     """16 m/s from behind (fast physics, 4 s) with ``closing_step`` on (issue #23 item 2; off in
@@ -352,7 +310,7 @@ def test_closing_step_brings_the_feet_back_to_a_comfortable_stance():
     sc = _sweep_scenario(16, 180, "--stepping")
     scene = build_scene(sc)
 
-    r = _run_closing(sc, scene, True)
+    r = run_qp_stepping(sc, scene, closing_step=True)
     steps = r.extra["steps"]
     assert [st["closing"] for st in steps] == [False, True], steps
     start, end = _sole_centres(scene, r.qpos[0]), _sole_centres(scene, r.qpos[-1])
@@ -360,7 +318,7 @@ def test_closing_step_brings_the_feet_back_to_a_comfortable_stance():
     assert w0[1] > 0.1 and w1[1] > 0.0  # the right foot on its own side (+y), start and end
     assert abs(w1[1] - w0[1]) <= 0.05 and abs(w1[0] - w0[0]) <= 0.05, (w0, w1)
     assert r.recovered and r.extra["final_com_speed_m_s"] < 0.05, r.extra
-    old = _run_closing(sc, scene, False)
+    old = run_qp_stepping(sc, scene, closing_step=False)
     oe = _sole_centres(scene, old.qpos[-1])
     assert abs((oe[1] - oe[0])[0] - w0[0]) > 0.3 and old.recovered  # staggered, at rest
 
@@ -376,7 +334,7 @@ def test_crossover_push_ends_uncrossed_after_the_closing_step():
     sc = _sweep_scenario(18, 90, "--stepping").with_overrides(duration_s=6.0)
     scene = build_scene(sc)
 
-    r = _run_closing(sc, scene, True)
+    r = run_qp_stepping(sc, scene, closing_step=True)
     steps = r.extra["steps"]
     assert any(st["crossover"] for st in steps) and [st["closing"] for st in steps][-1], steps
     start, end = _sole_centres(scene, r.qpos[0]), _sole_centres(scene, r.qpos[-1])
@@ -384,5 +342,5 @@ def test_crossover_push_ends_uncrossed_after_the_closing_step():
     assert w0[1] > 0.1 and w1[1] > 0.0  # the right foot on its own side (+y), start and end
     assert abs(w1[1] - w0[1]) <= 0.05 and abs(w1[0] - w0[0]) <= 0.05, (w0, w1)
     assert r.recovered and r.extra["final_com_speed_m_s"] < 0.05, r.extra
-    oe = _sole_centres(scene, _run_closing(sc, scene, False).qpos[-1])
+    oe = _sole_centres(scene, run_qp_stepping(sc, scene, closing_step=False).qpos[-1])
     assert (oe[1] - oe[0])[1] < 0.0  # crossed: the right foot left of the left one

@@ -9,7 +9,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 import pytest
-from _helpers import goal_push_scenario
+from _helpers import goal_push_scenario, qp_stepping, run_qp_stepping
 
 from biped.control import capture as cp
 
@@ -45,10 +45,6 @@ def _goal_push(**params):
     """W's goal push (4 kg at 8 m/s from behind, faithful physics, 4 s), stepping with the
     ``"qp"`` set and ``params``: (result, per step (foot, start_s), times, normal forces (n, 2)
     on the left and right soles [N] after every control period)."""
-    from biped.control.stepping import SteppingController
-    from biped.control.stepping_config import SteppingConfig
-    from biped.sim.policies import policy_config
-    from biped.sim.push import run_closed_loop
     from biped.sim.scene import build_scene
 
     sc = goal_push_scenario()
@@ -63,9 +59,7 @@ def _goal_push(**params):
         times.append(d.time)
         normal.append(fn)
 
-    cfg = SteppingConfig.for_trigger("qp", **params)
-    ctl = SteppingController(policy_config(sc), cfg, scene.joint_names)
-    r = run_closed_loop(sc, scene, ctl, on_step=on_step)
+    r = run_qp_stepping(sc, scene, on_step=on_step, **params)
     steps = [(st["foot"], st["start_s"]) for st in r.extra["steps"]]
     return r, steps, np.array(times), np.array(normal), float(np.sum(m.body_mass[1:]))
 
@@ -174,15 +168,12 @@ def test_the_135_deg_hop_load_is_the_whipped_legs_bias_wrench_and_real():
     window, and its tangential force reaches mu times it (the sole slides)."""
     from test_stance_slip import _sweep_scenario
 
-    from biped.control.stepping import SteppingController
-    from biped.control.stepping_config import SteppingConfig
-    from biped.sim.policies import policy_config
     from biped.sim.push import run_closed_loop
     from biped.sim.scene import build_scene
 
     sc = _sweep_scenario(16, 135)
     scene = build_scene(sc)
-    ctl = SteppingController(policy_config(sc), SteppingConfig.for_trigger("qp"), scene.joint_names)
+    ctl = qp_stepping(sc, scene)
     swing_qp = ctl._ctrl_swing_by_mode[True]
     names = ("tau", "P1", "z1", "X", "Fd")
     plan = []

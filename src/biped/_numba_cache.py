@@ -9,8 +9,11 @@ constant changed in ``control/qp_buffers.py`` and the QP call, cached, kept the 
 :func:`configure` runs from ``biped/__init__.py``, before any module that defines a kernel is
 imported (numba picks the folder when a function is decorated), and, unless ``NUMBA_CACHE_DIR`` is
 set (the user's choice stands), points numba at a folder named by :func:`source_stamp`, the hash
-of every Python source of the package: any change to any of them compiles every kernel afresh
-(the first run after it takes the first-run compile time again). The folder is
+of the sources a kernel can compile in (:func:`kernel_sources`: every module that defines a
+kernel and every package module those import, at any depth): any change to one of them compiles
+every kernel afresh (the first run after it takes the first-run compile time again); a change to
+another module (the CLI, outputs, plots, analyses, sweeps; once, every one) keeps the cache. The
+folder is
 ``biped/__pycache__/numba/<stamp>`` when the package folder is writable, else
 ``$XDG_CACHE_HOME/biped/numba/<stamp>`` (default ``~/.cache/...``), or a per-user folder under the
 temporary directory when that cannot be created; the stamps' folders of older sources there are
@@ -29,6 +32,7 @@ import hashlib
 import json
 import logging
 import os
+import re
 import sys
 import tempfile
 import threading
@@ -67,10 +71,73 @@ _CONFIGURED: str | None = None
 KEEP_STAMPS = 2
 
 
+#: What marks a module that defines a compiled kernel: numba's decorators or its ``njit(...)`` call.
+_KERNEL = ("@njit", "@jit", "@cfunc", "@vectorize", "@guvectorize", "njit(")
+#: An import statement, anywhere in a file: ``from X import (names)`` / ``from X import names``
+#: (group 1, 2) or ``import X, Y as Z`` (group 3).
+_IMPORT = re.compile(
+    r"^[ \t]*(?:from[ \t]+([\w.]+)[ \t]+import[ \t]+(\([^)]*\)|[^\n]*)|import[ \t]+([^\n]+))", re.M
+)
+
+
+def _modules(package: Path) -> dict[str, Path]:
+    """``{dotted name: file}`` of the package's Python modules (a package by its ``__init__``)."""
+    out = {}
+    for path in package.rglob("*.py"):
+        parts = path.relative_to(package.parent).with_suffix("").parts
+        out[".".join(parts[:-1] if parts[-1] == "__init__" else parts)] = path
+    return out
+
+
+def _imports(text: str, name: str, is_package: bool, modules: dict[str, Path]) -> set[str]:
+    """The modules of ``modules`` that source ``text`` (module ``name``) imports, with their parent
+    packages. A superset, read from the text: every import statement at any depth (inside
+    functions too, or a docstring's example), and every name imported from a module that is a
+    module itself."""
+    here = name if is_package else name.rpartition(".")[0]
+    wanted: list[str] = []
+    for base, names, plain in _IMPORT.findall(text):
+        if plain:
+            wanted += [n.split(" as ")[0].strip() for n in plain.split(",")]
+            continue
+        level = len(base) - len(base.lstrip("."))
+        if level:  # relative: from the module's package, up level - 1
+            parts = here.split(".")
+            base = ".".join([*parts[: len(parts) - level + 1], base[level:]]).rstrip(".")
+        wanted.append(base)
+        for n in names.strip("()").split(","):
+            n = n.split("#")[0].split(" as ")[0].strip()
+            if n:
+                wanted.append(f"{base}.{n}")
+    found: set[str] = set()
+    for w in wanted:
+        parts = w.split(".")
+        found.update(m for m in (".".join(parts[:i]) for i in range(1, len(parts) + 1)) if m in modules)
+    return found
+
+
+def kernel_sources(package: Path = PACKAGE_DIR) -> list[Path]:
+    """The package's Python files a compiled kernel can compile in, sorted: those that define a
+    kernel (:data:`_KERNEL`) and every package module they import, at any depth (:func:`_imports`:
+    a kernel reads only its own module's globals, which come from its imports)."""
+    modules = _modules(package)
+    texts = {name: path.read_text(encoding="utf-8") for name, path in modules.items()}
+    todo = [name for name, text in texts.items() if any(mark in text for mark in _KERNEL)]
+    seen: set[str] = set()
+    while todo:
+        name = todo.pop()
+        if name in seen:
+            continue
+        seen.add(name)
+        is_package = modules[name].name == "__init__.py"
+        todo += _imports(texts[name], name, is_package, modules) - seen
+    return sorted(modules[name] for name in seen)
+
+
 def source_stamp(package: Path = PACKAGE_DIR) -> str:
-    """A hash of the package's Python sources (their paths and bytes), 16 hex digits."""
+    """A hash of :func:`kernel_sources` (their paths and bytes), 16 hex digits."""
     h = hashlib.sha256()
-    for path in sorted(package.rglob("*.py")):
+    for path in kernel_sources(package):
         h.update(path.relative_to(package).as_posix().encode())
         h.update(path.read_bytes())
     return h.hexdigest()[:16]

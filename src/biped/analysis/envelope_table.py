@@ -4,7 +4,9 @@ share of Hof's feet-in-place bound (:mod:`biped.analysis.feet_in_place`).
 
 The limit is in the search axis's unit: the block's speed [m/s], or another paradigm's size in its
 own unit (force N, platform m, release deg; the rows' ``paradigm_unit``). The common sizes are
-the rows' (docs/perturbations.md): the block's impulse measured from its momentum; a force's
+the rows' (docs/perturbations.md), each horizontal, as Hof's bound is (the extrapolated COM moves
+in the floor's plane): the block's horizontal impulse measured from its momentum change (the
+rows' ``horizontal_impulse_n_s``; their ``impulse_n_s`` holds its vertical part too); a force's
 horizontal impulse applied (``horizontal_impulse_n_s``); a platform's body mass times its peak
 velocity (``com_velocity_change_m_s``: the support's velocity change under the COM, the same
 COM-relative-to-feet velocity as a push of that momentum); a release none (it starts at rest: NaN).
@@ -28,13 +30,13 @@ __all__ = ["EnvelopeRow", "EnvelopeTable", "envelope_table"]
 @dataclass(frozen=True)
 class EnvelopeRow:
     """One direction. limit / first_fail: sizes on the search axis (NaN: none survived / none
-    failed); impulse_n_s: the impulse measured on the limit's trial; delta_v_m_s: that impulse over
-    the body's mass (the COM velocity change it causes, J / m); j_max_n_s: Hof's bound in that
-    direction; percent_j_max: 100 impulse / J_max; non_monotone: a check trial below the first
-    limit failed (limit is then the bisection below the lowest failure, first_limit the one
-    before); n_trials: trials this direction used, n_checks of them check trials;
-    first_fail_error: the error of the first failure's trial when it raised (a release lean
-    friction cannot hold), else None."""
+    failed); impulse_n_s: the horizontal impulse of the limit's trial (module docstring);
+    delta_v_m_s: that impulse over the body's mass (the COM velocity change it causes, J / m);
+    j_max_n_s: Hof's bound in that direction; percent_j_max: 100 impulse / J_max; non_monotone:
+    a check trial below the first limit failed (limit is then the bisection below the lowest
+    failure, first_limit the one before); n_trials: trials this direction used, n_checks of them
+    check trials; first_fail_error: the error of the first failure's trial when it raised (a
+    release lean friction cannot hold), else None."""
 
     direction_deg: float
     limit: float
@@ -170,9 +172,6 @@ def _momentum(row: dict | None, paradigm: str, mass: float) -> tuple[float, floa
     nan = float("nan")
     if row is None:
         return nan, nan
-    if paradigm == "block":
-        j = _num(row, "impulse_n_s")
-        return j, j / mass
     if paradigm == "platform":
         dv = _num(row, "com_velocity_change_m_s")
         return mass * dv, dv

@@ -54,6 +54,8 @@ import weakref
 
 import numpy as np
 
+from biped.sim.contact import _BLOCK_BIT, STANDING
+
 #: Simulated time the rest conditions must hold before a run may stop [s].
 HOLD_S = 0.1
 #: How often the rule is evaluated [s] (rows = CHECK_S * control rate).
@@ -111,8 +113,8 @@ class EarlyStop:
         self.block_lin, self.block_ang = bv[:3], bv[3:6]
         # every other degree of freedom of the scene (a paradigm's bodies: the platform's slide)
         self.others = np.setdiff1d(np.arange(scene.model.nv), np.r_[iv, bv]).astype(np.int64)
-        self.flat = (1 << 4) - 1  # the four sole-part bits (biped.sim.contact.SOLE_GEOMS)
-        self.block_bit = 1 << 4  # the block touches the biped (biped.sim.contact)
+        self.flat = STANDING  # the four sole-part bits (biped.sim.contact.SOLE_GEOMS)
+        self.block_bit = _BLOCK_BIT  # the block touches the biped
         self.block_pos = np.asarray(scene.block_qpos_index)[:3]
         size = np.asarray(scenario.block_size_m, dtype=float)
         self.block_half_diag = 0.5 * float(np.linalg.norm(size))
