@@ -28,7 +28,7 @@ from biped._numba_cache import compile_once, key_by_sources
 from biped.control import mj_functions
 from biped.control.mj_functions import call_fullm, call_jac, mj_address
 
-__all__ = ["NG", "SwingLaw", "swing_law"]
+__all__ = ["NG", "SwingLaw", "compile_law", "swing_law"]
 
 #: gains (the law's float parameters), in this order
 G_KP_POS, G_KV_POS, G_KP_ROT, G_KV_ROT, G_ANKLE_KP, G_ANKLE_KV, G_MAX = range(7)
@@ -151,7 +151,7 @@ class SwingLaw:
             self.mm,
             self.g,
         )
-        compile_once(swing_law, _SIGNATURE)
+        compile_law()
         self._call: Any = swing_law
         if hasattr(swing_law, "overloads"):  # the compiled entry point: no typing of the arguments each call
             self._call = swing_law.overloads[swing_law.signatures[0]].entry_point  # type: ignore[attr-defined]
@@ -180,3 +180,9 @@ def _signature():
 
 
 _SIGNATURE = _signature()
+
+
+def compile_law() -> None:
+    """Compile :func:`swing_law` for its one signature (or load it from numba's cache); a no-op
+    once done (:mod:`biped.sim.jit` warms it up before a stepping run)."""
+    compile_once(swing_law, _SIGNATURE)
