@@ -148,6 +148,10 @@ def test_warm_up_one_line_when_cold_nothing_when_warm(monkeypatch):
     assert "loop" in jit.kernels_for("joint-pd") and "loop" in jit.kernels_for("workspace", "qp")
     # a robot's trial is robot_push's Python loop: compiling the push loop for it cost 43 s
     assert jit.kernels_for("workspace", "qp", sweep=True, robot=True) == ("controller", "qp")
+    # a stepping run's swings call W's swing law (a robot's swing law is its own, in Python)
+    assert "swing" in jit.kernels_for("workspace", "qp", stepping=True, sweep=True)
+    assert "swing" not in jit.kernels_for("workspace", "qp", sweep=True)
+    assert "swing" not in jit.kernels_for("workspace", "qp", stepping=True, robot=True)
 
 
 def test_compile_runs_each_kernel():

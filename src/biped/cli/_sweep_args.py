@@ -238,6 +238,7 @@ def warm_up_kernels(spec, **kwargs) -> None:
             spec.base.distribution,
             sweep=True,
             robot=bool(spec.robot),
+            stepping=bool(spec.base.stepping),
         ),
         log=lambda line: print(line, file=sys.stderr),
         **kwargs,

@@ -359,7 +359,7 @@ def run(args) -> int:
         prewarm()
     scene = build_scene(scenario)
     warm_up(
-        kernels_for(scenario.controller, scenario.distribution),
+        kernels_for(scenario.controller, scenario.distribution, stepping=scenario.stepping),
         log=lambda line: print(line, file=sys.stderr),
         tick=sys.stderr,
     )

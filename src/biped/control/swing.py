@@ -3,32 +3,12 @@ torque on the leg's own joints so the ankle follows the planned path and the sol
 
 from __future__ import annotations
 
-import math
-
 import mujoco
 import numpy as np
 
+from biped.control.swing_kernel import SwingLaw
+
 __all__ = ["swing_leg_torques", "swing_reaction_wrench"]
-
-
-#: The leg joints the swing law holds by joint-space PD (hip rotation, the two ankle hinges) and
-#: those that move the ankle point (hip abduction, hip flexion, knee), by their place in W's leg.
-_HELD = np.array([2, 4, 5])
-_TASK = np.array([0, 1, 3])
-
-
-def _buffers(ctl, i):
-    """(jacp (3, nv), jacr (3, nv), M (nv, nv), the leg block's index, damping 1e-4 I) for
-    :func:`swing_leg_torques` of foot ``i``: made once per controller, each array written whole
-    by MuJoCo at every call (the same numbers as new ones, without a period's allocations)."""
-    bufs = getattr(ctl, "_swing_buffers", None)
-    if bufs is None:
-        nv = ctl.model.nv
-        bufs = ctl._swing_buffers = [
-            (np.zeros((3, nv)), np.zeros((3, nv)), np.zeros((nv, nv)), np.ix_(dofs, dofs), 1e-4 * np.eye(3))
-            for dofs in ctl._leg_dofs
-        ]
-    return bufs[i]
 
 
 def swing_leg_torques(ctl, i, pd, vd, ad):
@@ -39,37 +19,16 @@ def swing_leg_torques(ctl, i, pd, vd, ad):
     two ankle joints at the angles that put the sole flat with zero yaw (from the shank's world
     orientation), both by joint-space PD; torques ``M_ll qdd + b_l - p_l`` (leg block of
     MuJoCo's mass matrix, leg bias forces, minus the passive hinge damping, which the foot's
-    small inertia would not overcome)."""
-    m, d, s = ctl.model, ctl.data, ctl.stepping
-    b = ctl._foot[i]
-    dofs = ctl._leg_dofs[i]
-    jp, jr, M, ix, damp = _buffers(ctl, i)
-    q = d.qpos[ctl._leg_qpos[i]]
-    qd = d.qvel[dofs]
-    mujoco.mj_jacBody(m, d, jp, jr, b)  # (each written whole; jr is used below)
-    Jl = jp[:, dofs]
-    # joint-space parts: hip rotation to 0, ankle to the flat-foot angles
-    R = d.xmat[ctl._shank[i]].reshape(3, 3).T  # desired foot orientation (I) in the shank frame
-    inv = ctl._inv_sign[i] * math.atan2(R[2, 1], R[1, 1])
-    dors = math.atan2(R[0, 2], R[0, 0])
-    qdd = np.zeros(6)
-    for k, qk in ((2, 0.0), (4, inv), (5, dors)):
-        qdd[k] = s.kp_rot * (qk - q[k]) - s.kv_rot * qd[k]
-    vl = Jl @ qd  # the leg's part of the foot's velocity (taken out and added back: as it was)
-    a = ad + s.kp_pos * (pd - d.xpos[b]) + s.kv_pos * (vd - vl - jp @ d.qvel + vl)
-    a = a - Jl[:, _HELD] @ qdd[_HELD]
-    J3 = Jl[:, _TASK]
-    qdd[_TASK] = J3.T @ np.linalg.solve(J3 @ J3.T + damp, a)
-    mujoco.mj_fullM(m, d, M)  # (written whole)
-    tau = M[ix] @ qdd + d.qfrc_bias[dofs] - d.qfrc_passive[dofs]
-    # the ankle's tiny inertia makes M_ll qdd a few N m that unmodelled coupling (the base's
-    # acceleration) swamps: a stiff joint PD on the ankle instead [N m/rad, N m s/rad]
-    # (damping on the foot's own angular velocity in the world, not the joint rate: the
-    # shank turns fast during the swing and the flat foot must not follow it)
-    w = jr @ d.qvel
-    for k, qk, wk in ((4, inv, ctl._inv_sign[i] * w[0]), (5, dors, w[1])):
-        tau[k] = s.ankle_kp * (qk - q[k]) - s.ankle_kv * wk + d.qfrc_bias[dofs[k]]
-    return np.clip(tau, -s.swing_torque_max_n_m, s.swing_torque_max_n_m)
+    small inertia would not overcome). The ankle's tiny inertia makes ``M_ll qdd`` a few N m
+    that unmodelled coupling (the base's acceleration) swamps: a stiff joint PD on the ankle
+    instead, damping the foot's own angular velocity in the world, not the joint rate (the shank
+    turns fast during the swing and the flat foot must not follow it). One compiled call
+    (:class:`biped.control.swing_kernel.SwingLaw`, made once per controller), the same in the
+    Python loop and the compiled one."""
+    law = getattr(ctl, "_swing_law", None)
+    if law is None:
+        law = ctl._swing_law = SwingLaw(ctl)
+    return law(i, pd, vd, ad)
 
 
 def swing_reaction_wrench(ctl, i, tau_swing):

@@ -50,6 +50,7 @@ KERNELS = {
     "contact": ("the contact monitor", 1),
     "loop": ("the compiled push loop", 47),
     "response": ("the sweep's margin of stability", 8),
+    "swing": ("the stepping swing law", 3),  # biped.control.swing_kernel (2-4 s, load 0-5)
 }
 
 #: Kernels found compiled or cached in this process (no need to look again).
@@ -62,6 +63,7 @@ def kernels_for(
     *,
     sweep: bool = False,
     robot: bool = False,
+    stepping: bool = False,
 ) -> tuple[str, ...]:
     """The kernels a push run with ``controller`` (``"workspace"`` or ``"joint-pd"``) and the
     workspace controller's ``distribution`` uses; ``sweep``: and a sweep row's response
@@ -69,10 +71,13 @@ def kernels_for(
     (:func:`biped.sim.push.run_closed_loop`), the joint PD's, the QP's and a stepping one's too
     (whose swings call the controller's and the QP's kernels from Python); a ``robot`` trial
     (:func:`biped.sim.robot.robot_push`), which measures no response, goes through its own
-    Python loop."""
+    Python loop. ``stepping``: and W's swing law (:mod:`biped.control.swing_kernel`), which a
+    stepping run's swings call (not a robot's)."""
     calls = ("controller", "qp") if distribution == "qp" else ("controller",)
-    if robot:
+    if robot:  # (a robot's swing is its own law: biped.control.swing_task)
         return calls
+    if stepping and controller == "workspace":
+        calls = (*calls, "swing")
     more = ("response",) if sweep else ()
     if controller != "workspace":
         return ("loop", "contact", *more)  # the joint PD runs in the compiled loop
@@ -106,6 +111,10 @@ def _dispatcher(name: str):
         from biped.sim.mos import _margins
 
         return _margins
+    if name == "swing":
+        from biped.control.swing_kernel import swing_law
+
+        return swing_law
     raise ValueError(f"unknown kernel {name!r}; valid: {', '.join(KERNELS)}")
 
 
@@ -184,6 +193,11 @@ def _compile(name: str) -> None:
         from biped.sim.fused import compile_kernel as compile_loop
 
         compile_loop()
+        return
+    if name == "swing":
+        from biped.control.swing_kernel import compile_law
+
+        compile_law()
         return
     if name == "response":
         from biped.sim.mos import margins

@@ -10,11 +10,12 @@ back to the Python loop.
 from __future__ import annotations
 
 import ctypes
-import os
 
 import mujoco
 import numpy as np
 from numba import types
+
+from biped.control.mj_functions import STEP_SIG, mj_function
 
 __all__ = [
     "FORCE_SIG",
@@ -26,44 +27,8 @@ __all__ = [
     "mjdata_layout",
 ]
 
-STEP_SIG = types.void(types.uintp, types.uintp)  # mj_step(const mjModel*, mjData*)
 #: mj_contactForce(const mjModel*, const mjData*, int id, mjtNum result[6]) (the pointer as an integer)
 FORCE_SIG = types.void(types.uintp, types.uintp, types.int32, types.uintp)
-
-
-class _MjFunction(types.WrapperAddressProtocol):
-    """A function of MuJoCo's C API as a numba first-class function (its address is an argument,
-    so the compiled loop can be cached)."""
-
-    def __init__(self, name: str, sig):
-        lib = ctypes.CDLL(os.path.join(os.path.dirname(mujoco.__file__), _libname()))
-        self._address = ctypes.cast(getattr(lib, name), ctypes.c_void_p).value
-        self._sig = sig
-
-    def __wrapper_address__(self):
-        return self._address
-
-    def signature(self):
-        return self._sig
-
-
-def _libname() -> str:
-    names = [f for f in os.listdir(os.path.dirname(mujoco.__file__)) if f.startswith("libmujoco.so")]
-    return sorted(names, key=len)[-1] if names else "libmujoco.so"
-
-
-_FUNCTIONS: dict = {}
-
-
-def mj_function(name: str, sig):
-    """The :class:`_MjFunction` ``name`` of libmujoco with signature ``sig`` (made once a process),
-    or None if libmujoco or the symbol cannot be found."""
-    if name not in _FUNCTIONS:
-        try:
-            _FUNCTIONS[name] = _MjFunction(name, sig)
-        except (OSError, AttributeError):
-            _FUNCTIONS[name] = None
-    return _FUNCTIONS[name]
 
 
 def mj_step_function():

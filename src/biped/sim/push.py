@@ -447,7 +447,7 @@ def simulate(
         )
     scene = scene or build_scene(scenario)
     # says so when cold
-    announce_and_warm(kernels_for(scenario.controller, scenario.distribution))
+    announce_and_warm(kernels_for(scenario.controller, scenario.distribution, stepping=scenario.stepping))
     return run_closed_loop(
         scenario, scene, controller_policy(scenario, scene), progress=progress, on_step=on_step
     )
