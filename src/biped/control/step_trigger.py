@@ -294,4 +294,4 @@ def double_support_controller(policy):
     double-support period calls (``SteppingController.__call__``'s choice)."""
     if policy._settled:
         return policy._ctrl_settle
-    return policy.ctrl if policy.steps else policy._ctrl_before
+    return policy._ctrl_post if policy.steps else policy._ctrl_before

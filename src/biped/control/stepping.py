@@ -131,6 +131,11 @@ class SteppingController(SwingPhase):
         self._ctrl_settle = self.ctrl
         if self.stepping.settle_after_s is not None and inner.qp_weights is not None and config.qp_weights:
             self._ctrl_settle = qp_with(moment=config.qp_weights.moment)
+        # after a step, in double support: the stepping QP, its friction pyramid scaled by
+        # post_step_friction_scale if set (a margin for a rear foot the QP takes as flat and loaded)
+        self._ctrl_post = self.ctrl
+        if self.stepping.post_step_friction_scale is not None and inner.qp_weights is not None:
+            self._ctrl_post = qp_with(friction_scale=self.stepping.post_step_friction_scale)
         # single support: the stepping QP, its friction pyramid scaled by swing_friction_scale
         # (a sideways step's: lateral_swing_friction_scale, if set)
         # (its own controller also when swing_inertia_share rewrites its friction each period, or the
@@ -373,7 +378,7 @@ class SteppingController(SwingPhase):
                 return tau
         if self.phase == "swing":
             return self._swing_call(t, qpos, qvel, xi, omega, (left, right))
-        ctrl = self.ctrl if self.steps else self._ctrl_before
+        ctrl = self._ctrl_post if self.steps else self._ctrl_before
         if (
             s.settle_after_s is not None
             and self.steps

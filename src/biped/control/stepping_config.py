@@ -154,6 +154,15 @@ class SteppingConfig:
     airborne_stance: in single support, a stance sole over ``AIRBORNE_M`` (10 cm) above the
     floor is left out of the QP (the biped tumbles; no wrench is distributed), as a foot in the
     air is in double support.
+    post_step_friction_scale: if set, the double support after a step (until the next step or
+    the settling switch) uses a stepping QP whose friction pyramid is ``friction *
+    post_step_friction_scale`` (``step_reach = "leg"`` with the feedback stepper: 0.35, the
+    scale the sweeps measured for a forward or backward step's stance foot,
+    ``biped.sim.policies.POST_STEP_FRICTION_SCALE``): the rear foot lands on its toe edge (rolled
+    5-8 deg by the push-off) with the QP's minimum normal force, and the full pyramid let the QP
+    hold the trunk's yaw by opposing lateral forces on the feet at that foot's friction limit;
+    its real normal force flickered, it slid 0.4 m back and out and the ideal preset fell at an
+    11 deg lean release (docs/validate.md, "The rear foot's friction after the step").
     closing_step, closing_speed_m_s, closing_band_m, closing_inside_m, closing_com_inside_m,
     closing_swing_time_s, closing_shift_max_s: once at rest after the last recovery step (after
     the settling switch, the first period the COM moves slower than closing_speed_m_s), if the
@@ -233,6 +242,7 @@ class SteppingConfig:
     lateral_swing_drop_ramp: bool | None = None
     rest_damping_compensation: bool = False
     rest_damping_joints: tuple | None = None
+    post_step_friction_scale: float | None = None
     closing_step: bool = False
     closing_band_m: float = 0.05
     closing_inside_m: float = 0.015

@@ -358,7 +358,7 @@ class SwingPhase:
         self._settled = False
         self.trigger = self._new_trigger()
         target = self._leg_capped(self.target, (0, 1))
-        tau = self.ctrl.torques(
+        tau = self._ctrl_post.torques(
             qpos, qvel, target=target, gains=self.gains, feet_in_contact=self._flags(*feet)
         )
         return self._out(tau)

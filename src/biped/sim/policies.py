@@ -132,9 +132,13 @@ def controller_policy(
             # the stance knee kept out of the last STANCE_KNEE_MIN_DEG before straight (and no
             # straighter than the starting pose's knee, were it straighter than that)
             knee = min(abs(float(a)) for a in scenario.initial_joint_angles_deg[3::6])
+            # the rear foot's friction margin after the step: the feedback stepper's (W's ideal
+            # preset); the step program's young lunge lost its 10 deg rest with it (measured)
+            feedback = scenario.step_program in ("feedback", "predicted")
             stepping = replace(stepping, reach_m=max(stepping.reach_m, leg), span_leg_m=leg, stand_hip_m=hip,
                                limits=replace(stepping.limits, max_step=limit),
-                               stance_knee_min_deg=min(knee, STANCE_KNEE_MIN_DEG))  # fmt: skip
+                               stance_knee_min_deg=min(knee, STANCE_KNEE_MIN_DEG),
+                               post_step_friction_scale=POST_STEP_FRICTION_SCALE if feedback else None)  # fmt: skip
         # planned steps for a delayed plant
         if scenario.step_program in ("program", "program-predicted", "program-trail"):
             from biped.control.step_program import StepProgram, StepProgramConfig
@@ -200,6 +204,14 @@ def predicted_stepper(scenario: Scenario, scene: Scene, config, stepping, tree, 
 #: (or the starting pose's flexion if less): the band the project's tests count as near the straight
 #: knee's singularity (tests/test_step_program.py); docs/validate.md, "Why the ideal stopped".
 STANCE_KNEE_MIN_DEG = 8.0
+
+
+#: ``step_reach = "leg"``, the feedback stepper: the double support after the step plans its friction at this share of
+#: the floor's (``SteppingConfig.post_step_friction_scale``): the share the sweeps measured for a
+#: forward or backward step's stance foot (docs/sweep.md; the "qp" set's 0.55 is for every
+#: direction), chosen before any lean was run with it; docs/validate.md, "The rear foot's friction
+#: after the step".
+POST_STEP_FRICTION_SCALE = 0.35
 
 
 def standing_legs(scenario: Scenario, scene: Scene) -> tuple[float, float]:
