@@ -9,7 +9,8 @@ contact with the floor, measured from the first such period. Not the controller'
 ``stance_slip_m`` (also printed, for comparison).
 
     python benchmarks/stance_slip.py [--direction 0:315:8] [--speed 16,18] [--trigger qp]
-        [--physics fast] [--duration 4] [--set key=value ...]
+        [--physics fast] [--duration 4] [--torque-limits human] [--model FILE.xml]
+        [--set key=value ...] [--param field=literal ...]
 """
 
 from __future__ import annotations
@@ -88,7 +89,7 @@ def step_slips(sc, r) -> list[dict]:
     return out
 
 
-def _scenario(speed, direction, trigger, physics, duration, sets):
+def _scenario(speed, direction, trigger, physics, duration, sets, more=()):
     from biped.cli import build_parser
     from biped.cli.sweep import build_spec
 
@@ -97,6 +98,7 @@ def _scenario(speed, direction, trigger, physics, duration, sets):
     args += ["--set", f'step_trigger="{trigger}"']
     for s in sets:
         args += ["--set", s]
+    args += list(more)
     spec = build_spec(build_parser().parse_args(args))
     return spec.scenario(spec.trials()[0])
 
@@ -129,6 +131,8 @@ def main() -> int:
     ap.add_argument("--trigger", default="qp", choices=("qp", "capture"))
     ap.add_argument("--physics", default="fast", choices=("fast", "faithful"))
     ap.add_argument("--duration", type=float, default=4.0)
+    ap.add_argument("--torque-limits", default=None, choices=("none", "human"))
+    ap.add_argument("--model", default=None, help="MJCF file (e.g. from `biped model`)")
     ap.add_argument("--set", action="append", default=[], help="scenario key=value (TOML value)")
     ap.add_argument(
         "--param", action="append", default=[], help="SteppingConfig field=literal, e.g. swing_reaction=True"
@@ -143,7 +147,10 @@ def main() -> int:
         base = min(direction, 360 - direction)
         speeds = [float(s) for s in args.speed.split(",")] if args.speed else SPEEDS[base]
         for speed in speeds:
-            sc = _scenario(speed, direction, args.trigger, args.physics, args.duration, args.set)
+            # the scenario's own key (simulate applies it; the sweep spec's is the runner's)
+            more = ["--set", f'torque_limits="{args.torque_limits}"'] if args.torque_limits else []
+            more += ["--model", args.model] if args.model else []
+            sc = _scenario(speed, direction, args.trigger, args.physics, args.duration, args.set, more)
             t0 = time.perf_counter()
             r = simulate(sc)
             wall = time.perf_counter() - t0

@@ -127,6 +127,14 @@ class SteppingConfig:
     step starts, then kept), "near" (decided when the step starts: the side of the target if it
     lies beyond crossover_clear_m, else the side on which the swing foot starts, the shorter path).
     crossover_swing_time_s: a crossover's planned swing time (None: lateral_swing_time_s).
+    crossover_modelled: a crossover's single support takes the forward and backward steps'
+    stance settings (``stance_contact_model``, ``swing_reaction``, ``swing_drop_ramp``), not the
+    sideways steps' ``lateral_*`` ones (its friction stays ``lateral_swing_friction_scale``'s;
+    measured, not adopted: docs/sweep.md, "The crossover's path").
+    crossover_path: when a crossover's foot moves along x and across: "fixed" (x in the swing's
+    first 60 %, across in its last 60 %) or "timed" (the windows from the step's geometry: across
+    from the start as long as the soles' side band is reached only once the move along x is done,
+    :func:`biped.control.crossover_path.windows`, decided at the step's first period).
     reach_on_floor: a swing point beyond reach_m from the swing hip is pulled in horizontally at
     its own height (the foot still comes down to the floor at the farthest point it reaches there)
     instead of toward the hip (which lifts it: the foot hangs above the floor and never lands).
@@ -237,6 +245,8 @@ class SteppingConfig:
     crossover_clear_m: float = 0.24
     crossover_side: str = "retarget"
     crossover_swing_time_s: float | None = None
+    crossover_modelled: bool = False
+    crossover_path: str = "fixed"
     reach_on_floor: bool = False
     swing_drop_ramp: bool = False
     lateral_swing_drop_ramp: bool | None = None
@@ -295,6 +305,8 @@ class SteppingConfig:
             raise ScenarioError(
                 f"crossover_side must be 'retarget', 'start' or 'near'; got {self.crossover_side!r}"
             )
+        if self.crossover_path not in ("fixed", "timed"):
+            raise ScenarioError(f"crossover_path must be 'fixed' or 'timed'; got {self.crossover_path!r}")
         if self.stance_contact_rows not in (1, 2, 3):
             raise ScenarioError(
                 "stance_contact_rows must be 1 (normal force and friction), 2 (and yaw) or 3 (and CoP); "

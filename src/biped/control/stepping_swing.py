@@ -31,7 +31,7 @@ import mujoco
 import numpy as np
 
 from biped.control import capture as cp
-from biped.control import closing_step, leg_geometry, stance_dynamics
+from biped.control import closing_step, crossover_path, leg_geometry, stance_dynamics
 from biped.control.setpoint import replaced
 from biped.control.swing import swing_reaction_wrench
 from biped.control.workspace import Gains
@@ -90,6 +90,7 @@ class SwingPhase:
         if self._cross and s.crossover_swing_time_s is not None:
             self._T = s.crossover_swing_time_s
         self._cross_ahead = None  # a crossover's end of the stance foot (+1 ahead, -1 behind)
+        self._cross_windows = None  # its along and across windows (crossover_path "timed")
         self._swing0 = self._sole_pose(swing)[0][:2].copy()  # the swing sole's centre at the start
         self.phase = "swing"
         self._dwell_since = None
@@ -150,7 +151,15 @@ class SwingPhase:
         if self._cross or self._uncross:  # around the stance foot: along x in the first 60 % of the swing,
             assert p0 is not None  # y in the last (uncrossing: across first, then along x)
             order = (0, 1) if self._cross else (1, 0)
-            for k, (s0, s1) in zip(order, ((0.0, 0.6), (0.4, 1.0)), strict=True):
+            wins = crossover_path.FIXED
+            if self._cross and s.crossover_path == "timed":  # timed from the step's geometry, once
+                if self._cross_windows is None:
+                    band = self._sole[i][2] + self._sole[st][2]
+                    gap = self._swing0[1] - self._stance0[1]
+                    d = ankle_land - p0
+                    self._cross_windows = crossover_path.windows(d[0], d[1], gap, band)
+                wins = self._cross_windows
+            for k, (s0, s1) in zip(order, wins, strict=True):
                 hk, hdk, hddk = cp.min_jerk((sc - s0) / (s1 - s0))
                 dk = ankle_land[k] - p0[k]
                 Tk = T * (s1 - s0)
@@ -196,7 +205,8 @@ class SwingPhase:
         com = np.array(self.target.com)
         drop = 0.0 if self._closing is not None else self._swing_drop(i)
         vz = az = 0.0
-        sideways = self.steps[-1]["sideways"]
+        # a crossover with crossover_modelled: the forward and backward steps' stance settings
+        sideways = self.steps[-1]["sideways"] and not (self._cross and s.crossover_modelled)
         ramp = (
             s.swing_drop_ramp
             if not sideways or s.lateral_swing_drop_ramp is None
