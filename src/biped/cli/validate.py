@@ -5,6 +5,8 @@ trials.parquet."""
 
 from __future__ import annotations
 
+import os
+import signal
 import sys
 import time
 from typing import Any
@@ -37,6 +39,14 @@ def register(subparsers) -> None:
         metavar="NAME",
         help="run only these experiments (repeatable): ankle_release, platform_backward, step_release, waist_pull",
     )
+    p.add_argument(
+        "--jobs",
+        type=int,
+        choices=(1, 2),
+        default=None,
+        help="1: one trial at a time; 2 (default with 2 or more cores): the next trial a search may need "
+        "runs beside the one it waits for, in a second process (the same trials and thresholds)",
+    )
     add_folder_options(p, "a new runs/validate-<date>-<time>")
     p.set_defaults(func=run, _parser=p)
 
@@ -59,17 +69,23 @@ def run(args) -> int:
     route_to(out / "mujoco.log")  # MuJoCo's warnings (a diverging trial's), as biped push does
     warned_before = count_warnings(out / "mujoco.log")
     iterations = QUICK_ITERATIONS if args.quick else FULL_ITERATIONS
-    t0 = time.perf_counter()
+    jobs = args.jobs or min(2, os.cpu_count() or 1)
+    t0, cpu0 = time.perf_counter(), time.process_time()
     results: dict = {}
     n = 0
     interrupted = False
     running: _Running | None = None
+    pool = _pool(jobs)
+    pool_cpu0 = _children_cpu_s()
+    # the trials run in the pool's processes: SIGTERM stops this one as Ctrl-C does (simulate's own
+    # handling is the running trial's, in the other process)
+    term = signal.signal(signal.SIGTERM, _interrupt) if pool is not None else None
     try:
         for name in names:
             per: dict = {}
             results[name] = per
             for preset in presets:
-                running = _Running(name, preset, EXPERIMENTS[name].unit)
+                running = _Running(name, preset, EXPERIMENTS[name].unit) if pool is None else None
                 th = run_experiment(
                     EXPERIMENTS[name],
                     preset,
@@ -77,6 +93,8 @@ def run(args) -> int:
                     progress=_said(name, preset, running),
                     running=running,
                     quick=args.quick,
+                    pool=pool,
+                    waiting=_waiting(name, preset, EXPERIMENTS[name].unit),
                 )
                 per[preset] = th
                 n += len(th.trials)
@@ -88,16 +106,25 @@ def run(args) -> int:
             running.close()
         interrupted = True
         results = {k: v for k, v in results.items() if v}
-    wall = time.perf_counter() - t0
+    finally:
+        if pool is not None:
+            signal.signal(signal.SIGTERM, term)
+            _close(pool, interrupted)
+    wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0
+    cpu_pool = _children_cpu_s() - pool_cpu0  # the pool's processes, ended above
     note = (
         "Each threshold is the largest magnitude the biped survived (bisection on a log scale; '<' "
-        "below the searched range, '>' above it); the one-step lean's, the largest lean recovered (at "
-        "rest over the final feet at the end of a 7 s run) with every lean below it recovered (raised "
-        "1 deg at a time from 2 deg until one failed, then bisected). Presets: biped.control.neuromotor, "
+        "below the searched range, '>' above it); the one-step lean's, the largest lean recovered "
+        "(Wojcik's success: no fall in a 7 s run, at most one step, still at the end) with every lean "
+        "below it recovered (raised 1 deg at a time from 2 deg until one failed, then bisected). "
+        "Presets: biped.control.neuromotor, "
         "docs/validate.md."
     )
+    trials_cpu = sum(t.cpu_time_s for per in results.values() for th in per.values() for t in th.trials)
     meta = {"mode": "quick" if args.quick else "full", "iterations": iterations, "presets": presets,
-            "trials": n, "wall_time_s": wall, "note": note, "interrupted": interrupted}  # fmt: skip
+            "trials": n, "wall_time_s": wall, "note": note, "interrupted": interrupted, "jobs": jobs,
+            "trials_cpu_s": trials_cpu, "main_cpu_s": cpu, "pool_cpu_s": cpu_pool,
+            "trials_dropped": sum(th.dropped for per in results.values() for th in per.values())}  # fmt: skip
     if results:
         write_validation(out, results, meta)
     said = summary(out / "mujoco.log", warned_before)
@@ -106,9 +133,55 @@ def run(args) -> int:
     if interrupted:
         raise KeyboardInterrupt
     print(
-        f"  wrote {out}/validation.md, validation.json, trials.parquet, figures/ ({n} trials, {wall:.1f} s)"
+        f"  wrote {out}/validation.md, validation.json, trials.parquet, figures/ ({n} trials, {wall:.1f} s; "
+        f"{trials_cpu:.1f} s of CPU in the trials taken, {cpu + cpu_pool:.1f} s in all, {jobs} job(s))"
     )
     return 0
+
+
+def _pool(jobs: int):
+    """Two processes (forked: the parent has run no simulation; the numba kernels warmed first, so
+    the children inherit them compiled) for ``jobs`` 2, else None (one trial at a time, here)."""
+    if jobs < 2:
+        return None
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    from biped.sim.jit import announce_and_warm, kernels_for
+
+    announce_and_warm(kernels_for("workspace", "qp"))
+    method = "fork" if "fork" in multiprocessing.get_all_start_methods() else None
+    return ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context(method))
+
+
+def _children_cpu_s() -> float:
+    """The CPU time [s] of this process's ended children (the pool's, once shut down)."""
+    import resource
+
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt
+
+
+def _close(pool, interrupted: bool) -> None:
+    """Shut ``pool`` down; after Ctrl-C / SIGTERM its running trials are stopped too."""
+    if interrupted:
+        for p in list(getattr(pool, "_processes", {}).values()):
+            p.terminate()
+    pool.shutdown(wait=not interrupted, cancel_futures=True)
+
+
+def _waiting(name: str, preset: str, unit: str):
+    """With a pool, a line on stderr every 5 s of a trial's wait (its simulated time is the other
+    process's)."""
+
+    def waiting(magnitude: float, wall: float) -> None:
+        print(f"    {name} {preset}: {magnitude:.4g} {unit}: running ({wall:.0f} s)", file=sys.stderr)
+
+    return waiting
 
 
 #: A running trial says nothing for its first second, then its simulated time every second.
@@ -148,14 +221,17 @@ class _Running:
 
 def _said(name: str, preset: str, running: _Running | None = None):
     """Each trial's line on stderr as it ends (a trial may take seconds: the user sees it work)."""
-    from biped.analysis.validate import EXPERIMENTS, RECOVERED
+    from biped.analysis.validate import EXPERIMENTS, ONE_STEP, RECOVERED
 
     def said(t) -> None:
         if running is not None:
             running.close()
         what = "survived" if t.survived else "fell"
-        if t.survived and EXPERIMENTS[t.experiment].criterion == RECOVERED:
+        criterion = EXPERIMENTS[t.experiment].criterion
+        if t.survived and criterion == RECOVERED:
             what = "recovered" if t.recovered else "stood, not recovered"
+        elif t.survived and criterion == ONE_STEP:
+            what = f"{t.steps} step{'' if t.steps == 1 else 's'}, " + ("still" if t.still else "still moving")
         print(
             f"    {name} {preset}: {t.magnitude:.4g} {t.unit} {what} ({t.wall_time_s:.1f} s)", file=sys.stderr
         )
