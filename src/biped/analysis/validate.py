@@ -458,6 +458,11 @@ def run_trial(
                  float(r.final_orientation_error_deg), still, end_speed, why, cpu)  # fmt: skip
 
 
+#: ``--quick``'s staircase: this many times the experiment's step, and no halving (the young's
+#: one-step trials run up to 7 s, ~30 s of CPU each: 2, 6, 10 deg, not 2, 4, 6, 8 and 3 halvings).
+QUICK_STAIRCASE_FACTOR = 4.0
+
+
 def run_experiment(
     exp: Experiment,
     neuromotor: str,
@@ -470,9 +475,10 @@ def run_experiment(
     waiting: Callable[[float, float], None] | None = None,
 ) -> Threshold:
     """The threshold of ``exp`` for the preset: the largest magnitude whose trial passes (the
-    experiment's criterion). With a staircase, the magnitude raised from ``lo`` by the step (twice
-    it with ``quick``) until a trial fails, then ``min(iterations, STAIRCASE_HALVINGS)`` halvings
-    between the last that passed and it: every step below the threshold passed. Without, a
+    experiment's criterion). With a staircase, the magnitude raised from ``lo`` by the step until a
+    trial fails, then ``min(iterations, STAIRCASE_HALVINGS)`` halvings between the last that passed
+    and it: every step below the threshold passed (``quick``: :data:`QUICK_STAIRCASE_FACTOR` times
+    the step, no halving: a smoke run of the protocol, not a measurement). Without, a
     bisection in [lo, hi] on a logarithmic scale, ``iterations`` halvings after the bracket's two
     trials. ``progress`` is called with each trial as it ends, ``running(magnitude, t, duration)``
     every 50 ms of a running trial's simulated time (:func:`run_trial`; without a pool).
@@ -489,8 +495,8 @@ def run_experiment(
         trial = functools.partial(run_trial, exp, neuromotor)
     trials = search.Trials(trial, pool, progress, waiting)
     if exp.staircase > 0:
-        step = 2.0 * exp.staircase if quick else exp.staircase
-        halvings = min(iterations, search.STAIRCASE_HALVINGS)
+        step = QUICK_STAIRCASE_FACTOR * exp.staircase if quick else exp.staircase
+        halvings = 0 if quick else min(iterations, search.STAIRCASE_HALVINGS)
         bound, value, at = search.staircase(
             trials, exp.lo, exp.hi, step, halvings, lambda a, b: 0.5 * (a + b)
         )

@@ -9,6 +9,7 @@ import os
 import signal
 import sys
 import time
+from concurrent.futures import ThreadPoolExecutor
 from typing import Any
 
 from biped.cli._common import add_folder_options, keeps_mujoco_log, run_dir
@@ -80,22 +81,35 @@ def run(args) -> int:
     # the trials run in the pool's processes: SIGTERM stops this one as Ctrl-C does (simulate's own
     # handling is the running trial's, in the other process)
     term = signal.signal(signal.SIGTERM, _interrupt) if pool is not None else None
+    searches = None if pool is None else ThreadPoolExecutor(len(names) * len(presets))
+    started: dict = {}
+
+    def search(name: str, preset: str, running=None):
+        return run_experiment(
+            EXPERIMENTS[name],
+            preset,
+            iterations,
+            progress=_said(name, preset, running),
+            running=running,
+            quick=args.quick,
+            pool=pool,
+            waiting=_waiting(name, preset, EXPERIMENTS[name].unit),
+        )
+
     try:
+        if searches is not None:  # every search at once, their trials queued in the pool: the
+            # one-step lean's (the longest) first
+            for name, preset in sorted(((a, b) for a in names for b in presets), key=_longest_first):
+                started[name, preset] = searches.submit(search, name, preset)
         for name in names:
             per: dict = {}
             results[name] = per
             for preset in presets:
-                running = _Running(name, preset, EXPERIMENTS[name].unit) if pool is None else None
-                th = run_experiment(
-                    EXPERIMENTS[name],
-                    preset,
-                    iterations,
-                    progress=_said(name, preset, running),
-                    running=running,
-                    quick=args.quick,
-                    pool=pool,
-                    waiting=_waiting(name, preset, EXPERIMENTS[name].unit),
-                )
+                if searches is not None:
+                    th = started[name, preset].result()
+                else:
+                    running = _Running(name, preset, EXPERIMENTS[name].unit)
+                    th = search(name, preset, running)
                 per[preset] = th
                 n += len(th.trials)
                 print(
@@ -110,6 +124,8 @@ def run(args) -> int:
         if pool is not None:
             signal.signal(signal.SIGTERM, term)
             _close(pool, interrupted)
+        if searches is not None:
+            searches.shutdown(wait=True, cancel_futures=True)
     wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0
     cpu_pool = _children_cpu_s() - pool_cpu0  # the pool's processes, ended above
     note = (
@@ -139,9 +155,17 @@ def run(args) -> int:
     return 0
 
 
+def _longest_first(task: tuple[str, str]) -> tuple[int, int]:
+    """The order the searches queue their trials: the one-step lean's first, the young's and the
+    older's (their trials the longest) before the ideal's."""
+    name, preset = task
+    return (0 if name == "step_release" else 1, 1 if preset == "ideal" else 0)
+
+
 def _pool(jobs: int):
     """Two processes (forked: the parent has run no simulation; the numba kernels warmed first, so
-    the children inherit them compiled) for ``jobs`` 2, else None (one trial at a time, here)."""
+    the children inherit them compiled; forked at once, before the searches' threads start) for
+    ``jobs`` 2, else None (one trial at a time, here)."""
     if jobs < 2:
         return None
     import multiprocessing
@@ -151,7 +175,9 @@ def _pool(jobs: int):
 
     announce_and_warm(kernels_for("workspace", "qp"))
     method = "fork" if "fork" in multiprocessing.get_all_start_methods() else None
-    return ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context(method))
+    pool = ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context(method))
+    pool.submit(int).result()  # forks every worker now (the fork context starts them all at once)
+    return pool
 
 
 def _children_cpu_s() -> float:
