@@ -458,9 +458,10 @@ def run_trial(
                  float(r.final_orientation_error_deg), still, end_speed, why, cpu)  # fmt: skip
 
 
-#: ``--quick``'s staircase: this many times the experiment's step, and no halving (the young's
-#: one-step trials run up to 7 s, ~30 s of CPU each: 2, 6, 10 deg, not 2, 4, 6, 8 and 3 halvings).
-QUICK_STAIRCASE_FACTOR = 4.0
+#: ``--quick``'s staircase: this many times the experiment's step, and no halving: 2, 10, 18 deg
+#: (the young's one-step trials that stand run the whole 7 s, 30-36 s of CPU each; with 4 deg
+#: steps the young's 2, 6, 10 and 14 deg took 89 s of CPU, two 7 s trials one after the other).
+QUICK_STAIRCASE_FACTOR = 8.0
 
 
 def run_experiment(
@@ -484,7 +485,7 @@ def run_experiment(
     every 50 ms of a running trial's simulated time (:func:`run_trial`; without a pool).
     ``pool``: the next trial the search may need runs beside the one it waits for
     (:mod:`biped.analysis.validate_search`; the same trials and threshold), ``waiting(magnitude,
-    wall_s)`` every 5 s of the wait."""
+    wall_s)`` every 10 s of a running trial's wait."""
     if pool is None:
 
         def trial(magnitude: float) -> Trial:
@@ -501,6 +502,7 @@ def run_experiment(
             trials, exp.lo, exp.hi, step, halvings, lambda a, b: 0.5 * (a + b)
         )
         return Threshold(exp.key, neuromotor, value, exp.unit, bound, at, trials.taken, trials.dropped)
+    trials.start(exp.lo)
     trials.start(exp.hi)
     lo_t = trials.run(exp.lo)
     if not lo_t.passed:

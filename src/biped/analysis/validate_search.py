@@ -17,7 +17,7 @@ __all__ = ["STAIRCASE_HALVINGS", "Trials", "bisect", "staircase"]
 #: at most this many halvings (1/16 of a 1 deg step).
 STAIRCASE_HALVINGS = 4
 #: How often a search waiting on a pool's trial says so [s of wall time].
-WAITING_EVERY_S = 5.0
+WAITING_EVERY_S = 10.0
 
 
 class Trials:
@@ -43,7 +43,7 @@ class Trials:
             f = self.started.pop(m)
             t0 = time.perf_counter()
             while not wait([f], timeout=WAITING_EVERY_S).done:
-                if self.waiting is not None:
+                if self.waiting is not None and f.running():  # not while queued behind others
                     self.waiting(m, time.perf_counter() - t0)
             t = f.result()
         self.taken.append(t)
@@ -65,6 +65,7 @@ def bisect(trials: Trials, bracket, halvings: int, mid) -> tuple[float, Any]:
     lo, hi, best = bracket
     for i in range(halvings):
         m = mid(lo, hi)
+        trials.start(m)  # queued before the guess
         if i + 1 < halvings:
             trials.start(mid(m, hi))  # the next one if m passes
         t = trials.run(m)
@@ -84,6 +85,7 @@ def staircase(trials: Trials, lo: float, hi: float, step: float, halvings: int, 
     best = None
     k = 0
     while (m := lo + k * step) <= hi + 1e-9:
+        trials.start(m)  # queued before the next step
         if lo + (k + 1) * step <= hi + 1e-9:
             trials.start(lo + (k + 1) * step)
         t = trials.run(m)

@@ -201,7 +201,7 @@ def _close(pool, interrupted: bool) -> None:
 
 
 def _waiting(name: str, preset: str, unit: str):
-    """With a pool, a line on stderr every 5 s of a trial's wait (its simulated time is the other
+    """With a pool, a line on stderr every 10 s a trial runs (its simulated time is the other
     process's)."""
 
     def waiting(magnitude: float, wall: float) -> None:
