@@ -26,7 +26,10 @@ def register(subparsers) -> None:
         "and young, find each threshold by bisection and compare it with the human mean +/- 2 SD.",
     )
     p.add_argument(
-        "--quick", action="store_true", help=f"coarse: {QUICK_ITERATIONS} bisection steps (<= 60 s)"
+        "--quick",
+        action="store_true",
+        help=f"coarse: {QUICK_ITERATIONS} bisection steps, the one-step lean's staircase in 8 deg steps with no "
+        "halving (a smoke run; ~50 s of CPU, <= 60 s on an idle 2-core machine)",
     )
     p.add_argument(
         "--neuromotor",
