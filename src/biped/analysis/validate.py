@@ -367,6 +367,7 @@ def run_experiment(
     quick: bool = False,
     pool: Executor | None = None,
     waiting: Callable[[float, float], None] | None = None,
+    stop=None,
 ) -> Threshold:
     """The threshold of ``exp`` for the preset: the largest magnitude whose trial passes (the
     experiment's criterion). With a staircase, the magnitude raised from ``lo`` by the step until a
@@ -378,7 +379,8 @@ def run_experiment(
     every 50 ms of a running trial's simulated time (:func:`run_trial`; without a pool).
     ``pool``: the next trial the search may need runs beside the one it waits for
     (:mod:`biped.analysis.validate_search`; the same trials and threshold), ``waiting(magnitude,
-    wall_s)`` every 10 s of a running trial's wait."""
+    wall_s)`` every 10 s of a running trial's wait; ``stop`` (a :class:`threading.Event`) set ends a
+    wait in KeyboardInterrupt."""
     if pool is None:
 
         def trial(magnitude: float) -> Trial:
@@ -387,7 +389,7 @@ def run_experiment(
 
     else:
         trial = functools.partial(run_trial, exp, neuromotor)
-    trials = search.Trials(trial, pool, progress, waiting)
+    trials = search.Trials(trial, pool, progress, waiting, stop)
     if exp.staircase > 0:
         step = QUICK_STAIRCASE_FACTOR * exp.staircase if quick else exp.staircase
         halvings = 0 if quick else min(iterations, search.STAIRCASE_HALVINGS)

@@ -25,8 +25,9 @@ class Trials:
     it (``progress`` called with it); ``start(m)``, with a pool, starts it without waiting;
     ``drop()`` forgets the started trials the search did not take."""
 
-    def __init__(self, trial: Callable, pool: Executor | None, progress=None, waiting=None):
+    def __init__(self, trial: Callable, pool: Executor | None, progress=None, waiting=None, stop=None):
         self.trial, self.pool, self.progress, self.waiting = trial, pool, progress, waiting
+        self.stop = stop  # a threading.Event: set, a wait ends in KeyboardInterrupt (the pool is gone)
         self.taken: list = []
         self.started: dict[float, Future] = {}
         self.dropped = 0  # started, never taken (their CPU spent for nothing)
@@ -41,10 +42,14 @@ class Trials:
         else:
             self.start(m)
             f = self.started.pop(m)
-            t0 = time.perf_counter()
-            while not wait([f], timeout=WAITING_EVERY_S).done:
-                if self.waiting is not None and f.running():  # not while queued behind others
-                    self.waiting(m, time.perf_counter() - t0)
+            t0 = said = time.perf_counter()
+            while not wait([f], timeout=1.0).done:
+                if self.stop is not None and self.stop.is_set():
+                    raise KeyboardInterrupt
+                now = time.perf_counter()
+                if self.waiting is not None and f.running() and now - said >= WAITING_EVERY_S:
+                    self.waiting(m, now - t0)  # (not while it is queued behind others)
+                    said = now
             t = f.result()
         self.taken.append(t)
         if self.progress is not None:

@@ -8,6 +8,7 @@ from __future__ import annotations
 import os
 import signal
 import sys
+import threading
 import time
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any
@@ -85,6 +86,7 @@ def run(args) -> int:
     # handling is the running trial's, in the other process)
     term = signal.signal(signal.SIGTERM, _interrupt) if pool is not None else None
     searches = None if pool is None else ThreadPoolExecutor(len(names) * len(presets))
+    stop = threading.Event()  # set: the searches' threads stop waiting on the pool
     started: dict = {}
 
     def search(name: str, preset: str, running=None):
@@ -97,6 +99,7 @@ def run(args) -> int:
             quick=args.quick,
             pool=pool,
             waiting=_waiting(name, preset, EXPERIMENTS[name].unit),
+            stop=stop,
         )
 
     try:
@@ -126,6 +129,7 @@ def run(args) -> int:
     finally:
         if pool is not None:
             signal.signal(signal.SIGTERM, term)
+            stop.set()
             _close(pool, interrupted)
         if searches is not None:
             searches.shutdown(wait=True, cancel_futures=True)
@@ -178,9 +182,18 @@ def _pool(jobs: int):
 
     announce_and_warm(kernels_for("workspace", "qp"))
     method = "fork" if "fork" in multiprocessing.get_all_start_methods() else None
-    pool = ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context(method))
+    pool = ProcessPoolExecutor(
+        jobs, mp_context=multiprocessing.get_context(method), initializer=_quiet_worker
+    )
     pool.submit(int).result()  # forks every worker now (the fork context starts them all at once)
     return pool
+
+
+def _quiet_worker() -> None:
+    """A pool's process ignores Ctrl-C (the terminal sends it to every process of the group: this
+    one stops the workers; ``_close`` kills them) and dies of SIGTERM without a traceback."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
 
 
 def _children_cpu_s() -> float:
@@ -199,7 +212,7 @@ def _close(pool, interrupted: bool) -> None:
     """Shut ``pool`` down; after Ctrl-C / SIGTERM its running trials are stopped too."""
     if interrupted:
         for p in list(getattr(pool, "_processes", {}).values()):
-            p.terminate()
+            p.kill()  # their trials are dropped: nothing of theirs to keep
     pool.shutdown(wait=not interrupted, cancel_futures=True)
 
 
