@@ -93,7 +93,8 @@ def test_a_long_trial_says_its_simulated_time_every_second(tmp_path, monkeypatch
     monkeypatch.setattr(biped._progress, "time", types.SimpleNamespace(perf_counter=lambda: now[0]))
     monkeypatch.setattr(av, "run_trial", fake_trial)
     monkeypatch.setattr("sys.stderr", Stderr())
-    argv = ["validate", "--quick", "--experiment", "ankle_release", "--neuromotor", "young"]
+    # one trial at a time (with --jobs 2 the trials run in another process, the heartbeat its wait's)
+    argv = ["validate", "--quick", "--experiment", "ankle_release", "--neuromotor", "young", "--jobs", "1"]
     assert main([*argv, "--out", str(tmp_path / "v")]) == 0
     starts = [i for i, (_, x) in enumerate(lines) if x == "<start>"]
     assert len(starts) == 2 + 3  # the bracket's two trials and --quick's 3 halvings

@@ -4,10 +4,11 @@ Each experiment follows its paper's protocol with the perturbation paradigms of
 :mod:`biped.sim.perturbations`, once with ``neuromotor = "ideal"`` (W's controller) and once with
 ``"young"`` (:mod:`biped.control.neuromotor`), and finds its threshold, the largest magnitude the
 biped survives, by bisection (a trial survives when it has not fallen, diverged or failed by the
-end of the run); the one-step lean by its paper's staircase and the stepping rule's "recovered"
-(at rest over the final feet; :data:`RECOVERED`, :func:`run_experiment`). The human numbers
-(:data:`HUMAN`) are copied with their sources from the project's notes; nothing here reads them
-at run time from anywhere else. docs/validate.md.
+end of the run); the one-step lean by its paper's staircase and its paper's success (no fall, at
+most one step, standing still at the end: :data:`ONE_STEP`, :mod:`biped.analysis.validate_rule`;
+:func:`run_experiment`). The human numbers (:data:`HUMAN`, :mod:`biped.analysis.validate_human`)
+are copied with their sources from the project's notes; nothing here reads them at run time from
+anywhere else. docs/validate.md.
 
 >>> sorted(EXPERIMENTS)
 ['ankle_release', 'platform_backward', 'step_release', 'waist_pull']
@@ -15,13 +16,17 @@ at run time from anywhere else. docs/validate.md.
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 from collections.abc import Callable
+from concurrent.futures import Executor
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from biped.analysis import validate_search as search
+from biped.analysis.validate_human import HUMAN, MEASURES, NOT_RUN, HumanValue, human_for  # noqa: F401
 from biped.analysis.validate_measures import (  # noqa: F401 (re-exported: tests and outputs read them here)
     LANDING_S,
     _ankle_measures,
@@ -29,127 +34,24 @@ from biped.analysis.validate_measures import (  # noqa: F401 (re-exported: tests
     ankle_to_toe_m,
     waist_ahead_of_ankles_m,
 )
+from biped.analysis.validate_rule import ONE_STEP, one_step_passes, still_at_end
 from biped.sim import Scenario, build_scene
+from biped.sim.early_stop import AT_REST
 from biped.sim.push import simulate
 
 __all__ = [
     "EXPERIMENTS",
     "HUMAN",
     "NOT_RUN",
+    "ONE_STEP",
+    "RECOVERED",
+    "SURVIVED",
     "Experiment",
     "HumanValue",
     "Threshold",
     "Trial",
     "run_experiment",
 ]
-
-
-@dataclass(frozen=True)
-class HumanValue:
-    """A human measurement: mean +/- SD [unit] and its source (``sd_assumed``: no SD given)."""
-
-    quantity: str
-    unit: str
-    mean: float
-    sd: float
-    source: str
-    sd_assumed: bool = False
-
-    def inside(self, value: float) -> bool | None:
-        """Whether ``value`` lies within mean +/- 2 SD (None when it is not a number)."""
-        if value is None or not math.isfinite(value):
-            return None
-        return abs(value - self.mean) <= 2 * self.sd
-
-
-ROBINOVITCH = "Robinovitch et al. 2002, J Neurophysiol 88:613-620 (23 young adults)"
-WOJCIK = (
-    "Wojcik et al. 1999, J Gerontol A 54:M44-50 (abstract: 10 young, 10 older women released from forward "
-    "leans raised from ~14 deg until one step failed; no SD in the abstract: 20 % assumed; Thelen et al. "
-    "1997, J Gerontol A 52:M8-13: young men 32.5, older men 23.9 deg)"
-)
-KOUSHYAR = (
-    "Koushyar, Bieryla, Nussbaum & Madigan 2019, PLoS ONE 14:e0210049 (abstract: the largest backward "
-    "support-surface displacement withstood without stepping, 5 young adults 20-30 y, 6 older 70-80 y; "
-    "hips free, not ankles only; the platform's velocity profile is theirs, not our 0.3 s ramp)"
-)
-MILLE = (
-    "Mille et al. 2003, J Neurophysiol 90:666-674, 'Thresholds for inducing protective stepping responses "
-    "to external perturbations of human standing' (abstract: motor-driven forward waist pulls; the "
-    "threshold is a position 'nearer to the ankles' as the pull's velocity grows, in % of the base of "
-    "support (BoS); young never stepped with the waist behind TH = 72 % BoS (fast pulls, velocity no "
-    "longer mattering above ~121 % BoS/s), always stepped past TL = 107 % (slow); older 59 % and 91 %; "
-    "read here as the waist's position ahead of the ankles, % of the ankle-to-toe length; no SD in the "
-    "abstract: 20 % assumed)"
-)
-
-#: The human results the experiments are held against (/work/shared/HUMAN-DATA.md and the
-#: abstracts cited, copied). Keys ``<experiment>.<measure>``; ``<experiment>_older.<measure>``
-#: is the older adults' value, compared with ``neuromotor = "older"``.
-HUMAN = {
-    "ankle_release.lean_deg": HumanValue(
-        "largest forward lean recovered, ankles only", "deg", 5.9, 1.1, ROBINOVITCH
-    ),
-    "ankle_release.peak_ankle_torque_n_m": HumanValue(
-        "peak ankle torque in that recovery", "N m", 116.0, 32.0, ROBINOVITCH
-    ),
-    "ankle_release.onset_ms": HumanValue("ankle torque onset after release", "ms", 99.0, 13.0, ROBINOVITCH),
-    "platform_backward.displacement_m": HumanValue(
-        "largest backward platform translation recovered without a step, young adults",
-        "m",
-        0.162,
-        0.026,
-        KOUSHYAR,
-    ),
-    "platform_backward_older.displacement_m": HumanValue(
-        "the same, older adults", "m", 0.118, 0.021, KOUSHYAR
-    ),
-    "waist_pull.percent_bos": HumanValue(
-        "the waist's position ahead of the ankles at the end of the largest fast forward waist pull "
-        "recovered without a step, % of the ankle-to-toe length",
-        "% BoS",
-        72.0,
-        14.4,
-        MILLE,
-        sd_assumed=True,
-    ),
-    "waist_pull_older.percent_bos": HumanValue(
-        "the same, older adults", "% BoS", 59.0, 11.8, MILLE, sd_assumed=True
-    ),
-    "step_release.lean_deg": HumanValue(
-        "largest forward lean recovered with one step, young women",
-        "deg",
-        30.7,
-        6.14,
-        WOJCIK,
-        sd_assumed=True,
-    ),
-    "step_release_older.lean_deg": HumanValue(
-        "the same, older women", "deg", 16.2, 3.24, WOJCIK, sd_assumed=True
-    ),
-}
-
-#: Measures reported without a human number: (what, unit).
-MEASURES = {
-    "step_release.step_length_m": ("one-step lean release: step length at the threshold (the stepping "
-                                   "foot's horizontal displacement)", "m"),
-    "step_release.contact_ms": ("one-step lean release: time from release to the stepping foot's contact "
-                                "at the threshold", "ms"),
-}  # fmt: skip
-
-#: Experiments of the issue that ``biped validate`` does not run, and why.
-NOT_RUN: dict[str, str] = {}
-
-
-def human_for(quantity: str, preset: str) -> HumanValue | None:
-    """The human value ``preset``'s result at ``quantity`` is held against: the older adults'
-    (``<experiment>_older.<measure>``) for ``"older"`` where there is one, else the quantity's own;
-    None for ``"older"`` against a young-only number when an older one exists elsewhere."""
-    exp, measure = quantity.split(".", 1)
-    older = HUMAN.get(f"{exp}_older.{measure}")
-    if preset == "older":
-        return older if older is not None else HUMAN.get(quantity)
-    return HUMAN.get(quantity)
 
 
 @dataclass(frozen=True)
@@ -167,8 +69,9 @@ class Experiment:
     hi: float
     human: tuple = ()
     preset_keys: dict = field(default_factory=dict)  # preset -> extra scenario keys of its protocol
-    #: what a trial must do to count: SURVIVED (no fall, divergence or error to the run's end) or
-    #: RECOVERED (that, and at rest over the final feet: the run's ``recovered``, below)
+    #: what a trial must do to count: SURVIVED (no fall, divergence or error to the run's end),
+    #: RECOVERED (that, and at rest over the final feet: the run's ``recovered``, below) or
+    #: ONE_STEP (Wojcik's: no fall, at most one step, still at the end; validate_rule)
     criterion: str = "survived"
     #: > 0: raise the magnitude from ``lo`` by this step until a trial fails, then bisect between
     #: the last that passed and it (Wojcik's protocol; :func:`run_experiment`); 0: bisect [lo, hi]
@@ -181,7 +84,9 @@ SURVIVED = "survived"
 #: (:func:`biped.sim.stepping.stepping_outcome`, the sweeps' strict rule of issue #23) at its end
 #: the COM within ``recovery_com_tol_m`` of the set point over the final feet, slower than 5 cm/s,
 #: the trunk within ``recovery_orientation_tol_deg``; ``early_stop`` ends a run once that is
-#: decided (:mod:`biped.sim.early_stop`), a fall ends it anyway.
+#: decided (:mod:`biped.sim.early_stop`), a fall ends it anyway. (The one-step lean's until
+#: 2026-11-28, now :data:`~biped.analysis.validate_rule.ONE_STEP`: its trunk and set-point clauses
+#: are the controller's own rule, not Wojcik's success.)
 RECOVERED = "recovered"
 
 
@@ -220,10 +125,11 @@ _COMMON = {"friction": 0.8, "duration_s": 2.5}
 #: at 2.6 s (4 s and 6 s runs agree on 0.148 m), the young's 5.84 deg ankle-only lean (falls at
 #: 2.73 s) and its 6.19 deg one-step lean (falls at 2.53 s).
 _SLOW_TOPPLE = {"duration_s": 4.0}
-#: The one-step lean runs 7 s and must end at rest (RECOVERED): after its step the young preset
-#: sways over the front foot and falls late, 10.5 deg at 4.31 s, 10.54 at 4.89 and validate's 4 s
-#: threshold trial, 10.72 deg, at 5.03 s (docs/validate.md, "Above the ideal's 20.5 deg");
-#: ``early_stop`` ends a trial once it is at rest, a fall ends it anyway.
+#: The one-step lean runs 7 s and must end standing still (ONE_STEP): after its step the young
+#: preset sways over the front foot and falls late, 10.5 deg at 4.31 s, 10.54 at 4.89 and
+#: validate's 4 s threshold trial, 10.72 deg, at 5.03 s (docs/validate.md, "Above the ideal's
+#: 20.5 deg"); ``early_stop`` ends a trial once it is at rest over its final feet (then it passes
+#: the rule's "still"), a fall ends it anyway.
 _AT_REST = {"duration_s": 7.0, "early_stop": True}
 
 EXPERIMENTS = {
@@ -284,8 +190,9 @@ EXPERIMENTS = {
         "stepping (stepping = true, at most one step, the QP distribution; the young and older "
         "presets with the step program) on a floor of "
         "friction 1.0 (a shod foot on a dry floor; the tether needs about tan(lean) of the weight in "
-        "friction); the largest lean recovered with at most one step (recovered: at rest over the final feet "
-        "at the end of a 7 s run, the stepping rule) with every lean below it recovered (raised 1 deg at a "
+        "friction); the largest lean recovered with at most one step (Wojcik's success: no fall in a 7 s "
+        "run, at most one step, a closing step counted, and standing still at the end, the central body "
+        "slower than 5 cm/s over the last 0.5 s) with every lean below it recovered (raised 1 deg at a "
         "time from 2 deg until one fails, then bisected)",
         {
             **HUMAN_STANCE,
@@ -313,10 +220,11 @@ EXPERIMENTS = {
         # W's ideal controller with the feedback stepper (docs/validate.md, "The predicted step",
         # "Braking after the lunge")
         {p: {"step_program": "program-trail"} for p in ("young", "older")},
-        # recovered: at rest over the final feet, as people are after the one step; the leans
-        # raised 1 deg at a time from 2 deg until one fails, as Wojcik raised them until the step
-        # failed (a bisection over 2-40 deg passed over leans that fall below its threshold)
-        criterion=RECOVERED,
+        # Wojcik's success: no fall, at most one step, standing still at the end (not upright, not
+        # over the set point: validate_rule); the leans raised 1 deg at a time from 2 deg until one
+        # fails, as Wojcik raised them until the step failed (a bisection over 2-40 deg passed over
+        # leans that fall below its threshold)
+        criterion=ONE_STEP,
         staircase=1.0,
     ),
     "waist_pull": Experiment(
@@ -366,11 +274,15 @@ class Trial:
     step_length_m: float = math.nan  # the first step: the stepping foot's horizontal displacement
     contact_ms: float = math.nan  # the first step: from release (or 0) to that foot's contact
     recovered: bool = False  # the run's ``recovered`` (RECOVERED): at rest over the final feet
-    passed: bool = False  # counted by the experiment's criterion (survived, or recovered)
+    passed: bool = False  # counted by the experiment's criterion (survived, recovered, or one step)
     end_s: float = math.nan  # the simulated time the run ended (a fall, at rest, or its duration)
     final_com_error_m: float = math.nan  # at the end: the COM from the set point judged by
     final_com_speed_m_s: float = math.nan  # at the end: the central body's COM speed
     final_orientation_error_deg: float = math.nan  # at the end: the trunk from the set point's
+    still: bool = False  # the central body slower than 5 cm/s over the run's last 0.5 s (ONE_STEP)
+    end_speed_m_s: float = math.nan  # its largest speed over that window
+    stop_reason: str = ""  # why the run ended before its duration: "fell", "at_rest" (early_stop), ""
+    cpu_time_s: float = math.nan  # the run's CPU time (this process's; wall_time_s is loaded)
 
     def row(self) -> dict:
         return dict(self.__dict__)
@@ -388,6 +300,7 @@ class Threshold:
     bound: str = ""
     at: Trial | None = None
     trials: list = field(default_factory=list)
+    dropped: int = 0  # trials a pool ran beside the search that it did not need (not in ``trials``)
 
     @property
     def lowest_failure(self) -> float | None:
@@ -412,10 +325,10 @@ def run_trial(
         neuromotor=neuromotor, **exp.base, **exp.preset_keys.get(neuromotor, {}), **exp.magnitude(magnitude)
     )
     scene = build_scene(s)
-    t = time.perf_counter()
+    t, cpu = time.perf_counter(), time.process_time()
     tick = None if running is None else lambda t_sim: running(t_sim, s.duration_s)
     r = simulate(s, scene=scene, progress=tick)
-    wall = time.perf_counter() - t
+    wall, cpu = time.perf_counter() - t, time.process_time() - cpu
     if r.interrupted:  # Ctrl-C / SIGTERM inside the run: not a fall, the end of the bisection
         raise KeyboardInterrupt
     survived = not r.fell and r.diverged is None and r.controller_error is None and not r.interrupted
@@ -428,16 +341,20 @@ def run_trial(
     n_steps, length, contact = _step_measures(r, s)
     recovered = bool(survived and r.recovered)
     speed = float(np.linalg.norm(r.qvel[-1, :3])) if r.qvel is not None and len(r.qvel) else math.nan
+    still, end_speed = still_at_end(r.qvel, s.control_rate_hz)
+    still = still or r.stop_reason == AT_REST  # at rest at its equilibrium: still to the run's end
+    passed = {SURVIVED: survived, RECOVERED: recovered, ONE_STEP: one_step_passes(survived, n_steps, still)}
+    why = "fell" if r.fell else (r.stop_reason or "")
     return Trial(exp.key, neuromotor, float(magnitude), exp.unit, bool(survived), r.fall_time_s, peak, onset,
-                 motion, wall, bos, n_steps, length, contact, recovered,
-                 recovered if exp.criterion == RECOVERED else bool(survived),
+                 motion, wall, bos, n_steps, length, contact, recovered, bool(passed[exp.criterion]),
                  float(r.times[-1]) if len(r.times) else math.nan, float(r.final_com_error_m), speed,
-                 float(r.final_orientation_error_deg))  # fmt: skip
+                 float(r.final_orientation_error_deg), still, end_speed, why, cpu)  # fmt: skip
 
 
-#: The staircase's bisection between the last magnitude that passed and the first that failed:
-#: at most this many halvings (1/16 of a 1 deg step).
-STAIRCASE_HALVINGS = 4
+#: ``--quick``'s staircase: this many times the experiment's step, and no halving: 2, 10, 18 deg
+#: (the young's one-step trials that stand run the whole 7 s, 30-36 s of CPU each; with 4 deg
+#: steps the young's 2, 6, 10 and 14 deg took 89 s of CPU, two 7 s trials one after the other).
+QUICK_STAIRCASE_FACTOR = 8.0
 
 
 def run_experiment(
@@ -448,71 +365,46 @@ def run_experiment(
     running: Callable[[float, float, float], None] | None = None,
     *,
     quick: bool = False,
+    pool: Executor | None = None,
+    waiting: Callable[[float, float], None] | None = None,
+    stop=None,
 ) -> Threshold:
     """The threshold of ``exp`` for the preset: the largest magnitude whose trial passes (the
-    experiment's criterion). With a staircase, the magnitude raised from ``lo`` by the step (twice
-    it with ``quick``) until a trial fails, then ``min(iterations, STAIRCASE_HALVINGS)`` halvings
-    between the last that passed and it: every step below the threshold passed. Without, a
+    experiment's criterion). With a staircase, the magnitude raised from ``lo`` by the step until a
+    trial fails, then ``min(iterations, STAIRCASE_HALVINGS)`` halvings between the last that passed
+    and it: every step below the threshold passed (``quick``: :data:`QUICK_STAIRCASE_FACTOR` times
+    the step, no halving: a smoke run of the protocol, not a measurement). Without, a
     bisection in [lo, hi] on a logarithmic scale, ``iterations`` halvings after the bracket's two
     trials. ``progress`` is called with each trial as it ends, ``running(magnitude, t, duration)``
-    every 50 ms of a running trial's simulated time (:func:`run_trial`)."""
-    trials: list[Trial] = []
+    every 50 ms of a running trial's simulated time (:func:`run_trial`; without a pool).
+    ``pool``: the next trial the search may need runs beside the one it waits for
+    (:mod:`biped.analysis.validate_search`; the same trials and threshold), ``waiting(magnitude,
+    wall_s)`` every 10 s of a running trial's wait; ``stop`` (a :class:`threading.Event`) set ends a
+    wait in KeyboardInterrupt."""
+    if pool is None:
 
-    def run(magnitude: float) -> Trial:
-        tick = None if running is None else lambda t_sim, dur: running(magnitude, t_sim, dur)
-        t = run_trial(exp, neuromotor, magnitude, tick)
-        trials.append(t)
-        if progress is not None:
-            progress(t)
-        return t
+        def trial(magnitude: float) -> Trial:
+            tick = None if running is None else lambda t_sim, dur: running(magnitude, t_sim, dur)
+            return run_trial(exp, neuromotor, magnitude, tick)
 
-    if exp.staircase > 0:
-        return _staircase(
-            exp, neuromotor, iterations, run, trials, 2.0 * exp.staircase if quick else exp.staircase
-        )
-    lo_t = run(exp.lo)
-    if not lo_t.passed:
-        return Threshold(exp.key, neuromotor, exp.lo, exp.unit, "<", None, trials)
-    hi_t = run(exp.hi)
-    if hi_t.passed:
-        return Threshold(exp.key, neuromotor, exp.hi, exp.unit, ">", hi_t, trials)
-    return _bisect(
-        exp, neuromotor, run, trials, (exp.lo, exp.hi, lo_t), iterations, lambda a, b: math.sqrt(a * b)
-    )
-
-
-def _bisect(exp: Experiment, neuromotor: str, run, trials: list, bracket, halvings: int, mid) -> Threshold:
-    """``halvings`` of ``bracket`` = (the magnitude that passed, the one that failed, the trial that
-    passed) at ``mid(lo, hi)`` (the log scale's or the staircase's plain mean): the largest magnitude
-    that passed, and its trial."""
-    lo, hi, best = bracket
-    for _ in range(halvings):
-        m = mid(lo, hi)
-        t = run(m)
-        if t.passed:
-            lo, best = m, t
-        else:
-            hi = m
-    return Threshold(exp.key, neuromotor, lo, exp.unit, "", best, trials)
-
-
-def _staircase(
-    exp: Experiment, neuromotor: str, iterations: int, run, trials: list, step: float
-) -> Threshold:
-    """:func:`run_experiment`'s staircase (its docstring)."""
-    best: Trial | None = None
-    k = 0
-    while (m := exp.lo + k * step) <= exp.hi + 1e-9:
-        t = run(m)
-        if not t.passed:
-            break
-        best, k = t, k + 1
     else:
-        assert best is not None  # lo <= hi: the loop ran
-        return Threshold(exp.key, neuromotor, best.magnitude, exp.unit, ">", best, trials)
-    if best is None:
-        return Threshold(exp.key, neuromotor, exp.lo, exp.unit, "<", None, trials)
-    halvings = min(iterations, STAIRCASE_HALVINGS)
-    return _bisect(
-        exp, neuromotor, run, trials, (best.magnitude, m, best), halvings, lambda a, b: 0.5 * (a + b)
-    )
+        trial = functools.partial(run_trial, exp, neuromotor)
+    trials = search.Trials(trial, pool, progress, waiting, stop)
+    if exp.staircase > 0:
+        step = QUICK_STAIRCASE_FACTOR * exp.staircase if quick else exp.staircase
+        halvings = 0 if quick else min(iterations, search.STAIRCASE_HALVINGS)
+        bound, value, at = search.staircase(
+            trials, exp.lo, exp.hi, step, halvings, lambda a, b: 0.5 * (a + b)
+        )
+        return Threshold(exp.key, neuromotor, value, exp.unit, bound, at, trials.taken, trials.dropped)
+    trials.start(exp.lo)
+    trials.start(exp.hi)
+    lo_t = trials.run(exp.lo)
+    if not lo_t.passed:
+        trials.drop()
+        return Threshold(exp.key, neuromotor, exp.lo, exp.unit, "<", None, trials.taken, trials.dropped)
+    hi_t = trials.run(exp.hi)
+    if hi_t.passed:
+        return Threshold(exp.key, neuromotor, exp.hi, exp.unit, ">", hi_t, trials.taken, trials.dropped)
+    value, at = search.bisect(trials, (exp.lo, exp.hi, lo_t), iterations, lambda a, b: math.sqrt(a * b))
+    return Threshold(exp.key, neuromotor, value, exp.unit, "", at, trials.taken, trials.dropped)

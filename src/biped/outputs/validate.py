@@ -8,7 +8,15 @@ from pathlib import Path
 from typing import Any
 
 from biped import files
-from biped.analysis.validate import EXPERIMENTS, HUMAN, MEASURES, NOT_RUN, Threshold, human_for
+from biped.analysis.validate import (
+    EXPERIMENTS,
+    HUMAN,
+    MEASURES,
+    NOT_RUN,
+    QUICK_STAIRCASE_FACTOR,
+    Threshold,
+    human_for,
+)
 from biped.outputs._json import write_json
 from biped.viz.validate import threshold_figure
 
@@ -94,13 +102,15 @@ def _markdown(rows: list[dict], presets: list[str], meta: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
-def _searches(results: dict[str, dict[str, Threshold]]) -> str:
+def _searches(results: dict[str, dict[str, Threshold]], quick: bool = False) -> str:
     """One line per preset and experiment: what counted, and the lowest magnitude that failed
     (an island below the threshold, if a bisection passed one)."""
     lines = ["", "Searches (the threshold; the lowest magnitude tried that failed; the highest that passed):"]
     for key, per in results.items():
         exp = EXPERIMENTS[key]
-        how = (f"raised {exp.staircase:g} {exp.unit} at a time from {exp.lo:g} until one failed, then bisected"
+        step = exp.staircase * (QUICK_STAIRCASE_FACTOR if quick else 1.0)
+        how = (f"raised {step:g} {exp.unit} at a time from {exp.lo:g} until one failed, "
+               + ("no halving (--quick)" if quick else "then bisected")
                if exp.staircase > 0 else "bisection on a log scale")  # fmt: skip
         for p, th in per.items():
             low, high = th.lowest_failure, th.highest_pass
@@ -127,7 +137,7 @@ def write_validation(out: Path, results: dict[str, dict[str, Threshold]], meta: 
                                "highest_pass": th.highest_pass} for p, th in per.items()}}
         for k, per in results.items()}})]  # fmt: skip
     md = out / "validation.md"
-    files.write_text(md, _markdown(rows, presets, meta) + _searches(results))
+    files.write_text(md, _markdown(rows, presets, meta) + _searches(results, meta.get("mode") == "quick"))
     written.append(md)
     trials = [t.row() for per in results.values() for th in per.values() for t in th.trials]
     table = pa.Table.from_pylist(trials)
