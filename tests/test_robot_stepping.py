@@ -349,3 +349,111 @@ def test_only_an_ankle_short_of_its_sole_gets_the_crouch_and_the_reaction():
             assert s.post_step_rest_drop_m == pytest.approx(s.rearm_margin_m / 0.02 * 0.08)  # s x 8 cm
         else:
             assert s.post_step_height_drop_m == pytest.approx(s.rearm_margin_m / 0.02 * 0.08)
+
+
+def _hips_lowered_ik(m, q0, feet, legs, h):
+    """The legs' joints (Newton on MuJoCo's foot Jacobians) that keep both feet at their poses of
+    ``q0`` with the floating body ``h`` lower and its orientation kept."""
+    d0 = mujoco.MjData(m)
+    d0.qpos[:] = q0
+    mujoco.mj_kinematics(m, d0)
+    goal = [(d0.xpos[f].copy(), d0.xmat[f].reshape(3, 3).copy()) for f in feet]
+    d = mujoco.MjData(m)
+    q = q0.copy()
+    q[2] -= h
+    for _ in range(50):
+        d.qpos[:] = q
+        mujoco.mj_kinematics(m, d)
+        mujoco.mj_comPos(m, d)
+        for f, leg, (p, R) in zip(feet, legs, goal, strict=True):
+            jp, jr = np.zeros((3, m.nv)), np.zeros((3, m.nv))
+            mujoco.mj_jacBody(m, d, jp, jr, f)
+            dofs = [int(m.jnt_dofadr[j]) for j in leg]
+            err = np.concatenate([p - d.xpos[f], _rotvec(R @ d.xmat[f].reshape(3, 3).T)])
+            dq = np.linalg.solve(np.vstack([jp, jr])[:, dofs], err)
+            for j, x in zip(leg, dq, strict=True):
+                q[m.jnt_qposadr[j]] += x
+    return q
+
+
+def _rotvec(R):
+    from biped.control.swing_task import rotation_vector
+
+    return rotation_vector(R)
+
+
+def test_ankle_range_drops_by_inverse_kinematics():
+    """The robots' ankle-range rule: the crouch the ankles' joint ranges take (``ankle_crouch_m``,
+    the standing pose's crouch until an ankle hinge reaches its joint range's end) is no
+    optimistic bound: with the hips lowered straight down by it over the feet held flat where
+    they stand (MuJoCo's kinematics, Newton on its foot Jacobians) an ankle is at or past the end
+    of its range (MuJoCo's ``jnt_range``; Berkeley Humanoid 1.5 deg past, G1 2.6 deg), and inside
+    it at half the drop. Berkeley Humanoid's 3.7 cm (its ankle pitch stands 10 deg from its
+    range's end) is less than its scaled post-step drop (5.0 cm), which it then does not take;
+    G1's ankles take 20 cm, its parameters unchanged by the rule."""
+    from biped.models.robot_pose import ankle_crouch_m
+    from biped.sim import robot_stepping as rs
+
+    for name, cm in (("berkeley_humanoid", 0.0374), ("g1", 0.204)):
+        desc, st = _stepper(name)
+        m = st.model
+        legs = [[int(m.joint(j).id) for j in leg] for leg in st.body.leg_joints]
+        q0 = st.data.qpos.copy()
+        h = ankle_crouch_m(m, q0, st.body.feet, legs[0] + legs[1])
+        assert h == pytest.approx(cm, abs=1e-3)
+        ankles = [leg[4] for leg in legs]  # the pitch hinges (5th)
+        ends = []
+        for frac in (0.5, 1.0):
+            q = _hips_lowered_ik(m, q0, st.body.feet, legs, frac * h)
+            ends.append(
+                min(
+                    min(q[m.jnt_qposadr[a]] - m.jnt_range[a][0], m.jnt_range[a][1] - q[m.jnt_qposadr[a]])
+                    for a in ankles
+                )
+            )
+        assert ends[0] > 0.0 and ends[1] < 2e-3, (name, ends)  # inside at h / 2, at or past its end at h
+        s = st.stepping
+        if name == "berkeley_humanoid":
+            assert s.post_step_height_drop_m == 0.0  # 5.0 cm scaled, more than 3.7 cm
+            assert s.swing_height_drop_m == pytest.approx(0.0699, abs=1e-4)  # kept (the crouch floor)
+        else:
+            rs.ROBOT_ANKLE_RANGE_DROPS = False
+            try:
+                _, off = _stepper(name)
+            finally:
+                rs.ROBOT_ANKLE_RANGE_DROPS = True
+            assert repr(off.stepping) == repr(s)
+
+
+def test_berkeley_humanoid_from_behind_steps_back_and_survives():
+    """W's scaled block from behind at 16 m/s on Berkeley Humanoid (its stepping limit was 13.0 m/s:
+    docs/robots.md, "Why Berkeley Humanoid's steps fail"): feet in place it falls backward (the
+    hip strategy's overshoot); with the default stepping it steps backward and survives within
+    its actuator limits now that it keeps its standing height after the step (before: three
+    steps, each swing ankle at its joint range, and a fall at 2.5 s)."""
+    from biped.models.robot import describe
+    from biped.sim.robot import Block, robot_controller, robot_push, standing_qpos
+    from biped.sim.robot_trial import robot_block_defaults
+    from biped.sim.scenario import Scenario
+    from biped.sim.sweep.spec import aim_block
+
+    name = "berkeley_humanoid"
+    desc = describe(name)
+    mass, height = robot_block_defaults(name, models.total_mass_kg())
+    ctrl = robot_controller(desc, "statics", "none")
+    c = ctrl.link_poses(standing_qpos(desc, ctrl))[0][:3, 3]
+    p0, v0 = aim_block(c[:2], 16.0, 0.0, height, 0.5)
+    block = Block(p0, v0, mass)
+    feet = robot_push(desc, 3.0, block=block, early_stop=True, qp_floor_friction=True)
+    assert feet.fell and feet.com[-1, 0] < c[0] - 0.15  # backward
+    run = robot_push(
+        desc,
+        3.0,
+        block=block,
+        early_stop=True,
+        qp_floor_friction=True,
+        stepping=SteppingConfig.for_trigger(Scenario().step_trigger),
+    )
+    assert not run.fell and run.steps
+    assert run.steps[0]["position_m"][0] < c[0] - 0.05  # the first step goes backward
+    assert run.max_torque_fraction <= 1.0 + 1e-9

@@ -335,3 +335,45 @@ def test_waist_pull_sweep_on_a_robot_rows_carry_the_displacement(tmp_path):
     assert [r["paradigm_magnitude"] for r in rows] == [0.02, 0.05] and rows[0]["paradigm_unit"] == "m"
     assert [r["fell"] for r in rows] == [False, True] and rows[0]["stop_reason"] == "at_rest"
     assert rows[0]["impulse_x_n_s"] > 0 and rows[0]["com_velocity_change_m_s"] > 0
+
+
+def test_a_robot_rows_step_count_leaves_closing_steps_out(monkeypatch):
+    """A robot trial's ``step_count`` is its recovery steps, as on W's biped (those ``max_steps``
+    counts); a closing step is reported apart, in ``closing_steps``. The run is the stepping
+    controller's record of two recovery steps and a closing one (the robot's run replaced: the
+    row is what is tested)."""
+    from biped.sim import robot_trial
+    from biped.sim.robot import RobotRun
+    from biped.sim.scenario import Scenario
+    from biped.sim.sweep.spec import SweepSpec
+
+    steps = [
+        {"foot": "right", "xcom_offset_m": 0.03, "stance_slip_m": 0.001},
+        {"foot": "left", "xcom_offset_m": 0.02, "stance_slip_m": 0.002},
+        {"foot": "right", "closing": True, "stance_slip_m": 0.004},
+    ]
+    n = 3
+    fake = RobotRun(
+        t=np.array([0.0, 0.1, 0.2]),
+        central_com=np.zeros((n, 3)),
+        com=np.zeros((n, 3)),
+        torques=np.zeros((n, 12)),
+        limits=np.ones(12),
+        fell=False,
+        fall_time_s=None,
+        target_com=np.zeros(3),
+        mass=16.0,
+        block_velocity=np.zeros((n, 3)),
+        steps=steps,
+    )
+    monkeypatch.setattr(robot_trial, "run_robot", lambda setup: fake)
+    spec = SweepSpec(
+        axes={"speed_m_s": (6.0,), "direction_deg": (0.0,)},
+        base=Scenario(stepping=True),
+        robot=str(robot_path(BH)),
+        torque_limits="model",
+    )
+    row = robot_trial.run_robot_trial(spec.setup(spec.trials()[0]))
+    assert row["step_count"] == 2
+    assert row["closing_steps"] == 1
+    assert row["max_stance_slip_m"] == pytest.approx(0.004)

@@ -146,7 +146,8 @@ def run_robot(args, desc, out_dir: Callable[[Any], Path]) -> int:
         else ""
     )
     if run.steps:
-        what += f", {len(run.steps)} step(s)"
+        closing = sum(1 for s in run.steps if s.get("closing"))
+        what += f", {len(run.steps) - closing} step(s)" + (f" and {closing} closing" if closing else "")
     print(
         f"{args.model} ({desc.mass:.1f} kg): {status}; {what}, peak COM velocity "
         f"{summary['peak_com_velocity_x_m_s']:.3f} m/s, "

@@ -48,9 +48,9 @@ def _crouch(m, qpos, legs, a) -> np.ndarray:
     return q
 
 
-def bend_legs(m: mujoco.MjModel, qpos: np.ndarray, feet: tuple[int, int], leg_joints: list[int]):
-    """(qpos, a): the keyframe ``qpos`` crouched by ``a`` [rad] per the module's rule (a = 0: kept).
-    ``leg_joints``: the 12 hinges, left leg then right, hip to ankle (the 4th of each the knee)."""
+def _crouch_legs(m: mujoco.MjModel, qpos: np.ndarray, leg_joints: list[int]):
+    """(legs, chains): per leg the crouch's (hip, knee, ankle) hinges and their signs (the
+    module's rule), and the leg's dof addresses."""
     d = mujoco.MjData(m)
     d.qpos[:] = qpos
     mujoco.mj_kinematics(m, d)
@@ -74,6 +74,13 @@ def bend_legs(m: mujoco.MjModel, qpos: np.ndarray, feet: tuple[int, int], leg_jo
                 ),
             )
         )
+    return legs, chains
+
+
+def bend_legs(m: mujoco.MjModel, qpos: np.ndarray, feet: tuple[int, int], leg_joints: list[int]):
+    """(qpos, a): the keyframe ``qpos`` crouched by ``a`` [rad] per the module's rule (a = 0: kept).
+    ``leg_joints``: the 12 hinges, left leg then right, hip to ankle (the 4th of each the knee)."""
+    legs, chains = _crouch_legs(m, qpos, leg_joints)
 
     def worst(a):
         qa = _crouch(m, qpos, legs, a)
@@ -91,3 +98,30 @@ def bend_legs(m: mujoco.MjModel, qpos: np.ndarray, feet: tuple[int, int], leg_jo
         mid = (lo_a + hi_a) / 2
         lo_a, hi_a = (lo_a, mid) if worst(mid) >= LEG_SV_MIN_M else (mid, hi_a)
     return _crouch(m, qpos, legs, hi_a), hi_a
+
+
+def ankle_crouch_m(
+    m: mujoco.MjModel, qpos: np.ndarray, feet: tuple[int, int], leg_joints: list[int]
+) -> float:
+    """How far [m] the hips can be lowered from ``qpos`` over the flat feet by the module's crouch
+    (knee ``2a``, hip and ankle ``-a``) before an ankle hinge reaches the end of its joint range:
+    the smaller leg's drop of the first hinge's body over the foot body."""
+    legs, _ = _crouch_legs(m, qpos, leg_joints)
+    d = mujoco.MjData(m)
+    d.qpos[:] = qpos
+    mujoco.mj_kinematics(m, d)
+    out = []
+    for side, ((_hip, _knee, ankle), signs) in enumerate(legs):
+        q = qpos[m.jnt_qposadr[ankle]]
+        lo, hi = m.jnt_range[ankle] if m.jnt_limited[ankle] else (-np.inf, np.inf)
+        a = (hi - q) / signs[2] if signs[2] > 0 else (q - lo) / -signs[2]
+        if not np.isfinite(a):
+            out.append(np.inf)
+            continue
+        qa = _crouch(m, qpos, [legs[side]], a)
+        da = mujoco.MjData(m)
+        da.qpos[:] = qa
+        mujoco.mj_kinematics(m, da)
+        first, foot = int(m.jnt_bodyid[leg_joints[6 * side]]), feet[side]
+        out.append(float((d.xpos[first][2] - d.xpos[foot][2]) - (da.xpos[first][2] - da.xpos[foot][2])))
+    return min(out)

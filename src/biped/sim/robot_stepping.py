@@ -49,6 +49,14 @@ A biped of W's size (s = w = 1, D = D_W) gets W's numbers.
   geometric sole, its front ankle at the limit and its trunk pitching, and stepped again too
   late. With both feet side by side the two ankles hold 2 x 6.5 cm (the first slice cut each
   sole to the whole weight's reach there too, and T1's diagonal steps started early and fell).
+- ``ROBOT_ANKLE_RANGE_DROPS``: a robot whose ankles' joint ranges cannot take the scaled
+  post-step height drop (:func:`biped.models.robot_pose.ankle_crouch_m`: the standing pose's
+  crouch, knee 2a, hip and ankle -a, until an ankle hinge reaches its range's end) keeps its
+  standing height after a step. Berkeley Humanoid's ankle pitch stands 10 deg from its range's
+  end (3.7 cm of crouch against the 5.0 cm drop): after a backward step, crouched with the foot
+  behind, its ankle sat at the end of its range, the foot off flat, and every backward step fell
+  (docs/robots.md, "Why Berkeley Humanoid's steps fail"). G1's, T1's and Apollo's ankles take
+  14-63 cm: their parameters are unchanged.
 - ``ROBOT_ANKLE_LIMITED_RULES``: a robot whose ankle holds the CoP, with the whole weight on the
   foot, more than the trigger's re-arm margin short of its sole's toe or heel
   (:func:`ankle_limited`: T1, 5.8 cm short of its toes; G1, Berkeley Humanoid and Apollo reach
@@ -96,6 +104,8 @@ from biped.spatial import axis_angle_quat, quat_mul, quat_to_rot, transform
 __all__ = [
     "ROBOT_ANKLE_POLYGON",
     "ROBOT_ANKLE_LIMITED_RULES",
+    "ROBOT_ANKLE_RANGE_DROPS",
+    "ankle_range_drops",
     "ankle_limited",
     "FootContacts",
     "robot_stepper",
@@ -115,10 +125,29 @@ ROBOT_QP_MAX_BACK_M = 0.40
 #: hold, the weight shared between the feet in any way (``SteppingConfig.ankle_limited_polygon``;
 #: module docstring, "Robots' rules").
 ROBOT_ANKLE_POLYGON = True
+#: A robot whose ankles' joint ranges cannot take its post-step height drop with the feet flat
+#: keeps its standing height after a step (:func:`ankle_range_drops`; module docstring, "Robots'
+#: rules").
+ROBOT_ANKLE_RANGE_DROPS = True
 #: A robot whose ankles cannot hold its CoP at its toes (:func:`ankle_limited`) keeps the crouch
 #: after a step while its COM moves and feeds the swing leg's reaction (of the torques its
 #: actuators give) to its stance (module docstring, "Robots' rules").
 ROBOT_ANKLE_LIMITED_RULES = True
+
+
+def ankle_range_drops(config: SteppingConfig, body: SteppingBody, qpos: np.ndarray) -> SteppingConfig:
+    """``config`` with its post-step height drop set to 0 when it is deeper than the crouch the
+    ankles' joint ranges take at the standing pose ``qpos``
+    (:func:`biped.models.robot_pose.ankle_crouch_m`: the standing pose's crouch, the feet flat;
+    module docstring, "Robots' rules"). The swing's drop is kept (with it 0 as well Berkeley
+    Humanoid's diagonal and sideways envelopes lost 1-6 % of J_max; docs/robots.md)."""
+    from biped.models.robot_pose import ankle_crouch_m
+
+    m = body.model
+    joints = [int(m.joint(j).id) for leg in body.leg_joints for j in leg]
+    if config.post_step_height_drop_m <= ankle_crouch_m(m, qpos, body.feet, joints):
+        return config
+    return replace(config, post_step_height_drop_m=0.0)
 
 
 def ankle_limited(body: SteppingBody, d: mujoco.MjData, lim, joint_names, tolerance_m: float) -> bool:
@@ -322,6 +351,8 @@ def robot_stepper(
     scaled = scaled_stepping(stepping, body.leg_length_m, _hip_width(d, body.feet), stand)
     # the robots keep their own crouch (the drops above, the rules below: off their straight knees)
     scaled = replace(scaled, knee_carried_drop=False)
+    if ROBOT_ANKLE_RANGE_DROPS:  # a post-step crouch the ankles' joint ranges cannot take: none
+        scaled = ankle_range_drops(scaled, body, qpos)
     if ROBOT_ANKLE_POLYGON and lim is not None:
         scaled = replace(scaled, ankle_limited_polygon=True)
     if (

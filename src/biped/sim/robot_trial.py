@@ -22,7 +22,8 @@ biped) moved onto the robot (:func:`biped.sim.robot.robot_push`), measured into 
 - **Stepping** (scenario key ``stepping``): the capture-point steps of
   :mod:`biped.sim.robot_stepping` (the scenario's ``step_trigger`` and ``max_steps``; W's
   parameters scaled to the robot's legs); recovered is then judged against the set point moved
-  with the feet, and the rows carry the stepping columns (``step_count``, ...).
+  with the feet, and the rows carry the stepping columns (``step_count``, the recovery steps as
+  on W's biped; ``closing_steps`` apart; ...).
 
 The robot's controller is W's with the QP by default, the limits the sweep's ``torque_limits``
 (``"model"``: the joints' ``actuatorfrcrange``). Survived: the central-body COM never 0.15 m below
@@ -198,6 +199,7 @@ def run_robot_trial(setup: TrialSetup) -> dict[str, Any]:
         com_velocity_change_m_s=jh / desc.mass if size is None else size.com_velocity_change_m_s,
         stop_reason=run.stop_reason,
         stopped_at_s=float(run.t[-1]) if run.stop_reason is not None and len(run.t) else math.nan,
-        step_count=len(run.steps or ()),
+        # the recovery steps (those max_steps counts); closing steps are the closing_steps column
+        step_count=sum(1 for s in run.steps or () if not s.get("closing")),
         **_step_columns(run.steps or ()),
     ).row()
