@@ -166,3 +166,40 @@ def test_crossover_path_takes_only_its_two_rules():
     assert SteppingConfig(crossover_path="timed").crossover_path == "timed"
     with pytest.raises(ScenarioError, match="crossover_path must be 'fixed' or 'timed'; got 'arc'"):
         SteppingConfig(crossover_path="arc")
+
+
+@pytest.mark.parametrize("dx, dy, gap", [(-0.57, -0.19, 0.2), (0.2, 0.72, -0.48), (0.05, 0.1, -0.3)])
+def test_swing_time_bounds_the_sampled_paths_peak_acceleration(dx, dy, gap):
+    """``crossover_max_acc_m_s2``: the swing time :func:`swing_time` returns makes the sampled
+    path's peak acceleration (finite differences in seconds, both moves) at most the bound, equal
+    to it (0.1 %) where it lengthens the swing, and keeps the set time where that is below it
+    already; the constant is 10 / sqrt(3) (the minimum-jerk profile's peak, sampled)."""
+    s = np.linspace(0.0, 1.0, 200001)
+    prof = s**3 * (10 - 15 * s + 6 * s * s)
+    assert np.abs(np.diff(prof, 2)).max() / (s[1] - s[0]) ** 2 == pytest.approx(cpath.MIN_JERK_PEAK, rel=1e-4)
+    wins = cpath.windows(dx, dy, gap, 0.1)
+    a_max, t0 = 120.0, 0.2
+    T = cpath.swing_time(dx, dy, wins, t0, a_max)
+    u = np.linspace(0.0, 1.0, 40001)
+    x, y = _path(dx, dy, wins, u)
+    h = (u[1] - u[0]) * T
+    peak = max(np.abs(np.diff(x, 2)).max(), np.abs(np.diff(y, 2)).max()) / h**2
+    assert peak <= a_max * (1 + 1e-3)
+    if T > t0:
+        assert peak == pytest.approx(a_max, rel=1e-3)
+    else:  # already within the bound at the set time
+        assert T == t0
+
+
+def test_crossover_max_acc_needs_the_timed_path():
+    """A bound without the timed path, or not positive, is a one-line error naming both."""
+    from biped.control.stepping_config import SteppingConfig
+    from biped.errors import ScenarioError
+
+    with pytest.raises(ScenarioError, match="crossover_max_acc_m_s2 must be a positive"):
+        SteppingConfig(crossover_max_acc_m_s2=120.0)
+    with pytest.raises(ScenarioError, match="crossover_max_acc_m_s2 must be a positive"):
+        SteppingConfig(crossover_path="timed", crossover_max_acc_m_s2=0.0)
+    assert (
+        SteppingConfig(crossover_path="timed", crossover_max_acc_m_s2=120.0).crossover_max_acc_m_s2 == 120.0
+    )

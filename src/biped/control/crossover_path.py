@@ -15,10 +15,13 @@ smaller larger peak acceleration (a minimum-jerk move of d in time t peaks at 5.
 
 from __future__ import annotations
 
-__all__ = ["FIXED", "min_jerk_inverse", "windows"]
+__all__ = ["FIXED", "MIN_JERK_PEAK", "min_jerk_inverse", "swing_time", "windows"]
 
 #: The fixed windows (x, y) as fractions of the swing time.
 FIXED = ((0.0, 0.6), (0.4, 1.0))
+
+#: A minimum-jerk move of d in time t peaks at this times d / t^2 (10 / sqrt(3)).
+MIN_JERK_PEAK = 10.0 / 3.0**0.5
 
 
 def min_jerk_inverse(f: float) -> float:
@@ -57,3 +60,15 @@ def windows(dx: float, dy: float, gap: float, band: float, n: int = 61):
     if best is None:
         return FIXED
     return ((0.0, best[1]), (best[2], 1.0))
+
+
+def swing_time(dx: float, dy: float, wins, t0: float, a_max: float) -> float:
+    """The crossover's swing time [s]: at least ``t0``, and long enough that neither move's
+    minimum-jerk peak acceleration in its window (``wins`` = ((a0, a1), (b0, b1)) fractions of the
+    swing, x then y) exceeds ``a_max`` [m/s^2]: ``MIN_JERK_PEAK |d| / (T w)^2 <= a_max`` for each
+    move d and window length w."""
+    t = t0
+    for d, (w0, w1) in zip((dx, dy), wins, strict=True):
+        if w1 > w0:
+            t = max(t, (MIN_JERK_PEAK * abs(d) / a_max) ** 0.5 / (w1 - w0))
+    return t

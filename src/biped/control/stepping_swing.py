@@ -140,11 +140,22 @@ class SwingPhase:
         # ankle path: the sole centre lands on `land`, flat, zero yaw
         sole_off = self._sole[i][0] if self._foot_rot is None else self._foot_rot[i] @ self._sole[i][0]
         ankle_land = np.array([land[0] - sole_off[0], land[1] - sole_off[1], -sole_off[2]])
+        p0 = self._p0
+        if self._cross and s.crossover_path == "timed" and self._cross_windows is None:
+            assert p0 is not None  # timed from the step's geometry, once
+            band = self._sole[i][2] + self._sole[st][2]
+            gap = self._swing0[1] - self._stance0[1]
+            d = ankle_land - p0
+            self._cross_windows = crossover_path.windows(d[0], d[1], gap, band)
+            if s.crossover_max_acc_m_s2 is not None:  # long enough for the bound on both moves
+                self._T = crossover_path.swing_time(
+                    d[0], d[1], self._cross_windows, self._T, s.crossover_max_acc_m_s2
+                )
+                step["swing_time_s"] = self._T
         T = self._T
         sc = el / T
         h, hd, hdd = cp.min_jerk(sc)
         b, bd, bdd = cp.bump(sc)
-        p0 = self._p0
         pd = p0 + (ankle_land - p0) * h
         vd = (ankle_land - p0) * hd / T
         ad = (ankle_land - p0) * hdd / T**2
@@ -152,12 +163,8 @@ class SwingPhase:
             assert p0 is not None  # y in the last (uncrossing: across first, then along x)
             order = (0, 1) if self._cross else (1, 0)
             wins = crossover_path.FIXED
-            if self._cross and s.crossover_path == "timed":  # timed from the step's geometry, once
-                if self._cross_windows is None:
-                    band = self._sole[i][2] + self._sole[st][2]
-                    gap = self._swing0[1] - self._stance0[1]
-                    d = ankle_land - p0
-                    self._cross_windows = crossover_path.windows(d[0], d[1], gap, band)
+            if self._cross and s.crossover_path == "timed":  # timed from the step's geometry (above)
+                assert self._cross_windows is not None
                 wins = self._cross_windows
             for k, (s0, s1) in zip(order, wins, strict=True):
                 hk, hdk, hddk = cp.min_jerk((sc - s0) / (s1 - s0))
