@@ -84,6 +84,13 @@ class StepProgramConfig:
     (landing) leg alone, not by both legs (:meth:`StepProgram._leg_capped`): the rear foot may
     roll onto its toe and trail instead of the hips being lowered to keep it flat (False: both
     legs, the program before; docs/validate.md, "Braking after the lunge").
+    rear_toe_free_deg: with ``rear_trails``, after the step in double support, the rear foot is no
+    support of the QP while its sole is tilted more than this [deg] (rolled onto its toe); 0: a
+    support whenever the stepping controller's flags say so (the program before). The QP takes a
+    support foot as flat, its centre of pressure anywhere on the sole: on a toe-down rear foot it
+    asked the rear hip for up to 133 N m of extension, and when the toe left the floor the rate
+    limit let that torque fall only over 0.17 s, which flung the leg 0.5 m up and 0.27 m back
+    (docs/validate.md, "The young's rear foot flung").
     swing_brake: None (the ankle's path the minimum-jerk polynomial), or the path the bang-bang
     jerk profile (:func:`biped.control.swing_plan.scurve`; 1: ending at rest, as the
     minimum-jerk path, in 0.81 of its time for the same peak jerk; docs/validate.md).
@@ -116,6 +123,7 @@ class StepProgramConfig:
     rot_gain_scale: float = 1.0
     reaction_ff: float = 1.0
     rear_trails: bool = False
+    rear_toe_free_deg: float = 0.0
     swing_brake: float | None = None
     swing_jerk_m_s3: float = 0.0
     land_within_m: float | None = None
@@ -226,6 +234,22 @@ class StepProgram(SteppingController):
         if self.program.rear_trails and self.phase == "double" and self.steps and len(legs) == 2:
             legs = (("left", "right").index(self.steps[-1]["foot"]),)
         return super()._leg_capped(target, legs)
+
+    def _flags(self, left, right):
+        """The stepping controller's support flags; with ``rear_toe_free_deg`` > 0 and
+        ``rear_trails``, after the step in double support, not the rear foot while its sole is
+        tilted more than that (its tilt: the angle between the sole's normal and the vertical)."""
+        flags = super()._flags(left, right)
+        p = self.program
+        if p.rear_toe_free_deg > 0 and p.rear_trails and self.phase == "double" and self.steps and flags:
+            rear = 1 - ("left", "right").index(self.steps[-1]["foot"])
+            if self._tilt_deg(rear) > p.rear_toe_free_deg:
+                flags = tuple(f and k != rear for k, f in enumerate(flags))
+        return flags
+
+    def _tilt_deg(self, i: int) -> float:
+        """Sole ``i``'s tilt from flat [deg]: the angle of its frame's z axis from the vertical."""
+        return math.degrees(math.acos(min(1.0, max(-1.0, float(self.data.xmat[self._foot[i]][8])))))
 
     def _transferred(self, t: float) -> bool:
         """Whether the weight transfer is over: ``transfer_s`` has passed, or the lateral capture
