@@ -318,3 +318,41 @@ def test_step_measures_skip_a_contact_flicker_and_a_mid_swing_scuff():
     assert n == 1
     assert abs(contact - 600.0) < 1e-6, contact
     assert abs(length - 0.34) < 1e-9, length
+
+
+def _trial_or_stop(exp, neuromotor, magnitude, running=None):
+    """A stand-in trial (module level: the pool's processes unpickle it). The ankle-only lean's and
+    the one-step lean's at 2 and 18 deg return at once; the one-step lean's 10 deg trial waits 3 s
+    (the ankle-only searches end meanwhile in the other process), sends the run SIGTERM, as a user
+    would, and runs on until the run stops it."""
+    import os
+    import signal
+    import time
+
+    import biped.analysis.validate as av
+
+    if exp.key.startswith("step_release") and magnitude == 10.0:
+        time.sleep(3.0)
+        os.kill(os.getppid(), signal.SIGTERM)
+        time.sleep(60.0)
+    ok = magnitude < 6.0
+    return av.Trial(exp.key, neuromotor, magnitude, exp.unit, ok, None, 1.0, 1.0, 0.0, 0.0, passed=ok)
+
+
+def test_sigterm_with_two_jobs_writes_the_searches_already_finished(tmp_path, monkeypatch):
+    """``--jobs 2`` runs every search at once but collects them in order: SIGTERM while the first
+    (the one-step lean, still running) is waited on must still write the ankle-only lean's finished
+    threshold (a run stopped never loses finished work), and say it was interrupted."""
+    import biped.analysis.validate as av
+
+    monkeypatch.setattr(av, "run_trial", _trial_or_stop)
+    out = tmp_path / "v"
+    argv = ["validate", "--quick", "--jobs", "2", "--neuromotor", "young", "--out", str(out)]
+    code = main([*argv, "--experiment", "step_release", "--experiment", "ankle_release"])
+    assert code in (130, 143)
+    data = json.loads((out / "validation.json").read_text())
+    assert data["meta"]["interrupted"] is True
+    assert list(data["experiments"]) == ["ankle_release"]  # the one-step lean's search never ended
+    lean = {r["quantity"]: r for r in data["rows"]}["largest forward lean recovered, ankles only"]
+    survived = [t["magnitude"] for t in pq.read_table(out / "trials.parquet").to_pylist() if t["survived"]]
+    assert lean["young"]["value"] == max(survived) < 6.0  # the stand-in survives below 6 deg

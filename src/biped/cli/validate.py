@@ -77,7 +77,6 @@ def run(args) -> int:
     jobs = args.jobs or min(2, os.cpu_count() or 1)
     t0, cpu0 = time.perf_counter(), time.process_time()
     results: dict = {}
-    n = 0
     interrupted = False
     running: _Running | None = None
     pool = _pool(jobs)
@@ -117,7 +116,6 @@ def run(args) -> int:
                     running = _Running(name, preset, EXPERIMENTS[name].unit)
                     th = search(name, preset, running)
                 per[preset] = th
-                n += len(th.trials)
                 print(
                     f"  {name:<18} {preset:<6} threshold {th.bound}{th.value:.4g} {th.unit} ({len(th.trials)} trials)"
                 )
@@ -125,6 +123,9 @@ def run(args) -> int:
         if running is not None:
             running.close()
         interrupted = True
+        for (name, preset), done in started.items():  # searches finished behind the one waited on
+            if done.done() and not done.cancelled() and done.exception() is None:
+                results.setdefault(name, {})[preset] = done.result()
         results = {k: v for k, v in results.items() if v}
     finally:
         if pool is not None:
@@ -143,6 +144,7 @@ def run(args) -> int:
         "Presets: biped.control.neuromotor, "
         "docs/validate.md."
     )
+    n = sum(len(th.trials) for per in results.values() for th in per.values())
     trials_cpu = sum(t.cpu_time_s for per in results.values() for th in per.values() for t in th.trials)
     meta = {"mode": "quick" if args.quick else "full", "iterations": iterations, "presets": presets,
             "trials": n, "wall_time_s": wall, "note": note, "interrupted": interrupted, "jobs": jobs,
