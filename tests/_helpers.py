@@ -182,3 +182,16 @@ def run_qp_stepping(sc, scene=None, *, on_step=None, **params):
 
     scene = build_scene(sc) if scene is None else scene
     return run_closed_loop(sc, scene, qp_stepping(sc, scene, **params), on_step=on_step)
+
+
+def leg_geoms(m, side: str) -> list[int]:
+    """The geoms of one leg's bodies (thigh and below), by the body tree from ``side``_thigh."""
+    top = m.body(f"{side}_thigh").id
+    out = []
+    for g in range(m.ngeom):
+        b = int(m.geom_bodyid[g])
+        while b > 0 and b != top:
+            b = int(m.body_parentid[b])
+        if b == top:
+            out.append(g)
+    return out

@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _helpers import leg_geoms
+from test_swing_drop import SET_B, _sole_forces
 
 from biped.control import crossover_path as cpath
 
@@ -64,12 +66,7 @@ def test_the_timed_windows_clear_the_soles_and_accelerate_less(dx, dy, gap):
 #: backward steps, friction 0.35 / 0.55), the ramped drop on them, the hip rotations' damping
 #: compensated at rest.
 C_PRIME = {
-    "stance_contact_model": True,
-    "lateral_stance_contact_model": False,
-    "swing_reaction": True,
-    "lateral_swing_reaction": False,
-    "swing_friction_scale": 0.35,
-    "lateral_swing_friction_scale": 0.55,
+    **SET_B,
     "swing_drop_ramp": True,
     "lateral_swing_drop_ramp": False,
     "rest_damping_compensation": True,
@@ -77,24 +74,11 @@ C_PRIME = {
 }
 
 
-def _leg_geoms(m, side):
-    top = m.body(f"{side}_thigh").id
-    out = []
-    for g in range(m.ngeom):
-        b = int(m.geom_bodyid[g])
-        while b > 0 and b != top:
-            b = int(m.body_parentid[b])
-        if b == top:
-            out.append(g)
-    return out
-
-
 def _run_with_leg_contacts(sc, **params):
     """The run of ``sc`` with the stepping set ``params`` on the ``"qp"`` set, MuJoCo's contacts
     between the two legs switched on: (result, MuJoCo's floor force on each sole after every
     physics step (normal, tangential) [N] (n, 2, 2), their times [s], the count of leg-leg
     contacts seen)."""
-    from test_swing_drop import _sole_forces
 
     from biped.control.stepping import SteppingController
     from biped.control.stepping_config import SteppingConfig
@@ -104,7 +88,7 @@ def _run_with_leg_contacts(sc, **params):
 
     scene = build_scene(sc)
     m = scene.model
-    left, right = set(_leg_geoms(m, "left")), set(_leg_geoms(m, "right"))
+    left, right = set(leg_geoms(m, "left")), set(leg_geoms(m, "right"))
     for gs, own, other in ((left, 4, 8), (right, 8, 4)):
         m.geom_contype[list(gs)] = own
         m.geom_conaffinity[list(gs)] = 1 | other

@@ -10,7 +10,7 @@ import math
 import mujoco
 import numpy as np
 import pytest
-from _helpers import goal_push_scenario, run_qp_stepping
+from _helpers import goal_push_scenario, leg_geoms, run_qp_stepping
 
 from biped.control import capture as cp
 from biped.control.capture import xcom_offset
@@ -231,19 +231,6 @@ def test_tumble_in_single_support_is_a_fall_not_a_divergence():
     assert run(airborne_stance=False).diverged is not None
 
 
-def _leg_geoms(m, side):
-    """The geoms of one leg's bodies (thigh and below), by the body tree from ``side``_thigh."""
-    top = m.body(f"{side}_thigh").id
-    out = []
-    for g in range(m.ngeom):
-        b = int(m.geom_bodyid[g])
-        while b > 0 and b != top:
-            b = int(m.body_parentid[b])
-        if b == top:
-            out.append(g)
-    return out
-
-
 @pytest.mark.slow
 def test_crossover_step_clears_the_stance_leg_with_leg_contacts_on():
     """13 m/s at 90 deg, faithful physics: the QP alone holds the push for 2 s, the slow trigger
@@ -258,7 +245,7 @@ def test_crossover_step_clears_the_stance_leg_with_leg_contacts_on():
     plain = simulate(sc)
     scene = build_scene(sc)
     m = scene.model
-    left, right = _leg_geoms(m, "left"), _leg_geoms(m, "right")
+    left, right = leg_geoms(m, "left"), leg_geoms(m, "right")
     assert left and right and not set(left) & set(right)
     for gs, own, other in ((left, 4, 8), (right, 8, 4)):
         m.geom_contype[gs] = own
