@@ -381,14 +381,15 @@ def stepping(args) -> None:
     )
     print("goal: a stepping trial <= 1.3x a feet-in-place trial of the same length (issue #23)")
     if args.phases:
-        phases(setups[step][0], setups[step][1], args.repeat)
+        for name in (fip, step):
+            phases(name, setups[name][0], setups[name][1], args.repeat)
 
 
-def phases(sc, scene, repeat) -> None:
-    """Where a stepping trial's rows go: the compiled loop's calls (rows of double support and of
+def phases(name, sc, scene, repeat) -> None:
+    """Where trial ``name``'s rows go: the compiled loop's calls (rows of double support and of
     the plain swing, :mod:`biped.control.swing_period`), the Python periods (the policy's call),
-    and the same rows' physics in a bare ``mj_step`` replay; per row, medians of ``repeat``."""
-    from biped.control.swing_period import I_ON
+    and the same rows' physics in a bare ``mj_step`` replay; thread CPU per row, medians of
+    ``repeat``, and per kind of row the loop's cost beyond its physics."""
     from biped.sim import fused as fused_mod
     from biped.sim import push as push_mod
 
@@ -399,10 +400,13 @@ def phases(sc, scene, repeat) -> None:
         t = time.thread_time_ns()
         k, why = real_run(self, k0, k1)
         st = self._stepping
-        kind = "swing" if st is not None and st.plan.ints[I_ON] else "double"
+        swing = st is not None and getattr(st, "plan", None) is not None and st.plan.ints[-1]  # its I_ON
+        kind = "swing" if swing else "double support"
+        if kind != "swing" and st is not None:
+            kind += ", after a step" if st.policy.steps else ", before"
         rows = k - k0 + (1 if why not in (fused_mod.DONE, fused_mod.PYTHON) else 0)
         if rows > 0:
-            acc.setdefault(f"compiled {kind} rows", []).append((time.thread_time_ns() - t, rows))
+            acc.setdefault(kind, []).append((time.thread_time_ns() - t, rows))
         for j in range(k0, k):
             kinds[j] = kind
         return k, why
@@ -421,7 +425,7 @@ def phases(sc, scene, repeat) -> None:
             def call(self, t, q, v, feet, real_call=real_call):
                 w = time.thread_time_ns()
                 out = real_call(self, t, q, v, feet)
-                acc.setdefault("Python periods: the policy's call", []).append((time.thread_time_ns() - w, 1))
+                acc.setdefault("python", []).append((time.thread_time_ns() - w, 1))
                 return out
 
             type(policy).__call__ = call  # type: ignore[method-assign]
@@ -440,22 +444,26 @@ def phases(sc, scene, repeat) -> None:
             tot: dict = {}
             for k in range(len(r.times) - 1):
                 d.ctrl[act] = r.torques[k]
-                w = time.perf_counter_ns()
+                w = time.thread_time_ns()
                 mujoco.mj_step(m, d, sub)
                 x = tot.setdefault(kinds[k], [0, 0])
-                x[0] += time.perf_counter_ns() - w
+                x[0] += time.thread_time_ns() - w
                 x[1] += 1
             for key, (ns, rows) in tot.items():
                 phys.setdefault(key, []).append((ns, rows))
     finally:
         fused_mod.FusedRows.run = real_run  # type: ignore[method-assign]
-    print(f"where the step trial's rows go (thread CPU per row, median of {repeat}; physics: wall per row):")
+    print(f"where the {name} trial's rows go (thread CPU a row, median of {repeat}):")
+    print(
+        "  rows                                   rows   loop [us]   physics alone [us]   loop less physics [us]"
+    )
     for key, v in per.items():
         us = statistics.median(ns / rows / 1e3 for ns, rows in v)
-        print(f"  {key:40s} {us:7.1f} us a row  ({v[0][1]} rows)")
-    for key, v in phys.items():
-        us = statistics.median(ns / rows / 1e3 for ns, rows in v)
-        print(f"  physics alone, {key + ' rows':25s} {us:7.1f} us a row  ({v[0][1]} rows)")
+        ph = statistics.median(ns / rows / 1e3 for ns, rows in phys.get(key, [(0, 1)]))
+        if key == "python":  # (its loop time is the policy's call alone)
+            print(f"  {'python: the policy':38s} {v[0][1]:5d}   {us:9.1f}   {ph:18.1f}   {'-':>22s}")
+        else:
+            print(f"  {'compiled ' + key:38s} {v[0][1]:5d}   {us:9.1f}   {ph:18.1f}   {us - ph:22.1f}")
 
 
 if __name__ == "__main__":

@@ -10,10 +10,14 @@ of the controller's ``mj_forward`` and ``mj_subtreeVel``) and
 :func:`biped.control.step_trigger.double_support` (capture point, trigger, contact flags); the loop
 then calls W's controller, the one :class:`SteppingRows` bound for the stretch
 (:func:`~biped.control.step_trigger.double_support_controller`, with the controller's set point
-and gains of the moment). A step starting, the settling switch, the swing and the touchdown go
-back to the Python loop, one period at a time: the swing runs ``SteppingController`` itself
-(its task-space swing leg, the stance QP and the touchdown; a few hundred microseconds of Python
-a period), and after the touchdown the compiled loop takes over again with the new set point.
+and gains of the moment). A plain swing (:func:`biped.control.swing_period.compiled_swing`) runs
+compiled too: the controller's ``mj_forward`` and ``mj_subtreeVel``, the capture point,
+:func:`biped.control.swing_period.period` (the landing target, the ankle's path, the stance's
+flags, the COM acceleration written into the bound set point, :class:`SteppingRows`'s
+``target``) and W's swing law (:func:`biped.control.swing_kernel.law`), then the loop calls the
+swing's controller (the single-sole QP) and puts the swing leg's torques in its place. A step
+starting, the settling switch, the touchdown and the other swings (crossovers, closing steps, the
+step program's, the opt-in stance models) go back to the Python loop, one period at a time.
 The controller's carried state is loaded before and stored after each compiled stretch, so the
 run is the Python loop's bit for bit (``tests/test_sim_fused_step.py``).
 """
