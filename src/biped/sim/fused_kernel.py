@@ -227,7 +227,7 @@ def _key_cache_by_what_it_compiles_in() -> None:
     """numba keys a cached kernel by its own source file only, but :func:`_run_rows` compiles the
     controller's kernel into itself: key it by those files too (recursions, statics, buffers,
     spatial, distribution, fused_qp, cones, daqp_c, contact, neuromotor, loop_measures, schedule,
-    step_trigger, fused_step), so that an edit of the
+    step_trigger, fused_step; the plain swing's swing_period, swing_kernel, mj_functions), so that an edit of the
     controller recompiles the loop instead of loading stale code. Uses numba's cache internals (as
     :func:`biped.sim.jit.is_cached` does); without them, numba's own key stands."""
     import biped.control.buffers
