@@ -31,7 +31,12 @@ steps (``--step-push``, default 14 m/s from the side) and one that does not (``-
 8 m/s from the side), each with stepping in the compiled loop (the default) and in the Python
 loop, against the feet-in-place trial of the hold push (the same length: it holds): interleaved,
 medians of thread CPU time, each one's ratio to the feet-in-place trial (issue #23: a stepping
-trial <= 1.3x); also the ratio of the fastest runs (less moved by other work on a shared machine).
+trial <= 1.3x); also the ratio of the fastest runs (less moved by other work on a shared machine),
+and the controller's share: each round's trial less its own physics replay, and the step trial's
+ratio with its physics at the feet-in-place trial's cost (MuJoCo's own extra work on a step taken
+out). ``--phases``: and where the step trial's rows go (thread CPU a row of the compiled loop's
+double support and swing stretches and of the Python periods, and the same rows' physics in a bare
+replay).
 """
 
 from __future__ import annotations
@@ -131,6 +136,7 @@ def main() -> None:
     ap.add_argument("--step-push", default="14,90", help="--stepping: speed [m/s],direction [deg] that steps")
     ap.add_argument("--hold-push", default="8,90", help="--stepping: speed,direction held feet in place")
     ap.add_argument("--duration", type=float, default=4.0, help="--stepping: trial length [s]")
+    ap.add_argument("--phases", action="store_true", help="--stepping: and where the step trial's rows go")
     args = ap.parse_args()
     if args.paradigms:
         paradigms(args)
@@ -314,7 +320,8 @@ def _sweep_trial(push: str, args, stepping: bool):
 
 def stepping(args) -> None:
     """Thread-CPU medians of stepping trials (compiled loop and Python loop) and their ratio to the
-    feet-in-place trial of the same length (see the module docstring)."""
+    feet-in-place trial of the same length (see the module docstring); then the controller's share
+    (each trial less its own physics replay) and where the step trial's rows go (``phases``)."""
     cases = {
         "feet in place, hold push": (_sweep_trial(args.hold_push, args, False), None),
         "stepping, hold push": (_sweep_trial(args.hold_push, args, True), None),
@@ -359,7 +366,104 @@ def stepping(args) -> None:
     a, b = results["stepping, step push"], results["stepping, step push, Python loop"]
     same = np.array_equal(a.qpos, b.qpos) and a.extra["steps"] == b.extra["steps"]
     print(f"the step push's compiled run is the Python loop's bit for bit: {same}")
+    # the controller's share: each round's trial less its own physics replay (same round), medians
+    print("the controller's share (each round's trial CPU less its physics replay's; medians):")
+    own = {k: statistics.median(c - p for c, p in zip(cpu[k], phys[k], strict=True)) for k in cases}
+    for name in ("feet in place, hold push", "stepping, hold push", "stepping, step push"):
+        print(f"  {name:36s} {own[name] * 1e3:7.1f} ms")
+    step, fip = "stepping, step push", "feet in place, hold push"
+    dphys = statistics.median(phys[step]) - ref_p
+    print(
+        f"  the step trial costs {statistics.median(cpu[step]) / ref:.3f}x the feet-in-place trial; its physics "
+        f"{dphys * 1e3:+.1f} ms of that ({statistics.median(phys[step]) / ref_p:.3f}x), the controller "
+        f"{(own[step] - own[fip]) * 1e3:+.1f} ms; the trial with the step's physics at the feet-in-place "
+        f"trial's cost: {(statistics.median(cpu[step]) - dphys) / ref:.3f}x"
+    )
     print("goal: a stepping trial <= 1.3x a feet-in-place trial of the same length (issue #23)")
+    if args.phases:
+        for name in (fip, step):
+            phases(name, setups[name][0], setups[name][1], args.repeat)
+
+
+def phases(name, sc, scene, repeat) -> None:
+    """Where trial ``name``'s rows go: the compiled loop's calls (rows of double support and of
+    the plain swing, :mod:`biped.control.swing_period`), the Python periods (the policy's call),
+    and the same rows' physics in a bare ``mj_step`` replay; thread CPU per row, medians of
+    ``repeat``, and per kind of row the loop's cost beyond its physics."""
+    from biped.sim import fused as fused_mod
+    from biped.sim import push as push_mod
+
+    acc: dict = {}
+    real_run = fused_mod.FusedRows.run
+
+    def timed_run(self, k0, k1):
+        t = time.thread_time_ns()
+        k, why = real_run(self, k0, k1)
+        st = self._stepping
+        swing = st is not None and getattr(st, "plan", None) is not None and st.plan.ints[-1]  # its I_ON
+        kind = "swing" if swing else "double support"
+        if kind != "swing" and st is not None:
+            kind += ", after a step" if st.policy.steps else ", before"
+        rows = k - k0 + (1 if why not in (fused_mod.DONE, fused_mod.PYTHON) else 0)
+        if rows > 0:
+            acc.setdefault(kind, []).append((time.thread_time_ns() - t, rows))
+        for j in range(k0, k):
+            kinds[j] = kind
+        return k, why
+
+    fused_mod.FusedRows.run = timed_run  # type: ignore[method-assign]
+    per: dict = {}
+    phys: dict = {}
+    try:
+        for _ in range(repeat):
+            acc.clear()
+            policy = controller_policy(sc, scene)
+            real_call = type(policy).__call__
+            n = sc.control_steps + 1
+            kinds = ["python"] * n
+
+            def call(self, t, q, v, feet, real_call=real_call):
+                w = time.thread_time_ns()
+                out = real_call(self, t, q, v, feet)
+                acc.setdefault("python", []).append((time.thread_time_ns() - w, 1))
+                return out
+
+            type(policy).__call__ = call  # type: ignore[method-assign]
+            try:
+                r = push_mod.run_closed_loop(sc, scene, policy)
+            finally:
+                type(policy).__call__ = real_call  # type: ignore[method-assign]
+            for key, v in acc.items():
+                per.setdefault(key, []).append((sum(x for x, _ in v), sum(y for _, y in v)))
+            # the physics of the same rows, replayed
+            m = scene.model
+            d = mujoco.MjData(m)
+            d.qpos[:], d.qvel[:] = initial_state(scene, sc)
+            mujoco.mj_forward(m, d)
+            act, sub = scene.actuator_index, sc.control_substeps
+            tot: dict = {}
+            for k in range(len(r.times) - 1):
+                d.ctrl[act] = r.torques[k]
+                w = time.thread_time_ns()
+                mujoco.mj_step(m, d, sub)
+                x = tot.setdefault(kinds[k], [0, 0])
+                x[0] += time.thread_time_ns() - w
+                x[1] += 1
+            for key, (ns, rows) in tot.items():
+                phys.setdefault(key, []).append((ns, rows))
+    finally:
+        fused_mod.FusedRows.run = real_run  # type: ignore[method-assign]
+    print(f"where the {name} trial's rows go (thread CPU a row, median of {repeat}):")
+    print(
+        "  rows                                   rows   loop [us]   physics alone [us]   loop less physics [us]"
+    )
+    for key, v in per.items():
+        us = statistics.median(ns / rows / 1e3 for ns, rows in v)
+        ph = statistics.median(ns / rows / 1e3 for ns, rows in phys.get(key, [(0, 1)]))
+        if key == "python":  # (its loop time is the policy's call alone)
+            print(f"  {'python: the policy':38s} {v[0][1]:5d}   {us:9.1f}   {ph:18.1f}   {'-':>22s}")
+        else:
+            print(f"  {'compiled ' + key:38s} {v[0][1]:5d}   {us:9.1f}   {ph:18.1f}   {us - ph:22.1f}")
 
 
 if __name__ == "__main__":

@@ -61,21 +61,32 @@ def test_cache_key_covers_the_controller_sources():
     stamp = fused._run_rows._cache._cache_file._source_stamp
     own, extra = stamp
     # recursions, statics, buffers, spatial, distribution, fused_qp, cones, daqp_c, contact, neuromotor,
-    # loop_measures, schedule, step_trigger, fused_step
-    assert len(extra) == 14
-    assert extra[0][1] == __import__("os").stat(biped.control.recursions.__file__).st_size
+    # loop_measures, schedule, step_trigger, fused_step, and the plain swing's swing_period,
+    # swing_kernel, mj_functions
+    import os
+
+    from biped.control import mj_functions, swing_kernel, swing_period
+
+    assert len(extra) == 17
+    assert extra[0][1] == os.stat(biped.control.recursions.__file__).st_size
+    swing = (swing_period.__file__, swing_kernel.__file__, mj_functions.__file__)
+    assert extra[-3:] == tuple((os.stat(f).st_mtime, os.stat(f).st_size) for f in swing)
 
 
 def test_the_stepping_rows_cache_key_covers_the_masks_and_the_trigger():
-    """stepping_row compiles in contact's feet masks and step_trigger's kernel and constants: its
-    cache key names those files too (a user's NUMBA_CACHE_DIR then never loads it stale)."""
+    """stepping_row compiles in contact's feet masks, step_trigger's kernel and constants and the
+    plain swing's kernels (swing_period, the swing law and its MuJoCo calls): its cache key names
+    those files too (a user's NUMBA_CACHE_DIR then never loads it stale)."""
     import os
 
     from biped.control import step_trigger
     from biped.sim import fused_step
 
     own, extra = fused_step.stepping_row._cache._cache_file._source_stamp
-    files = (contact.__file__, step_trigger.__file__)
+    from biped.control import mj_functions, swing_kernel, swing_period
+
+    files = (contact.__file__, step_trigger.__file__, swing_period.__file__, swing_kernel.__file__)
+    files += (mj_functions.__file__,)
     assert extra == tuple((os.stat(f).st_mtime, os.stat(f).st_size) for f in files)
 
 

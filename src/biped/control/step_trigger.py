@@ -32,7 +32,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["EPS", "GO", "HAND_BACK", "NI", "NQ", "NS", "double_support", "load", "params", "store"]
+__all__ = ["EPS", "GO", "HAND_BACK", "NI", "NQ", "NS", "capture", "double_support", "load", "params", "store"]
 
 #: what :func:`double_support` says: W's controller may run the period with ``contact``; or not
 GO, HAND_BACK = 0, 1
@@ -124,12 +124,10 @@ def _excess(poles, npts, xi0, xi1):  # pragma: no cover - compiled
     return sd, max(xi1 - ymax, ymin - xi1)
 
 
-@njit(cache=True)
-def double_support(t, left, right, com, vcom, xpos, xmat, st, pend, prm, ints, contact):  # pragma: no cover
-    """One double-support period of ``SteppingController.__call__`` up to its call of W's
-    controller: the new state into ``pend`` (from ``st``), the contact flags into ``contact``;
-    :data:`GO`, or :data:`HAND_BACK` (a step starts, the settling switch, a decision within
-    :data:`EPS` of its threshold)."""
+@njit(cache=True, inline="always")
+def capture(t, com, vcom, st, pend, prm):  # pragma: no cover - compiled
+    """``SteppingController.__call__``'s capture point and its filtered rate, every period: ``st``
+    into ``pend``, the new capture point and rate into ``pend``; (omega_0, xi_x, xi_y)."""
     pend[:] = st
     h = com[2] if com[2] >= MIN_HEIGHT_M else MIN_HEIGHT_M
     omega = math.sqrt(prm[Q_G] / h)
@@ -144,6 +142,16 @@ def double_support(t, left, right, com, vcom, xpos, xmat, st, pend, prm, ints, c
         pend[S_RATE + 1] = st[S_RATE + 1] + a * (raw1 - st[S_RATE + 1])
     pend[S_T_PREV] = t
     pend[S_XI], pend[S_XI + 1], pend[S_HAS_XI] = xi0, xi1, 1.0
+    return omega, xi0, xi1
+
+
+@njit(cache=True)
+def double_support(t, left, right, com, vcom, xpos, xmat, st, pend, prm, ints, contact):  # pragma: no cover
+    """One double-support period of ``SteppingController.__call__`` up to its call of W's
+    controller: the new state into ``pend`` (from ``st``), the contact flags into ``contact``;
+    :data:`GO`, or :data:`HAND_BACK` (a step starts, the settling switch, a decision within
+    :data:`EPS` of its threshold)."""
+    omega, xi0, xi1 = capture(t, com, vcom, st, pend, prm)
     feet = (left, right)
     soles = np.empty((2, 4))
     _sole(xpos, xmat, ints[I_F0], prm, 0, soles[0])

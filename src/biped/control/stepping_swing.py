@@ -31,7 +31,7 @@ import mujoco
 import numpy as np
 
 from biped.control import capture as cp
-from biped.control import closing_step, crossover_path, leg_geometry, stance_dynamics
+from biped.control import closing_step, crossover_path, leg_geometry, stance_dynamics, swing_period
 from biped.control.setpoint import replaced
 from biped.control.swing import swing_reaction_wrench
 from biped.control.workspace import Gains
@@ -47,6 +47,9 @@ AIRBORNE_M = 0.10
 class SwingPhase:
     """The swing-phase methods of :class:`~biped.control.stepping.SteppingController` (a mixin:
     they use its state, set in its ``__init__`` and ``reset``)."""
+
+    #: the plain swing's compiled period (:mod:`biped.control.swing_period`), made on first use
+    _swing_plan: swing_period.SwingPlan | None = None
 
     if TYPE_CHECKING:  # the controller's attributes, for the type checker
 
@@ -121,6 +124,8 @@ class SwingPhase:
         s = self.stepping
         i = self.swing
         assert i is not None  # called only while a foot swings
+        if swing_period.compiled_swing(self):  # the plain swing: one compiled call (both loops)
+            return self._planned_call(t, qpos, qvel, xi, omega, feet)
         st = 1 - i
         step = self.steps[-1]
         el = t - self._t_start
@@ -178,6 +183,35 @@ class SwingPhase:
             pd[2] = ankle_land[2] - s.descent_m_s * (el - T)
             vd[2] = -s.descent_m_s
         return self._single_support(i, qpos, qvel, omega, cop, pd, vd, ad)
+
+    def _planned_call(self, t, qpos, qvel, xi, omega, feet):
+        """A period of the plain swing (:func:`biped.control.swing_period.plan`: the lift-off, the
+        touchdown check, the landing point, the ankle's path, the stance's flags and feed-forward),
+        then the swing law and W's controller, as :meth:`_single_support`."""
+        i = self.swing
+        assert i is not None
+        pl = self._swing_plan
+        if pl is None:
+            pl = self._swing_plan = swing_period.SwingPlan()
+        if pl(self, t, feet[i], xi, omega) == swing_period.TOUCHDOWN:
+            return self._touch_down(t, qpos, qvel, feet, xi)
+        o = pl.out
+        target = replaced(self._swing_set_point(self._swing_com(i)), com_acc=(float(o[9]), float(o[10]), 0.0))
+        tau_swing = self._swing_torques(i, o[0:3], o[3:6], o[6:9])
+        flags = (bool(pl.contact[0]), bool(pl.contact[1]))
+        tau = np.array(
+            self._ctrl_swing.torques(
+                qpos, qvel, target=target, gains=self._swing_gains, feet_in_contact=flags
+            )
+        )
+        tau[self._leg_tau[i]] = tau_swing
+        return self._out(tau)
+
+    def _swing_com(self, i: int) -> np.ndarray:
+        """The plain swing's COM set point: the body's, ``_swing_drop`` lower."""
+        com = np.array(self.target.com)
+        com[2] -= self._swing_drop(i)
+        return com
 
     def _stance_cop(self, st: int) -> tuple[np.ndarray, np.ndarray]:
         """(the stance sole ``st``'s centre (3,), the stance CoP (2,)): the point of the stance

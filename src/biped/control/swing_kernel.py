@@ -28,7 +28,7 @@ from biped._numba_cache import compile_once, key_by_sources
 from biped.control import mj_functions
 from biped.control.mj_functions import call_fullm, call_jac, mj_address
 
-__all__ = ["NG", "SwingLaw", "compile_law", "swing_law"]
+__all__ = ["NG", "SwingLaw", "compile_law", "law", "swing_law"]
 
 #: gains (the law's float parameters), in this order
 G_KP_POS, G_KV_POS, G_KP_ROT, G_KV_ROT, G_ANKLE_KP, G_ANKLE_KV, G_MAX = range(7)
@@ -36,7 +36,7 @@ NG = 7
 
 
 @njit(cache=True)
-def swing_law(
+def law(
     jac, fullm, m, d, foot, shank, inv_sign, dofs, qadr, qpos, qvel, xpos, xmat, bias, passive, jp, jr, mm, g,
     pd, vd, ad, tau,
 ):  # fmt: skip  # pragma: no cover - compiled
@@ -109,6 +109,21 @@ def swing_law(
     tau[5] = g[G_ANKLE_KP] * (dors - q[5]) - g[G_ANKLE_KV] * w[1] + bias[dofs[5]]
     for r in range(6):
         tau[r] = min(max(tau[r], -g[G_MAX]), g[G_MAX])
+
+
+key_by_sources(law, (mj_functions,))
+
+
+@njit(cache=True)
+def swing_law(
+    jac, fullm, m, d, foot, shank, inv_sign, dofs, qadr, qpos, qvel, xpos, xmat, bias, passive, jp, jr, mm, g,
+    pd, vd, ad, tau,
+):  # fmt: skip  # pragma: no cover - compiled
+    """:func:`law` for its one signature (the Python loop's entry point; :func:`law` itself stays
+    generic, so the compiled push loop compiles it in for its own argument types,
+    :mod:`biped.sim.fused_step`)."""
+    law(jac, fullm, m, d, foot, shank, inv_sign, dofs, qadr, qpos, qvel, xpos, xmat, bias, passive, jp, jr, mm, g,
+        pd, vd, ad, tau)  # fmt: skip
 
 
 key_by_sources(swing_law, (mj_functions,))

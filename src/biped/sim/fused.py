@@ -4,7 +4,8 @@
 distribution; the QP solved by daqp's C function, :mod:`biped.control.daqp_c`, or through numba's
 objmode, :mod:`biped.sim.fused_qp`) and the joint-PD
 baseline (without gravity compensation), clipped by torque limits or not, and a stepping
-policy's double support (:mod:`biped.sim.fused_step`: the swings go back to Python), through
+policy's double support and plain swings (:mod:`biped.sim.fused_step`: the other swings and
+the touchdowns go back to Python), through
 :class:`FusedRows` (the kernel: :mod:`biped.sim.fused_kernel`): one numba call runs up to one
 progress interval of control periods, each doing exactly what the Python loop does, in the same
 order: classify MuJoCo's contacts (the OR of

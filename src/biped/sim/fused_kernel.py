@@ -16,6 +16,9 @@ from biped.control.daqp_c import C_TYPES, c_solve
 from biped.control.distribution import qp_build, qp_finish
 from biped.control.neuromotor import neural_filter
 from biped.control.recursions import compute_kernel
+from biped.control.swing_period import I_ON as I_SWING_ON
+from biped.control.swing_period import I_TAU as I_SWING_TAU
+from biped.control.swing_period import O_TAU as O_SWING_TAU
 from biped.sim import contact as contact_mod
 from biped.sim.contact import _LEFT_MASK, _LYING_BIT, _RIGHT_MASK, STANDING, contact_code
 from biped.sim.fused_qp import QP_TYPES, call_solve
@@ -115,6 +118,7 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
     qa, qt, qf, qtau, qcol, qg, qav, qct, qb, qx, qwg, dqfn, dqaddr, dqres, dqsense, dqupper, dqf, dqx, dqstat,
     sact, sval, sfol, saxis, sbase, starget,
     fk, fcp, fcv, fsv, sm, sd, sq, sv, sxpos, sxmat, sscom, sslin, sst, spend, sprm, sints,
+    sfwd, sjac, sfullm, sbias, spassive, sjp, sjr, smm, slawg, wprm, wints, wst, wpend, wout,
 ):  # the arguments of _SIGNATURE, in its order
     # fmt: on
     sub, n_ctrl, cb, f0, f1 = p[P_SUB], p[P_NCTRL], p[P_CB], p[P_F0], p[P_F1]
@@ -142,7 +146,8 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
             contact[1] = 1 if sbits & _RIGHT_MASK else 0
         if p[P_STEP] and stepping_row(
             k, qs, vs, sbits, fk, fcp, fcv, fsv, sm, sd, sq, sv, sxpos, sxmat, sscom, sslin, sst, spend, sprm,
-            sints, contact,
+            sints, contact, sfwd, sjac, sfullm, sbias, spassive, sjp, sjr, smm, slawg, wprm, wints, wst, wpend, wout,
+            target,
         ):  # fmt: skip
             return k * 8 + PYTHON  # a step starts (or Python must decide): the policy's own call
         if p[P_PD]:  # JointPDController.compute: kp (q_ref - q) - kd qd, q and qd finite
@@ -175,6 +180,9 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
                 qx, contact, qa, qt, soles, to.tau, to.Fl_tilde, to.Fr_tilde, to.Fl, to.Fr, ti.parent, tm.H,
                 ti.leg, ti.beyond, tw.gl, qf, p[P_NLIM],
             )  # fmt: skip
+        if p[P_STEP] and wints[I_SWING_ON]:  # a plain swing: the swing leg's own torques
+            for j in range(6):
+                out[wints[I_SWING_TAU + j]] = wout[O_SWING_TAU + j]
         rq[k, :] = dq
         rv[k, :] = dv
         rcom[k, :] = xipos[cb]
@@ -188,6 +196,8 @@ def _run_rows(  # pragma: no cover - compiled (NUMBA_DISABLE_JIT=1 runs it)
             neural_filter(rtau[k], nact, nalpha, nrate, k == 0)
         if p[P_STEP]:  # the period ran: its stepping state is the policy's now
             sst[:] = spend
+            if wints[I_SWING_ON]:
+                wst[:] = wpend
         if bits & _LYING_BIT or xipos[cb, 2] < fall_h:
             return k * 8 + FELL
         if k == n_ctrl:
@@ -217,7 +227,7 @@ def _key_cache_by_what_it_compiles_in() -> None:
     """numba keys a cached kernel by its own source file only, but :func:`_run_rows` compiles the
     controller's kernel into itself: key it by those files too (recursions, statics, buffers,
     spatial, distribution, fused_qp, cones, daqp_c, contact, neuromotor, loop_measures, schedule,
-    step_trigger, fused_step), so that an edit of the
+    step_trigger, fused_step; the plain swing's swing_period, swing_kernel, mj_functions), so that an edit of the
     controller recompiles the loop instead of loading stale code. Uses numba's cache internals (as
     :func:`biped.sim.jit.is_cached` does); without them, numba's own key stands."""
     import biped.control.buffers
@@ -227,7 +237,7 @@ def _key_cache_by_what_it_compiles_in() -> None:
     import biped.control.recursions
     import biped.control.statics
     import biped.spatial
-    from biped.control import daqp_c, step_trigger
+    from biped.control import daqp_c, mj_functions, step_trigger, swing_kernel, swing_period
     from biped.sim import fused_qp, fused_step, loop_measures, schedule
 
     modules = (
@@ -245,6 +255,9 @@ def _key_cache_by_what_it_compiles_in() -> None:
         schedule,
         step_trigger,
         fused_step,
+        swing_period,
+        swing_kernel,
+        mj_functions,
     )
     key_by_sources(_run_rows, modules)
 

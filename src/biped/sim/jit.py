@@ -50,7 +50,7 @@ KERNELS = {
     "contact": ("the contact monitor", 1),
     "loop": ("the compiled push loop", 47),
     "response": ("the sweep's margin of stability", 8),
-    "swing": ("the stepping swing law", 3),  # biped.control.swing_kernel (2-4 s, load 0-5)
+    "swing": ("the stepping swing law", 3),  # biped.control.swing_kernel, swing_period (2-4 s, load 0-5)
 }
 
 #: Kernels found compiled or cached in this process (no need to look again).
@@ -196,8 +196,10 @@ def _compile(name: str) -> None:
         return
     if name == "swing":
         from biped.control.swing_kernel import compile_law
+        from biped.control.swing_period import compile_plan
 
         compile_law()
+        compile_plan()
         return
     if name == "response":
         from biped.sim.mos import margins
