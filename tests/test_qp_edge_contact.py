@@ -162,6 +162,7 @@ def test_the_far_edge_moves_with_the_raised_end(theta_deg):
 
 
 def test_edge_contact_off_and_bad_heights():
+    assert not QPWeights().edge_contact  # opt-in (docs/controller.md, "A foot on an edge")
     assert QPWeights(edge_contact=False).array[10] == -1.0
     for bad in ((0.01, 0.005), (-0.001, 0.01), (0.0, float("nan"))):
         with pytest.raises(ScenarioError, match="edge_lift_m must be"):

@@ -36,9 +36,10 @@ __all__ = [
 ]
 
 ROWS_PER_FOOT = 18  # min and max normal force + 4 friction + 4 CoP + 8 yaw moment
-#: half length of the strip along the lower edge that stands for a line contact [m] (2 mm: a few
-#: times MuJoCo's contact penetration under a standing load; a zero-width strip is an equality
-#: written as two opposite inequalities, which daqp handles less well)
+#: half length of the strip along the lower edge that stands for a line contact [m]: a strip
+#: 4 mm wide whose outer side is the edge (MuJoCo's box-on-plane contacts of a pitched sole lie on
+#: the edge itself, tests/test_qp_edge_contact.py); not zero: a zero-width strip is an equality
+#: written as two opposite inequalities
 EDGE_HALF_LINE = 0.002
 
 

@@ -94,8 +94,10 @@ class QPWeights:
     floor_friction: the friction pyramid on the floor's axes, not the sole's (a sole tilted on
         an edge; :func:`biped.control.cones.floor_friction_rows`; the stepping QP sets it).
     edge_contact: a foot pitched onto one end's edge (on its toe, heel up, or on its heel) is a
-        line contact along that edge (:func:`biped.control.cones.edge_contact`, docs/controller.md:
-        its CoP on that edge, no moment about it); False: every foot the flat sole.
+        line contact along that edge (:func:`biped.control.cones.edge_contact`: its CoP on that
+        edge, no moment about it); False (the default): every foot the flat sole. Opt-in: measured,
+        it cost the ideal's one-step lean and two stepping cells (docs/controller.md, "A foot on
+        an edge").
     edge_lift_m: (start, full) heights of the raised end above the lower one [m]: the whole sole
         up to start, the line contact from full on, the far edge moving linearly between.
     """
@@ -112,7 +114,7 @@ class QPWeights:
     cop_scale: float = 1.0
     leg_weight: float = 1.0
     floor_friction: bool = False
-    edge_contact: bool = True
+    edge_contact: bool = False
     edge_lift_m: tuple[float, float] = (0.005, 0.015)
     array: np.ndarray = field(init=False, repr=False, compare=False)
 
