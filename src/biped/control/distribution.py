@@ -93,13 +93,10 @@ class QPWeights:
         (:func:`biped.control.cones.carry_leg_weight`; 0: the legs taken as massless).
     floor_friction: the friction pyramid on the floor's axes, not the sole's (a sole tilted on
         an edge; :func:`biped.control.cones.floor_friction_rows`; the stepping QP sets it).
-    edge_contact: a foot pitched onto one end's edge (on its toe, heel up, or on its heel) is a
-        line contact along that edge (:func:`biped.control.cones.edge_contact`: its CoP on that
-        edge, no moment about it); False (the default): every foot the flat sole. Opt-in: measured,
-        it cost the ideal's one-step lean and two stepping cells (docs/controller.md, "A foot on
-        an edge").
-    edge_lift_m: (start, full) heights of the raised end above the lower one [m]: the whole sole
-        up to start, the line contact from full on, the far edge moving linearly between.
+    edge_contact: a foot pitched onto an end's edge (toe or heel) is a line contact along it
+        (:func:`biped.control.cones.edge_contact`); opt-in (docs/controller.md, "A foot on an edge").
+    edge_lift_m: (start, full) heights of the raised end [m]: the whole sole up to start, the line
+        from full on, the far edge moving linearly between.
     """
 
     force: float = 1.0
@@ -142,7 +139,7 @@ class QPWeights:
         e0, e1 = self.edge_lift_m
         if not (math.isfinite(e0) and math.isfinite(e1) and 0.0 <= e0 < e1):
             raise ScenarioError(
-                f"QP edge_lift_m must be (start, full) heights with 0 <= start < full; got {self.edge_lift_m!r}"
+                f"QP edge_lift_m must be (start, full) with 0 <= start < full; got {(e0, e1)!r}"
             )
         arr = np.array(
             [
