@@ -127,21 +127,32 @@ def _sole_wrenches(m, d, out, soles):
     return sole_w, body_w
 
 
+#: the flat sole's cones for every foot in contact: the random states below pitch the feet by up
+#: to ~30 deg with both taken in contact, where the edge contact (tests/test_qp_edge_contact.py)
+#: would leave a strip; these tests check the rectangle's rows and the solver on them
+FLAT = QPWeights(edge_contact=False)
+
+
 @pytest.fixture(scope="module")
 def ctrls(wendlandt_path):
     return {
         "statics": WorkspaceController.from_mjcf(wendlandt_path),
-        "qp": WorkspaceController.from_mjcf(wendlandt_path, distribution="qp"),
-        "qp_human": WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", torque_limits=HUMAN),
+        "qp": WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", qp_weights=FLAT),
+        "qp_human": WorkspaceController.from_mjcf(
+            wendlandt_path, distribution="qp", torque_limits=HUMAN, qp_weights=FLAT
+        ),
         # the legs taken as massless (the cones hold the legs' shares alone: QPWeights.leg_weight 0)
         "qp_massless": WorkspaceController.from_mjcf(
-            wendlandt_path, distribution="qp", qp_weights=QPWeights(leg_weight=0.0)
+            wendlandt_path, distribution="qp", qp_weights=QPWeights(leg_weight=0.0, edge_contact=False)
         ),
         "qp_human_massless": WorkspaceController.from_mjcf(
-            wendlandt_path, distribution="qp", torque_limits=HUMAN, qp_weights=QPWeights(leg_weight=0.0)
+            wendlandt_path,
+            distribution="qp",
+            torque_limits=HUMAN,
+            qp_weights=QPWeights(leg_weight=0.0, edge_contact=False),
         ),
         "qp_quadprog": WorkspaceController.from_mjcf(
-            wendlandt_path, distribution="qp", torque_limits=HUMAN, qp_solver="quadprog"
+            wendlandt_path, distribution="qp", torque_limits=HUMAN, qp_solver="quadprog", qp_weights=FLAT
         ),
     }
 
@@ -288,7 +299,7 @@ def test_a_failed_solve_zeroes_the_wrenches_without_an_exception(wendlandt_path,
     """The documented last fallback, with the real solvers: a desired wrench that is not finite
     (or too large for double precision in the cost) leaves no solution; the call returns zero
     wrenches (status ZEROED, counted) instead of raising, and the next sane state solves again."""
-    ctrl = WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", qp_solver=solver)
+    ctrl = WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", qp_solver=solver, qp_weights=FLAT)
     d = next(random_states(wendlandt_mj, 1, 7))
     good = ctrl.compute(d.qpos, d.qvel).torques
     qp = ctrl.qp
@@ -381,7 +392,9 @@ def test_unlimited_qp_torques_are_alg6_of_the_shares(ctrls, wendlandt_path, wend
     from biped.control.limits import TorqueLimits
 
     wide = TorqueLimits("wide", HUMAN.joint_names, -1e7 * np.ones(12), 1e7 * np.ones(12))
-    mapped = WorkspaceController.from_mjcf(wendlandt_path, distribution="qp", torque_limits=wide)
+    mapped = WorkspaceController.from_mjcf(
+        wendlandt_path, distribution="qp", torque_limits=wide, qp_weights=FLAT
+    )
     ctrl = ctrls["qp"]
     assert not ctrl.qp.limited and mapped.qp.limited
     for i, d in enumerate(random_states(wendlandt_mj, 10, 9, vel=1.0)):

@@ -19,7 +19,7 @@ from _helpers import random_states
 
 from biped.control import WorkspaceController
 from biped.control.daqp_c import XS, _unused, daqp_c, unconstrained
-from biped.control.distribution import RELAXED, SOLVED, ZEROED
+from biped.control.distribution import RELAXED, SOLVED, ZEROED, QPWeights
 from biped.control.limits import TorqueLimits, torque_limits
 from biped.control.qp_buffers import H_FN
 
@@ -29,25 +29,27 @@ HUMAN = torque_limits("human")
 CONTACTS = (None, (True, False), (False, True), (False, False))
 
 
-def _pair(path, limits):
-    fast = WorkspaceController.from_mjcf(path, distribution="qp", torque_limits=limits)
-    slow = WorkspaceController.from_mjcf(path, distribution="qp", torque_limits=limits)
+def _pair(path, limits, weights=None):
+    fast = WorkspaceController.from_mjcf(path, distribution="qp", torque_limits=limits, qp_weights=weights)
+    slow = WorkspaceController.from_mjcf(path, distribution="qp", torque_limits=limits, qp_weights=weights)
     assert fast._qf is not None  # the compiled call
     slow._qf = slow._qi = None  # the Python path: build, daqp.solve from Python, finish
     slow.qp._c = None
     return fast, slow
 
 
+@pytest.mark.parametrize("edge", [False, True], ids=["flat", "edge"])
 @pytest.mark.parametrize("scale", [1.0, 0.15])
 def test_compiled_call_is_the_python_path_bit_for_bit_and_daqp_to_rounding(
-    wendlandt_path, wendlandt_mj, scale
+    wendlandt_path, wendlandt_mj, scale, edge
 ):
     """On random states (both feet, one foot, none; HUMAN limits and limits at 15 %, which
     activate torque rows) the compiled call gives the Python path's torques and wrenches bit for
-    bit, and its solution is daqp's and quadprog's on the same built problem."""
+    bit, and its solution is daqp's and quadprog's on the same built problem; with every foot the
+    flat sole and with the edge contact (the random states pitch the feet: strips in use)."""
     lim = TorqueLimits("t", HUMAN.joint_names, scale * HUMAN.lower, scale * HUMAN.upper)
-    fast, slow = _pair(wendlandt_path, lim)
-    counts = {"free": 0, "active": 0}
+    fast, slow = _pair(wendlandt_path, lim, QPWeights(edge_contact=edge))
+    counts = {"free": 0, "active": 0, "strip": 0}
     calm = [(d, None) for d in random_states(wendlandt_mj, 3, 4, 0.01, 0.01)]  # near standing: no active row
     moving = [(d, CONTACTS[i % 4]) for i, d in enumerate(random_states(wendlandt_mj, 12, 3))]
     for d, feet in calm + moving:
@@ -63,6 +65,8 @@ def test_compiled_call_is_the_python_path_bit_for_bit_and_daqp_to_rounding(
             slow.qp.first,
         )
         assert np.array_equal(qp.x, slow.qp.x) and np.array_equal(qp.Gq, slow.qp.Gq)
+        assert np.array_equal(qp._dims, slow.qp._dims)
+        counts["strip"] += int(np.any(qp._dims[:, 2] < qp._dims[:, 0]))
         if feet == (False, False) or qp.status != SOLVED:
             continue
         n, meq = qp.rows, qp.meq
@@ -78,7 +82,10 @@ def test_compiled_call_is_the_python_path_bit_for_bit_and_daqp_to_rounding(
         np.testing.assert_allclose(qp.x, x_qp, rtol=0, atol=1e-6 * scale_x)
         active = np.sum(qp.Ct[meq:n] @ qp.x - qp.b[meq:n] < 1e-7 * scale_x)
         counts["active" if active else "free"] += 1
-    assert counts["active"] >= 3 and (scale < 1.0 or counts["free"] >= 1), counts  # both branches
+    if edge:  # the strips were built and solved the same way on both paths
+        assert counts["strip"] >= 5, counts
+    else:
+        assert counts["active"] >= 3 and (scale < 1.0 or counts["free"] >= 1), counts  # both branches
 
 
 def test_unconstrained_is_the_minimizer_or_refuses():

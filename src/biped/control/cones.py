@@ -26,6 +26,9 @@ __all__ = [
     "ROWS_PER_FOOT",
     "carry_leg_weight",
     "cone_rows",
+    "contact_rows",
+    "edge_contact",
+    "foot_rows",
     "floor_friction_rows",
     "leg_weight_wrench",
     "map_contact_rows",
@@ -33,6 +36,11 @@ __all__ = [
 ]
 
 ROWS_PER_FOOT = 18  # min and max normal force + 4 friction + 4 CoP + 8 yaw moment
+#: half length of the strip along the lower edge that stands for a line contact [m]: a strip
+#: 4 mm wide whose outer side is the edge (MuJoCo's box-on-plane contacts of a pitched sole lie on
+#: the edge itself, tests/test_qp_edge_contact.py); not zero: a zero-width strip is an equality
+#: written as two opposite inequalities
+EDGE_HALF_LINE = 0.002
 
 
 @njit(cache=True)
@@ -77,6 +85,62 @@ def cone_rows(X, Y, mu, fmin, fmax, o, Ct, b, m):
             Ct[r + 1, o + 1] = -s2 * X
             Ct[r + 1, o + 4] = -s2 * mu
             r += 2
+    return r
+
+
+@njit(cache=True)
+def contact_rows(X, Y, cx, mu, fmin, fmax, o, Ct, b, m):
+    """:func:`cone_rows` of the rectangle of half length X, half width Y centred at ``cx`` on the
+    sole's x axis, written on the wrench x[o:o+6] at the sole centre: the rows hold the wrench
+    moved to (cx, 0, 0), ``tau' = tau - p x f`` = (tx, ty + cx fz, tz - cx fy); returns the next row."""
+    r_end = cone_rows(X, Y, mu, fmin, fmax, o, Ct, b, m)
+    if cx != 0.0:
+        for r in range(m, r_end):
+            Ct[r, o + 2] += Ct[r, o + 4] * cx
+            Ct[r, o + 1] -= Ct[r, o + 5] * cx
+    return r_end
+
+
+@njit(cache=True)
+def edge_contact(gf, gfs, X, lift0, lift1, half_line):
+    """(half length, centre on the sole's x axis) of the part of a rectangular sole (half length X)
+    that can carry load when the foot is pitched about one end's edge (on its toe, heel up; or on
+    its heel): the end raised ``lift = 2 X |z . x_s|`` above the other (x_s the sole's x axis in
+    the world, the floor's normal world z). Up to ``lift0`` the whole sole; from ``lift1`` on a
+    strip ``2 half_line`` wide along the lower end's edge (a line contact: the CoP on that edge,
+    no moment about it); between, the far edge of the rectangle moves linearly toward the lower
+    end (no step in the QP's rows as the foot rolls). gf = g_{0,foot}, gfs = g_{foot,sole}."""
+    e = sole_rotation_row(gf, gfs, 2)[0]
+    lift = 2.0 * X * abs(e)
+    if lift0 < 0.0 or lift <= lift0:
+        return X, 0.0
+    s = 1.0 if lift >= lift1 else (lift - lift0) / (lift1 - lift0)
+    xn = max(X * (1.0 - s), half_line)
+    if xn >= X:
+        return X, 0.0
+    return xn, (X - xn) if e < 0.0 else (xn - X)  # e < 0: the +x end is the lower one
+
+
+@njit(cache=True)
+def foot_rows(g, foot, gfs, dims, f, prm, leg, mass, grav, wg, Ct, b, m):
+    """Write foot ``f``'s 18 cone rows from row m on (the wrench x[6f:6f+6]; gfs = g_{foot,sole},
+    ``dims[f]`` = (half length, half width, and here written: the half length and centre of the
+    part of the sole in use, :func:`edge_contact`, if ``prm[10] >= 0``), with the QP's parameters
+    ``prm``: the friction rows on the floor's axes (``prm[9]``), the rows on the
+    ground's wrench with the leg's weight (``prm[8]``); returns the next row."""
+    gf = g[foot]
+    X, Y = dims[f, 0], dims[f, 1]
+    xn, cx = X, 0.0
+    if prm[10] >= 0.0:
+        xn, cx = edge_contact(gf, gfs, X, prm[10], prm[11], EDGE_HALF_LINE)
+    dims[f, 2], dims[f, 3] = xn, cx
+    o = 6 * f
+    r = contact_rows(xn, Y, cx, prm[6], prm[5], prm[7], o, Ct, b, m)
+    if prm[9] != 0.0:  # the friction rows on the floor's axes
+        floor_friction_rows(gf, gfs, prm[6], o, Ct, m)
+    if prm[8] != 0.0:  # the cone holds the ground's wrench: the QP's share plus the leg's weight
+        leg_weight_wrench(g, foot, gfs, leg, f, mass, grav, prm[8], wg[f])
+        carry_leg_weight(Ct, b, m, o, wg[f])
     return r
 
 

@@ -28,7 +28,7 @@ from numba import carray, njit, types
 from numba.extending import intrinsic, overload
 
 from biped.control.buffers import _take2
-from biped.control.cones import cone_rows
+from biped.control.cones import contact_rows
 
 __all__ = [
     "CHECKED_VERSIONS",
@@ -322,7 +322,7 @@ def c_solve(
         for k in range(2):
             m = f0 if k == 0 else f1
             if m >= 0:
-                cone_rows(dims[k, 0], dims[k, 1], prm[6], 0.0, prm[7], 6 * k, Ct, b, m)
+                contact_rows(dims[k, 2], dims[k, 1], dims[k, 3], prm[6], 0.0, prm[7], 6 * k, Ct, b, m)
         if _once(fn, addr, res32, meq, used, sense, upper, f, av, Ct, b, xs):
             x[:] = xs[:12]
             status = RELAXED

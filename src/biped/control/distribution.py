@@ -45,10 +45,9 @@ from numba import njit
 
 from biped.control.cones import (
     ROWS_PER_FOOT,
-    carry_leg_weight,
     cone_rows,
-    floor_friction_rows,
-    leg_weight_wrench,
+    contact_rows,
+    foot_rows,
     map_contact_rows,
     sole_to_body,
 )
@@ -94,6 +93,10 @@ class QPWeights:
         (:func:`biped.control.cones.carry_leg_weight`; 0: the legs taken as massless).
     floor_friction: the friction pyramid on the floor's axes, not the sole's (a sole tilted on
         an edge; :func:`biped.control.cones.floor_friction_rows`; the stepping QP sets it).
+    edge_contact: a foot pitched onto an end's edge (toe or heel) is a line contact along it
+        (:func:`biped.control.cones.edge_contact`); opt-in (docs/controller.md, "A foot on an edge").
+    edge_lift_m: (start, full) heights of the raised end [m]: the whole sole up to start, the line
+        from full on, the far edge moving linearly between.
     """
 
     force: float = 1.0
@@ -108,6 +111,8 @@ class QPWeights:
     cop_scale: float = 1.0
     leg_weight: float = 1.0
     floor_friction: bool = False
+    edge_contact: bool = False
+    edge_lift_m: tuple[float, float] = (0.005, 0.015)
     array: np.ndarray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self):
@@ -131,6 +136,11 @@ class QPWeights:
         lw = self.leg_weight
         if not (isinstance(lw, (int, float)) and 0.0 <= lw <= 1.0):
             raise ScenarioError(f"QP leg_weight must be a share of the legs' weight in [0, 1]; got {lw!r}")
+        e0, e1 = self.edge_lift_m
+        if not (math.isfinite(e0) and math.isfinite(e1) and 0.0 <= e0 < e1):
+            raise ScenarioError(
+                f"QP edge_lift_m must be (start, full) with 0 <= start < full; got {(e0, e1)!r}"
+            )
         arr = np.array(
             [
                 self.force,
@@ -143,6 +153,8 @@ class QPWeights:
                 self.max_normal_n,
                 self.leg_weight,
                 1.0 if self.floor_friction else 0.0,
+                self.edge_lift_m[0] if self.edge_contact else -1.0,
+                self.edge_lift_m[1],
             ],
             dtype=float,
         )
@@ -236,13 +248,7 @@ def qp_build(
                 first0 = m
             else:
                 first1 = m
-            m0 = m
-            m = cone_rows(dims[f, 0], dims[f, 1], prm[6], prm[5], prm[7], 6 * f, Ct, b, m)
-            if prm[9] != 0.0:  # the friction rows on the floor's axes
-                floor_friction_rows(g[feet[f]], soles[f], prm[6], 6 * f, Ct, m0)
-            if prm[8] != 0.0:  # the cone holds the ground's wrench: the QP's share plus the leg's weight
-                leg_weight_wrench(g, feet[f], soles[f], leg, f, mass, grav, prm[8], wg[f])
-                carry_leg_weight(Ct, b, m0, 6 * f, wg[f])
+            m = foot_rows(g, feet[f], soles[f], dims, f, prm, leg, mass, grav, wg, Ct, b, m)
     if nlim:
         for j in range(nj):
             side = leg[j + 1] if beyond[j + 1] == 0 else -1
@@ -369,7 +375,8 @@ class ContactQP(QPState):
         )  # fmt: skip
         self._qstat, self._res32, self._sense = qp_int_views(self._qi, rows)
         self._soles[:] = np.stack([s.g_foot_sole for s in soles])
-        self._dims[:] = self.weights.cop_scale * np.array([[s.half_length, s.half_width] for s in soles])
+        self._dims[:, :2] = self.weights.cop_scale * np.array([[s.half_length, s.half_width] for s in soles])
+        self._dims[:, 2] = self._dims[:, 0]  # the part of the sole in use (qp_build: cones.edge_contact)
         self._lo[:], self._hi[:] = lo, hi
         self._prm[:] = self.weights.array
         self._meq = 0
@@ -459,7 +466,8 @@ class ContactQP(QPState):
             p = self._prm
             for f, m in enumerate(self.first):
                 if m >= 0:
-                    cone_rows(self._dims[f, 0], self._dims[f, 1], p[6], 0.0, p[7], 6 * f, self.Ct, self.b, m)
+                    d = self._dims[f]
+                    contact_rows(d[2], d[1], d[3], p[6], 0.0, p[7], 6 * f, self.Ct, self.b, m)
             try:
                 x[:] = self._solve_once()
                 self.status = RELAXED

@@ -30,13 +30,13 @@ __all__ = [
     "solve_flat",
 ]
 
-PRM = 10  # entries of QPWeights.array
+PRM = 12  # entries of QPWeights.array
 #: entries of a foot's contact map (cones.map_contact_rows): on/off, K (6, 6) row by row, r (6,)
 CMAP = 43
 #: qf's fields (name, shape with nj = joints, rows = constraint rows)
 FLOAT_FIELDS = (
     ("soles", (2, 4, 4)),
-    ("dims", (2, 2)),
+    ("dims", (2, 4)),  # a sole's half length, half width; the part in use: half length, centre
     ("prm", (PRM,)),
     ("lo", ("nj",)),
     ("hi", ("nj",)),
@@ -79,7 +79,7 @@ def qp_views(qf, nj, rows):
     """The views of :data:`FLOAT_FIELDS` in ``qf``, in that order."""
     o = 0
     soles, o = _take3(qf, o, 2, 4, 4)
-    dims, o = _take2(qf, o, 2, 2)
+    dims, o = _take2(qf, o, 2, 4)
     prm, o = _take1(qf, o, PRM)
     lo, o = _take1(qf, o, nj)
     hi, o = _take1(qf, o, nj)

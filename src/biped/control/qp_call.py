@@ -13,7 +13,8 @@ compiled build and finish, and daqp's own C function on the same arrays
 
 numba caches this function with the compiled :func:`~biped.control.qp_buffers.qp_views` inside it
 and checks only this file's stamp: a change of the buffers' layout there (e.g. ``PRM``, the
-entries of ``QPWeights.array``, 10 since ``floor_friction``; ``cmap`` at the end since the stance
+entries of ``QPWeights.array``, 10 since ``floor_friction``, 12 since ``edge_contact``; ``dims`` (2, 4)
+since the edge contact; ``cmap`` at the end since the stance
 contact map) needs an edit here too, or the cached copy reads the old layout.
 """
 

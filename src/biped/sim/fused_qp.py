@@ -74,7 +74,7 @@ def qp_arguments(qp) -> tuple:
     a QP."""
     if qp is None:
         z1, z2 = np.zeros(1), np.zeros((1, 1))
-        empty = (np.zeros((2, 4, 4)), np.zeros((2, 2)), np.zeros(8), z1, z1, np.zeros((2, 6, 6)))
+        empty = (np.zeros((2, 4, 4)), np.zeros((2, 4)), np.zeros(12), z1, z1, np.zeros((2, 6, 6)))
         return empty + (z2, z2, z1, z2, z2, z1, z2, z1, z1, np.zeros((2, 6)))
     head = (qp._soles, qp._dims, qp._prm, qp._lo, qp._hi, qp.A, qp.T, qp._F)
     return head + (qp._tau, qp._col, qp.Gq, qp.av, qp.Ct, qp.b, qp.x, qp.wg)
