@@ -2,7 +2,8 @@
 straight, W's controller's singularity: past it, with W's min-norm split, the torques grow each
 control period until MuJoCo's integration diverges; with the QP distribution the same pull keeps
 every state finite and ends as a fall at the same magnitude (docs/validate.md, "The ideal's
-waist-pull divergence")."""
+waist-pull divergence"). The experiment runs on the QP since 2026-11-28; the min-norm rows here
+name it (``distribution = "statics"``)."""
 
 from __future__ import annotations
 
@@ -30,18 +31,18 @@ def _pull(displacement_m: float, **extra):
 
 @pytest.mark.slow
 def test_ideal_waist_pull_divergence_is_the_knee_passing_straight_and_the_qp_makes_it_a_fall():
-    """W's min-norm split (the protocol's default): the largest pull held (0.0231 m) keeps both
+    """W's min-norm split (the protocol's until 2026-11-28): the largest pull held (0.0231 m) keeps both
     knees over 0.3 deg bent (they start 12 deg bent; MuJoCo's recorded angles); the next
     (0.0233 m) straightens a knee while the torques are still those of standing (under 300 N m),
     and only then do they grow past 1 kN and MuJoCo's integration diverges (the knee's Jacobian
     singular: W's controller has no straight-knee handling). The QP distribution (its bounded
     normal forces bound the torques) runs the same 0.0233 m pull with every recorded state
     finite and ends it as a fall, not a divergence; 0.0231 m it holds."""
-    s, r, rows, knees = _pull(0.0231)
+    s, r, rows, knees = _pull(0.0231, distribution="statics")
     assert r.diverged is None and not r.fell and math.isclose(r.times[rows - 1], s.duration_s, abs_tol=0.01)
     assert knees.max() < -0.3, knees.max()
 
-    s, r, rows, knees = _pull(0.0233)
+    s, r, rows, knees = _pull(0.0233, distribution="statics")
     assert r.diverged is not None and not r.fell
     tau = np.abs(r.torques[:rows]).max(axis=1)
     straight = int(np.argmax(knees > 0.0))

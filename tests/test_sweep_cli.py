@@ -90,6 +90,61 @@ def _toy_sweep(tmp_path, name, **base):
     return out
 
 
+#: the toy block's hit below the horizontal [deg]: its impulse has a vertical part
+_DOWN_DEG = 30.0
+
+
+def _downward_trial(setup) -> dict:
+    """:func:`toy_trial`'s block, its momentum 1.2 m v delivered 30 deg below the horizontal along
+    its direction of travel: the columns as the sweep's trial writes them (impulse_n_s the 3-D
+    norm; horizontal_impulse_n_s the block's hypot(J_x, J_y), biped.sim.sweep.trial)."""
+    import math
+
+    t = setup.trial
+    j = 1.2 * t.block_mass_kg * t.speed_m_s
+    a, down = math.radians(t.direction_deg), math.radians(_DOWN_DEG)
+    jx, jy, jz = j * math.cos(down) * math.cos(a), j * math.cos(down) * math.sin(a), -j * math.sin(down)
+    return {**toy_trial(setup), "impulse_n_s": j, "impulse_x_n_s": jx, "impulse_y_n_s": jy,
+            "impulse_z_n_s": jz, "impulse_horizontal_n_s": math.hypot(jx, jy),
+            "horizontal_impulse_n_s": math.hypot(jx, jy), "paradigm": "block"}  # fmt: skip
+
+
+def test_the_impulse_plot_draws_the_horizontal_impulse_of_the_envelope_table(tmp_path):
+    """``--by impulse_n_s``: the radius is the horizontal impulse, as ``biped envelope``'s table's
+    (one function, biped.analysis.envelope.horizontal_impulse_n_s), not the 3-D norm: for a block
+    that delivers 1.2 m v 30 deg below the horizontal, every dot and the envelope line sit at
+    1.2 m v cos 30 deg (closed form), the table's impulse of the same row too; a row written before
+    the horizontal column has it from its components."""
+    pytest.importorskip("matplotlib")
+    import math
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from biped.analysis.envelope import horizontal_impulse_n_s
+    from biped.analysis.envelope_table import _momentum
+    from biped.sim.scenario import Scenario
+    from biped.sim.sweep import SweepSpec, run_sweep
+    from biped.viz.envelope import plot_envelope
+
+    out = tmp_path / "down.parquet"
+    speeds, mass = (2.0, 4.0, 6.0), 1.8
+    spec = SweepSpec(axes={"speed_m_s": speeds, "direction_deg": tuple(range(0, 360, 45))}, base=Scenario())
+    run_sweep(spec, out, workers=1, trial_fn=_downward_trial, progress=False)
+    horizontal = {v: 1.2 * mass * v * math.cos(math.radians(_DOWN_DEG)) for v in speeds}
+    ax = plot_envelope(out, by="impulse_n_s", bound=False)
+    radii = np.concatenate([c.get_offsets()[:, 1] for c in ax.collections if len(c.get_offsets())])
+    np.testing.assert_allclose(np.sort(radii), np.sort(np.repeat(list(horizontal.values()), 8)), rtol=1e-12)
+    (line,) = [ln for ln in ax.get_lines() if ln.get_label() == "envelope"]
+    np.testing.assert_allclose(line.get_data()[1], horizontal[4.0], rtol=1e-12)  # 6 m/s falls
+    assert "horizontal" in ax.get_title()
+    row = load(out).table.slice(0, 1).to_pylist()[0]
+    j, _ = _momentum(row, "block", 70.0)
+    assert j == pytest.approx(horizontal[row["speed_m_s"]], rel=1e-12)
+    old = {k: v for k, v in row.items() if k != "horizontal_impulse_n_s"}  # a file from before the column
+    assert horizontal_impulse_n_s(old) == pytest.approx(horizontal[row["speed_m_s"]], rel=1e-12)
+
+
 def _boxes_overlap(a, b) -> bool:
     return a.x0 < b.x1 and b.x0 < a.x1 and a.y0 < b.y1 and b.y0 < a.y1
 

@@ -36,6 +36,11 @@ def test_validate_quick_writes_the_table_figures_and_trials(tmp_path, capsys):
         if lean[preset]["bound"] == "":
             assert value == max(survived) and value < min(fell)
         assert lean[preset]["inside_2sd"] in (None, abs(value - 5.9) <= 2.2)
+    # each trial says what came of it; survived is exactly the recovered and survived outcomes
+    assert {t["outcome"] for t in trials} <= {"recovered", "survived", "fell", "diverged", "error"}
+    assert all(t["survived"] == (t["outcome"] in ("recovered", "survived")) for t in trials)
+    for preset, th in data["experiments"]["ankle_release"]["thresholds"].items():
+        assert sum(th["outcomes"].values()) == sum(t["neuromotor"] == preset for t in trials)
     assert "young" in (out / "validation.md").read_text()
     assert (out / "figures" / "ankle_release.png").stat().st_size > 1000
     assert not any("not_run" in r for r in data["rows"])  # every experiment of the issue runs now

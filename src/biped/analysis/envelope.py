@@ -99,9 +99,23 @@ def envelope(
     return Envelope(by, criterion, dirs, np.array(smax), np.array(fmin), np.array(count))
 
 
+def horizontal_impulse_n_s(row: Mapping) -> float:
+    """The perturbation's horizontal impulse [N s] of one sweep row, the impulse of ``biped
+    envelope``'s table and of the polar plot's impulse radius (Hof's bound is horizontal: the
+    extrapolated COM moves in the floor's plane): the row's ``horizontal_impulse_n_s`` (a block's
+    measured from its momentum change, a force's applied; NaN for a platform or a release); a row
+    written before that column, the block's ``hypot(impulse_x_n_s, impulse_y_n_s)``; else NaN.
+    Never ``impulse_n_s``, which holds the vertical part of a block's hit too."""
+    v = row.get("horizontal_impulse_n_s")
+    if v is not None:
+        return float(v)
+    x, y = row.get("impulse_x_n_s"), row.get("impulse_y_n_s")
+    return float(np.hypot(x, y)) if x is not None and y is not None else float("nan")
+
+
 def sweep_data(source: Any) -> SweepData:
     """A sweep file's :class:`~biped.sim.sweep.SweepData` from its path (or itself)."""
     return source if isinstance(source, SweepData) else load(source)
 
 
-__all__ = ["Envelope", "envelope", "survived", "sweep_data"]
+__all__ = ["Envelope", "envelope", "horizontal_impulse_n_s", "survived", "sweep_data"]

@@ -21,6 +21,7 @@ import math
 from dataclasses import asdict, dataclass
 from typing import Any
 
+from biped.analysis.envelope import horizontal_impulse_n_s
 from biped.analysis.feet_in_place import feet_in_place_bound
 from biped.sim.perturbations import PARADIGMS
 
@@ -177,5 +178,5 @@ def _momentum(row: dict | None, paradigm: str, mass: float) -> tuple[float, floa
         return mass * dv, dv
     if paradigm == "release":
         return nan, nan
-    j = _num(row, "horizontal_impulse_n_s")
+    j = horizontal_impulse_n_s(row)  # the polar plot's impulse radius too (biped.viz.envelope)
     return j, j / mass

@@ -44,12 +44,14 @@ __all__ = [
     "HUMAN",
     "NOT_RUN",
     "ONE_STEP",
+    "OUTCOMES",
     "RECOVERED",
     "SURVIVED",
     "Experiment",
     "HumanValue",
     "Threshold",
     "Trial",
+    "outcome",
     "run_experiment",
 ]
 
@@ -233,9 +235,10 @@ EXPERIMENTS = {
         "a stiff cable from the pelvis to a motor that travels the displacement forward at a peak "
         f"velocity of {PULL_VELOCITY_M_S:g} m/s (the platform's trapezoid; ~250 % of the ankle-to-toe "
         "length per s, in Mille's fast range, above the ~121 % BoS/s beyond which velocity no longer "
-        "mattered), then lets go, from human quiet stance (HUMAN_STANCE); the largest displacement "
-        "recovered with the feet in place (a step is needed beyond it), and the waist's position ahead "
-        "of the ankles when the cable is let go, as % of the ankle-to-toe length (Mille's measure)",
+        "mattered), then lets go, from human quiet stance (HUMAN_STANCE), the QP distribution; the "
+        "largest displacement recovered with the feet in place (a step is needed beyond it), and the "
+        "waist's position ahead of the ankles when the cable is let go, as % of the ankle-to-toe length "
+        "(Mille's measure)",
         {
             **_COMMON,
             **HUMAN_STANCE,
@@ -243,6 +246,11 @@ EXPERIMENTS = {
             "perturbation": "pull",
             "pull_start_s": 0.1,
             "pull_velocity_m_s": PULL_VELOCITY_M_S,
+            # the QP: with W's min-norm split the ideal preset's threshold trial (0.0233 m) ends in a
+            # MuJoCo divergence once the knees reach straight (its torques grow without bound as a
+            # leg stretches), not a fall; the QP's bounded normal forces make it a fall
+            # (docs/validate.md, "The ideal's waist-pull divergence")
+            "distribution": "qp",
         },
         _pull,
         "m",
@@ -283,6 +291,9 @@ class Trial:
     end_speed_m_s: float = math.nan  # its largest speed over that window
     stop_reason: str = ""  # why the run ended before its duration: "fell", "at_rest" (early_stop), ""
     cpu_time_s: float = math.nan  # the run's CPU time (this process's; wall_time_s is loaded)
+    #: what came of the run (:func:`outcome`): "recovered", "survived", "fell", "diverged", "error"
+    outcome: str = ""
+    detail: str = ""  # a divergence's or a controller error's message ("" otherwise)
 
     def row(self) -> dict:
         return dict(self.__dict__)
@@ -310,6 +321,13 @@ class Threshold:
         return min(failed) if failed else None
 
     @property
+    def lowest_failure_outcome(self) -> str | None:
+        """What came of the lowest failing trial (:data:`OUTCOMES`; None if none failed): a fall, or a
+        divergence or error that says nothing of balance."""
+        failed = [t for t in self.trials if not t.passed]
+        return min(failed, key=lambda t: t.magnitude).outcome if failed else None
+
+    @property
     def highest_pass(self) -> float | None:
         """The largest magnitude tried that passed (None if none did)."""
         passed = [t.magnitude for t in self.trials if t.passed]
@@ -331,7 +349,8 @@ def run_trial(
     wall, cpu = time.perf_counter() - t, time.process_time() - cpu
     if r.interrupted:  # Ctrl-C / SIGTERM inside the run: not a fall, the end of the bisection
         raise KeyboardInterrupt
-    survived = not r.fell and r.diverged is None and r.controller_error is None and not r.interrupted
+    what, detail = outcome(r)
+    survived = what in ("recovered", "survived")
     peak, onset, motion = _ankle_measures(r, s)
     if s.perturbation == "pull":  # Mille's measure: the waist's position ahead of the ankles
         forward = waist_ahead_of_ankles_m(scene, r)
@@ -348,7 +367,28 @@ def run_trial(
     return Trial(exp.key, neuromotor, float(magnitude), exp.unit, bool(survived), r.fall_time_s, peak, onset,
                  motion, wall, bos, n_steps, length, contact, recovered, bool(passed[exp.criterion]),
                  float(r.times[-1]) if len(r.times) else math.nan, float(r.final_com_error_m), speed,
-                 float(r.final_orientation_error_deg), still, end_speed, why, cpu)  # fmt: skip
+                 float(r.final_orientation_error_deg), still, end_speed, why, cpu, what, detail)  # fmt: skip
+
+
+#: :attr:`Trial.outcome`'s values: at rest over the final feet at the end (the run's ``recovered``);
+#: to the run's end without a fall, divergence or error, not at rest; fell (the contact monitor's
+#: fall); MuJoCo's integration diverged (its bad-acceleration warning) or a recorded state, velocity
+#: or torque is not finite; the controller raised (a singular state).
+OUTCOMES = ("recovered", "survived", "fell", "diverged", "error")
+
+
+def outcome(r) -> tuple[str, str]:
+    """(:data:`OUTCOMES`' value, its message) of a run: a divergence before an error before a fall
+    (a state MuJoCo could not integrate says nothing of balance)."""
+    recorded = (getattr(r, k, None) for k in ("qpos", "qvel", "torques"))
+    finite = all(np.isfinite(a).all() for a in recorded if a is not None)
+    if r.diverged is not None or not finite:
+        return "diverged", r.diverged or "a recorded state, velocity or torque is not finite"
+    if r.controller_error is not None:
+        return "error", r.controller_error
+    if r.fell:
+        return "fell", ""
+    return ("recovered" if r.recovered else "survived"), ""
 
 
 #: ``--quick``'s staircase: this many times the experiment's step, and no halving: 2, 10, 18 deg

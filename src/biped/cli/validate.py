@@ -270,7 +270,7 @@ def _said(name: str, preset: str, running: _Running | None = None):
     def said(t) -> None:
         if running is not None:
             running.close()
-        what = "survived" if t.survived else "fell"
+        what = "survived" if t.survived else (t.outcome or "fell")  # fell, diverged or error
         criterion = EXPERIMENTS[t.experiment].criterion
         if t.survived and criterion == RECOVERED:
             what = "recovered" if t.recovered else "stood, not recovered"

@@ -13,6 +13,7 @@ from biped.analysis.validate import (
     HUMAN,
     MEASURES,
     NOT_RUN,
+    OUTCOMES,
     QUICK_STAIRCASE_FACTOR,
     Threshold,
     human_for,
@@ -105,7 +106,12 @@ def _markdown(rows: list[dict], presets: list[str], meta: dict) -> str:
 def _searches(results: dict[str, dict[str, Threshold]], quick: bool = False) -> str:
     """One line per preset and experiment: what counted, and the lowest magnitude that failed
     (an island below the threshold, if a bisection passed one)."""
-    lines = ["", "Searches (the threshold; the lowest magnitude tried that failed; the highest that passed):"]
+    lines = [
+        "",
+        "Searches (the threshold; the lowest magnitude tried that failed, and what came of it: fell, "
+        "diverged (MuJoCo), error (the controller), or survived/recovered short of the criterion; the "
+        "highest that passed):",
+    ]
     for key, per in results.items():
         exp = EXPERIMENTS[key]
         step = exp.staircase * (QUICK_STAIRCASE_FACTOR if quick else 1.0)
@@ -117,8 +123,8 @@ def _searches(results: dict[str, dict[str, Threshold]], quick: bool = False) -> 
             island = low is not None and not th.bound and low < th.value
             lines.append(
                 f"- {key}, {p}: {exp.criterion}, {how}: {_fmt(th.value, th.bound)} {exp.unit}; lowest failed "
-                f"{_fmt(low)}; highest passed {_fmt(high)}"
-                + (" (fails below the threshold)" if island else "")
+                f"{_fmt(low)}{f' ({th.lowest_failure_outcome})' if low is not None else ''}; highest passed "
+                f"{_fmt(high)}" + (" (fails below the threshold)" if island else "")
             )
     return "\n".join(lines) + "\n"
 
@@ -134,7 +140,11 @@ def write_validation(out: Path, results: dict[str, dict[str, Threshold]], meta: 
         k: {"title": EXPERIMENTS[k].title, "protocol": EXPERIMENTS[k].protocol, "unit": EXPERIMENTS[k].unit,
             "criterion": EXPERIMENTS[k].criterion, "staircase_step": EXPERIMENTS[k].staircase,
             "thresholds": {p: {"value": th.value, "bound": th.bound, "lowest_failure": th.lowest_failure,
-                               "highest_pass": th.highest_pass} for p, th in per.items()}}
+                               "highest_pass": th.highest_pass,
+                               "lowest_failure_outcome": th.lowest_failure_outcome,
+                               "outcomes": {o: n for o in OUTCOMES
+                                            if (n := sum(t.outcome == o for t in th.trials))}}
+                           for p, th in per.items()}}
         for k, per in results.items()}})]  # fmt: skip
     md = out / "validation.md"
     files.write_text(md, _markdown(rows, presets, meta) + _searches(results, meta.get("mode") == "quick"))

@@ -31,11 +31,12 @@ import numpy as np
 
 from biped import files
 from biped.analysis import envelope, feet_in_place_bound, survived, sweep_data
+from biped.analysis.envelope import horizontal_impulse_n_s
 from biped.errors import ScenarioError
 
 LABELS = {
     "speed_m_s": "block speed [m/s]",
-    "impulse_n_s": "impulse to the body [N s]",
+    "impulse_n_s": "horizontal impulse to the body [N s]",
     "impulse_horizontal_n_s": "horizontal impulse [N s]",
     "magnitude": "the perturbation's size",  # + its unit, from the sweep (paradigm_unit)
     "horizontal_impulse_n_s": "the perturbation's horizontal impulse [N s]",
@@ -87,8 +88,23 @@ def _bound_radius(data: Any, cols: dict, by: str, dirs: np.ndarray) -> np.ndarra
     return b.j_max_n_s
 
 
+#: The impulse radii: each the perturbation's horizontal impulse, as ``biped envelope``'s table's
+#: (:func:`biped.analysis.envelope.horizontal_impulse_n_s`; a block's ``impulse_n_s`` column
+#: holds the vertical part of its hit too, Hof's bound does not)
+IMPULSE_RADII = ("impulse_n_s", "impulse_horizontal_n_s", "horizontal_impulse_n_s")
+
+
+def _radius_columns(cols: dict, by: str) -> dict:
+    """``cols`` with ``cols[by]`` the plot's radius: an impulse radius the horizontal impulse of
+    each row (:data:`IMPULSE_RADII`), any other the column as it is."""
+    if by not in IMPULSE_RADII:
+        return cols
+    rows = [dict(zip(cols, vals, strict=True)) for vals in zip(*cols.values(), strict=True)]
+    return {**cols, by: [horizontal_impulse_n_s(r) for r in rows]}
+
+
 def _values(cols: dict, by: str) -> np.ndarray:
-    return np.array([np.nan if v is None else v for v in cols[by]], dtype=float)
+    return np.array([np.nan if v is None else v for v in _radius_columns(cols, by)[by]], dtype=float)
 
 
 def _scale(data: Any, by: str, bound: bool) -> float:
@@ -97,7 +113,7 @@ def _scale(data: Any, by: str, bound: bool) -> float:
     cols = _columns(data)
     r = _values(cols, by)
     top = float(np.nanmax(r)) if np.isfinite(r).any() else 1.0
-    if bound and by in ("speed_m_s", "impulse_n_s", "impulse_horizontal_n_s"):
+    if bound and by in ("speed_m_s", *IMPULSE_RADII):
         radius = _bound_radius(data, cols, by, np.arange(0.0, 360.0, 2.0))
         far, near = float(radius.max()), float(radius.min())
         top = max(top, far if far <= 2.5 * top else near)
@@ -129,7 +145,8 @@ def plot_envelope(
 ) -> Any:
     """Draw one sweep's envelope on a polar axes (created if None); returns the axes.
 
-    ``by``: ``"speed_m_s"`` or ``"impulse_n_s"``; ``criterion``: ``"survived"`` or
+    ``by``: ``"speed_m_s"``, ``"impulse_n_s"`` (the horizontal impulse, as ``biped envelope``'s
+    table's: :data:`IMPULSE_RADII`) or another of :data:`LABELS`; ``criterion``: ``"survived"`` or
     ``"recovered"`` (:func:`biped.analysis.survived`). ``rmax`` defaults to a scale that shows
     every trial and Hof's bound (at least its nearest point).
     """
@@ -148,13 +165,13 @@ def plot_envelope(
     r = _values(cols, by)
     ax.scatter(theta[ok], r[ok], s=14, c="tab:green", marker="o", label=criterion, zorder=3)
     ax.scatter(theta[~ok], r[~ok], s=18, c="tab:red", marker="x", label=f"not {criterion}", zorder=3)
-    env = envelope(cols, by=by, criterion=criterion, bin_deg=bin_deg)
+    env = envelope(_radius_columns(cols, by), by=by, criterion=criterion, bin_deg=bin_deg)
     if len(env.directions_deg) >= 3:
         t, v = _closed(np.radians(env.directions_deg), np.nan_to_num(env.survived_max, nan=0.0))
         ax.plot(t, v, color="tab:green", lw=2, label="envelope")
     else:
         _too_few_directions(ax, len(env.directions_deg))
-    if bound and by in ("speed_m_s", "impulse_n_s", "impulse_horizontal_n_s"):  # Hof's bound is an impulse
+    if bound and by in ("speed_m_s", *IMPULSE_RADII):  # Hof's bound is an impulse
         dirs = np.arange(0.0, 360.0, 2.0)
         radius = _bound_radius(data, cols, by, dirs)
         t, v = _closed(np.radians(dirs), radius)
@@ -215,12 +232,17 @@ def plot_comparison(
         ax = axes[-1]
         colors = ["tab:blue", "tab:orange", "tab:purple", "tab:brown"]
         fewest = min(
-            len(envelope(d.table, by=by, criterion=criterion, bin_deg=bin_deg).directions_deg) for d in datas
+            len(
+                envelope(
+                    _radius_columns(_columns(d), by), by=by, criterion=criterion, bin_deg=bin_deg
+                ).directions_deg
+            )
+            for d in datas
         )
         if fewest < 3:
             _too_few_directions(ax, fewest)
         for k, (d, lab) in enumerate(zip(datas, labels, strict=True)):
-            env = envelope(d.table, by=by, criterion=criterion, bin_deg=bin_deg)
+            env = envelope(_radius_columns(_columns(d), by), by=by, criterion=criterion, bin_deg=bin_deg)
             if len(env.directions_deg) < 3:
                 continue
             t, v = _closed(np.radians(env.directions_deg), np.nan_to_num(env.survived_max, nan=0.0))
