@@ -80,7 +80,7 @@ def test_the_s_curve_lands_the_young_step_sooner_within_the_rate_limits():
     out = {}
     for path in ("min-jerk", "s-curve"):
         keys = {**exp.base, **exp.preset_keys["young"], **exp.magnitude(8.0), "duration_s": 1.2}
-        s = Scenario(neuromotor="young", swing_path=path, **keys)
+        s = Scenario(neuromotor="young", **{**keys, "swing_path": path})
         r = simulate(s)
         out[path] = _step_measures(r, s)[2]
         step = np.abs(np.diff(r.torques, axis=0))

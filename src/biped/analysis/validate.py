@@ -220,8 +220,10 @@ EXPERIMENTS = {
         # lagged plant) on the present state their internal model predicts over the delay, the
         # activation lag inverted on it, the rear foot trailing after the step ("program-trail");
         # W's ideal controller with the feedback stepper (docs/validate.md, "The predicted step",
-        # "Braking after the lunge")
-        {p: {"step_program": "program-trail"} for p in ("young", "older")},
+        # "Braking after the lunge"); the swing on the bang-bang jerk path timed by the preset's
+        # own hip flexion rate limit for the step's length ("The S-curve tracked", "The young's
+        # fast step")
+        {p: {"step_program": "program-trail", "swing_path": "s-curve-timed"} for p in ("young", "older")},
         # Wojcik's success: no fall, at most one step, standing still at the end (not upright, not
         # over the set point: validate_rule); the leans raised 1 deg at a time from 2 deg until one
         # fails, as Wojcik raised them until the step failed (a bisection over 2-40 deg passed over
