@@ -96,7 +96,9 @@ class SteppingConfig:
     reaction, the legs' inertia and weight; :mod:`biped.control.stance_dynamics`), not on the
     massless-leg wrench it plans (needs qp_leg_weight 0). stance_contact_rows: which of the stance
     foot's cone rows hold the prediction: 1 the normal-force and friction rows, 2 also the yaw
-    rows, 3 also the CoP rows (2 and 3 measured, not better: docs/sweep.md).
+    rows, 3 also the CoP rows (2 and 3 measured, not better: docs/sweep.md; 2 on set C' holds a
+    forward step's stance foot's yaw, 11 -> 1.5 deg, but lowers the human-limit front and the 1.55 m
+    subject's 135 and 180 deg limits: docs/sweep.md, "The stance foot's yaw").
     lateral_stance_contact_model: False: a sideways step's (and the closing step's) single support
     without it (None: as stance_contact_model).
     lateral_swing_friction_scale: if set, a *sideways step*'s (and the closing step's) single
